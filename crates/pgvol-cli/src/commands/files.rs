@@ -1,0 +1,168 @@
+//! `pgvol encode`, `pgvol decode` and `pgvol info`: the .pgv file.
+
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use serde::Serialize;
+
+use super::{BasisArg, GridArgs, OutputArgs, PathArg};
+use crate::pipeline;
+
+#[derive(Args)]
+pub struct EncodeArgs {
+    /// Input mesh.
+    pub mesh: PathArg,
+    /// Output .pgv file.
+    #[arg(short, long)]
+    pub output: PathArg,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Basis of the coefficient volume.
+    #[arg(long, value_enum, default_value_t)]
+    pub basis: BasisArg,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct DecodeArgs {
+    /// Input .pgv file.
+    pub input: PathArg,
+    /// Output mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// The level set to extract: 0 is the surface, positive values offset it outward.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub iso: f32,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct InfoArgs {
+    /// A .pgv file.
+    pub input: PathArg,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+fn check_pgv_extension(path: &std::path::Path) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("pgv") => Ok(()),
+        _ => bail!("{}: expected a .pgv file name", path.display()),
+    }
+}
+
+pub fn encode(a: EncodeArgs) -> Result<()> {
+    check_pgv_extension(&a.output)?;
+    let quiet = a.out.silent();
+    let start = Instant::now();
+    let mesh = pipeline::load_mesh(&a.mesh, quiet)?;
+    let grid = a.grid.spec(128).grid_for(&mesh)?;
+    let (volume, sdf_seconds, fit_seconds) = pipeline::encode(&mesh, grid, a.basis.into(), quiet)?;
+    let header = pgvol_format::pgv::header_for(&volume, "interp", Some(&mesh));
+    let file = pgvol_format::PgvFile { header, volume };
+    pgvol_format::write_pgv(&a.output, &file)?;
+    let bytes = std::fs::metadata(&a.output)?.len();
+    if a.out.json {
+        let v = serde_json::json!({
+            "output": a.output, "grid": grid, "basis": file.volume.basis.name(), "bytes": bytes,
+            "seconds": { "sdf": sdf_seconds, "fit": fit_seconds, "total": start.elapsed().as_secs_f64() },
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !a.out.quiet {
+        println!(
+            "{}: {}^3 {} coefficients, {} bytes",
+            a.output.display(),
+            grid.dims[0],
+            file.volume.basis.name(),
+            bytes
+        );
+    }
+    Ok(())
+}
+
+pub fn decode(a: DecodeArgs) -> Result<()> {
+    pgvol_mesh::MeshFormat::from_path(&a.output)?;
+    if !a.iso.is_finite() {
+        bail!("--iso must be a finite number");
+    }
+    let file = pgvol_format::read_pgv(&a.input)?;
+    let t = Instant::now();
+    let mesh = pipeline::decode(&file.volume, a.iso);
+    let seconds = t.elapsed().as_secs_f64();
+    if mesh.triangles.is_empty() {
+        bail!(
+            "{}: the level set {} is empty in this field",
+            a.input.display(),
+            a.iso
+        );
+    }
+    pgvol_mesh::write(&a.output, &mesh)?;
+    if a.out.json {
+        let v = serde_json::json!({
+            "output": a.output, "triangles": mesh.triangles.len(), "vertices": mesh.positions.len(),
+            "seconds": seconds,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !a.out.quiet {
+        println!(
+            "{}: {} triangles in {:.2} s",
+            a.output.display(),
+            mesh.triangles.len(),
+            seconds
+        );
+    }
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct Info<'a> {
+    file: &'a std::path::Path,
+    bytes: u64,
+    header: &'a pgvol_format::PgvHeader,
+    coefficients: usize,
+    coefficient_range: [f32; 2],
+}
+
+pub fn info(a: InfoArgs) -> Result<()> {
+    let file = pgvol_format::read_pgv(&a.input)?;
+    let bytes = std::fs::metadata(&a.input)?.len();
+    let c = &file.volume.coeffs;
+    let range = [
+        c.iter().cloned().fold(f32::INFINITY, f32::min),
+        c.iter().cloned().fold(f32::NEG_INFINITY, f32::max),
+    ];
+    let info = Info {
+        file: &a.input,
+        bytes,
+        header: &file.header,
+        coefficients: c.len(),
+        coefficient_range: range,
+    };
+    if a.out.json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
+        return Ok(());
+    }
+    let h = &file.header;
+    let g = h.grid;
+    println!("file          {} ({} bytes)", a.input.display(), bytes);
+    println!("basis         {} (fit: {})", h.basis.name(), h.fit);
+    println!(
+        "grid          {} x {} x {}, spacing {}, origin ({}, {}, {})",
+        g.dims[0], g.dims[1], g.dims[2], g.spacing, g.origin.x, g.origin.y, g.origin.z
+    );
+    println!("encoding      {}", h.encoding);
+    println!("coefficients  {} in [{}, {}]", c.len(), range[0], range[1]);
+    if let Some([lo, hi]) = h.source_bounds {
+        println!("source box    {lo:?} .. {hi:?}");
+    }
+    if let Some(hash) = &h.source_hash {
+        println!("source hash   {hash}");
+    }
+    for (k, v) in &h.metadata {
+        println!("{k:<13} {v}");
+    }
+    Ok(())
+}

@@ -1,0 +1,103 @@
+//! The subcommands and their arguments.
+
+mod compare;
+mod files;
+mod remesh;
+mod sdf;
+
+use anyhow::Result;
+use clap::{Args, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+use pgvol_field::Basis;
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Mesh → signed distance → coefficient volume → mesh, in one go.
+    ///
+    /// Reads OBJ, glTF/GLB, STL or PLY and writes GLB, glTF, OBJ, STL or PLY (by extension). The
+    /// output is watertight and manifold whatever the input's holes or flipped faces.
+    Remesh(remesh::RemeshArgs),
+    /// Surface distances and statistics of mesh A against reference mesh B.
+    ///
+    /// Hausdorff and Chamfer-L1 (mean of the two mean distances) from area-uniform samples with
+    /// exact point-to-triangle distances, in absolute units and as % of B's bounding-box diagonal;
+    /// normal deviation between each sample and its closest point; triangles, boundary and
+    /// non-manifold edges, watertightness, Euler characteristic, volume and area of both.
+    Compare(compare::CompareArgs),
+    /// Samples the signed distance of a mesh on a dense grid and writes NRRD or NPY (float32).
+    Sdf(sdf::SdfArgs),
+    /// Encodes a mesh as a .pgv coefficient-volume file.
+    Encode(files::EncodeArgs),
+    /// Contours a .pgv file into a mesh.
+    Decode(files::DecodeArgs),
+    /// Prints what a .pgv file holds.
+    Info(files::InfoArgs),
+}
+
+pub fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Remesh(a) => remesh::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::Sdf(a) => sdf::run(a),
+        Command::Encode(a) => files::encode(a),
+        Command::Decode(a) => files::decode(a),
+        Command::Info(a) => files::info(a),
+    }
+}
+
+/// Grid size options shared by the commands that sample a mesh.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct GridArgs {
+    /// Nodes per axis of the grid (a cube 1.1 × the mesh's longest extent).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    pub res: Option<u32>,
+    /// Grid spacing in mesh units, instead of --res.
+    #[arg(long, conflicts_with = "res")]
+    pub voxel: Option<f32>,
+}
+
+impl GridArgs {
+    pub fn spec(self, default_res: usize) -> crate::pipeline::GridSpec {
+        crate::pipeline::GridSpec::from_args(self.res.map(|r| r as usize), self.voxel, default_res)
+    }
+}
+
+/// The basis of the coefficient volume.
+#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+pub enum BasisArg {
+    /// Tensor-product cubic B-spline (smooth, exact gradients).
+    #[default]
+    Bspline3,
+    /// The sampled values themselves, interpolated trilinearly (the baseline).
+    Trilinear,
+}
+
+impl From<BasisArg> for Basis {
+    fn from(b: BasisArg) -> Basis {
+        match b {
+            BasisArg::Bspline3 => Basis::Bspline3,
+            BasisArg::Trilinear => Basis::Trilinear,
+        }
+    }
+}
+
+/// Output options shared by every command.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct OutputArgs {
+    /// Print the results as one JSON object on standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bars or notes on standard error.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+impl OutputArgs {
+    /// Progress and notes are off in JSON mode too, so standard error stays clean for scripts.
+    pub fn silent(self) -> bool {
+        self.quiet || self.json
+    }
+}
+
+pub type PathArg = PathBuf;

@@ -1,0 +1,28 @@
+//! `pgvol`: meshes to compact implicit files and back.
+
+mod commands;
+mod pipeline;
+mod progress;
+
+use clap::Parser;
+
+/// Turns triangle meshes into smooth implicit fields (coefficient volumes) and back into meshes.
+///
+/// Signed distance is negative inside and positive outside, in the units of the input mesh. The
+/// grid is a cube of side 1.1 × the longest bounding-box extent, centred on the mesh, with N nodes
+/// per axis (--res N) or a given spacing (--voxel H).
+#[derive(Parser)]
+#[command(name = "pgvol", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: commands::Command,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(e) = commands::run(cli.command) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+

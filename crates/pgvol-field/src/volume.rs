@@ -1,0 +1,327 @@
+//! The coefficient volume: a grid, a basis and one coefficient per node.
+
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::{basis::Basis, prefilter::prefilter_volume};
+use pgvol_sdf::Grid;
+
+/// Why a coefficient volume could not be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FieldError {
+    #[error("{got} values given for a grid of {want} nodes")]
+    SizeMismatch { got: usize, want: usize },
+    #[error("the grid needs at least 2 nodes per axis, got {0:?}")]
+    GridTooSmall([usize; 3]),
+    #[error("value {index} is not finite")]
+    NonFinite { index: usize },
+}
+
+/// A smooth field `f(x) = Σ_j c_j B((x − g_j) / h)` over a grid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CoefficientVolume {
+    pub grid: Grid,
+    pub basis: Basis,
+    pub coeffs: Vec<f32>,
+}
+
+impl CoefficientVolume {
+    /// Wraps existing coefficients, checking their count and finiteness.
+    pub fn new(grid: Grid, basis: Basis, coeffs: Vec<f32>) -> Result<Self, FieldError> {
+        if grid.dims.iter().any(|&n| n < 2) {
+            return Err(FieldError::GridTooSmall(grid.dims));
+        }
+        if coeffs.len() != grid.len() {
+            return Err(FieldError::SizeMismatch {
+                got: coeffs.len(),
+                want: grid.len(),
+            });
+        }
+        if let Some(index) = coeffs.iter().position(|c| !c.is_finite()) {
+            return Err(FieldError::NonFinite { index });
+        }
+        Ok(CoefficientVolume {
+            grid,
+            basis,
+            coeffs,
+        })
+    }
+
+    /// The field that interpolates `samples` (one per node, x fastest) in the given basis.
+    pub fn interpolate(
+        grid: Grid,
+        basis: Basis,
+        mut samples: Vec<f32>,
+    ) -> Result<Self, FieldError> {
+        let probe = CoefficientVolume::new(grid, basis, Vec::new());
+        if let Err(FieldError::GridTooSmall(d)) = probe {
+            return Err(FieldError::GridTooSmall(d));
+        }
+        if samples.len() != grid.len() {
+            return Err(FieldError::SizeMismatch {
+                got: samples.len(),
+                want: grid.len(),
+            });
+        }
+        if let Some(index) = samples.iter().position(|c| !c.is_finite()) {
+            return Err(FieldError::NonFinite { index });
+        }
+        if basis == Basis::Bspline3 {
+            prefilter_volume(&mut samples, grid.dims);
+        }
+        CoefficientVolume::new(grid, basis, samples)
+    }
+
+    /// Coefficient at node `(i, j, k)`, with indices past the border mirrored as the prefilter
+    /// assumes.
+    #[inline]
+    fn coeff_mirrored(&self, i: i64, j: i64, k: i64) -> f32 {
+        let [nx, ny, nz] = self.grid.dims;
+        let (i, j, k) = (mirror(i, nx), mirror(j, ny), mirror(k, nz));
+        self.coeffs[i + nx * (j + ny * k)]
+    }
+
+    /// Field value and gradient at `p`. Points outside the grid box take the value at the nearest
+    /// point of the box plus their distance to it, so the field stays continuous and grows outward.
+    pub fn eval(&self, p: Vec3) -> (f32, Vec3) {
+        let g = &self.grid;
+        let lo = g.origin;
+        let hi = g.max_corner();
+        let q = p.clamp(lo, hi);
+        let outside = p.distance(q);
+        let u = g.to_grid(q);
+        let [nx, ny, nz] = g.dims;
+        let cell = |u: f32, n: usize| -> (i64, f32) {
+            let c = (u.floor() as i64).clamp(0, n as i64 - 2);
+            (c, (u - c as f32).clamp(0.0, 1.0))
+        };
+        let (ci, ti) = cell(u.x, nx);
+        let (cj, tj) = cell(u.y, ny);
+        let (ck, tk) = cell(u.z, nz);
+        let b = self.basis;
+        let (wx, dx) = b.weights(ti);
+        let (wy, dy) = b.weights(tj);
+        let (wz, dz) = b.weights(tk);
+        let (fi, fj, fk) = (b.first_node(ci), b.first_node(cj), b.first_node(ck));
+        let width = b.width();
+        let mut value = 0.0f32;
+        let mut grad = Vec3::ZERO;
+        for c in 0..width {
+            let mut vz = 0.0f32;
+            let mut gz = Vec3::ZERO;
+            for bb in 0..width {
+                let mut vy = 0.0f32;
+                let mut gy = 0.0f32;
+                for a in 0..width {
+                    let coef = self.coeff_mirrored(fi + a as i64, fj + bb as i64, fk + c as i64);
+                    vy += wx[a] * coef;
+                    gy += dx[a] * coef;
+                }
+                vz += wy[bb] * vy;
+                gz += Vec3::new(wy[bb] * gy, dy[bb] * vy, 0.0);
+            }
+            value += wz[c] * vz;
+            grad += Vec3::new(wz[c] * gz.x, wz[c] * gz.y, dz[c] * vz);
+        }
+        let grad = grad / g.spacing;
+        if outside > 0.0 {
+            let dir = (p - q) / outside;
+            (
+                value + outside,
+                if grad.dot(dir) < 1.0 {
+                    grad + dir
+                } else {
+                    grad
+                },
+            )
+        } else {
+            (value, grad)
+        }
+    }
+
+    /// Field value only.
+    #[inline]
+    pub fn value(&self, p: Vec3) -> f32 {
+        self.eval(p).0
+    }
+
+    /// Values and gradients at many points, in parallel.
+    pub fn eval_many(&self, points: &[Vec3]) -> Vec<(f32, Vec3)> {
+        points.par_iter().map(|&p| self.eval(p)).collect()
+    }
+
+    /// The field sampled at every node of `grid` (x fastest), in parallel over z-planes.
+    pub fn sample(&self, grid: &Grid) -> Vec<f32> {
+        let [nx, ny, _] = grid.dims;
+        let mut out = vec![0.0f32; grid.len()];
+        out.par_chunks_mut(nx * ny)
+            .enumerate()
+            .for_each(|(k, plane)| {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        plane[i + nx * j] = self.value(grid.point(i, j, k));
+                    }
+                }
+            });
+        out
+    }
+
+    /// The zero of the field on the segment from `a` (value `va`) to `b` (value `vb`), where the
+    /// values have opposite signs relative to `iso`: regula falsi with the Illinois modification,
+    /// a few steps, falling back to the best bracket end so the result stays on the segment.
+    pub fn root_on_segment(&self, a: Vec3, va: f32, b: Vec3, vb: f32, iso: f32) -> Vec3 {
+        let (mut t0, mut f0) = (0.0f32, va - iso);
+        let (mut t1, mut f1) = (1.0f32, vb - iso);
+        if f0 == f1 || (f0 < 0.0) == (f1 < 0.0) {
+            return a + (b - a) * 0.5;
+        }
+        let mut side = 0i8;
+        let mut t = t0 - f0 * (t1 - t0) / (f1 - f0);
+        for _ in 0..8 {
+            t = t0 - f0 * (t1 - t0) / (f1 - f0);
+            let f = self.value(a + (b - a) * t) - iso;
+            if f == 0.0 || (t1 - t0).abs() < 1e-6 {
+                break;
+            }
+            if (f < 0.0) == (f1 < 0.0) {
+                t1 = t;
+                f1 = f;
+                if side == -1 {
+                    f0 *= 0.5;
+                }
+                side = -1;
+            } else {
+                t0 = t;
+                f0 = f;
+                if side == 1 {
+                    f1 *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        a + (b - a) * t.clamp(0.0, 1.0)
+    }
+}
+
+#[inline]
+fn mirror(i: i64, n: usize) -> usize {
+    let n = n as i64;
+    let m = if i < 0 {
+        -i
+    } else if i >= n {
+        2 * (n - 1) - i
+    } else {
+        i
+    };
+    m.clamp(0, n - 1) as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> Grid {
+        Grid::cube_res(Vec3::splat(-1.0), Vec3::splat(1.0), n).unwrap()
+    }
+
+    fn sampled(grid: &Grid, f: impl Fn(Vec3) -> f32) -> Vec<f32> {
+        let mut v = Vec::with_capacity(grid.len());
+        for k in 0..grid.dims[2] {
+            for j in 0..grid.dims[1] {
+                for i in 0..grid.dims[0] {
+                    v.push(f(grid.point(i, j, k)));
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn both_bases_interpolate_the_samples_at_nodes() {
+        let g = grid(12);
+        let sphere = |p: Vec3| p.length() - 0.7;
+        for basis in [Basis::Trilinear, Basis::Bspline3] {
+            let vol = CoefficientVolume::interpolate(g, basis, sampled(&g, sphere)).unwrap();
+            for (i, j, k) in [(0, 0, 0), (3, 4, 5), (11, 11, 11), (6, 0, 9)] {
+                let p = g.point(i, j, k);
+                assert!((vol.value(p) - sphere(p)).abs() < 1e-4, "{basis:?} at {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn bspline_is_much_more_accurate_between_nodes() {
+        let g = grid(24);
+        let sphere = |p: Vec3| p.length() - 0.6;
+        let err = |basis| {
+            let vol = CoefficientVolume::interpolate(g, basis, sampled(&g, sphere)).unwrap();
+            let mut worst = 0.0f32;
+            for n in 0..2000 {
+                let d = Vec3::new(
+                    (n as f32 * 0.618).sin(),
+                    (n as f32 * 1.3).cos(),
+                    (n as f32 * 0.77).sin(),
+                )
+                .normalize();
+                let p = d * 0.6;
+                worst = worst.max(vol.value(p).abs());
+            }
+            worst
+        };
+        let (tri, bs) = (err(Basis::Trilinear), err(Basis::Bspline3));
+        assert!(bs * 5.0 < tri, "bspline {bs} trilinear {tri}");
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let g = grid(16);
+        let f = |p: Vec3| (p.x * 2.0).sin() + p.y * p.z - 0.3 * p.z;
+        for basis in [Basis::Trilinear, Basis::Bspline3] {
+            let vol = CoefficientVolume::interpolate(g, basis, sampled(&g, f)).unwrap();
+            for p in [Vec3::new(0.13, -0.21, 0.37), Vec3::new(-0.5, 0.44, 0.02)] {
+                let (_, grad) = vol.eval(p);
+                let e = 1e-3;
+                let fd = Vec3::new(
+                    vol.value(p + Vec3::X * e) - vol.value(p - Vec3::X * e),
+                    vol.value(p + Vec3::Y * e) - vol.value(p - Vec3::Y * e),
+                    vol.value(p + Vec3::Z * e) - vol.value(p - Vec3::Z * e),
+                ) / (2.0 * e);
+                assert!((grad - fd).length() < 2e-2, "{basis:?} {p}: {grad} vs {fd}");
+            }
+        }
+    }
+
+    #[test]
+    fn root_finding_lands_on_the_zero_set() {
+        let g = grid(20);
+        let sphere = |p: Vec3| p.length() - 0.55;
+        let vol = CoefficientVolume::interpolate(g, Basis::Bspline3, sampled(&g, sphere)).unwrap();
+        let (a, b) = (Vec3::new(0.1, 0.2, 0.0), Vec3::new(0.8, 0.3, 0.1));
+        let r = vol.root_on_segment(a, vol.value(a), b, vol.value(b), 0.0);
+        assert!(vol.value(r).abs() < 1e-4);
+        assert!((r.length() - 0.55).abs() < 2e-3);
+    }
+
+    #[test]
+    fn bad_inputs_are_refused() {
+        let g = grid(4);
+        assert!(CoefficientVolume::new(g, Basis::Bspline3, vec![0.0; 3]).is_err());
+        let mut v = vec![0.0; 64];
+        v[5] = f32::NAN;
+        assert_eq!(
+            CoefficientVolume::interpolate(g, Basis::Bspline3, v).err(),
+            Some(FieldError::NonFinite { index: 5 })
+        );
+    }
+
+    #[test]
+    fn outside_the_box_the_field_grows() {
+        let g = grid(8);
+        let vol =
+            CoefficientVolume::interpolate(g, Basis::Bspline3, sampled(&g, |p| p.length() - 0.5))
+                .unwrap();
+        let edge = vol.value(g.max_corner());
+        assert!(vol.value(g.max_corner() + Vec3::splat(1.0)) > edge + 1.0);
+    }
+}

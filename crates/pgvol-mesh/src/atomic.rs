@@ -1,0 +1,82 @@
+//! Atomic file replacement: readers of `path` see either the old file or the complete new one,
+//! never a partial write, and a failed write leaves nothing behind.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::MeshError;
+
+/// Writes `path` by letting `f` fill a temporary file in the same directory (so the final
+/// rename cannot cross file systems), flushing and syncing it, then renaming it over `path`.
+/// On any failure the temporary file is removed and `path` is left untouched.
+pub fn write_atomic(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), MeshError> {
+    let Some(name) = path.file_name() else {
+        return Err(MeshError::new(path, "not a file path (no file name)"));
+    };
+    if path.is_dir() {
+        return Err(MeshError::new(path, "is a directory, not a file"));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    // The counter keeps concurrent writers in one process from sharing a temporary name.
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let tmp = dir.join(format!(
+        ".{}.{}.{n}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+
+    let file = OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(|e| {
+            MeshError::new(
+                path,
+                format!("cannot create temporary file '{}': {e}", tmp.display()),
+            )
+        })?;
+    let result = fill_and_sync(file, f)
+        .map_err(|e| MeshError::new(path, format!("write failed: {e}")))
+        .and_then(|()| {
+            fs::rename(&tmp, path).map_err(|e| {
+                MeshError::new(path, format!("cannot move finished file into place: {e}"))
+            })
+        });
+    match result {
+        Ok(()) => {
+            sync_dir(&dir);
+            Ok(())
+        }
+        Err(e) => {
+            let _ = fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn fill_and_sync(file: File, f: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
+    let mut w = BufWriter::new(file);
+    f(&mut w)?;
+    let file = w.into_inner().map_err(|e| e.into_error())?;
+    file.sync_all()
+}
+
+/// Makes the rename itself durable where the platform allows; failure only weakens durability,
+/// never correctness, so it is ignored.
+fn sync_dir(dir: &Path) {
+    #[cfg(unix)]
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    #[cfg(not(unix))]
+    let _ = dir;
+}

@@ -1,0 +1,31 @@
+//! The single error type of this crate: which file, and what is wrong with it.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A failure to read, write or interpret a mesh file.
+///
+/// `problem` is a plain sentence meant for a person, e.g. "face 12 refers to vertex 9001 but the
+/// file has 400 vertices"; `Display` prefixes it with the path so callers can print it as is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MeshError {
+    pub path: PathBuf,
+    pub problem: String,
+}
+
+impl MeshError {
+    pub fn new(path: impl AsRef<Path>, problem: impl Into<String>) -> Self {
+        Self {
+            path: path.as_ref().to_path_buf(),
+            problem: problem.into(),
+        }
+    }
+}
+
+impl fmt::Display for MeshError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path.display(), self.problem)
+    }
+}
+
+impl std::error::Error for MeshError {}

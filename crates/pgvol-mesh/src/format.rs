@@ -1,0 +1,51 @@
+//! File formats and their recognition from a path's extension.
+
+use std::path::Path;
+
+use crate::MeshError;
+
+/// The mesh file formats this crate reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    Obj,
+    Gltf,
+    Glb,
+    Stl,
+    Ply,
+}
+
+impl MeshFormat {
+    /// The format named by the extension of `path`, ignoring case.
+    pub fn from_path(path: &Path) -> Result<MeshFormat, MeshError> {
+        const EXPECTED: &str = "(expected .obj, .gltf, .glb, .stl, .ply)";
+        let Some(ext) = path.extension() else {
+            return Err(MeshError::new(
+                path,
+                format!("no file extension {EXPECTED}"),
+            ));
+        };
+        let ext = ext.to_string_lossy();
+        match ext.to_ascii_lowercase().as_str() {
+            "obj" => Ok(MeshFormat::Obj),
+            "gltf" => Ok(MeshFormat::Gltf),
+            "glb" => Ok(MeshFormat::Glb),
+            "stl" => Ok(MeshFormat::Stl),
+            "ply" => Ok(MeshFormat::Ply),
+            _ => Err(MeshError::new(
+                path,
+                format!("unknown extension '.{ext}' {EXPECTED}"),
+            )),
+        }
+    }
+
+    /// Conventional lower-case extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "obj",
+            MeshFormat::Gltf => "gltf",
+            MeshFormat::Glb => "glb",
+            MeshFormat::Stl => "stl",
+            MeshFormat::Ply => "ply",
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! Format dispatch for reading and writing whole files.
+
+use std::path::Path;
+
+use crate::validate::problem;
+use crate::{
+    atomic::write_atomic, gltf_io, obj, ply, stl, vertex_normals, Mesh, MeshError, MeshFormat,
+};
+
+/// Reads the mesh in `path`, choosing the format by extension, and validates it.
+pub fn read(path: &Path) -> Result<Mesh, MeshError> {
+    let format = MeshFormat::from_path(path)?;
+    let bytes =
+        std::fs::read(path).map_err(|e| MeshError::new(path, format!("cannot read file: {e}")))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    parse(&bytes, format, path, Some(dir))
+}
+
+/// Parses a mesh held in memory. `name` is only used in error messages. A `.gltf` whose buffers
+/// live in separate files cannot be read this way and yields an error saying so.
+pub fn read_bytes(bytes: &[u8], format: MeshFormat, name: &Path) -> Result<Mesh, MeshError> {
+    parse(bytes, format, name, None)
+}
+
+fn parse(
+    bytes: &[u8],
+    format: MeshFormat,
+    name: &Path,
+    dir: Option<&Path>,
+) -> Result<Mesh, MeshError> {
+    if bytes.is_empty() {
+        return Err(MeshError::new(name, "empty file"));
+    }
+    let mesh = match format {
+        MeshFormat::Obj => obj::read(bytes, name)?,
+        MeshFormat::Gltf => gltf_io::read(bytes, name, false, dir)?,
+        MeshFormat::Glb => gltf_io::read(bytes, name, true, dir)?,
+        MeshFormat::Stl => stl::read(bytes, name)?,
+        MeshFormat::Ply => ply::read(bytes, name)?,
+    };
+    match problem(&mesh, "file") {
+        Some(p) => Err(MeshError::new(name, p)),
+        None => Ok(mesh),
+    }
+}
+
+/// Writes `mesh` to `path` in the format named by its extension, atomically, with unit
+/// per-vertex normals (facet normals for STL).
+pub fn write(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
+    let format = MeshFormat::from_path(path)?;
+    if let Some(p) = problem(mesh, "mesh") {
+        return Err(MeshError::new(path, format!("refusing to write: {p}")));
+    }
+    let normals = match format {
+        MeshFormat::Stl => Vec::new(),
+        _ => vertex_normals(mesh),
+    };
+    write_atomic(path, |w| match format {
+        MeshFormat::Obj => obj::write(w, mesh, &normals),
+        MeshFormat::Gltf => gltf_io::write(w, mesh, &normals, false),
+        MeshFormat::Glb => gltf_io::write(w, mesh, &normals, true),
+        MeshFormat::Stl => stl::write(w, mesh),
+        MeshFormat::Ply => ply::write(w, mesh, &normals),
+    })
+}

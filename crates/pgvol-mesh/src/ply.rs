@@ -1,0 +1,430 @@
+//! PLY (ascii, binary_little_endian, binary_big_endian). Only `vertex` x/y/z and the `face`
+//! index list are kept; every other element and property is parsed past and dropped.
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::{Mesh, MeshError};
+
+#[derive(Clone, Copy, Debug)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(word: &str) -> Option<Scalar> {
+        Some(match word {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Debug)]
+enum Kind {
+    Scalar(Scalar),
+    List { count: Scalar, item: Scalar },
+}
+
+#[derive(Debug)]
+struct Property {
+    name: String,
+    kind: Kind,
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: u64,
+    props: Vec<Property>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Encoding {
+    Ascii,
+    LittleEndian,
+    BigEndian,
+}
+
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
+    body_start: usize,
+}
+
+pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
+    let err = |problem: String| MeshError::new(name, problem);
+    let header = parse_header(bytes).map_err(err)?;
+    let body = &bytes[header.body_start..];
+    let mut values: Box<dyn Values> = match header.encoding {
+        Encoding::Ascii => Box::new(AsciiValues { body, pos: 0 }),
+        enc => Box::new(BinaryValues {
+            body,
+            pos: 0,
+            big_endian: enc == Encoding::BigEndian,
+        }),
+    };
+
+    let mut mesh = Mesh::default();
+    let mut saw_vertices = false;
+    for element in &header.elements {
+        let result = match element.name.as_str() {
+            "vertex" if !saw_vertices => {
+                saw_vertices = true;
+                read_vertices(element, values.as_mut(), body.len(), &mut mesh.positions)
+            }
+            "face" => read_faces(element, values.as_mut(), &mut mesh.triangles),
+            _ => skip(element, values.as_mut()),
+        };
+        result.map_err(err)?;
+    }
+    if !saw_vertices {
+        return Err(err("PLY header declares no 'vertex' element".into()));
+    }
+    Ok(mesh)
+}
+
+fn parse_header(bytes: &[u8]) -> Result<Header, String> {
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    let mut pos = 0;
+    let mut first = true;
+    loop {
+        let Some(len) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+            return Err(if first {
+                "not a PLY file (first line is not 'ply')".into()
+            } else {
+                "PLY header has no 'end_header' line".into()
+            });
+        };
+        let raw = &bytes[pos..pos + len];
+        pos += len + 1;
+        let line = std::str::from_utf8(raw)
+            .map_err(|_| "PLY header contains non-text bytes".to_string())?
+            .trim();
+        if first {
+            if line != "ply" {
+                return Err("not a PLY file (first line is not 'ply')".into());
+            }
+            first = false;
+            continue;
+        }
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            [] | ["comment", ..] | ["obj_info", ..] => {}
+            ["end_header"] => break,
+            ["format", fmt, _version] => {
+                encoding = Some(match *fmt {
+                    "ascii" => Encoding::Ascii,
+                    "binary_little_endian" => Encoding::LittleEndian,
+                    "binary_big_endian" => Encoding::BigEndian,
+                    other => return Err(format!("unknown PLY format '{other}'")),
+                });
+            }
+            ["element", elem, count] => {
+                let count = count
+                    .parse()
+                    .map_err(|_| format!("element '{elem}' has a bad count '{count}'"))?;
+                elements.push(Element {
+                    name: elem.to_string(),
+                    count,
+                    props: Vec::new(),
+                });
+            }
+            ["property", "list", count, item, prop] => {
+                let element = elements
+                    .last_mut()
+                    .ok_or_else(|| format!("property '{prop}' comes before any element"))?;
+                let count = scalar_type(count)?;
+                if !count.is_integer() {
+                    return Err(format!("list '{prop}' has a non-integer count type"));
+                }
+                let item = scalar_type(item)?;
+                element.props.push(Property {
+                    name: prop.to_string(),
+                    kind: Kind::List { count, item },
+                });
+            }
+            ["property", ty, prop] => {
+                let element = elements
+                    .last_mut()
+                    .ok_or_else(|| format!("property '{prop}' comes before any element"))?;
+                element.props.push(Property {
+                    name: prop.to_string(),
+                    kind: Kind::Scalar(scalar_type(ty)?),
+                });
+            }
+            _ => return Err(format!("unrecognised PLY header line '{line}'")),
+        }
+    }
+    let encoding = encoding.ok_or("PLY header has no 'format' line")?;
+    Ok(Header {
+        encoding,
+        elements,
+        body_start: pos,
+    })
+}
+
+fn scalar_type(word: &str) -> Result<Scalar, String> {
+    Scalar::parse(word).ok_or_else(|| format!("unknown PLY property type '{word}'"))
+}
+
+/// Sequential access to the body's numbers, independent of encoding.
+trait Values {
+    fn next(&mut self, ty: Scalar) -> Result<f64, String>;
+}
+
+struct AsciiValues<'a> {
+    body: &'a [u8],
+    pos: usize,
+}
+
+impl Values for AsciiValues<'_> {
+    fn next(&mut self, ty: Scalar) -> Result<f64, String> {
+        let rest = &self.body[self.pos..];
+        let start = rest
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .ok_or("file ends early")?;
+        let len = rest[start..]
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .unwrap_or(rest.len() - start);
+        self.pos += start + len;
+        let word = std::str::from_utf8(&rest[start..start + len]).unwrap_or("?");
+        let bad = || format!("'{word}' is not a valid {ty:?} value");
+        if ty.is_integer() {
+            word.parse::<i64>().map(|v| v as f64).map_err(|_| bad())
+        } else {
+            word.parse::<f64>().map_err(|_| bad())
+        }
+    }
+}
+
+struct BinaryValues<'a> {
+    body: &'a [u8],
+    pos: usize,
+    big_endian: bool,
+}
+
+impl Values for BinaryValues<'_> {
+    fn next(&mut self, ty: Scalar) -> Result<f64, String> {
+        let n = ty.size();
+        let raw = self
+            .body
+            .get(self.pos..self.pos + n)
+            .ok_or("file ends early")?;
+        self.pos += n;
+        let mut b = [0u8; 8];
+        b[..n].copy_from_slice(raw);
+        if self.big_endian {
+            b[..n].reverse();
+        }
+        Ok(match ty {
+            Scalar::I8 => f64::from(b[0] as i8),
+            Scalar::U8 => f64::from(b[0]),
+            Scalar::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
+            Scalar::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+            Scalar::I32 => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            Scalar::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            Scalar::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            Scalar::F64 => f64::from_le_bytes(b),
+        })
+    }
+}
+
+fn list_len(v: f64) -> Result<u64, String> {
+    if v >= 0.0 && v.fract() == 0.0 {
+        Ok(v as u64)
+    } else {
+        Err(format!("negative list length {v}"))
+    }
+}
+
+/// Reads (and drops) one property value, whatever its kind.
+fn skip_property(kind: &Kind, values: &mut dyn Values) -> Result<(), String> {
+    match *kind {
+        Kind::Scalar(ty) => values.next(ty).map(drop),
+        Kind::List { count, item } => {
+            for _ in 0..list_len(values.next(count)?)? {
+                values.next(item)?;
+            }
+            Ok(())
+        }
+    }
+}
+
+fn skip(element: &Element, values: &mut dyn Values) -> Result<(), String> {
+    if element.props.is_empty() {
+        // Nothing to consume; do not spin through a hostile count.
+        return Ok(());
+    }
+    for i in 0..element.count {
+        for p in &element.props {
+            skip_property(&p.kind, values).map_err(|e| at(element, i, e))?;
+        }
+    }
+    Ok(())
+}
+
+fn at(element: &Element, i: u64, problem: String) -> String {
+    format!("{} {i} (of {}): {problem}", element.name, element.count)
+}
+
+fn read_vertices(
+    element: &Element,
+    values: &mut dyn Values,
+    body_len: usize,
+    out: &mut Vec<Vec3>,
+) -> Result<(), String> {
+    let find = |axis: &str| {
+        element
+            .props
+            .iter()
+            .position(|p| p.name == axis)
+            .ok_or_else(|| format!("PLY 'vertex' element has no '{axis}' property"))
+    };
+    let slots = [find("x")?, find("y")?, find("z")?];
+    for &s in &slots {
+        if let Kind::List { .. } = element.props[s].kind {
+            return Err(format!(
+                "vertex property '{}' is a list, expected a number",
+                element.props[s].name
+            ));
+        }
+    }
+    if element.count > u64::from(u32::MAX) {
+        return Err(format!("{} vertices is more than 2^32", element.count));
+    }
+    // The declared count is untrusted; never reserve more than the body could hold.
+    out.reserve((element.count as usize).min(body_len / 3));
+    for i in 0..element.count {
+        let mut xyz = [0f32; 3];
+        for (k, p) in element.props.iter().enumerate() {
+            match (p.kind_scalar(), slots.iter().position(|&s| s == k)) {
+                (Some(ty), Some(axis)) => {
+                    xyz[axis] = values.next(ty).map_err(|e| at(element, i, e))? as f32;
+                }
+                _ => skip_property(&p.kind, values).map_err(|e| at(element, i, e))?,
+            }
+        }
+        out.push(Vec3::from_array(xyz));
+    }
+    Ok(())
+}
+
+impl Property {
+    fn kind_scalar(&self) -> Option<Scalar> {
+        match self.kind {
+            Kind::Scalar(ty) => Some(ty),
+            Kind::List { .. } => None,
+        }
+    }
+}
+
+fn read_faces(
+    element: &Element,
+    values: &mut dyn Values,
+    out: &mut Vec<[u32; 3]>,
+) -> Result<(), String> {
+    let slot = element
+        .props
+        .iter()
+        .position(|p| {
+            matches!(p.kind, Kind::List { .. })
+                && (p.name == "vertex_indices" || p.name == "vertex_index")
+        })
+        .ok_or("PLY 'face' element has no 'vertex_indices' list")?;
+    for i in 0..element.count {
+        for (k, p) in element.props.iter().enumerate() {
+            match p.kind {
+                Kind::List { count, item } if k == slot => {
+                    let n = list_len(values.next(count).map_err(|e| at(element, i, e))?)
+                        .map_err(|e| at(element, i, e))?;
+                    // Fan from the first corner, streaming so a hostile count costs nothing.
+                    let mut first = 0;
+                    let mut prev = 0;
+                    for j in 0..n {
+                        let v = values.next(item).map_err(|e| at(element, i, e))?;
+                        let v = vertex_index(v).map_err(|e| at(element, i, e))?;
+                        match j {
+                            0 => first = v,
+                            1 => {}
+                            _ => out.push([first, prev, v]),
+                        }
+                        prev = v;
+                    }
+                }
+                _ => skip_property(&p.kind, values).map_err(|e| at(element, i, e))?,
+            }
+        }
+    }
+    Ok(())
+}
+
+fn vertex_index(v: f64) -> Result<u32, String> {
+    if v >= 0.0 && v <= f64::from(u32::MAX) && v.fract() == 0.0 {
+        Ok(v as u32)
+    } else {
+        Err(format!("invalid vertex index {v}"))
+    }
+}
+
+/// Binary little-endian PLY with per-vertex normals.
+pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, normals: &[Vec3]) -> io::Result<()> {
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\ncomment pgvol\n\
+         element vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\n\
+         element face {}\nproperty list uchar uint vertex_indices\nend_header\n",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    )?;
+    let mut record = [0u8; 24];
+    for (p, n) in mesh.positions.iter().zip(normals) {
+        for (k, c) in p.to_array().iter().chain(&n.to_array()).enumerate() {
+            record[4 * k..4 * k + 4].copy_from_slice(&c.to_le_bytes());
+        }
+        w.write_all(&record)?;
+    }
+    let mut face = [0u8; 13];
+    face[0] = 3;
+    for t in &mesh.triangles {
+        for (k, i) in t.iter().enumerate() {
+            face[1 + 4 * k..5 + 4 * k].copy_from_slice(&i.to_le_bytes());
+        }
+        w.write_all(&face)?;
+    }
+    Ok(())
+}

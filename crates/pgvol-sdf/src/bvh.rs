@@ -1,0 +1,281 @@
+//! A bounding volume hierarchy over a mesh's triangles with nearest-first closest-point queries.
+//!
+//! The tree is built by obvhs (PLOC), then copied into a compact layout of our own with the
+//! triangles stored in leaf order, because obvhs answers ray and overlap queries only.
+
+use glam::{Vec3, Vec3A};
+use obvhs::{bvh2::builder::build_bvh2_from_tris, triangle::Triangle, BvhBuildParams};
+use pgvol_mesh::Mesh;
+use std::time::Duration;
+
+use crate::triangle::{closest_point, Feature};
+
+/// One node: a box and either two children (`count == 0`, children at `first` and `first + 1`)
+/// or `count` triangles starting at `first` in leaf order.
+#[derive(Clone, Copy, Debug)]
+pub struct Node {
+    pub min: Vec3A,
+    pub max: Vec3A,
+    pub first: u32,
+    pub count: u32,
+}
+
+impl Node {
+    #[inline]
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    #[inline]
+    pub fn distance_squared(&self, p: Vec3A) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3A::ZERO);
+        d.length_squared()
+    }
+}
+
+/// The hierarchy. `tris[n]` are the corners of mesh triangle `tri_ids[n]`.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    pub nodes: Vec<Node>,
+    pub tris: Vec<[Vec3A; 3]>,
+    pub tri_ids: Vec<u32>,
+}
+
+/// The closest point of the mesh to a query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closest {
+    pub point: Vec3,
+    pub distance_squared: f32,
+    /// Triangle index in the original mesh.
+    pub triangle: u32,
+    /// Position of that triangle in leaf order (a hint for the next query).
+    pub slot: u32,
+    pub feature: Feature,
+}
+
+/// Enough for any tree obvhs builds on meshes that fit in memory; deeper trees spill to the heap.
+const STACK: usize = 96;
+
+impl Bvh {
+    /// Builds the hierarchy. The mesh must have at least one triangle.
+    pub fn build(mesh: &Mesh) -> Bvh {
+        let tris: Vec<Triangle> = (0..mesh.triangles.len())
+            .map(|t| {
+                let [a, b, c] = mesh.triangle(t);
+                Triangle {
+                    v0: a.into(),
+                    v1: b.into(),
+                    v2: c.into(),
+                }
+            })
+            .collect();
+        let mut build_time = Duration::ZERO;
+        // fast_build keeps one triangle per leaf slot (no spatial splits), so leaves list each
+        // triangle exactly once.
+        let bvh2 = build_bvh2_from_tris(&tris, BvhBuildParams::fast_build(), &mut build_time);
+        let mut out = Bvh {
+            nodes: Vec::with_capacity(bvh2.nodes.len()),
+            tris: Vec::with_capacity(tris.len()),
+            tri_ids: Vec::with_capacity(tris.len()),
+        };
+        if bvh2.nodes.is_empty() {
+            return out;
+        }
+        // Breadth-first copy keeps siblings adjacent, so children sit at `first` and `first + 1`.
+        out.nodes.push(Node {
+            min: Vec3A::ZERO,
+            max: Vec3A::ZERO,
+            first: 0,
+            count: 0,
+        });
+        let mut queue = std::collections::VecDeque::from([(0usize, 0usize)]);
+        while let Some((src, dst)) = queue.pop_front() {
+            let n = &bvh2.nodes[src];
+            let (min, max) = (n.aabb.min, n.aabb.max);
+            if n.prim_count > 0 {
+                let first = out.tris.len() as u32;
+                let range = n.first_index as usize..(n.first_index + n.prim_count) as usize;
+                for &prim in &bvh2.primitive_indices[range] {
+                    let t = &tris[prim as usize];
+                    out.tris.push([t.v0, t.v1, t.v2]);
+                    out.tri_ids.push(prim);
+                }
+                out.nodes[dst] = Node {
+                    min,
+                    max,
+                    first,
+                    count: n.prim_count,
+                };
+            } else {
+                let child = out.nodes.len();
+                let blank = Node {
+                    min: Vec3A::ZERO,
+                    max: Vec3A::ZERO,
+                    first: 0,
+                    count: 0,
+                };
+                out.nodes.push(blank);
+                out.nodes.push(blank);
+                out.nodes[dst] = Node {
+                    min,
+                    max,
+                    first: child as u32,
+                    count: 0,
+                };
+                queue.push_back((n.first_index as usize, child));
+                queue.push_back((n.first_index as usize + 1, child + 1));
+            }
+        }
+        out
+    }
+
+    /// The closest point of the mesh to `p`, or `None` for an empty tree or when nothing is
+    /// closer than `sqrt(bound_squared)`.
+    pub fn closest(&self, p: Vec3, bound_squared: f32) -> Option<Closest> {
+        self.closest_with_hint(p, bound_squared, None)
+    }
+
+    /// As [`Bvh::closest`], starting from the distance to the triangle at leaf slot `hint`
+    /// (typically the previous query's answer), which prunes most of the tree for nearby queries.
+    pub fn closest_with_hint(
+        &self,
+        p: Vec3,
+        bound_squared: f32,
+        hint: Option<u32>,
+    ) -> Option<Closest> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let q = Vec3A::from(p);
+        let mut best: Option<Closest> = None;
+        let mut best_d2 = bound_squared;
+        let consider = |slot: u32, best: &mut Option<Closest>, best_d2: &mut f32| {
+            let [a, b, c] = self.tris[slot as usize];
+            let (point, feature) = closest_point(q, a, b, c);
+            let d2 = q.distance_squared(point);
+            if d2 < *best_d2 || (best.is_none() && d2 <= *best_d2) {
+                *best_d2 = d2;
+                *best = Some(Closest {
+                    point: point.into(),
+                    distance_squared: d2,
+                    triangle: self.tri_ids[slot as usize],
+                    slot,
+                    feature,
+                });
+            }
+        };
+        if let Some(h) = hint.filter(|&h| (h as usize) < self.tris.len()) {
+            consider(h, &mut best, &mut best_d2);
+        }
+        let mut stack = [0u32; STACK];
+        let mut spill: Vec<u32> = Vec::new();
+        let mut top = 1usize;
+        stack[0] = 0;
+        loop {
+            let id = if let Some(id) = spill.pop() {
+                id
+            } else if top > 0 {
+                top -= 1;
+                stack[top]
+            } else {
+                break;
+            };
+            let node = &self.nodes[id as usize];
+            if node.distance_squared(q) > best_d2 {
+                continue;
+            }
+            if node.is_leaf() {
+                for slot in node.first..node.first + node.count {
+                    consider(slot, &mut best, &mut best_d2);
+                }
+                continue;
+            }
+            let (l, r) = (node.first, node.first + 1);
+            let dl = self.nodes[l as usize].distance_squared(q);
+            let dr = self.nodes[r as usize].distance_squared(q);
+            // Push the farther child first so the nearer one is visited next.
+            let (near, far, dfar, dnear) = if dl <= dr {
+                (l, r, dr, dl)
+            } else {
+                (r, l, dl, dr)
+            };
+            for (child, d) in [(far, dfar), (near, dnear)] {
+                if d <= best_d2 {
+                    if top < STACK && spill.is_empty() {
+                        stack[top] = child;
+                        top += 1;
+                    } else {
+                        spill.push(child);
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    pub(crate) fn random_soup(n: usize, seed: u64) -> Mesh {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for t in 0..n {
+            let c = Vec3::new(rng.gen(), rng.gen(), rng.gen()) * 4.0;
+            for _ in 0..3 {
+                positions.push(c + Vec3::new(rng.gen(), rng.gen(), rng.gen()) * 0.5);
+            }
+            let b = 3 * t as u32;
+            triangles.push([b, b + 1, b + 2]);
+        }
+        Mesh::new(positions, triangles)
+    }
+
+    #[test]
+    fn every_triangle_appears_once_in_leaf_order() {
+        let mesh = random_soup(1000, 1);
+        let bvh = Bvh::build(&mesh);
+        let mut ids = bvh.tri_ids.clone();
+        ids.sort_unstable();
+        assert_eq!(ids, (0..1000).collect::<Vec<u32>>());
+    }
+
+    #[test]
+    fn closest_matches_brute_force() {
+        let mesh = random_soup(500, 2);
+        let bvh = Bvh::build(&mesh);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let mut hint = None;
+        for _ in 0..2000 {
+            let p = Vec3::new(rng.gen(), rng.gen(), rng.gen()) * 6.0 - Vec3::ONE;
+            let got = bvh.closest_with_hint(p, f32::INFINITY, hint).unwrap();
+            hint = Some(got.slot);
+            let brute = (0..mesh.triangles.len())
+                .map(|t| {
+                    let [a, b, c] = mesh.triangle(t);
+                    let (q, _) = closest_point(p.into(), a.into(), b.into(), c.into());
+                    Vec3::from(q).distance_squared(p)
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(got.distance_squared, brute, "query {p}");
+            let [a, b, c] = mesh.triangle(got.triangle as usize);
+            let (q, _) = closest_point(p.into(), a.into(), b.into(), c.into());
+            assert_eq!(Vec3::from(q), got.point);
+        }
+    }
+
+    #[test]
+    fn single_triangle_and_bounds() {
+        let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
+        let bvh = Bvh::build(&mesh);
+        let c = bvh
+            .closest(Vec3::new(0.2, 0.2, 2.0), f32::INFINITY)
+            .unwrap();
+        assert!((c.distance_squared - 4.0).abs() < 1e-6);
+        assert!(bvh.closest(Vec3::new(0.2, 0.2, 2.0), 1.0).is_none());
+    }
+}

@@ -1,0 +1,16 @@
+//! Signed distance from triangle meshes.
+//!
+//! Distances are exact (closest point on the nearest triangle, found through a BVH); the sign
+//! comes from the generalized winding number, which stays meaningful on open, flipped or
+//! self-intersecting meshes. Negative inside, positive outside, in the mesh's units.
+
+pub mod bvh;
+pub mod grid;
+pub mod triangle;
+pub mod winding;
+
+pub use bvh::{Bvh, Closest};
+pub use grid::{Grid, GridError};
+pub use winding::WindingTree;
+pub mod sdf;
+pub use sdf::{MeshSdf, SdfError, SignMode};

@@ -1,0 +1,169 @@
+//! Exact closest point on a triangle, classified by the feature (face, edge, vertex) it lies on.
+
+use glam::Vec3A;
+
+/// Which part of a triangle holds the closest point; the pseudonormal sign needs it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Feature {
+    Face,
+    /// Edge from corner `n` to corner `(n + 1) % 3`.
+    Edge(u8),
+    Vertex(u8),
+}
+
+/// Closest point on triangle `(a, b, c)` to `p`, by the Voronoi regions of its features.
+/// Degenerate triangles (zero area) fall through to their edges and stay exact.
+pub fn closest_point(p: Vec3A, a: Vec3A, b: Vec3A, c: Vec3A) -> (Vec3A, Feature) {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, Feature::Vertex(0));
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, Feature::Vertex(1));
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let t = d1 / (d1 - d3);
+        return (a + ab * t, Feature::Edge(0));
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, Feature::Vertex(2));
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let t = d2 / (d2 - d6);
+        return (a + ac * t, Feature::Edge(2));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + (c - b) * t, Feature::Edge(1));
+    }
+    let sum = va + vb + vc;
+    if sum.is_nan() || sum <= 0.0 || sum.is_infinite() {
+        // Degenerate (collinear) triangle that slipped through the region tests: take the best edge.
+        return closest_on_edges(p, a, b, c);
+    }
+    let denom = 1.0 / sum;
+    let v = vb * denom;
+    let w = vc * denom;
+    (a + ab * v + ac * w, Feature::Face)
+}
+
+fn closest_on_segment(p: Vec3A, a: Vec3A, b: Vec3A) -> Vec3A {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    if len2 <= 0.0 {
+        return a;
+    }
+    let t = ((p - a).dot(ab) / len2).clamp(0.0, 1.0);
+    a + ab * t
+}
+
+fn closest_on_edges(p: Vec3A, a: Vec3A, b: Vec3A, c: Vec3A) -> (Vec3A, Feature) {
+    let candidates = [
+        (closest_on_segment(p, a, b), Feature::Edge(0)),
+        (closest_on_segment(p, b, c), Feature::Edge(1)),
+        (closest_on_segment(p, c, a), Feature::Edge(2)),
+    ];
+    let mut best = candidates[0];
+    for cand in &candidates[1..] {
+        if p.distance_squared(cand.0) < p.distance_squared(best.0) {
+            best = *cand;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn v(x: f32, y: f32, z: f32) -> Vec3A {
+        Vec3A::new(x, y, z)
+    }
+
+    /// Dense sampling of the triangle by barycentric coordinates: an independent upper bound.
+    fn brute_force_distance(p: Vec3A, a: Vec3A, b: Vec3A, c: Vec3A) -> f32 {
+        let n = 200;
+        let mut best = f32::INFINITY;
+        for i in 0..=n {
+            for j in 0..=(n - i) {
+                let u = i as f32 / n as f32;
+                let w = j as f32 / n as f32;
+                let q = a + (b - a) * u + (c - a) * w;
+                best = best.min(p.distance(q));
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn regions_of_a_right_triangle() {
+        let (a, b, c) = (v(0., 0., 0.), v(1., 0., 0.), v(0., 1., 0.));
+        let (q, f) = closest_point(v(0.2, 0.2, 1.0), a, b, c);
+        assert!((q - v(0.2, 0.2, 0.0)).length() < 1e-6);
+        assert_eq!(f, Feature::Face);
+        assert_eq!(
+            closest_point(v(-1., -1., 0.), a, b, c).1,
+            Feature::Vertex(0)
+        );
+        assert_eq!(closest_point(v(2., -1., 0.), a, b, c).1, Feature::Vertex(1));
+        assert_eq!(closest_point(v(-1., 3., 0.), a, b, c).1, Feature::Vertex(2));
+        assert_eq!(
+            closest_point(v(0.5, -1., 0.), a, b, c),
+            (v(0.5, 0., 0.), Feature::Edge(0))
+        );
+        assert_eq!(
+            closest_point(v(1., 1., 0.), a, b, c),
+            (v(0.5, 0.5, 0.), Feature::Edge(1))
+        );
+        assert_eq!(
+            closest_point(v(-1., 0.5, 0.), a, b, c),
+            (v(0., 0.5, 0.), Feature::Edge(2))
+        );
+    }
+
+    #[test]
+    fn degenerate_triangles_are_exact() {
+        let (a, b, c) = (v(0., 0., 0.), v(1., 0., 0.), v(2., 0., 0.));
+        let (q, _) = closest_point(v(1.5, 1.0, 0.0), a, b, c);
+        assert!((q - v(1.5, 0., 0.)).length() < 1e-6);
+        let (q, _) = closest_point(v(1.0, 1.0, 1.0), a, a, a);
+        assert_eq!(q, a);
+    }
+
+    proptest! {
+        #[test]
+        fn never_farther_than_brute_force(
+            t in proptest::array::uniform9(-1.0f32..1.0),
+            p in proptest::array::uniform3(-2.0f32..2.0),
+        ) {
+            let (a, b, c) = (v(t[0], t[1], t[2]), v(t[3], t[4], t[5]), v(t[6], t[7], t[8]));
+            let p = v(p[0], p[1], p[2]);
+            let (q, _) = closest_point(p, a, b, c);
+            let d = p.distance(q);
+            let brute = brute_force_distance(p, a, b, c);
+            // The sampled minimum is an upper bound within the sampling step of the true minimum.
+            let step = (b - a).length().max((c - a).length()) / 200.0;
+            prop_assert!(d <= brute + 1e-5);
+            prop_assert!(d >= brute - step - 1e-5);
+            // The returned point lies in the triangle's plane region: barycentrics are in [0, 1].
+            let n = (b - a).cross(c - a);
+            if n.length() > 1e-3 {
+                prop_assert!((q - a).dot(n).abs() / n.length() < 1e-4);
+            }
+        }
+    }
+}
