@@ -1,1 +1,150 @@
-//! Helpers shared by the integration tests.
+//! Helpers shared by the integration tests: locating the shared meshes, seeded random points
+//! and the encode/decode pipeline as the CLI wires it (the CLI crate itself is not a dependency).
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use pgvol_field::{Basis, CoefficientVolume, Grid};
+use pgvol_mesh::Mesh;
+use pgvol_sdf::{MeshSdf, SignMode};
+use rand::{Rng, SeedableRng};
+
+/// Every mesh of the shared folder, by file stem.
+pub const SHARED_MESHES: [&str; 7] = [
+    "stanford-bunny",
+    "spot",
+    "cow",
+    "fandisk",
+    "rocker-arm",
+    "teapot",
+    "suzanne",
+];
+
+/// The folder with the shared meshes: `PGVOL_SHARED_MESHES` if set, otherwise `shared/meshes`
+/// next to the workspace. Panics (never skips) when it is missing, so a broken checkout cannot
+/// pass the suite by testing nothing.
+pub fn shared_meshes_dir() -> PathBuf {
+    let (dir, origin) = match std::env::var_os("PGVOL_SHARED_MESHES") {
+        Some(d) => (PathBuf::from(d), "PGVOL_SHARED_MESHES"),
+        None => (
+            // This crate sits at the workspace root, so two levels up is the workspace's parent.
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"),
+            "the default location (set PGVOL_SHARED_MESHES to override)",
+        ),
+    };
+    existing_dir(dir, origin)
+}
+
+fn existing_dir(dir: PathBuf, origin: &str) -> PathBuf {
+    assert!(
+        dir.is_dir(),
+        "shared meshes folder {} (from {origin}) does not exist: the integration tests need \
+         the shared meshes and refuse to pass without them",
+        dir.display()
+    );
+    dir
+}
+
+/// Path of the shared mesh `name` (file stem), panicking with a clear message if it is absent.
+pub fn shared_mesh_path(name: &str) -> PathBuf {
+    let path = shared_meshes_dir().join(format!("{name}.obj"));
+    assert!(
+        path.is_file(),
+        "shared mesh {} is missing: the integration tests need it",
+        path.display()
+    );
+    path
+}
+
+/// The shared mesh `name`, read and cleaned the way the CLI does (bit-exact weld, degenerate
+/// triangles dropped).
+pub fn load_shared(name: &str) -> Mesh {
+    let path = shared_mesh_path(name);
+    match pgvol_mesh::read_clean(&path) {
+        Ok((mesh, _)) => mesh,
+        Err(e) => panic!("cannot read shared mesh {}: {e}", path.display()),
+    }
+}
+
+/// The cube of side 1.1 x the longest extent around the mesh (the grid convention), as
+/// `(lo, hi)`.
+pub fn margin_cube(mesh: &Mesh) -> (Vec3, Vec3) {
+    let (lo, hi) = mesh.bounds().expect("mesh has triangles");
+    let half = 0.5 * pgvol_sdf::grid::GRID_MARGIN * (hi - lo).max_element();
+    let centre = 0.5 * (lo + hi);
+    (centre - Vec3::splat(half), centre + Vec3::splat(half))
+}
+
+/// `n` uniformly random points in `[lo, hi]`, reproducible from `seed`.
+pub fn random_points(lo: Vec3, hi: Vec3, n: usize, seed: u64) -> Vec<Vec3> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    (0..n)
+        .map(|_| lo + (hi - lo) * Vec3::new(rng.gen(), rng.gen(), rng.gen()))
+        .collect()
+}
+
+/// Mesh -> signed distance on `Grid::cube_res(bounds, res)` -> fitted coefficient volume.
+pub fn encode(mesh: &Mesh, res: usize, basis: Basis) -> CoefficientVolume {
+    let (lo, hi) = mesh.bounds().expect("mesh has triangles");
+    let grid = Grid::cube_res(lo, hi, res).expect("grid");
+    let sdf = MeshSdf::new(mesh, SignMode::Winding).expect("distance field");
+    let samples = sdf.sample_grid(&grid, &|_| {});
+    CoefficientVolume::interpolate(grid, basis, samples).expect("fit")
+}
+
+/// Contours the `iso` level set of `volume` on its own grid as the CLI's decode does: the grid
+/// is padded with one layer of outside values so the surface closes where it reaches the border,
+/// and vertices on interior edges are placed by root finding on the continuous field.
+pub fn decode(volume: &CoefficientVolume, iso: f32) -> Mesh {
+    let g = volume.grid;
+    let inner = volume.sample(&g);
+    let [nx, ny, nz] = g.dims;
+    let dims = [nx + 2, ny + 2, nz + 2];
+    let outside = iso + g.spacing;
+    let mut values = vec![outside; dims[0] * dims[1] * dims[2]];
+    for k in 0..nz {
+        for j in 0..ny {
+            let src = nx * (j + ny * k);
+            let dst = 1 + dims[0] * ((j + 1) + dims[1] * (k + 1));
+            values[dst..dst + nx].copy_from_slice(&inner[src..src + nx]);
+        }
+    }
+    let origin = g.origin - Vec3::splat(g.spacing);
+    let (lo, hi) = (g.origin, g.max_corner());
+    let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
+        let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+        if in_box(a) && in_box(b) {
+            volume.root_on_segment(a, va, b, vb, iso)
+        } else {
+            // Padding values are artificial: interpolate linearly on edges that reach them.
+            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+            a + (b - a) * t
+        }
+    };
+    pgvol_contour::marching_cubes_with(&values, dims, origin, g.spacing, iso, &refine)
+}
+
+/// Runs `f` in a fresh rayon pool of `threads` threads.
+pub fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool")
+        .install(f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    #[should_panic(expected = "refuse to pass without them")]
+    fn a_missing_mesh_folder_fails_loudly() {
+        existing_dir(PathBuf::from("/nonexistent/pgvol/meshes"), "a test");
+    }
+
+    #[test]
+    fn the_default_folder_is_found() {
+        assert!(shared_meshes_dir().join("stanford-bunny.obj").is_file());
+    }
+}

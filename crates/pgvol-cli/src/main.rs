@@ -25,4 +25,3 @@ fn main() {
         std::process::exit(1);
     }
 }
-

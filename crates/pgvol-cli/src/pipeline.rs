@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_mesh::Mesh;
+use pgvol_sdf::sampling::{Extent, Sampled};
 use pgvol_sdf::{MeshSdf, SignMode};
 use serde::Serialize;
 
@@ -64,14 +65,27 @@ pub fn load_mesh(path: &Path, quiet: bool) -> Result<Mesh> {
     Ok(mesh)
 }
 
-/// Signed distance of `mesh` at every node of `grid`.
-pub fn signed_distance_grid(mesh: &Mesh, grid: &Grid, quiet: bool) -> Result<Vec<f32>> {
-    let sdf = MeshSdf::new(mesh, SignMode::Winding).context("cannot build the distance field")?;
-    let pb = progress::bar(grid.dims[2] as u64, "distance", quiet);
-    let values = sdf.sample_grid(grid, &|done| pb.set_position(done as u64));
+/// Signed distance of `mesh` on `grid`, and the sign mode that was used.
+pub fn signed_distance_grid(
+    mesh: &Mesh,
+    grid: &Grid,
+    extent: Extent,
+    sign: SignMode,
+    quiet: bool,
+) -> Result<(Sampled, SignMode)> {
+    let sdf = MeshSdf::new(mesh, sign).context("cannot build the distance field")?;
+    let pb = progress::bar(1000, "distance", quiet);
+    let sampled = sdf.sample(grid, extent, &|done| {
+        pb.set_position((done * 1000.0) as u64)
+    });
     pb.finish_and_clear();
-    Ok(values)
+    Ok((sampled, sdf.sign_mode()))
 }
+
+/// Exact distances within this many grid spacings of the surface when encoding: the cubic
+/// B-spline near the surface depends on samples up to 2 nodes away directly and on farther ones
+/// through the prefilter, whose influence falls by 0.268 per node.
+pub const ENCODE_BAND: f32 = 4.0;
 
 /// The coefficient volume of `mesh` on `grid`, and the seconds spent on distances and the fit.
 pub fn encode(
@@ -81,7 +95,14 @@ pub fn encode(
     quiet: bool,
 ) -> Result<(CoefficientVolume, f64, f64)> {
     let t = Instant::now();
-    let samples = signed_distance_grid(mesh, &grid, quiet)?;
+    let (sampled, _) = signed_distance_grid(
+        mesh,
+        &grid,
+        Extent::Band(ENCODE_BAND),
+        SignMode::Auto,
+        quiet,
+    )?;
+    let samples = sampled.values;
     let sdf_time = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let volume = CoefficientVolume::interpolate(grid, basis, samples)

@@ -71,9 +71,10 @@ impl Bvh {
             })
             .collect();
         let mut build_time = Duration::ZERO;
-        // fast_build keeps one triangle per leaf slot (no spatial splits), so leaves list each
-        // triangle exactly once.
-        let bvh2 = build_bvh2_from_tris(&tris, BvhBuildParams::fast_build(), &mut build_time);
+        // Presets without spatial splits list each triangle in exactly one leaf. On the bunny at
+        // 64^3, very_fast_build answered closest-point queries fastest of fastest, very_fast and
+        // medium (1.57 s against 1.91 s and 1.71 s on one core).
+        let bvh2 = build_bvh2_from_tris(&tris, BvhBuildParams::very_fast_build(), &mut build_time);
         let mut out = Bvh {
             nodes: Vec::with_capacity(bvh2.nodes.len()),
             tris: Vec::with_capacity(tris.len()),
@@ -215,6 +216,181 @@ impl Bvh {
     }
 }
 
+/// Squared distance between two boxes (0 when they overlap).
+#[inline]
+fn box_box_distance_squared(lo: Vec3A, hi: Vec3A, node: &Node) -> f32 {
+    let d = (node.min - hi).max(lo - node.max).max(Vec3A::ZERO);
+    d.length_squared()
+}
+
+impl Bvh {
+    /// Leaves whose box lies within `sqrt(bound_squared)` of the box `[lo, hi]`, as
+    /// `(squared box distance, node id)` sorted by distance: every triangle that can be closest
+    /// to a point of the box, given that each such point is within that bound of the surface.
+    pub fn leaves_near_box(
+        &self,
+        lo: Vec3A,
+        hi: Vec3A,
+        bound_squared: f32,
+        out: &mut Vec<(f32, u32)>,
+    ) {
+        out.clear();
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        while let Some(id) = stack.pop() {
+            let node = &self.nodes[id as usize];
+            let d2 = box_box_distance_squared(lo, hi, node);
+            if d2 > bound_squared {
+                continue;
+            }
+            if node.is_leaf() {
+                out.push((d2, id));
+            } else {
+                stack.push(node.first);
+                stack.push(node.first + 1);
+            }
+        }
+        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    }
+
+    /// The closest point to `p` among the triangles of `leaves` (from [`Bvh::leaves_near_box`]
+    /// for a box holding `p`), improving on `start`, the distance to some triangle.
+    pub fn closest_among(&self, p: Vec3, leaves: &[(f32, u32)], start: Closest) -> Closest {
+        let q = Vec3A::from(p);
+        let mut best = start;
+        for &(box_d2, id) in leaves {
+            // Sorted by distance to the whole box, which bounds the distance to `p` from below.
+            if box_d2 > best.distance_squared {
+                break;
+            }
+            let node = &self.nodes[id as usize];
+            if node.distance_squared(q) > best.distance_squared {
+                continue;
+            }
+            for slot in node.first..node.first + node.count {
+                let [a, b, c] = self.tris[slot as usize];
+                let (point, feature) = closest_point(q, a, b, c);
+                let d2 = q.distance_squared(point);
+                if d2 < best.distance_squared {
+                    best = Closest {
+                        point: point.into(),
+                        distance_squared: d2,
+                        triangle: self.tri_ids[slot as usize],
+                        slot,
+                        feature,
+                    };
+                }
+            }
+        }
+        best
+    }
+
+    /// The change of the generalized winding number from `a` to `b` caused by the triangles the
+    /// segment crosses: +1 for each triangle crossed from its front to its back (into the
+    /// inside), −1 the other way. `None` when a crossing is too close to an edge, a vertex or an
+    /// end of the segment to count reliably.
+    pub fn winding_jump(&self, a: Vec3, b: Vec3) -> Option<i32> {
+        if self.nodes.is_empty() {
+            return Some(0);
+        }
+        let (pa, pb) = (Vec3A::from(a), Vec3A::from(b));
+        let (lo, hi) = (pa.min(pb), pa.max(pb));
+        let dir = pb - pa;
+        let mut jump = 0i32;
+        let mut stack: Vec<u32> = Vec::with_capacity(32);
+        stack.push(0);
+        while let Some(id) = stack.pop() {
+            let node = &self.nodes[id as usize];
+            if node.min.cmpgt(hi).any() || node.max.cmplt(lo).any() {
+                continue;
+            }
+            if !node.is_leaf() {
+                stack.push(node.first);
+                stack.push(node.first + 1);
+                continue;
+            }
+            for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
+                match segment_crossing(pa, dir, t) {
+                    Crossing::None => {}
+                    Crossing::Unsure => return None,
+                    Crossing::IntoBack => jump += 1,
+                    Crossing::IntoFront => jump -= 1,
+                }
+            }
+        }
+        Some(jump)
+    }
+
+    /// Closest point to `p` on the triangle at leaf slot `slot`.
+    pub fn closest_on_slot(&self, p: Vec3, slot: u32) -> Closest {
+        let q = Vec3A::from(p);
+        let [a, b, c] = self.tris[slot as usize];
+        let (point, feature) = closest_point(q, a, b, c);
+        Closest {
+            point: point.into(),
+            distance_squared: q.distance_squared(point),
+            triangle: self.tri_ids[slot as usize],
+            slot,
+            feature,
+        }
+    }
+}
+
+/// How a segment meets a triangle.
+enum Crossing {
+    None,
+    /// Too close to an edge, a vertex or a segment end, or parallel within rounding.
+    Unsure,
+    /// Through the triangle against its normal (from outside to inside).
+    IntoBack,
+    /// Through the triangle along its normal.
+    IntoFront,
+}
+
+/// Möller–Trumbore on the segment `a + s·dir`, `s ∈ [0, 1]`, with margins that turn near misses
+/// and grazing hits into `Unsure` rather than guesses.
+#[inline]
+fn segment_crossing(a: Vec3A, dir: Vec3A, t: &[Vec3A; 3]) -> Crossing {
+    const EDGE: f32 = 1e-4;
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let pvec = dir.cross(e2);
+    let det = e1.dot(pvec);
+    let scale = e1.length() * e2.length() * dir.length();
+    if det.abs() <= 1e-6 * scale {
+        // Parallel: a crossing is impossible unless the segment lies in the plane.
+        let n = e1.cross(e2);
+        let off = (a - t[0]).dot(n);
+        return if off.abs() <= 1e-6 * n.length() * dir.length().max(1e-30) {
+            Crossing::Unsure
+        } else {
+            Crossing::None
+        };
+    }
+    let inv = 1.0 / det;
+    let tvec = a - t[0];
+    let u = tvec.dot(pvec) * inv;
+    let q = tvec.cross(e1);
+    let v = dir.dot(q) * inv;
+    let s = e2.dot(q) * inv;
+    let w = 1.0 - u - v;
+    if u < -EDGE || v < -EDGE || w < -EDGE || !(-EDGE..=1.0 + EDGE).contains(&s) {
+        return Crossing::None;
+    }
+    if u < EDGE || v < EDGE || w < EDGE || !(EDGE..=1.0 - EDGE).contains(&s) {
+        return Crossing::Unsure;
+    }
+    // det > 0 means dir · normal < 0: the segment enters through the front face.
+    if det > 0.0 {
+        Crossing::IntoBack
+    } else {
+        Crossing::IntoFront
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,6 +442,35 @@ mod tests {
             let (q, _) = closest_point(p.into(), a.into(), b.into(), c.into());
             assert_eq!(Vec3::from(q), got.point);
         }
+    }
+
+    #[test]
+    fn winding_jumps_count_crossings_with_direction() {
+        let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
+        let bvh = Bvh::build(&mesh);
+        // The normal is +z: going down crosses into the back (inside), +1.
+        assert_eq!(
+            bvh.winding_jump(Vec3::new(0.2, 0.2, 1.0), Vec3::new(0.2, 0.2, -1.0)),
+            Some(1)
+        );
+        assert_eq!(
+            bvh.winding_jump(Vec3::new(0.2, 0.2, -1.0), Vec3::new(0.2, 0.2, 1.0)),
+            Some(-1)
+        );
+        assert_eq!(
+            bvh.winding_jump(Vec3::new(2.0, 0.2, 1.0), Vec3::new(2.0, 0.2, -1.0)),
+            Some(0)
+        );
+        // Through an edge: unsure.
+        assert_eq!(
+            bvh.winding_jump(Vec3::new(0.5, 0.0, 1.0), Vec3::new(0.5, 0.0, -1.0)),
+            None
+        );
+        // Ending on the triangle: unsure.
+        assert_eq!(
+            bvh.winding_jump(Vec3::new(0.2, 0.2, 1.0), Vec3::new(0.2, 0.2, 0.0)),
+            None
+        );
     }
 
     #[test]

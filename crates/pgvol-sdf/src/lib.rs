@@ -6,6 +6,8 @@
 
 pub mod bvh;
 pub mod grid;
+pub mod pseudonormal;
+pub mod sampling;
 pub mod triangle;
 pub mod winding;
 

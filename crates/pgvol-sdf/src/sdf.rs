@@ -2,16 +2,30 @@
 
 use glam::Vec3;
 use pgvol_mesh::Mesh;
-use rayon::prelude::*;
 
-use crate::{bvh::Bvh, grid::Grid, winding::WindingTree};
+use crate::{bvh::Bvh, bvh::Closest, pseudonormal::Pseudonormals, winding::WindingTree};
 
 /// How inside and outside are told apart.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SignMode {
-    /// Generalized winding number > 1/2: robust to holes, flips and self-intersections.
+    /// Pseudonormal when the mesh is closed, manifold and consistently oriented, else winding.
     #[default]
+    Auto,
+    /// Generalized winding number > 1/2: robust to holes, flips and self-intersections.
     Winding,
+    /// Angle-weighted pseudonormal at the closest point: exact and fast on closed, manifold,
+    /// consistently oriented meshes; wrong near holes and overlaps.
+    Pseudonormal,
+}
+
+impl SignMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            SignMode::Auto => "auto",
+            SignMode::Winding => "winding",
+            SignMode::Pseudonormal => "pseudonormal",
+        }
+    }
 }
 
 /// Why a distance field could not be built.
@@ -27,7 +41,39 @@ pub enum SdfError {
 pub struct MeshSdf {
     bvh: Bvh,
     winding: WindingTree,
+    pseudonormals: Option<Pseudonormals>,
+    /// The mode in force (never `Auto`: that is resolved on construction).
     mode: SignMode,
+    /// Edges where the triangles' orientations do not cancel (open boundaries, edges used twice
+    /// the same way, ...): the winding number varies fast near them.
+    rims: Vec<[glam::Vec3A; 2]>,
+}
+
+/// Edges whose oriented uses do not cancel: the rim of the winding number's jump surface.
+fn winding_rims(mesh: &Mesh) -> Vec<[glam::Vec3A; 2]> {
+    let mut net: std::collections::HashMap<(u32, u32), i32> = std::collections::HashMap::new();
+    for t in &mesh.triangles {
+        for c in 0..3 {
+            let (a, b) = (t[c], t[(c + 1) % 3]);
+            *net.entry((a.min(b), a.max(b))).or_insert(0) += if a < b { 1 } else { -1 };
+        }
+    }
+    let mut rims: Vec<[glam::Vec3A; 2]> = net
+        .into_iter()
+        .filter(|&(_, n)| n != 0)
+        .map(|((a, b), _)| {
+            [
+                mesh.positions[a as usize].into(),
+                mesh.positions[b as usize].into(),
+            ]
+        })
+        .collect();
+    rims.sort_by(|x, y| {
+        x[0].to_array()
+            .partial_cmp(&y[0].to_array())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    rims
 }
 
 /// Winding numbers within this margin of 1/2 are recomputed with a finer expansion before the
@@ -44,7 +90,61 @@ impl MeshSdf {
         }
         let bvh = Bvh::build(mesh);
         let winding = WindingTree::new(&bvh);
-        Ok(MeshSdf { bvh, winding, mode })
+        let mode = match mode {
+            SignMode::Auto => {
+                let s = mesh.stats();
+                if s.watertight && s.winding_consistent && s.non_manifold_edges == 0 {
+                    SignMode::Pseudonormal
+                } else {
+                    SignMode::Winding
+                }
+            }
+            m => m,
+        };
+        let pseudonormals =
+            (mode == SignMode::Pseudonormal).then(|| Pseudonormals::new(mesh, &bvh));
+        let rims = if mode == SignMode::Winding {
+            winding_rims(mesh)
+        } else {
+            Vec::new()
+        };
+        Ok(MeshSdf {
+            bvh,
+            winding,
+            pseudonormals,
+            mode,
+            rims,
+        })
+    }
+
+    /// Rim edges (see [`MeshSdf`]) whose bounding box comes within `reach` of the box `[lo, hi]`.
+    pub fn rims_near_box(
+        &self,
+        lo: glam::Vec3A,
+        hi: glam::Vec3A,
+        reach: f32,
+        out: &mut Vec<[glam::Vec3A; 2]>,
+    ) {
+        out.clear();
+        let (lo, hi) = (
+            lo - glam::Vec3A::splat(reach),
+            hi + glam::Vec3A::splat(reach),
+        );
+        for r in &self.rims {
+            if r[0].min(r[1]).cmple(hi).all() && r[0].max(r[1]).cmpge(lo).all() {
+                out.push(*r);
+            }
+        }
+    }
+
+    /// Number of rim edges (0 for closed, consistently oriented meshes).
+    pub fn rim_count(&self) -> usize {
+        self.rims.len()
+    }
+
+    /// The sign mode in force (`Auto` resolved).
+    pub fn sign_mode(&self) -> SignMode {
+        self.mode
     }
 
     pub fn bvh(&self) -> &Bvh {
@@ -61,9 +161,25 @@ impl MeshSdf {
         }
     }
 
+    /// Whether `p` is inside, given its closest point on the mesh.
+    pub fn is_inside_near(&self, p: Vec3, closest: &Closest) -> bool {
+        match &self.pseudonormals {
+            Some(pn) => {
+                let n = pn.normal(closest.slot, closest.feature);
+                (glam::Vec3A::from(p) - glam::Vec3A::from(closest.point)).dot(n) < 0.0
+            }
+            None => self.winding_number(p) > 0.5,
+        }
+    }
+
+    /// Whether `p` is inside (for the winding mode, independent of the closest point).
     pub fn is_inside(&self, p: Vec3) -> bool {
-        match self.mode {
-            SignMode::Winding => self.winding_number(p) > 0.5,
+        match self.pseudonormals {
+            Some(_) => match self.bvh.closest(p, f32::INFINITY) {
+                Some(c) => self.is_inside_near(p, &c),
+                None => false,
+            },
+            None => self.winding_number(p) > 0.5,
         }
     }
 
@@ -77,43 +193,20 @@ impl MeshSdf {
         match self.bvh.closest_with_hint(p, f32::INFINITY, hint) {
             Some(c) => {
                 let d = c.distance_squared.sqrt();
-                (if self.is_inside(p) { -d } else { d }, Some(c.slot))
+                (
+                    if self.is_inside_near(p, &c) { -d } else { d },
+                    Some(c.slot),
+                )
             }
             None => (f32::INFINITY, None),
         }
-    }
-
-    /// Signed distance at every node of `grid` (x fastest), in parallel over z-planes. `progress`
-    /// is called with the number of planes finished so far. The values do not depend on the
-    /// number of threads.
-    pub fn sample_grid(&self, grid: &Grid, progress: &(dyn Fn(usize) + Sync)) -> Vec<f32> {
-        let [nx, ny, _] = grid.dims;
-        let mut values = vec![0.0f32; grid.len()];
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        values
-            .par_chunks_mut(nx * ny)
-            .enumerate()
-            .for_each(|(k, plane)| {
-                let mut hint = None;
-                for j in 0..ny {
-                    // Serpentine order keeps consecutive queries adjacent, so the hint stays close.
-                    for step in 0..nx {
-                        let i = if j % 2 == 0 { step } else { nx - 1 - step };
-                        let (d, h) = self.signed_distance_with_hint(grid.point(i, j, k), hint);
-                        plane[i + nx * j] = d;
-                        hint = h;
-                    }
-                }
-                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                progress(n);
-            });
-        values
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::Grid;
     use crate::winding::tests_support::sphere;
 
     fn unit_cube() -> Mesh {
@@ -147,7 +240,7 @@ mod tests {
     fn cube_matches_the_analytic_sdf() {
         let sdf = MeshSdf::new(&unit_cube(), SignMode::Winding).unwrap();
         let grid = Grid::cube_res(Vec3::ZERO, Vec3::ONE, 17).unwrap();
-        let values = sdf.sample_grid(&grid, &|_| {});
+        let values = sdf.sample_grid(&grid, &|_: f64| {});
         for k in 0..17 {
             for j in 0..17 {
                 for i in 0..17 {
@@ -222,7 +315,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| sdf.sample_grid(&grid, &|_| {}))
+                .install(|| sdf.sample_grid(&grid, &|_: f64| {}))
         };
         assert_eq!(run(1), run(2));
     }

@@ -99,6 +99,12 @@ impl WindingTree {
                     (node.min + node.max) * 0.5
                 };
                 m.area = area_sum;
+                // The ball around the centre holding every corner: tighter than the box.
+                m.radius_squared = bvh.tris[range]
+                    .iter()
+                    .flatten()
+                    .map(|v| v.distance_squared(m.centre))
+                    .fold(0.0, f32::max);
             } else {
                 let (l, r) = (
                     moments[node.first as usize],
@@ -111,8 +117,11 @@ impl WindingTree {
                     (node.min + node.max) * 0.5
                 };
                 m.area_vector = l.area_vector + r.area_vector;
+                let reach = |c: &Moments| c.centre.distance(m.centre) + c.radius_squared.sqrt();
+                let ball = reach(&l).max(reach(&r));
+                m.radius_squared =
+                    (ball * ball).min(farthest_corner_squared(m.centre, node.min, node.max));
             }
-            m.radius_squared = farthest_corner_squared(m.centre, node.min, node.max);
             moments[id] = m;
         }
         WindingTree {

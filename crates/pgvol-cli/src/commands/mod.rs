@@ -82,6 +82,28 @@ impl From<BasisArg> for Basis {
     }
 }
 
+/// How inside and outside are told apart.
+#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+pub enum SignArg {
+    /// Pseudonormal for closed, consistently oriented meshes; winding number otherwise.
+    #[default]
+    Auto,
+    /// Generalized winding number > 1/2: survives holes, flipped faces, self-intersections.
+    Winding,
+    /// Angle-weighted pseudonormal: for closed, consistently oriented meshes only.
+    Pseudonormal,
+}
+
+impl From<SignArg> for pgvol_sdf::SignMode {
+    fn from(s: SignArg) -> Self {
+        match s {
+            SignArg::Auto => pgvol_sdf::SignMode::Auto,
+            SignArg::Winding => pgvol_sdf::SignMode::Winding,
+            SignArg::Pseudonormal => pgvol_sdf::SignMode::Pseudonormal,
+        }
+    }
+}
+
 /// Output options shared by every command.
 #[derive(Args, Clone, Copy, Debug)]
 pub struct OutputArgs {
