@@ -1,10 +1,18 @@
 //! Coefficient volumes: one coefficient per grid node of a compactly supported basis, the field
-//! being their weighted sum. Smooth, O(1) to evaluate, with exact analytic gradients.
+//! being their weighted sum. Smooth, O(1) to evaluate, with exact analytic gradients and
+//! Hessians; coefficients from node samples or fitted to a signed distance function.
 
+pub mod analytic;
 pub mod basis;
+pub mod fit;
+pub mod kernel;
+mod mesh_sdf;
 pub mod prefilter;
+mod stencil;
 pub mod volume;
 
 pub use basis::Basis;
+pub use fit::{fit, FitMethod, FitOptions, FitReport, SignedDistance};
+pub use kernel::{Jet, Kernel};
 pub use pgvol_sdf::grid::{Grid, MAX_GRID_NODES};
 pub use volume::{CoefficientVolume, FieldError};

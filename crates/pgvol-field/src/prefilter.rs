@@ -1,19 +1,28 @@
-//! Exact cubic B-spline interpolation by recursive filtering (Unser, Aldroubi & Eden 1991): the
+//! Exact B-spline interpolation by recursive filtering (Unser, Aldroubi & Eden 1991): the
 //! coefficients whose spline passes through given samples, in O(N), with mirror boundaries.
+//! Node-centred splines of degree 2 and 3 have sampled kernels `[1, 6, 1]/8` and `[1, 4, 1]/6`;
+//! each inverse is one causal and one anti-causal pass with the pole `z` of `z + 1/z = −6` or `−4`.
 
 use rayon::prelude::*;
 
 /// The pole of the cubic B-spline's inverse filter, √3 − 2.
-const POLE: f64 = -0.267_949_192_431_122_7;
+pub const CUBIC_POLE: f64 = -0.267_949_192_431_122_7;
+/// The pole of the quadratic B-spline's inverse filter, 2√2 − 3.
+pub const QUADRATIC_POLE: f64 = -0.171_572_875_253_809_9;
 
 /// Turns samples along one line into cubic B-spline coefficients, in place, assuming the signal
 /// continues by mirror symmetry about both end samples.
 pub fn prefilter_line(line: &mut [f64]) {
+    prefilter_line_with(line, CUBIC_POLE);
+}
+
+/// As [`prefilter_line`] for the symmetric 3-tap kernel whose inverse has pole `z`.
+pub fn prefilter_line_with(line: &mut [f64], z: f64) {
     let n = line.len();
     if n < 2 {
         return;
     }
-    let z = POLE;
+    // (1 − z)(1 − 1/z) is the kernel's normalisation: 6 for the cubic, 8 for the quadratic.
     let gain = (1.0 - z) * (1.0 - 1.0 / z);
     for v in line.iter_mut() {
         *v *= gain;
@@ -52,13 +61,18 @@ pub fn prefilter_line(line: &mut [f64]) {
     }
 }
 
-/// Prefilters a 3D array (x fastest) along all three axes.
+/// Prefilters a 3D array (x fastest) along all three axes for the cubic B-spline.
 pub fn prefilter_volume(values: &mut [f32], dims: [usize; 3]) {
+    prefilter_volume_with(values, dims, CUBIC_POLE);
+}
+
+/// As [`prefilter_volume`] with the pole `z` of another spline degree.
+pub fn prefilter_volume_with(values: &mut [f32], dims: [usize; 3], z: f64) {
     let [nx, ny, nz] = dims;
     // x lines are contiguous.
     values.par_chunks_mut(nx).for_each(|row| {
         let mut line: Vec<f64> = row.iter().map(|&v| v as f64).collect();
-        prefilter_line(&mut line);
+        prefilter_line_with(&mut line, z);
         for (d, s) in row.iter_mut().zip(&line) {
             *d = *s as f32;
         }
@@ -70,7 +84,7 @@ pub fn prefilter_volume(values: &mut [f32], dims: [usize; 3]) {
             for (j, v) in line.iter_mut().enumerate() {
                 *v = plane[i + nx * j] as f64;
             }
-            prefilter_line(&mut line);
+            prefilter_line_with(&mut line, z);
             for (j, v) in line.iter().enumerate() {
                 plane[i + nx * j] = *v as f32;
             }
@@ -82,7 +96,7 @@ pub fn prefilter_volume(values: &mut [f32], dims: [usize; 3]) {
         .into_par_iter()
         .map(|c| {
             let mut line: Vec<f64> = (0..nz).map(|k| values[c + plane * k] as f64).collect();
-            prefilter_line(&mut line);
+            prefilter_line_with(&mut line, z);
             line.into_iter().map(|v| v as f32).collect()
         })
         .collect();
@@ -125,6 +139,28 @@ mod tests {
             prefilter_line(&mut c);
             for (a, b) in reconstruct(&c).iter().zip(&samples) {
                 assert!((a - b).abs() < 1e-9, "n = {n}: {a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn quadratic_pole_inverts_its_kernel() {
+        let z = QUADRATIC_POLE;
+        assert!((z + 1.0 / z + 6.0).abs() < 1e-12);
+        for n in [2usize, 3, 4, 9, 60] {
+            let samples: Vec<f64> = (0..n)
+                .map(|k| ((k * 31) % 7) as f64 - 0.3 * k as f64)
+                .collect();
+            let mut c = samples.clone();
+            prefilter_line_with(&mut c, z);
+            let at = |k: i64| c[super::super::stencil::mirror(k, n)];
+            for (k, want) in samples.iter().enumerate() {
+                let k = k as i64;
+                let got = (at(k - 1) + 6.0 * at(k) + at(k + 1)) / 8.0;
+                assert!(
+                    (got - want).abs() < 1e-9,
+                    "n = {n}, k = {k}: {got} vs {want}"
+                );
             }
         }
     }

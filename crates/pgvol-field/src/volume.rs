@@ -1,10 +1,12 @@
 //! The coefficient volume: a grid, a basis and one coefficient per node.
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::{basis::Basis, prefilter::prefilter_volume};
+use crate::basis::Basis;
+use crate::prefilter::{prefilter_volume_with, CUBIC_POLE, QUADRATIC_POLE};
+use crate::stencil::{self, GRADIENT, HESSIAN, VALUE};
 use pgvol_sdf::Grid;
 
 /// Why a coefficient volume could not be made.
@@ -16,6 +18,10 @@ pub enum FieldError {
     GridTooSmall([usize; 3]),
     #[error("value {index} is not finite")]
     NonFinite { index: usize },
+    #[error("invalid basis: {0}")]
+    BadBasis(String),
+    #[error("invalid fit: {0}")]
+    BadFit(String),
 }
 
 /// A smooth field `f(x) = Σ_j c_j B((x − g_j) / h)` over a grid.
@@ -26,21 +32,29 @@ pub struct CoefficientVolume {
     pub coeffs: Vec<f32>,
 }
 
+/// Checks what every constructor needs: a valid basis, at least 2 nodes per axis, one finite
+/// value per node.
+pub(crate) fn check_inputs(grid: &Grid, basis: Basis, values: &[f32]) -> Result<(), FieldError> {
+    basis.validate().map_err(FieldError::BadBasis)?;
+    if grid.dims.iter().any(|&n| n < 2) {
+        return Err(FieldError::GridTooSmall(grid.dims));
+    }
+    if values.len() != grid.len() {
+        return Err(FieldError::SizeMismatch {
+            got: values.len(),
+            want: grid.len(),
+        });
+    }
+    if let Some(index) = values.iter().position(|c| !c.is_finite()) {
+        return Err(FieldError::NonFinite { index });
+    }
+    Ok(())
+}
+
 impl CoefficientVolume {
-    /// Wraps existing coefficients, checking their count and finiteness.
+    /// Wraps existing coefficients, checking the basis, their count and finiteness.
     pub fn new(grid: Grid, basis: Basis, coeffs: Vec<f32>) -> Result<Self, FieldError> {
-        if grid.dims.iter().any(|&n| n < 2) {
-            return Err(FieldError::GridTooSmall(grid.dims));
-        }
-        if coeffs.len() != grid.len() {
-            return Err(FieldError::SizeMismatch {
-                got: coeffs.len(),
-                want: grid.len(),
-            });
-        }
-        if let Some(index) = coeffs.iter().position(|c| !c.is_finite()) {
-            return Err(FieldError::NonFinite { index });
-        }
+        check_inputs(&grid, basis, &coeffs)?;
         Ok(CoefficientVolume {
             grid,
             basis,
@@ -48,102 +62,87 @@ impl CoefficientVolume {
         })
     }
 
-    /// The field that interpolates `samples` (one per node, x fastest) in the given basis.
+    /// The field that interpolates `samples` (one per node, x fastest) in the given basis:
+    /// B-splines by their exact prefilter, pseudo-Gaussians by an iterative collocation solve
+    /// (see [`crate::fit::interp_samples`] for its report).
     pub fn interpolate(
         grid: Grid,
         basis: Basis,
         mut samples: Vec<f32>,
     ) -> Result<Self, FieldError> {
-        let probe = CoefficientVolume::new(grid, basis, Vec::new());
-        if let Err(FieldError::GridTooSmall(d)) = probe {
-            return Err(FieldError::GridTooSmall(d));
-        }
-        if samples.len() != grid.len() {
-            return Err(FieldError::SizeMismatch {
-                got: samples.len(),
-                want: grid.len(),
-            });
-        }
-        if let Some(index) = samples.iter().position(|c| !c.is_finite()) {
-            return Err(FieldError::NonFinite { index });
-        }
-        if basis == Basis::Bspline3 {
-            prefilter_volume(&mut samples, grid.dims);
+        check_inputs(&grid, basis, &samples)?;
+        match basis {
+            Basis::Trilinear => {}
+            Basis::Bspline2 => prefilter_volume_with(&mut samples, grid.dims, QUADRATIC_POLE),
+            Basis::Bspline3 => prefilter_volume_with(&mut samples, grid.dims, CUBIC_POLE),
+            Basis::Pg { .. } => {
+                let opts = crate::fit::FitOptions::default();
+                return crate::fit::interp_samples(grid, basis, &samples, &opts).map(|(v, _)| v);
+            }
         }
         CoefficientVolume::new(grid, basis, samples)
     }
 
-    /// Coefficient at node `(i, j, k)`, with indices past the border mirrored as the prefilter
-    /// assumes.
+    /// Value, gradient and Hessian (Hessian left zero below `ORDER`) at `p`. Points outside the
+    /// grid box take the value at the nearest box point plus their distance to it, so the field
+    /// stays continuous and grows outward.
     #[inline]
-    fn coeff_mirrored(&self, i: i64, j: i64, k: i64) -> f32 {
-        let [nx, ny, nz] = self.grid.dims;
-        let (i, j, k) = (mirror(i, nx), mirror(j, ny), mirror(k, nz));
-        self.coeffs[i + nx * (j + ny * k)]
-    }
-
-    /// Field value and gradient at `p`. Points outside the grid box take the value at the nearest
-    /// point of the box plus their distance to it, so the field stays continuous and grows outward.
-    pub fn eval(&self, p: Vec3) -> (f32, Vec3) {
+    fn jet<const ORDER: u8>(&self, p: Vec3) -> (f32, Vec3, Mat3) {
         let g = &self.grid;
-        let lo = g.origin;
-        let hi = g.max_corner();
-        let q = p.clamp(lo, hi);
+        let q = p.clamp(g.origin, g.max_corner());
         let outside = p.distance(q);
         let u = g.to_grid(q);
-        let [nx, ny, nz] = g.dims;
-        let cell = |u: f32, n: usize| -> (i64, f32) {
-            let c = (u.floor() as i64).clamp(0, n as i64 - 2);
-            (c, (u - c as f32).clamp(0.0, 1.0))
-        };
-        let (ci, ti) = cell(u.x, nx);
-        let (cj, tj) = cell(u.y, ny);
-        let (ck, tk) = cell(u.z, nz);
-        let b = self.basis;
-        let (wx, dx) = b.weights(ti);
-        let (wy, dy) = b.weights(tj);
-        let (wz, dz) = b.weights(tk);
-        let (fi, fj, fk) = (b.first_node(ci), b.first_node(cj), b.first_node(ck));
-        let width = b.width();
         let mut value = 0.0f32;
         let mut grad = Vec3::ZERO;
-        for c in 0..width {
-            let mut vz = 0.0f32;
-            let mut gz = Vec3::ZERO;
-            for bb in 0..width {
-                let mut vy = 0.0f32;
-                let mut gy = 0.0f32;
-                for a in 0..width {
-                    let coef = self.coeff_mirrored(fi + a as i64, fj + bb as i64, fk + c as i64);
-                    vy += wx[a] * coef;
-                    gy += dx[a] * coef;
-                }
-                vz += wy[bb] * vy;
-                gz += Vec3::new(wy[bb] * gy, dy[bb] * vy, 0.0);
+        let mut hess = Mat3::ZERO;
+        stencil::visit::<ORDER>(self.basis, g.dims, u, |i, jet| {
+            let c = self.coeffs[i];
+            value += c * jet.value;
+            if ORDER >= GRADIENT {
+                grad += c * jet.gradient;
             }
-            value += wz[c] * vz;
-            grad += Vec3::new(wz[c] * gz.x, wz[c] * gz.y, dz[c] * vz);
-        }
-        let grad = grad / g.spacing;
+            if ORDER >= HESSIAN {
+                hess += jet.hessian * c;
+            }
+        });
+        let h = g.spacing;
+        let (grad, hess) = (grad / h, hess * (1.0 / (h * h)));
         if outside > 0.0 {
             let dir = (p - q) / outside;
-            (
-                value + outside,
-                if grad.dot(dir) < 1.0 {
-                    grad + dir
-                } else {
-                    grad
-                },
-            )
+            let grad = if grad.dot(dir) < 1.0 {
+                grad + dir
+            } else {
+                grad
+            };
+            (value + outside, grad, hess)
         } else {
-            (value, grad)
+            (value, grad, hess)
         }
+    }
+
+    /// Field value and gradient at `p`. Points outside the grid box take the value at the
+    /// nearest point of the box plus their distance to it, so the field stays continuous and
+    /// grows outward.
+    pub fn eval(&self, p: Vec3) -> (f32, Vec3) {
+        let (v, g, _) = self.jet::<GRADIENT>(p);
+        (v, g)
+    }
+
+    /// Value, gradient and Hessian at `p` (outside the box: as [`Self::eval`], with the
+    /// Hessian of the nearest box point).
+    pub fn eval_hessian(&self, p: Vec3) -> (f32, Vec3, Mat3) {
+        self.jet::<HESSIAN>(p)
+    }
+
+    /// Values, gradients and Hessians at many points, in parallel.
+    pub fn eval_hessian_many(&self, points: &[Vec3]) -> Vec<(f32, Vec3, Mat3)> {
+        points.par_iter().map(|&p| self.eval_hessian(p)).collect()
     }
 
     /// Field value only.
     #[inline]
     pub fn value(&self, p: Vec3) -> f32 {
-        self.eval(p).0
+        self.jet::<VALUE>(p).0
     }
 
     /// Values and gradients at many points, in parallel.
@@ -202,19 +201,6 @@ impl CoefficientVolume {
         }
         a + (b - a) * t.clamp(0.0, 1.0)
     }
-}
-
-#[inline]
-fn mirror(i: i64, n: usize) -> usize {
-    let n = n as i64;
-    let m = if i < 0 {
-        -i
-    } else if i >= n {
-        2 * (n - 1) - i
-    } else {
-        i
-    };
-    m.clamp(0, n - 1) as usize
 }
 
 #[cfg(test)]

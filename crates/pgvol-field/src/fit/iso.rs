@@ -1,0 +1,164 @@
+//! The paper's fit: one collocation point per node, moved to the nearest point of the isosurface
+//! `SDF = q · z_step` (q the nearest integer), so the zero surface and its offsets are hit
+//! exactly; a square, non-symmetric system solved by CGLS. `z_step` may be searched for.
+
+use glam::Vec3;
+
+use super::operator::Operator;
+use super::{
+    project, report, to_f32, weighted_solve, FitOptions, FitReport, NodeSdf, SignedDistance,
+};
+use crate::{Basis, FieldError, Grid};
+
+pub(crate) fn fit(
+    grid: &Grid,
+    basis: Basis,
+    nodes: &NodeSdf,
+    sdf: &dyn SignedDistance,
+    z_step: Option<f32>,
+    options: &FitOptions,
+) -> Result<(Vec<f32>, FitReport), FieldError> {
+    let warm = super::interp::warm_start(grid, basis, &nodes.distance, options);
+    let z = match z_step {
+        Some(z) if z.is_finite() && z > 0.0 && z <= 2.0 => z,
+        Some(z) => {
+            return Err(FieldError::BadFit(format!(
+                "iso z_step must be in (0, 2] spacings, got {z}"
+            )))
+        }
+        None => search(grid, basis, nodes, sdf, &warm, options),
+    };
+    let (c, outcome) = solve_step(grid, basis, nodes, sdf, z, &warm, options);
+    let mut rep = report("cgls", Some(outcome));
+    rep.z_step = Some(z);
+    Ok((to_f32(c), rep))
+}
+
+/// Collocation points and targets for step `z` (spacings). A point that would leave the basis
+/// function's support or the grid box stays on its node with the node's SDF as target.
+fn points(
+    grid: &Grid,
+    basis: Basis,
+    nodes: &NodeSdf,
+    sdf: &dyn SignedDistance,
+    z: f32,
+) -> (Vec<Vec3>, Vec<f32>) {
+    let k = grid.spacing;
+    let reach = basis.support() * k * 0.999;
+    let hi = grid.max_corner();
+    let [nx, ny, _] = grid.dims;
+    let mut pts = Vec::with_capacity(grid.len());
+    let mut tgt = Vec::with_capacity(grid.len());
+    for (idx, (&d, &n)) in nodes.distance.iter().zip(&nodes.gradient).enumerate() {
+        let g = grid.point(idx % nx, (idx / nx) % ny, idx / (nx * ny));
+        let t = (d / (z * k)).round() * z * k;
+        let p = project(sdf, g, d, n, t);
+        let ok = p.is_finite()
+            && p.distance(g) < reach
+            && p.cmpge(grid.origin).all()
+            && p.cmple(hi).all();
+        let (p, t) = if ok { (p, t) } else { (g, d) };
+        pts.push(grid.to_grid(p));
+        tgt.push(t);
+    }
+    (pts, tgt)
+}
+
+fn solve_step(
+    grid: &Grid,
+    basis: Basis,
+    nodes: &NodeSdf,
+    sdf: &dyn SignedDistance,
+    z: f32,
+    warm: &[f64],
+    options: &FitOptions,
+) -> (Vec<f64>, super::solve::SolveOutcome) {
+    let (pts, tgt) = points(grid, basis, nodes, sdf, z);
+    weighted_solve(
+        grid,
+        basis,
+        super::Rows {
+            points: &pts,
+            targets: &tgt,
+            weights: None,
+        },
+        warm,
+        0.0,
+        options,
+    )
+}
+
+/// Golden-section search of `z_step` in [0.05, 1] spacings for the smallest RMS of `f − SDF` at
+/// the cell centres within two spacings of the surface and at the nodes' nearest surface points.
+fn search(
+    grid: &Grid,
+    basis: Basis,
+    nodes: &NodeSdf,
+    sdf: &dyn SignedDistance,
+    warm: &[f64],
+    options: &FitOptions,
+) -> f32 {
+    let k = grid.spacing;
+    let [nx, ny, nz] = grid.dims;
+    let mut check = Vec::new();
+    let mut want = Vec::new();
+    for (idx, (&d, &n)) in nodes.distance.iter().zip(&nodes.gradient).enumerate() {
+        if d.abs() >= 2.0 * k {
+            continue;
+        }
+        let (i, j, l) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
+        let g = grid.point(i, j, l);
+        let s = project(sdf, g, d, n, 0.0);
+        if s.is_finite() && s.cmpge(grid.origin).all() && s.cmple(grid.max_corner()).all() {
+            check.push(grid.to_grid(s));
+            want.push(0.0f64);
+        }
+        if i + 1 < nx && j + 1 < ny && l + 1 < nz {
+            let c = g + Vec3::splat(0.5 * k);
+            check.push(grid.to_grid(c));
+            want.push(sdf.distance(c) as f64);
+        }
+    }
+    let op = Operator {
+        basis,
+        dims: grid.dims,
+        points: &check,
+        sqrt_weights: None,
+    };
+    let cost = |z: f32| {
+        let (c, _) = solve_step(grid, basis, nodes, sdf, z, warm, options);
+        let f = op.forward(&c);
+        let e: f64 = f.iter().zip(&want).map(|(f, w)| (f - w) * (f - w)).sum();
+        let e = (e / want.len().max(1) as f64).sqrt();
+        if e.is_finite() {
+            e
+        } else {
+            f64::INFINITY
+        }
+    };
+    let phi = 0.618_034f32;
+    let (mut a, mut b) = (0.05f32, 1.0f32);
+    let mut x1 = b - phi * (b - a);
+    let mut x2 = a + phi * (b - a);
+    let (mut f1, mut f2) = (cost(x1), cost(x2));
+    for _ in 2..options.z_step_evaluations.max(3) {
+        if f1 <= f2 {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - phi * (b - a);
+            f1 = cost(x1);
+        } else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + phi * (b - a);
+            f2 = cost(x2);
+        }
+    }
+    if f1 <= f2 {
+        x1
+    } else {
+        x2
+    }
+}

@@ -1,0 +1,170 @@
+//! Krylov solvers on operators given as closures: conjugate gradients for symmetric positive
+//! definite systems, CGLS for everything else (least squares, with optional damping).
+
+/// How a solve ended.
+#[derive(Clone, Copy, Debug)]
+pub struct SolveOutcome {
+    pub iterations: usize,
+    /// `‖A x − b‖ / ‖b‖` at the end (the damping term excluded).
+    pub residual: f64,
+    pub converged: bool,
+}
+
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Conjugate gradients for `A x = b`, `A` symmetric positive definite, from the initial `x`.
+/// Stops when `‖r‖ ≤ tol ‖b‖`.
+pub fn cg(
+    apply: impl Fn(&[f64]) -> Vec<f64>,
+    b: &[f64],
+    x: &mut [f64],
+    tol: f64,
+    max_iterations: usize,
+) -> SolveOutcome {
+    let bn = norm(b).max(f64::MIN_POSITIVE);
+    let ax = apply(x);
+    let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
+    let mut p = r.clone();
+    let mut rr = dot(&r, &r);
+    let mut it = 0;
+    while rr.sqrt() > tol * bn && it < max_iterations {
+        let ap = apply(&p);
+        let pap = dot(&p, &ap);
+        if pap <= 0.0 || !pap.is_finite() {
+            break; // not positive definite along p: report what we have
+        }
+        let alpha = rr / pap;
+        for ((x, r), (p, ap)) in x.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(&ap)) {
+            *x += alpha * p;
+            *r -= alpha * ap;
+        }
+        let rr_new = dot(&r, &r);
+        let beta = rr_new / rr;
+        rr = rr_new;
+        for (p, r) in p.iter_mut().zip(&r) {
+            *p = r + beta * *p;
+        }
+        it += 1;
+    }
+    let residual = rr.sqrt() / bn;
+    SolveOutcome {
+        iterations: it,
+        residual,
+        converged: residual <= tol,
+    }
+}
+
+/// CGLS for `min ‖A x − b‖² + λ² ‖x‖²` from `x = 0`. Stops when the data residual falls below
+/// `tol ‖b‖` (consistent systems) or the normal-equation residual below `tol` times its start
+/// (least squares).
+pub fn cgls(
+    forward: impl Fn(&[f64]) -> Vec<f64>,
+    adjoint: impl Fn(&[f64]) -> Vec<f64>,
+    b: &[f64],
+    cols: usize,
+    damping: f64,
+    tol: f64,
+    max_iterations: usize,
+) -> (Vec<f64>, SolveOutcome) {
+    let l2 = damping * damping;
+    let bn = norm(b).max(f64::MIN_POSITIVE);
+    let mut x = vec![0.0f64; cols];
+    let mut r = b.to_vec();
+    let mut s = adjoint(&r);
+    let s0 = norm(&s).max(f64::MIN_POSITIVE);
+    let mut p = s.clone();
+    let mut gamma = dot(&s, &s);
+    let mut it = 0;
+    let done = |r: &[f64], gamma: f64| norm(r) <= tol * bn || gamma.sqrt() <= tol * s0;
+    while !done(&r, gamma) && it < max_iterations {
+        let q = forward(&p);
+        let delta = dot(&q, &q) + l2 * dot(&p, &p);
+        if delta <= 0.0 || !delta.is_finite() {
+            break;
+        }
+        let alpha = gamma / delta;
+        for (x, p) in x.iter_mut().zip(&p) {
+            *x += alpha * p;
+        }
+        for (r, q) in r.iter_mut().zip(&q) {
+            *r -= alpha * q;
+        }
+        s = adjoint(&r);
+        if l2 > 0.0 {
+            for (s, x) in s.iter_mut().zip(&x) {
+                *s -= l2 * x;
+            }
+        }
+        let gamma_new = dot(&s, &s);
+        let beta = gamma_new / gamma;
+        gamma = gamma_new;
+        for (p, s) in p.iter_mut().zip(&s) {
+            *p = s + beta * *p;
+        }
+        it += 1;
+    }
+    let converged = done(&r, gamma);
+    let residual = norm(&r) / bn;
+    (
+        x,
+        SolveOutcome {
+            iterations: it,
+            residual,
+            converged,
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 1D Laplacian-like SPD tridiagonal matrix.
+    fn tri(x: &[f64]) -> Vec<f64> {
+        let n = x.len();
+        (0..n)
+            .map(|i| {
+                let l = if i > 0 { x[i - 1] } else { 0.0 };
+                let r = if i + 1 < n { x[i + 1] } else { 0.0 };
+                3.0 * x[i] - l - r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn cg_solves_an_spd_system() {
+        let b: Vec<f64> = (0..50).map(|i| (i as f64).sin()).collect();
+        let mut x = vec![0.0; 50];
+        let out = cg(tri, &b, &mut x, 1e-10, 200);
+        assert!(out.converged, "{out:?}");
+        let ax = tri(&x);
+        assert!(ax.iter().zip(&b).all(|(a, b)| (a - b).abs() < 1e-8));
+    }
+
+    #[test]
+    fn cgls_solves_an_overdetermined_system() {
+        // Rows: the tridiagonal matrix stacked over the identity; normal equations by hand.
+        let fwd = |x: &[f64]| {
+            let mut v = tri(x);
+            v.extend_from_slice(x);
+            v
+        };
+        let adj = |r: &[f64]| {
+            let (a, b) = r.split_at(r.len() / 2);
+            tri(a).iter().zip(b).map(|(x, y)| x + y).collect::<Vec<_>>()
+        };
+        let b: Vec<f64> = (0..60).map(|i| ((i * 7) % 5) as f64).collect();
+        let (x, out) = cgls(fwd, adj, &b, 30, 0.0, 1e-12, 500);
+        assert!(out.converged);
+        // Optimality: Aᵀ(b − A x) = 0.
+        let ax = fwd(&x);
+        let r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
+        assert!(adj(&r).iter().all(|g| g.abs() < 1e-8));
+    }
+}
