@@ -5,9 +5,10 @@
 //! lists without a dense per-edge index.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
-use crate::field::Field;
 use crate::place::onto_edge;
+use crate::samples::Samples;
 
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).
 pub(crate) type Refine<'r> = dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + 'r;
@@ -29,13 +30,20 @@ impl Layer {
         (&self.keys[s as usize..e as usize], s)
     }
 
+    /// Row and key of the crossing with layer-local index `local`.
+    pub fn locate(&self, local: u32) -> (usize, u32) {
+        // Empty rows repeat a start offset; the last row starting at or before `local` holds it.
+        let j = self.row_start.partition_point(|&s| s <= local) - 1;
+        (j, self.keys[local as usize])
+    }
+
     pub fn len(&self) -> usize {
         self.keys.len()
     }
 }
 
 /// Finds and places the crossings of the edges owned by layer `z`.
-pub(crate) fn layer_crossings(field: &Field, z: usize, refine: &Refine) -> Layer {
+pub(crate) fn layer_crossings(field: &Samples, z: usize, refine: &Refine) -> Layer {
     let [nx, ny, nz] = field.dims;
     let mut layer = Layer {
         row_start: Vec::with_capacity(ny + 1),
@@ -78,4 +86,37 @@ pub(crate) fn layer_crossings(field: &Field, z: usize, refine: &Refine) -> Layer
 
 fn to_u32(n: usize) -> u32 {
     u32::try_from(n).expect("grid too large for 32-bit indices")
+}
+
+/// Every crossing of the grid: per-layer lists, each layer's first global index, and the
+/// positions in global order (layer by layer, scan order within a layer).
+pub(crate) struct Crossings {
+    pub layers: Vec<Layer>,
+    pub base: Vec<u32>,
+    pub positions: Vec<Vec3>,
+}
+
+/// Finds and places all crossings, in parallel over layers; the order does not depend on the
+/// number of threads.
+pub(crate) fn all_crossings(field: &Samples, refine: &Refine, limit: u32) -> Crossings {
+    let layers: Vec<Layer> = (0..field.dims[2])
+        .into_par_iter()
+        .map(|z| layer_crossings(field, z, refine))
+        .collect();
+    let mut base = Vec::with_capacity(layers.len());
+    let mut n = 0usize;
+    for layer in &layers {
+        base.push(n as u32);
+        n += layer.len();
+        assert!(n < limit as usize, "too many vertices");
+    }
+    let mut positions = Vec::with_capacity(n);
+    for layer in &layers {
+        positions.extend_from_slice(&layer.positions);
+    }
+    Crossings {
+        layers,
+        base,
+        positions,
+    }
 }

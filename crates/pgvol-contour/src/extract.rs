@@ -5,7 +5,7 @@ use glam::Vec3;
 use crate::crossings::Layer;
 use crate::cube::{edge_axis, face_corners, EDGE_START};
 use crate::decider::joins_inside;
-use crate::field::Field;
+use crate::samples::Samples;
 use crate::table::{case_table, CaseTable, CENTER};
 
 /// Marks a triangle index as referring to the slab's `extra` vertices rather than an edge vertex;
@@ -29,7 +29,7 @@ pub(crate) struct Vertices<'a> {
 impl Vertices<'_> {
     /// Global index of the vertex on the edge along `axis` from node `n`.
     #[inline]
-    fn find(&self, n: [usize; 3], axis: usize) -> u32 {
+    pub fn find(&self, n: [usize; 3], axis: usize) -> u32 {
         let (keys, start) = self.layers[n[2]].row(n[1]);
         let key = (3 * n[0] + axis) as u32;
         let at = keys
@@ -39,8 +39,17 @@ impl Vertices<'_> {
     }
 }
 
+impl Vertices<'_> {
+    /// Lower node and axis of the edge holding global vertex `g`.
+    pub fn locate(&self, g: u32) -> ([usize; 3], usize) {
+        let z = self.base.partition_point(|&b| b <= g) - 1;
+        let (j, key) = self.layers[z].locate(g - self.base[z]);
+        ([key as usize / 3, j, z], key as usize % 3)
+    }
+}
+
 /// Triangles of the cells between node layers `k` and `k + 1`, in cell scan order.
-pub(crate) fn slab_triangles(field: &Field, verts: &Vertices, k: usize) -> Slab {
+pub(crate) fn slab_triangles(field: &Samples, verts: &Vertices, k: usize) -> Slab {
     let [nx, ny, _] = field.dims;
     let table = case_table();
     let mut slab = Slab {
@@ -49,17 +58,7 @@ pub(crate) fn slab_triangles(field: &Field, verts: &Vertices, k: usize) -> Slab 
     };
     let mut candidates: Vec<usize> = Vec::new();
     for j in 0..ny - 1 {
-        // Every edge of a cell in this row is listed in rows j and j + 1 of layers k and k + 1,
-        // with its lower node at x = i or i + 1; cells next to no crossing are never visited.
-        candidates.clear();
-        for (layer, row) in [(k, j), (k, j + 1), (k + 1, j), (k + 1, j + 1)] {
-            for &key in verts.layers[layer].row(row).0 {
-                let x = key as usize / 3;
-                candidates.extend((x.saturating_sub(1)..=x).filter(|&i| i + 1 < nx));
-            }
-        }
-        candidates.sort_unstable();
-        candidates.dedup();
+        row_cells(verts, nx, j, k, &mut candidates);
         for &i in &candidates {
             cell_triangles(field, table, verts, [i, j, k], &mut slab);
         }
@@ -68,34 +67,17 @@ pub(crate) fn slab_triangles(field: &Field, verts: &Vertices, k: usize) -> Slab 
 }
 
 fn cell_triangles(
-    field: &Field,
+    field: &Samples,
     table: &CaseTable,
     verts: &Vertices,
     cell: [usize; 3],
     slab: &mut Slab,
 ) {
     let [i, j, k] = cell;
-    let mut values = [0f32; 8];
-    let mut case = 0usize;
-    for (c, v) in values.iter_mut().enumerate() {
-        *v = field.values[field.index(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2))];
-        case |= usize::from(field.inside(*v)) << c;
-    }
-    let crossed = table.crossed[case];
-    if crossed == 0 {
+    let Some((case, joined)) = cell_config(field, table, cell) else {
         return;
-    }
-    let mut joined = 0u8;
-    let mut ambiguous = table.ambiguous[case];
-    while ambiguous != 0 {
-        let f = ambiguous.trailing_zeros() as usize;
-        ambiguous &= ambiguous - 1;
-        let corners = face_corners(f);
-        let g = corners.map(|c| values[c] - field.iso);
-        if joins_inside(g, (case >> corners[0]) & 1 == 1) {
-            joined |= 1 << f;
-        }
-    }
+    };
+    let crossed = table.crossed[case];
     let mut edge_vertex = [0u32; 12];
     let mut todo = crossed;
     while todo != 0 {
@@ -123,4 +105,51 @@ fn cell_triangles(
     };
     slab.triangles
         .extend(entry.triangles().iter().map(|t| t.map(vertex)));
+}
+
+/// The cells of row `j` in slab `k` that have a crossed edge, ascending, into `out`.
+pub(crate) fn row_cells(verts: &Vertices, nx: usize, j: usize, k: usize, out: &mut Vec<usize>) {
+    // Every edge of a cell in this row is listed in rows j and j + 1 of layers k and k + 1,
+    // with its lower node at x = i or i + 1; cells next to no crossing are never visited.
+    out.clear();
+    for (layer, row) in [(k, j), (k, j + 1), (k + 1, j), (k + 1, j + 1)] {
+        for &key in verts.layers[layer].row(row).0 {
+            let x = key as usize / 3;
+            out.extend((x.saturating_sub(1)..=x).filter(|&i| i + 1 < nx));
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+}
+
+/// The inside-corner case of `cell` and the asymptotic decider's choice on each ambiguous face,
+/// or `None` when no edge of the cell is crossed.
+#[inline]
+pub(crate) fn cell_config(
+    field: &Samples,
+    table: &CaseTable,
+    cell: [usize; 3],
+) -> Option<(usize, u8)> {
+    let [i, j, k] = cell;
+    let mut values = [0f32; 8];
+    let mut case = 0usize;
+    for (c, v) in values.iter_mut().enumerate() {
+        *v = field.values[field.index(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2))];
+        case |= usize::from(field.inside(*v)) << c;
+    }
+    if table.crossed[case] == 0 {
+        return None;
+    }
+    let mut joined = 0u8;
+    let mut ambiguous = table.ambiguous[case];
+    while ambiguous != 0 {
+        let f = ambiguous.trailing_zeros() as usize;
+        ambiguous &= ambiguous - 1;
+        let corners = face_corners(f);
+        let g = corners.map(|c| values[c] - field.iso);
+        if joins_inside(g, (case >> corners[0]) & 1 == 1) {
+            joined |= 1 << f;
+        }
+    }
+    Some((case, joined))
 }

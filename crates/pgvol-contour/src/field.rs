@@ -1,33 +1,44 @@
-//! The sampled scalar field being contoured.
+//! Continuous fields that contouring can evaluate between the grid nodes.
 
 use glam::Vec3;
+use pgvol_field::CoefficientVolume;
 
-/// Node values on a regular grid, x fastest: node `(i, j, k)` is `values[i + nx * (j + ny * k)]`
-/// at `origin + spacing * (i, j, k)`.
-#[derive(Clone, Copy)]
-pub(crate) struct Field<'a> {
-    pub values: &'a [f32],
-    pub dims: [usize; 3],
-    pub origin: Vec3,
-    pub spacing: f32,
-    pub iso: f32,
+/// A scalar field defined everywhere in space, with its gradient.
+///
+/// The contouring functions take node samples for the topology and ask the field for vertex
+/// placement only, so the two should agree at the nodes (the samples are usually this field
+/// evaluated there). Negative is inside, as for signed distance.
+pub trait Field: Sync {
+    /// Field value at `p`.
+    fn value(&self, p: Vec3) -> f32;
+    /// Field value and gradient at `p`.
+    fn value_gradient(&self, p: Vec3) -> (f32, Vec3);
 }
 
-impl Field<'_> {
+impl Field for CoefficientVolume {
     #[inline]
-    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
-        i + self.dims[0] * (j + self.dims[1] * k)
+    fn value(&self, p: Vec3) -> f32 {
+        CoefficientVolume::value(self, p)
     }
 
-    /// Node position; every caller goes through here so shared nodes get bit-identical positions.
     #[inline]
-    pub fn node(&self, n: [usize; 3]) -> Vec3 {
-        self.origin + self.spacing * Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32)
+    fn value_gradient(&self, p: Vec3) -> (f32, Vec3) {
+        self.eval(p)
+    }
+}
+
+/// Any closure returning value and gradient is a field, which suits analytic shapes.
+impl<F> Field for F
+where
+    F: Fn(Vec3) -> (f32, Vec3) + Sync,
+{
+    #[inline]
+    fn value(&self, p: Vec3) -> f32 {
+        self(p).0
     }
 
-    /// Inside means below iso; NaN compares false and so counts as outside.
     #[inline]
-    pub fn inside(&self, v: f32) -> bool {
-        v < self.iso
+    fn value_gradient(&self, p: Vec3) -> (f32, Vec3) {
+        self(p)
     }
 }

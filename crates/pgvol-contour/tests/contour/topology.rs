@@ -127,3 +127,60 @@ pub fn check_surface(mesh: &Mesh) -> Closed {
     }
     closed
 }
+
+/// Edge and vertex statistics of a mesh that may be non-manifold, from [`check_balanced`].
+#[derive(Debug, Default)]
+pub struct Balanced {
+    /// Most triangles on one undirected edge.
+    pub max_uses: usize,
+    /// Undirected edges with more than two triangles.
+    pub non_manifold_edges: usize,
+    /// Vertices whose triangles form more than one fan (or a pinched link).
+    pub non_manifold_vertices: usize,
+}
+
+/// Asserts that the mesh is closed and consistently oriented in the weakest sense: every
+/// directed edge is traversed as often as its reverse, so there is no border and no flipped
+/// neighbour. Counts the places where it is not a manifold.
+pub fn check_balanced(mesh: &Mesh) -> Balanced {
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut link: Vec<Vec<(u32, u32)>> = vec![Vec::new(); mesh.positions.len()];
+    for &[a, b, c] in &mesh.triangles {
+        for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
+            *directed.entry((x, y)).or_default() += 1;
+            link[x as usize].push((y, z));
+        }
+    }
+    let mut out = Balanced::default();
+    for (&(x, y), &n) in &directed {
+        let back = directed.get(&(y, x)).copied().unwrap_or(0);
+        assert_eq!(
+            n, back,
+            "edge {x}->{y} used {n} times, {y}->{x} {back} times"
+        );
+        if x < y {
+            out.max_uses = out.max_uses.max(2 * n);
+            out.non_manifold_edges += usize::from(n > 1);
+        }
+    }
+    for around in &link {
+        if around.is_empty() {
+            continue;
+        }
+        let next: HashMap<u32, u32> = around.iter().copied().collect();
+        let single_fan = next.len() == around.len() && {
+            let start = around[0].0;
+            let (mut at, mut steps) = (start, 0);
+            while let Some(&n) = next.get(&at) {
+                at = n;
+                steps += 1;
+                if at == start || steps > around.len() {
+                    break;
+                }
+            }
+            steps == around.len()
+        };
+        out.non_manifold_vertices += usize::from(!single_fan);
+    }
+    out
+}

@@ -1,0 +1,358 @@
+//! Dual contouring with one vertex per surface component of each cell.
+//!
+//! The components are the loops of the face-traced contour that marching cubes triangulates, so
+//! the dual mesh is the polygonal dual of the marching cubes surface: each loop becomes a vertex,
+//! each crossed grid edge a quad joining the vertices of the four loops through its crossing.
+//! The dual of a closed manifold is a closed manifold, which carries over every guarantee of
+//! the marching cubes topology. The one thing a triangle mesh cannot express is two distinct
+//! dual edges between the same two vertices (a loop crossing a face twice, with the loop across
+//! doing the same: a tunnel through the face); such edges get a vertex in their middle, and the
+//! quads along them are fanned around their crossing instead of split in two.
+
+use glam::{DVec3, Vec3};
+use pgvol_mesh::Mesh;
+use rayon::prelude::*;
+
+use crate::components::{components, ring_slot};
+use crate::crossings::Crossings;
+use crate::cube::{edge_axis, plane_axes, EDGE_START};
+use crate::decider::joins_inside;
+use crate::extract::{cell_config, row_cells, Vertices, EXTRA_FLAG};
+use crate::field::Field;
+use crate::qef::Qef;
+use crate::quads::split_quad;
+use crate::samples::Samples;
+use crate::table::case_table;
+use crate::DualContourOptions;
+
+/// Fraction of the cell kept clear at each face when clamping, so vertices of neighbouring cells
+/// never coincide and every quad projects along its edge onto four distinct open quadrants.
+const CELL_MARGIN: f64 = 1e-3;
+
+/// Crossings per parallel task when building quads.
+const QUAD_CHUNK: usize = 4096;
+
+/// Marks an extra vertex key as a quad centre (otherwise it is a face segment midpoint).
+const CENTRE_KEY: u64 = 1 << 63;
+
+const UNSET: u32 = u32::MAX;
+
+struct Slab {
+    positions: Vec<Vec3>,
+    double_faces: Vec<u8>,
+    links: Vec<Link>,
+}
+
+/// Cell vertex `vertex` (slab-local) is the corner `slot` of the quad of crossing `crossing`.
+struct Link {
+    crossing: u32,
+    vertex: u32,
+    slot: u8,
+    /// Edge axis, and bit 2 set when the edge's lower node is inside.
+    meta: u8,
+}
+
+/// Triangles of a run of crossings; indices with [`EXTRA_FLAG`] point into `extra`.
+struct QuadRun {
+    triangles: Vec<[u32; 3]>,
+    extra: Vec<u64>,
+}
+
+pub(crate) fn dual_contour(
+    samples: &Samples,
+    crossings: &Crossings,
+    field: &dyn Field,
+    options: &DualContourOptions,
+) -> Mesh {
+    let verts = Vertices {
+        layers: &crossings.layers,
+        base: &crossings.base,
+        positions: &crossings.positions,
+    };
+    let normals: Vec<Vec3> = crossings
+        .positions
+        .par_iter()
+        .map(|&p| field.value_gradient(p).1.normalize_or_zero())
+        .collect();
+
+    let slabs: Vec<Slab> = (0..samples.dims[2] - 1)
+        .into_par_iter()
+        .map(|k| slab_vertices(samples, &verts, &normals, options, k))
+        .collect();
+
+    let n_crossings = crossings.positions.len();
+    let mut ring = vec![[UNSET; 4]; n_crossings];
+    let mut meta = vec![0u8; n_crossings];
+    let mut positions = Vec::new();
+    let mut double_faces = Vec::new();
+    for slab in slabs {
+        let first = positions.len() as u32;
+        for link in &slab.links {
+            ring[link.crossing as usize][link.slot as usize] = first + link.vertex;
+            meta[link.crossing as usize] = link.meta;
+        }
+        positions.extend_from_slice(&slab.positions);
+        double_faces.extend_from_slice(&slab.double_faces);
+    }
+    assert!(positions.len() < EXTRA_FLAG as usize, "too many vertices");
+
+    let runs: Vec<QuadRun> = ring
+        .par_chunks(QUAD_CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let mut run = QuadRun {
+                triangles: Vec::new(),
+                extra: Vec::new(),
+            };
+            for (n, r) in chunk.iter().enumerate() {
+                let g = (c * QUAD_CHUNK + n) as u32;
+                quad(
+                    samples,
+                    &verts,
+                    &positions,
+                    &double_faces,
+                    g,
+                    *r,
+                    meta[g as usize],
+                    &mut run,
+                );
+            }
+            run
+        })
+        .collect();
+
+    let mut keys: Vec<u64> = runs.iter().flat_map(|r| r.extra.iter().copied()).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    let first_extra = positions.len();
+    assert!(
+        first_extra + keys.len() < EXTRA_FLAG as usize,
+        "too many vertices"
+    );
+    positions.extend(keys.iter().map(|&key| extra_position(samples, &verts, key)));
+
+    let mut triangles = Vec::with_capacity(runs.iter().map(|r| r.triangles.len()).sum());
+    for run in runs {
+        triangles.extend(run.triangles.iter().map(|t| {
+            t.map(|v| {
+                if v & EXTRA_FLAG == 0 {
+                    v
+                } else {
+                    let key = run.extra[(v & !EXTRA_FLAG) as usize];
+                    (first_extra + keys.binary_search(&key).unwrap()) as u32
+                }
+            })
+        }));
+    }
+    Mesh::new(positions, triangles)
+}
+
+/// One vertex per loop of every cell between node layers `k` and `k + 1`.
+fn slab_vertices(
+    samples: &Samples,
+    verts: &Vertices,
+    normals: &[Vec3],
+    options: &DualContourOptions,
+    k: usize,
+) -> Slab {
+    let [nx, ny, _] = samples.dims;
+    let table = case_table();
+    let threshold = f64::from(options.singular_threshold);
+    let inv_h = 1.0 / f64::from(samples.spacing);
+    let mut slab = Slab {
+        positions: Vec::new(),
+        double_faces: Vec::new(),
+        links: Vec::new(),
+    };
+    let mut cells = Vec::new();
+    for j in 0..ny - 1 {
+        row_cells(verts, nx, j, k, &mut cells);
+        for &i in &cells {
+            let Some((case, joined)) = cell_config(samples, table, [i, j, k]) else {
+                continue;
+            };
+            let comps = components(case, joined);
+            let corner = samples.node([i, j, k]);
+            let mut qefs = [Qef::default(); 4];
+            let first = slab.positions.len() as u32;
+            let mut crossed = table.crossed[case];
+            while crossed != 0 {
+                let e = crossed.trailing_zeros() as usize;
+                crossed &= crossed - 1;
+                let s = EDGE_START[e];
+                let axis = edge_axis(e);
+                let g = verts.find([i + s[0], j + s[1], k + s[2]], axis);
+                let lower = s[0] | (s[1] << 1) | (s[2] << 2);
+                let lower_inside = (case >> lower) & 1 == 1;
+                // Work in cell units about the lowest corner, so the QEF is well scaled.
+                let p = (verts.positions[g as usize] - corner).as_dvec3() * inv_h;
+                let mut n = normals[g as usize].as_dvec3();
+                if n == DVec3::ZERO {
+                    // No usable gradient: the edge itself, from inside to outside, is the best
+                    // available normal.
+                    n = DVec3::ZERO;
+                    n[axis] = if lower_inside { 1.0 } else { -1.0 };
+                }
+                let l = comps.edge_loop[e];
+                qefs[l as usize].add(p, n);
+                slab.links.push(Link {
+                    crossing: g,
+                    vertex: first + u32::from(l),
+                    slot: ring_slot(e) as u8,
+                    meta: axis as u8 | (u8::from(lower_inside) << 2),
+                });
+            }
+            for (l, qef) in qefs.iter().take(comps.n_loops as usize).enumerate() {
+                let mut x = qef.solve(threshold);
+                if !x.is_finite() {
+                    x = qef.mass_point();
+                }
+                if options.clamp_to_cell {
+                    x = x.clamp(DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN));
+                }
+                slab.positions.push(corner + x.as_vec3() * samples.spacing);
+                slab.double_faces.push(comps.double_faces[l]);
+            }
+        }
+    }
+    slab
+}
+
+/// Plane axis that changes between ring corners `q` and `q + 1`, and the face side (0 low,
+/// 1 high) that the shared face is on for each of the two cells.
+const RING_SIDES: [(usize, u8, u8); 4] = [(0, 1, 0), (1, 1, 0), (0, 0, 1), (1, 0, 1)];
+
+/// Ring corner offsets (0 for the cell below the edge along a plane axis, 1 above).
+const RING_OFFSETS: [[usize; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
+
+/// Triangles of the quad around crossing `g`, whose cells hold the vertices `r` (in ring order).
+#[allow(clippy::too_many_arguments)]
+fn quad(
+    samples: &Samples,
+    verts: &Vertices,
+    positions: &[Vec3],
+    double_faces: &[u8],
+    g: u32,
+    r: [u32; 4],
+    meta: u8,
+    run: &mut QuadRun,
+) {
+    if r.contains(&UNSET) {
+        // An edge on the grid border: the surface is left open there, as in marching cubes.
+        return;
+    }
+    let axis = (meta & 3) as usize;
+    let lower_inside = meta & 4 != 0;
+    let (u, v) = plane_axes(axis);
+    let plane = [u, v];
+    let mut doubled = [false; 4];
+    for (q, &(along, side_a, side_b)) in RING_SIDES.iter().enumerate() {
+        let f = 2 * plane[along] as u8;
+        let (a, b) = (r[q] as usize, r[(q + 1) % 4] as usize);
+        doubled[q] = double_faces[a] & (1 << (f + side_a)) != 0
+            && double_faces[b] & (1 << (f + side_b)) != 0;
+    }
+    let mut dir = Vec3::ZERO;
+    dir[axis] = if lower_inside { 1.0 } else { -1.0 };
+
+    if !doubled.contains(&true) {
+        let ring = if lower_inside {
+            r
+        } else {
+            [r[0], r[3], r[2], r[1]]
+        };
+        let p = ring.map(|i| positions[i as usize]);
+        for t in split_quad(p, dir) {
+            run.triangles.push(t.map(|c| ring[c]));
+        }
+        return;
+    }
+
+    // Rare: insert segment midpoints on the doubled sides and fan around the crossing, which
+    // lies on the edge itself and so sees the ring's corners in order.
+    let (node, _) = verts.locate(g);
+    let mut polygon = Vec::with_capacity(8);
+    for q in 0..4 {
+        polygon.push(r[q]);
+        if doubled[q] {
+            let key = segment_key(samples, node, axis, q, lower_inside);
+            polygon.push(extra(run, key));
+        }
+    }
+    if !lower_inside {
+        polygon.reverse();
+    }
+    let centre = extra(run, CENTRE_KEY | u64::from(g));
+    for i in 0..polygon.len() {
+        run.triangles
+            .push([centre, polygon[i], polygon[(i + 1) % polygon.len()]]);
+    }
+}
+
+fn extra(run: &mut QuadRun, key: u64) -> u32 {
+    run.extra.push(key);
+    EXTRA_FLAG | (run.extra.len() - 1) as u32
+}
+
+/// Key of the contour segment on the face between ring corners `q` and `q + 1` around the edge
+/// along `axis` from `node`, that ends at this edge's crossing: the face and the face corner the
+/// segment cuts off. Both quads along the segment derive the same key.
+fn segment_key(
+    samples: &Samples,
+    node: [usize; 3],
+    axis: usize,
+    q: usize,
+    lower_inside: bool,
+) -> u64 {
+    let (u, v) = plane_axes(axis);
+    let (along, side_a, _) = RING_SIDES[q];
+    let normal = [u, v][along];
+    // The face's lowest node is the lowest node of its high-side cell.
+    let high = if side_a == 0 { q } else { (q + 1) % 4 };
+    let mut low = node;
+    for (d, &a) in [u, v].iter().enumerate() {
+        low[a] = node[a] + RING_OFFSETS[high][d] - 1;
+    }
+    let (p, pq) = plane_axes(normal);
+    let offsets = [[0, 0], [1, 0], [1, 1], [0, 1]];
+    let corner_nodes = offsets.map(|[a, b]| {
+        let mut n = low;
+        n[p] += a;
+        n[pq] += b;
+        n
+    });
+    let values = corner_nodes.map(|n| samples.values[samples.index(n[0], n[1], n[2])]);
+    let joined = joins_inside(values.map(|x| x - samples.iso), samples.inside(values[0]));
+    // Separated inside corners are cut off by the segments; joined ones leave the outside
+    // corners cut off. The segment through this edge cuts the edge's end of that kind.
+    let mut cut = node;
+    if lower_inside == joined {
+        cut[axis] += 1;
+    }
+    let corner = (cut[p] - low[p]) + 2 * (cut[pq] - low[pq]);
+    let face = samples.index(low[0], low[1], low[2]) as u64 * 3 + normal as u64;
+    (face << 2) | corner as u64
+}
+
+fn extra_position(samples: &Samples, verts: &Vertices, key: u64) -> Vec3 {
+    if key & CENTRE_KEY != 0 {
+        return verts.positions[(key & !CENTRE_KEY) as usize];
+    }
+    let corner = (key & 3) as usize;
+    let face = key >> 2;
+    let normal = (face % 3) as usize;
+    let low = face as usize / 3;
+    let [nx, ny, _] = samples.dims;
+    let low = [low % nx, (low / nx) % ny, low / (nx * ny)];
+    let (p, q) = plane_axes(normal);
+    let mut cut = low;
+    cut[p] += corner & 1;
+    cut[q] += corner >> 1;
+    // The segment joins the crossings on the two face edges meeting at the cut corner.
+    let ends = [(p, corner & 1), (q, corner >> 1)].map(|(a, high)| {
+        let mut n = cut;
+        n[a] -= high;
+        verts.positions[verts.find(n, a) as usize]
+    });
+    0.5 * (ends[0] + ends[1])
+}

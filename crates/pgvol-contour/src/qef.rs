@@ -1,0 +1,162 @@
+//! Quadratic error function of dual contouring: the point closest, in the least-squares sense,
+//! to the tangent planes at a cell's edge crossings.
+
+use glam::{DMat3, DVec3};
+
+/// Accumulated planes `n · x = n · p` as `AᵀA`, `Aᵀb` and the mass point of the `p`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Qef {
+    ata: DMat3,
+    atb: DVec3,
+    sum: DVec3,
+    count: u32,
+}
+
+impl Default for Qef {
+    // Not derived: glam's default matrix is the identity.
+    fn default() -> Self {
+        Self {
+            ata: DMat3::ZERO,
+            atb: DVec3::ZERO,
+            sum: DVec3::ZERO,
+            count: 0,
+        }
+    }
+}
+
+impl Qef {
+    /// Adds the plane through `p` with unit normal `n`.
+    pub fn add(&mut self, p: DVec3, n: DVec3) {
+        self.ata += DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+        self.atb += n * n.dot(p);
+        self.sum += p;
+        self.count += 1;
+    }
+
+    pub fn mass_point(&self) -> DVec3 {
+        self.sum / f64::from(self.count.max(1))
+    }
+
+    /// The minimiser closest to the mass point, with directions whose singular value (square
+    /// root of the eigenvalue of `AᵀA`) is below `rel_threshold` times the largest treated as
+    /// unconstrained: along a flat face only the normal direction is fixed, and along a sharp
+    /// edge two, so the rest stays at the mass point rather than running off with noise.
+    pub fn solve(&self, rel_threshold: f64) -> DVec3 {
+        let c = self.mass_point();
+        let (values, vectors) = symmetric_eigen(self.ata);
+        let largest = values.max_element();
+        if largest.is_nan() || largest <= 0.0 {
+            return c;
+        }
+        let cutoff = largest * rel_threshold * rel_threshold;
+        let r = self.atb - self.ata * c;
+        let mut x = c;
+        for i in 0..3 {
+            if values[i] > cutoff {
+                let v = vectors.col(i);
+                x += v * (v.dot(r) / values[i]);
+            }
+        }
+        x
+    }
+}
+
+/// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi rotations,
+/// which converge quadratically and stay accurate for the rank-deficient matrices met here.
+pub(crate) fn symmetric_eigen(m: DMat3) -> (DVec3, DMat3) {
+    let mut a = m.to_cols_array_2d();
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let scale: f64 = a.iter().flatten().map(|x| x * x).sum::<f64>();
+    for _sweep in 0..12 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        if off <= 1e-30 * scale || off == 0.0 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            // Rotation angle zeroing a[p][q] (Golub & Van Loan, symmetric Schur).
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for row in &mut a {
+                let (akp, akq) = (row[p], row[q]);
+                row[p] = c * akp - s * akq;
+                row[q] = s * akp + c * akq;
+            }
+            let (rp, rq) = (a[p], a[q]);
+            for (k, (apk, aqk)) in rp.into_iter().zip(rq).enumerate() {
+                a[p][k] = c * apk - s * aqk;
+                a[q][k] = s * apk + c * aqk;
+            }
+            for row in &mut v {
+                let (vkp, vkq) = (row[p], row[q]);
+                row[p] = c * vkp - s * vkq;
+                row[q] = s * vkp + c * vkq;
+            }
+        }
+    }
+    let values = DVec3::new(a[0][0], a[1][1], a[2][2]);
+    // `v` holds eigenvectors as columns in row-major storage.
+    let vectors = DMat3::from_cols(
+        DVec3::new(v[0][0], v[1][0], v[2][0]),
+        DVec3::new(v[0][1], v[1][1], v[2][1]),
+        DVec3::new(v[0][2], v[1][2], v[2][2]),
+    );
+    (values, vectors)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eigen_decomposition_reconstructs_the_matrix() {
+        let m = DMat3::from_cols(
+            DVec3::new(4.0, 1.0, -2.0),
+            DVec3::new(1.0, 3.0, 0.5),
+            DVec3::new(-2.0, 0.5, 1.0),
+        );
+        let (l, v) = symmetric_eigen(m);
+        let back = v * DMat3::from_diagonal(l) * v.transpose();
+        for (x, y) in back.to_cols_array().iter().zip(m.to_cols_array()) {
+            assert!((x - y).abs() < 1e-12, "{back:?} vs {m:?}");
+        }
+        let ortho = v.transpose() * v;
+        assert!((ortho - DMat3::IDENTITY).abs_diff_eq(DMat3::ZERO, 1e-12));
+    }
+
+    #[test]
+    fn three_planes_meet_at_the_corner() {
+        let mut q = Qef::default();
+        let corner = DVec3::new(0.3, 0.6, 0.2);
+        for n in [DVec3::X, DVec3::Y, DVec3::Z] {
+            q.add(corner + (DVec3::ONE - n) * 0.25, n);
+        }
+        let x = q.solve(0.1);
+        assert!(x.distance(corner) < 1e-12, "{x:?}");
+    }
+
+    #[test]
+    fn a_flat_face_keeps_the_tangential_mass_point() {
+        let mut q = Qef::default();
+        for p in [DVec3::new(0.0, 0.0, 0.4), DVec3::new(1.0, 0.2, 0.4)] {
+            q.add(p, DVec3::Z);
+        }
+        // Slightly noisy normal: a tiny second direction must not move the point sideways.
+        q.add(
+            DVec3::new(0.5, 1.0, 0.4),
+            DVec3::new(1e-4, 0.0, 1.0).normalize(),
+        );
+        let x = q.solve(0.1);
+        let c = q.mass_point();
+        assert!((x.z - 0.4).abs() < 1e-3);
+        assert!(
+            (x.x - c.x).abs() < 1e-3 && (x.y - c.y).abs() < 1e-3,
+            "{x:?} vs {c:?}"
+        );
+    }
+}

@@ -1,0 +1,140 @@
+//! Dual contouring is the dual of the marching cubes surface: the same closed, oriented
+//! manifold topology on every input.
+
+use proptest::prelude::*;
+
+use crate::grids::{Rng, Samples};
+use crate::topology::{check_closed_manifold, check_surface};
+
+/// Checks the dual mesh and that it has the marching cubes surface's topology: the same Euler
+/// characteristic and the same number of components.
+fn check_dual_of_mc(samples: &Samples, iso: f32) {
+    let mc = samples.contour(iso);
+    let dc = samples.dual_trilinear(iso);
+    assert_eq!(mc.triangles.is_empty(), dc.triangles.is_empty());
+    if mc.triangles.is_empty() {
+        return;
+    }
+    let (m, d) = (check_surface(&mc), check_surface(&dc));
+    assert_eq!(d.euler, m.euler, "Euler characteristic");
+    assert_eq!(d.component_volumes.len(), m.component_volumes.len());
+}
+
+fn single_cell(case: usize, mut magnitude: impl FnMut(usize) -> f32) -> Samples {
+    Samples::padded([4, 4, 4], 1.0, |[i, j, k]| {
+        let c = (i - 1) | ((j - 1) << 1) | ((k - 1) << 2);
+        let m = magnitude(c);
+        if (case >> c) & 1 == 1 {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+#[test]
+fn all_single_cell_cases() {
+    let mut rng = Rng::new(11);
+    for case in 0..256 {
+        check_dual_of_mc(&single_cell(case, |_| 1.0), 0.0);
+        for _ in 0..30 {
+            check_dual_of_mc(&single_cell(case, |_| rng.range(0.01, 2.0)), 0.0);
+        }
+        for _ in 0..5 {
+            let s = single_cell(case, |c| {
+                if (case >> c) & 1 == 1 || rng.next_u64() & 1 == 0 {
+                    rng.range(0.01, 2.0)
+                } else {
+                    0.0
+                }
+            });
+            check_dual_of_mc(&s, 0.0);
+        }
+    }
+}
+
+#[test]
+fn all_pairs_of_cells_across_an_ambiguous_face() {
+    // Two cells sharing the face x = 2 with inside corners on one of its diagonals: every
+    // configuration of the other eight corners, both decider outcomes. This covers the tunnels
+    // through a face, where both cells' loops cross the shared face twice.
+    let mut tunnels = 0;
+    for rest in 0..256usize {
+        for (inside, outside) in [(1.0, 0.3), (0.3, 1.0)] {
+            let s = Samples::padded([5, 4, 4], 1.0, |[i, j, k]| {
+                let (y, z) = (j - 1, k - 1);
+                let corner_inside = if i == 2 {
+                    y == z
+                } else {
+                    let bit = (i - 1) / 2 * 4 + y + 2 * z;
+                    (rest >> bit) & 1 == 1
+                };
+                if corner_inside {
+                    -inside
+                } else {
+                    outside
+                }
+            });
+            check_dual_of_mc(&s, 0.0);
+            let mc = check_closed_manifold(&s.contour(0.0));
+            tunnels += usize::from(mc.euler == 0);
+        }
+    }
+    assert!(tunnels > 0, "no configuration made a tunnel");
+}
+
+fn checkerboard(n: usize, parity: usize, mut magnitude: impl FnMut() -> f32) -> Samples {
+    Samples::padded([n, n, n], 1.0, |[i, j, k]| {
+        let m = magnitude();
+        if (i + j + k) % 2 == parity {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+#[test]
+fn checkerboards() {
+    let mut rng = Rng::new(12);
+    for parity in 0..2 {
+        check_dual_of_mc(&checkerboard(9, parity, || 1.0), 0.0);
+        for _ in 0..20 {
+            check_dual_of_mc(&checkerboard(8, parity, || rng.range(0.05, 1.0)), 0.0);
+        }
+    }
+}
+
+fn value() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        8 => -1.0f32..1.0,
+        1 => Just(0.0f32),
+        1 => Just(f32::NAN),
+        1 => prop_oneof![Just(-1e-30f32), Just(1e-30f32), Just(-1e30f32)],
+    ]
+}
+
+fn field() -> impl Strategy<Value = Samples> {
+    (3usize..9, 3usize..9, 3usize..9).prop_flat_map(|(x, y, z)| {
+        prop::collection::vec(value(), x * y * z).prop_map(move |v| {
+            let mut it = v.into_iter();
+            Samples::padded([x, y, z], 1.0, |_| it.next().unwrap())
+        })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn random_fields(samples in field(), iso in -0.5f32..0.5) {
+        check_dual_of_mc(&samples, iso);
+    }
+
+    #[test]
+    fn random_six_cubed_fields(values in prop::collection::vec(-1.0f32..1.0, 64)) {
+        let mut it = values.into_iter();
+        let samples = Samples::padded([6, 6, 6], 1.0, |_| it.next().unwrap());
+        check_dual_of_mc(&samples, 0.0);
+    }
+}
