@@ -1,0 +1,123 @@
+"""Bad input makes `pgvol remesh` fail cleanly: non-zero exit, a message naming
+the culprit, no panic, and nothing left behind in the output folder."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import pytest
+
+import helpers
+
+GOOD_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+def _empty(folder: Path) -> Path:
+    p = folder / "empty.obj"
+    p.write_bytes(b"")
+    return p
+
+
+def _truncated_stl(folder: Path) -> Path:
+    p = folder / "truncated.stl"
+    tri = struct.pack("<12fH", *([0.0] * 3), 0, 0, 0, 1, 0, 0, 0, 1, 0, 0)
+    # Header claims 100 triangles; only 10 follow, the last one cut short.
+    p.write_bytes(b"binary stl".ljust(80, b" ") + struct.pack("<I", 100) + tri * 10 + tri[:20])
+    return p
+
+
+def _index_out_of_range(folder: Path) -> Path:
+    p = folder / "bad-index.obj"
+    p.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    return p
+
+
+def _nan_coordinate(folder: Path) -> Path:
+    p = folder / "nan-coordinate.obj"
+    p.write_text(GOOD_OBJ.replace("v 1 0 0", "v nan 0 0"))
+    return p
+
+
+def _unknown_extension(folder: Path) -> Path:
+    p = folder / "mesh.xyz"
+    p.write_text(GOOD_OBJ)
+    return p
+
+
+def _nonexistent(folder: Path) -> Path:
+    return folder / "does-not-exist.obj"
+
+
+INPUT_CASES = {
+    "empty-file": _empty,
+    "truncated-binary-stl": _truncated_stl,
+    "obj-index-out-of-range": _index_out_of_range,
+    "obj-nan-coordinate": _nan_coordinate,
+    "unknown-input-extension": _unknown_extension,
+    "nonexistent-file": _nonexistent,
+}
+
+
+def _assert_clean_failure(r: helpers.Run, culprit: str, out_dir: Path):
+    assert r.returncode != 0, "expected a non-zero exit\n" + r.describe()
+    assert r.returncode > 0, f"killed by signal {-r.returncode}\n" + r.describe()
+    assert "panicked" not in r.stderr and "panicked" not in r.stdout, "pgvol panicked\n" + r.describe()
+    assert r.stderr.strip(), "no error message on stderr\n" + r.describe()
+    assert culprit in r.stderr, f"stderr does not name {culprit!r}\n" + r.describe()
+    left = sorted(p.name for p in out_dir.iterdir())
+    assert not left, f"files left in the output folder: {left}"
+
+
+@pytest.fixture
+def dirs(tmp_path):
+    inputs, outputs = tmp_path / "in", tmp_path / "out"
+    inputs.mkdir()
+    outputs.mkdir()
+    return inputs, outputs
+
+
+@pytest.mark.parametrize("case", list(INPUT_CASES))
+def test_bad_input_fails_cleanly(case, dirs, pgvol):
+    in_dir, out_dir = dirs
+    src = INPUT_CASES[case](in_dir)
+    r = helpers.run([pgvol, "remesh", src, "-o", out_dir / "out.glb", "--res", 16], timeout=120)
+    _assert_clean_failure(r, src.name, out_dir)
+
+
+def test_unknown_output_extension_fails_cleanly(dirs, pgvol):
+    in_dir, out_dir = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    out = out_dir / "out.unknownext"
+    r = helpers.run([pgvol, "remesh", src, "-o", out, "--res", 16], timeout=120)
+    _assert_clean_failure(r, "unknownext", out_dir)
+
+
+def test_wrong_flag_fails_cleanly(dirs, pgvol):
+    in_dir, out_dir = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    r = helpers.run([pgvol, "remesh", src, "-o", out_dir / "out.glb", "--no-such-flag"], timeout=120)
+    _assert_clean_failure(r, "--no-such-flag", out_dir)
+
+
+def test_good_tetrahedron_succeeds(dirs, pgvol):
+    """Control for the cases above: the same small input without the defect works."""
+    in_dir, out_dir = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    helpers.run_ok([pgvol, "remesh", src, "-o", out_dir / "out.glb", "--res", 16], timeout=120)
+    assert (out_dir / "out.glb").is_file()
+
+
+@pytest.mark.parametrize("command", ["compare", "sdf"])
+def test_other_commands_name_missing_file(command, dirs, pgvol):
+    in_dir, out_dir = dirs
+    missing = in_dir / "does-not-exist.obj"
+    if command == "compare":
+        args = [pgvol, "compare", missing, missing, "--json"]
+    else:
+        args = [pgvol, "sdf", missing, "-o", out_dir / "grid.nrrd", "--res", 8, "--dense"]
+    r = helpers.run(args, timeout=120)
+    _assert_clean_failure(r, missing.name, out_dir)

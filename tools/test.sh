@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# The project's single test command: builds pgvol, sets up the Python and Node
+# helpers, runs the Rust tests and the end-to-end checks in tools/checks.
+# Usage: bash tools/test.sh   (from any directory; needs only the package registries)
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+
+section() { printf '\n==> %s\n' "$*"; }
+
+hash_of() { sha256sum "$@" | sha256sum | cut -d' ' -f1; }
+
+section "cargo build --release"
+cargo build --release
+
+section "python environment (.venv)"
+PY="${PYTHON:-python3}"
+if [[ ! -x .venv/bin/python ]]; then
+    "$PY" -m venv .venv
+fi
+req_hash="$(hash_of tools/requirements.txt)"
+stamp=.venv/.pgvol-requirements.sha256
+if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$req_hash" ]]; then
+    .venv/bin/python -m pip install -q --disable-pip-version-check -r tools/requirements.txt
+    echo "$req_hash" > "$stamp"
+else
+    echo "requirements unchanged; skipping pip install"
+fi
+
+section "node helpers (tools/node_modules)"
+lock_hash="$(hash_of tools/package.json tools/package-lock.json)"
+nstamp=tools/node_modules/.pgvol-lock.sha256
+if [[ ! -f "$nstamp" || "$(cat "$nstamp")" != "$lock_hash" ]]; then
+    npm ci --prefix tools --no-audit --no-fund --loglevel=error
+    echo "$lock_hash" > "$nstamp"
+else
+    echo "package-lock unchanged; skipping npm ci"
+fi
+
+# Both suites run even if the first fails, so one CI log shows every failure.
+failed=()
+
+section "cargo test --release --workspace"
+cargo test --release --workspace || failed+=("cargo test")
+
+section "end-to-end checks (pytest tools/checks)"
+.venv/bin/python -m pytest -q -p no:cacheprovider tools/checks || failed+=("pytest tools/checks")
+
+if [[ ${#failed[@]} -gt 0 ]]; then
+    section "FAILED: ${failed[*]}"
+    exit 1
+fi
+section "all tests passed"
