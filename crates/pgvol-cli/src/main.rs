@@ -1,6 +1,6 @@
 //! `pgvol`: meshes to compact implicit files and back.
 
-mod commands;
+pub(crate) mod commands;
 mod pipeline;
 mod progress;
 

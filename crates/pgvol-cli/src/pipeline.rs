@@ -5,12 +5,13 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use glam::Vec3;
-use pgvol_field::{Basis, CoefficientVolume, Grid};
+use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitOptions, FitReport, Grid};
 use pgvol_mesh::Mesh;
 use pgvol_sdf::sampling::{Extent, Sampled};
 use pgvol_sdf::{MeshSdf, SignMode};
 use serde::Serialize;
 
+use crate::commands::MethodArg;
 use crate::progress;
 
 /// How the user asked for the grid.
@@ -87,34 +88,87 @@ pub fn signed_distance_grid(
 /// through the prefilter, whose influence falls by 0.268 per node.
 pub const ENCODE_BAND: f32 = 4.0;
 
-/// The coefficient volume of `mesh` on `grid`, and the seconds spent on distances and the fit.
+/// The coefficient volume of `mesh` on `grid`, the fit's report and the seconds spent on
+/// signed distances. `interp` interpolates band-limited node distances (fast); `iso` and `wls`
+/// query the mesh's distance at the points they choose.
+pub fn encode_with(
+    mesh: &Mesh,
+    grid: Grid,
+    basis: Basis,
+    method: FitMethod,
+    quiet: bool,
+) -> Result<(CoefficientVolume, FitReport, f64)> {
+    let options = FitOptions::default();
+    if method == FitMethod::Interp {
+        let t = Instant::now();
+        let (sampled, _) = signed_distance_grid(
+            mesh,
+            &grid,
+            Extent::Band(ENCODE_BAND),
+            SignMode::Auto,
+            quiet,
+        )?;
+        let sdf_time = t.elapsed().as_secs_f64();
+        let (volume, report) =
+            pgvol_field::fit::interp_samples(grid, basis, &sampled.values, &options)
+                .context("cannot fit the coefficients")?;
+        return Ok((volume, report, sdf_time));
+    }
+    let t = Instant::now();
+    let sdf = MeshSdf::new(mesh, SignMode::Auto).context("cannot build the distance field")?;
+    let sdf_time = t.elapsed().as_secs_f64();
+    if !quiet {
+        eprintln!(
+            "fitting {} coefficients ({} fit, {} basis)...",
+            grid.len(),
+            method.name(),
+            basis
+        );
+    }
+    let (volume, report) = pgvol_field::fit(grid, basis, method, &sdf, &options)
+        .context("cannot fit the coefficients")?;
+    Ok((volume, report, sdf_time))
+}
+
+/// [`encode_with`] with the `interp` fit, returning the seconds spent on distances and the fit.
 pub fn encode(
     mesh: &Mesh,
     grid: Grid,
     basis: Basis,
     quiet: bool,
 ) -> Result<(CoefficientVolume, f64, f64)> {
-    let t = Instant::now();
-    let (sampled, _) = signed_distance_grid(
-        mesh,
-        &grid,
-        Extent::Band(ENCODE_BAND),
-        SignMode::Auto,
-        quiet,
-    )?;
-    let samples = sampled.values;
-    let sdf_time = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let volume = CoefficientVolume::interpolate(grid, basis, samples)
-        .context("cannot fit the coefficients")?;
-    Ok((volume, sdf_time, t.elapsed().as_secs_f64()))
+    let (volume, report, sdf_time) = encode_with(mesh, grid, basis, FitMethod::Interp, quiet)?;
+    Ok((volume, sdf_time, report.seconds))
 }
 
-/// Contours the `iso` level set of `volume` with marching cubes on its own grid, vertices placed
-/// on the continuous field. The grid is padded with one layer of outside values so the surface
-/// is closed even where it reaches the border.
-pub fn decode(volume: &CoefficientVolume, iso: f32) -> Mesh {
-    let g = volume.grid;
+/// Contours the `iso` level set of `volume` with `method`, on the volume's own grid or on a grid
+/// of `res` nodes per axis spanning the same box. The grid is padded with one layer of outside
+/// values so the surface is closed even where it reaches the border.
+pub fn decode(
+    volume: &CoefficientVolume,
+    iso: f32,
+    method: MethodArg,
+    res: Option<usize>,
+) -> Result<Mesh> {
+    let g = match res {
+        None => volume.grid,
+        Some(n) => {
+            let side = volume.grid.max_corner() - volume.grid.origin;
+            let spacing = side.max_element() / (n - 1) as f32;
+            let dims = side
+                .to_array()
+                .map(|s| ((s / spacing).round() as usize + 1).max(2));
+            let total = dims.iter().map(|&d| d as u128).product::<u128>();
+            if total > pgvol_field::MAX_GRID_NODES {
+                anyhow::bail!("--res {n} gives a grid of {total} nodes, more than the limit");
+            }
+            Grid {
+                origin: volume.grid.origin,
+                spacing,
+                dims,
+            }
+        }
+    };
     let inner = volume.sample(&g);
     let [nx, ny, nz] = g.dims;
     let dims = [nx + 2, ny + 2, nz + 2];
@@ -128,17 +182,26 @@ pub fn decode(volume: &CoefficientVolume, iso: f32) -> Mesh {
         }
     }
     let origin = g.origin - Vec3::splat(g.spacing);
-    let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-        let lo = g.origin;
-        let hi = g.max_corner();
-        let inside_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-        if inside_box(a) && inside_box(b) {
-            volume.root_on_segment(a, va, b, vb, iso)
-        } else {
-            // An edge into the padding: the padding value is artificial, interpolate linearly.
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            a + (b - a) * t
+    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    let inside_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    let mesh = match method {
+        MethodArg::Mc => {
+            let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
+                if inside_box(a) && inside_box(b) {
+                    volume.root_on_segment(a, va, b, vb, iso)
+                } else {
+                    // An edge into the padding: the padding value is artificial, interpolate.
+                    let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+                    a + (b - a) * t
+                }
+            };
+            pgvol_contour::marching_cubes_with(&values, dims, origin, g.spacing, iso, &refine)
         }
+        MethodArg::Dc => {
+            let options = pgvol_contour::DualContourOptions::default();
+            pgvol_contour::dual_contour(&values, dims, origin, g.spacing, iso, volume, &options)
+        }
+        MethodArg::Sn => pgvol_contour::surface_nets(&values, dims, origin, g.spacing, iso, volume),
     };
-    pgvol_contour::marching_cubes_with(&values, dims, origin, g.spacing, iso, &refine)
+    Ok(mesh)
 }

@@ -6,8 +6,9 @@ use anyhow::{bail, Result};
 use clap::Args;
 use serde::Serialize;
 
-use super::{BasisArg, GridArgs, OutputArgs, PathArg};
+use super::{BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
 use crate::pipeline;
+use clap::ValueEnum;
 
 #[derive(Args)]
 pub struct EncodeArgs {
@@ -18,11 +19,32 @@ pub struct EncodeArgs {
     pub output: PathArg,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// Basis of the coefficient volume.
+    #[command(flatten)]
+    pub basis: BasisArgs,
+    /// How the coefficients are found.
     #[arg(long, value_enum, default_value_t)]
-    pub basis: BasisArg,
+    pub fit: FitArg,
+    /// For --fit iso: the isosurface step in grid spacings (searched when not given).
+    #[arg(long)]
+    pub z_step: Option<f32>,
+    /// Print the solver's iterations and residual.
+    #[arg(long, short)]
+    pub verbose: bool,
     #[command(flatten)]
     pub out: OutputArgs,
+}
+
+/// How the coefficients are found.
+#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+pub enum FitArg {
+    /// The field passes through the signed distance at every node (B-splines: exact prefilter;
+    /// pseudo-Gaussian: CG or CGLS).
+    #[default]
+    Interp,
+    /// The paper's points: nodes moved to the nearest isosurface SDF = q·z_step.
+    Iso,
+    /// Weighted least squares on surface and offset samples (most accurate, slowest).
+    Wls,
 }
 
 #[derive(Args)]
@@ -35,6 +57,13 @@ pub struct DecodeArgs {
     /// The level set to extract: 0 is the surface, positive values offset it outward.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub iso: f32,
+    /// Contouring method.
+    #[arg(long, value_enum, default_value_t)]
+    pub method: MethodArg,
+    /// Resample the field on a grid of N nodes per axis over the same box (default: the
+    /// stored grid).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    pub res: Option<u32>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -60,14 +89,60 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
     let start = Instant::now();
     let mesh = pipeline::load_mesh(&a.mesh, quiet)?;
     let grid = a.grid.spec(128).grid_for(&mesh)?;
-    let (volume, sdf_seconds, fit_seconds) = pipeline::encode(&mesh, grid, a.basis.into(), quiet)?;
-    let header = pgvol_format::pgv::header_for(&volume, "interp", Some(&mesh));
+    let method = match a.fit {
+        FitArg::Interp => pgvol_field::FitMethod::Interp,
+        FitArg::Iso => pgvol_field::FitMethod::Iso { z_step: a.z_step },
+        FitArg::Wls => pgvol_field::FitMethod::Wls,
+    };
+    if a.z_step.is_some() && !matches!(a.fit, FitArg::Iso) {
+        bail!("--z-step applies to --fit iso only");
+    }
+    if let Some(z) = a.z_step {
+        if !(z.is_finite() && z > 0.0) {
+            bail!("--z-step must be a positive number of grid spacings, got {z}");
+        }
+    }
+    let (volume, report, sdf_seconds) =
+        pipeline::encode_with(&mesh, grid, a.basis.basis()?, method, quiet)?;
+    let fit_seconds = report.seconds;
+    if a.verbose && !a.out.json {
+        eprintln!(
+            "fit {}: solver {}, {} iterations, relative residual {:.3e}, {}, {} spurious sign changes{}",
+            report.method,
+            report.solver,
+            report.iterations,
+            report.residual,
+            if report.converged { "converged" } else { "NOT converged" },
+            report.spurious_sign_changes,
+            report.z_step.map(|z| format!(", z_step {z:.4} k")).unwrap_or_default()
+        );
+    }
+    if !report.converged && !quiet {
+        eprintln!(
+            "warning: the {} solver did not converge (relative residual {:.3e})",
+            report.solver, report.residual
+        );
+    }
+    if report.spurious_sign_changes > 0 && !quiet {
+        eprintln!(
+            "warning: {} nodes farther than one spacing from the surface have the wrong sign: the field has spurious surface pieces",
+            report.spurious_sign_changes
+        );
+    }
+    let mut header = pgvol_format::pgv::header_for(&volume, report.method.as_str(), Some(&mesh));
+    header
+        .metadata
+        .insert("fit_residual".into(), format!("{:e}", report.residual));
+    header
+        .metadata
+        .insert("fit_solver".into(), report.solver.clone());
     let file = pgvol_format::PgvFile { header, volume };
     pgvol_format::write_pgv(&a.output, &file)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     if a.out.json {
         let v = serde_json::json!({
-            "output": a.output, "grid": grid, "basis": file.volume.basis.name(), "bytes": bytes,
+            "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
+            "fit": report,
             "seconds": { "sdf": sdf_seconds, "fit": fit_seconds, "total": start.elapsed().as_secs_f64() },
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -90,7 +165,7 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
     }
     let file = pgvol_format::read_pgv(&a.input)?;
     let t = Instant::now();
-    let mesh = pipeline::decode(&file.volume, a.iso);
+    let mesh = pipeline::decode(&file.volume, a.iso, a.method, a.res.map(|r| r as usize))?;
     let seconds = t.elapsed().as_secs_f64();
     if mesh.triangles.is_empty() {
         bail!(
@@ -148,7 +223,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
     let h = &file.header;
     let g = h.grid;
     println!("file          {} ({} bytes)", a.input.display(), bytes);
-    println!("basis         {} (fit: {})", h.basis.name(), h.fit);
+    println!("basis         {} (fit: {})", h.basis, h.fit);
     println!(
         "grid          {} x {} x {}, spacing {}, origin ({}, {}, {})",
         g.dims[0], g.dims[1], g.dims[2], g.spacing, g.origin.x, g.origin.y, g.origin.z

@@ -1,6 +1,7 @@
 //! The subcommands and their arguments.
 
 mod compare;
+mod eval;
 mod files;
 mod remesh;
 mod sdf;
@@ -33,6 +34,8 @@ pub enum Command {
     Decode(files::DecodeArgs),
     /// Prints what a .pgv file holds.
     Info(files::InfoArgs),
+    /// Evaluates a .pgv field (value and gradient) at the points of a CSV file (x,y,z per line).
+    Eval(eval::EvalArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -43,6 +46,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Encode(a) => files::encode(a),
         Command::Decode(a) => files::decode(a),
         Command::Info(a) => files::info(a),
+        Command::Eval(a) => eval::run(a),
     }
 }
 
@@ -64,22 +68,61 @@ impl GridArgs {
 }
 
 /// The basis of the coefficient volume.
-#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BasisArg {
-    /// Tensor-product cubic B-spline (smooth, exact gradients).
+    /// Tensor-product cubic B-spline: C², 64 nodes per evaluation; the most accurate per byte
+    /// in docs/basis-study.md.
     #[default]
     Bspline3,
+    /// Tensor-product quadratic B-spline: C¹, 27 nodes per evaluation.
+    Bspline2,
+    /// The paper's pseudo-Gaussian (1 − d²/r²)^(n+1), radial; see --pg-n and --pg-r.
+    Pg,
     /// The sampled values themselves, interpolated trilinearly (the baseline).
     Trilinear,
 }
 
-impl From<BasisArg> for Basis {
-    fn from(b: BasisArg) -> Basis {
-        match b {
+/// Basis choice with its parameters.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct BasisArgs {
+    /// Basis of the coefficient volume.
+    #[arg(long, value_enum, default_value_t)]
+    pub basis: BasisArg,
+    /// Pseudo-Gaussian continuity order n (1 to 4); with --basis pg.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..=4))]
+    pub pg_n: u8,
+    /// Pseudo-Gaussian support radius r in grid spacings (0 < r ≤ 4); with --basis pg.
+    #[arg(long, default_value_t = 1.5)]
+    pub pg_r: f32,
+}
+
+impl BasisArgs {
+    pub fn basis(self) -> anyhow::Result<Basis> {
+        let b = match self.basis {
             BasisArg::Bspline3 => Basis::Bspline3,
+            BasisArg::Bspline2 => Basis::Bspline2,
             BasisArg::Trilinear => Basis::Trilinear,
-        }
+            BasisArg::Pg => Basis::Pg {
+                n: self.pg_n,
+                r: self.pg_r,
+            },
+        };
+        b.validate()
+            .map_err(|e| anyhow::anyhow!("--pg-r/--pg-n: {e}"))?;
+        Ok(b)
     }
+}
+
+/// How the mesh is extracted from the field.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MethodArg {
+    /// Marching cubes, vertices on the continuous field: watertight and manifold.
+    #[default]
+    Mc,
+    /// Surface nets, vertices projected onto the field: closed, smooth, not always manifold.
+    Sn,
+    /// Dual contouring with the analytic gradients: keeps sharp edges, manifold.
+    Dc,
 }
 
 /// How inside and outside are told apart.

@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::Args;
 use serde::Serialize;
 
-use super::{BasisArg, GridArgs, OutputArgs, PathArg};
+use super::{BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
 use crate::pipeline::{self, Timings};
 
 #[derive(Args)]
@@ -18,9 +18,11 @@ pub struct RemeshArgs {
     pub output: PathArg,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// Basis of the coefficient volume.
+    #[command(flatten)]
+    pub basis: BasisArgs,
+    /// Contouring method.
     #[arg(long, value_enum, default_value_t)]
-    pub basis: BasisArg,
+    pub method: MethodArg,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -47,11 +49,11 @@ pub fn run(a: RemeshArgs) -> Result<()> {
     let mesh = pipeline::load_mesh(&a.input, quiet)?;
     t.read = start.elapsed().as_secs_f64();
     let grid = a.grid.spec(128).grid_for(&mesh)?;
-    let (volume, sdf, fit) = pipeline::encode(&mesh, grid, a.basis.into(), quiet)?;
+    let (volume, sdf, fit) = pipeline::encode(&mesh, grid, a.basis.basis()?, quiet)?;
     t.sdf = sdf;
     t.fit = fit;
     let c = Instant::now();
-    let out = pipeline::decode(&volume, 0.0);
+    let out = pipeline::decode(&volume, 0.0, a.method, None)?;
     t.contour = c.elapsed().as_secs_f64();
     if out.triangles.is_empty() {
         anyhow::bail!(
