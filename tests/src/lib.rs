@@ -92,36 +92,15 @@ pub fn encode(mesh: &Mesh, res: usize, basis: Basis) -> CoefficientVolume {
     CoefficientVolume::interpolate(grid, basis, samples).expect("fit")
 }
 
-/// Contours the `iso` level set of `volume` on its own grid as the CLI's decode does: the grid
-/// is padded with one layer of outside values so the surface closes where it reaches the border,
-/// and vertices on interior edges are placed by root finding on the continuous field.
+/// Contours the `iso` level set of `volume` on its own grid with marching cubes, as
+/// `pgvol decode` does.
 pub fn decode(volume: &CoefficientVolume, iso: f32) -> Mesh {
-    let g = volume.grid;
-    let inner = volume.sample(&g);
-    let [nx, ny, nz] = g.dims;
-    let dims = [nx + 2, ny + 2, nz + 2];
-    let outside = iso + g.spacing;
-    let mut values = vec![outside; dims[0] * dims[1] * dims[2]];
-    for k in 0..nz {
-        for j in 0..ny {
-            let src = nx * (j + ny * k);
-            let dst = 1 + dims[0] * ((j + 1) + dims[1] * (k + 1));
-            values[dst..dst + nx].copy_from_slice(&inner[src..src + nx]);
-        }
-    }
-    let origin = g.origin - Vec3::splat(g.spacing);
-    let (lo, hi) = (g.origin, g.max_corner());
-    let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-        let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-        if in_box(a) && in_box(b) {
-            volume.root_on_segment(a, va, b, vb, iso)
-        } else {
-            // Padding values are artificial: interpolate linearly on edges that reach them.
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            a + (b - a) * t
-        }
-    };
-    pgvol_contour::marching_cubes_with(&values, dims, origin, g.spacing, iso, &refine)
+    pgvol_contour::contour_volume(
+        volume,
+        &volume.grid,
+        iso,
+        pgvol_contour::Method::MarchingCubes,
+    )
 }
 
 /// Runs `f` in a fresh rayon pool of `threads` threads.

@@ -4,7 +4,6 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitOptions, FitReport, Grid};
 use pgvol_mesh::Mesh;
 use pgvol_sdf::sampling::{Extent, Sampled};
@@ -142,66 +141,22 @@ pub fn encode(
 }
 
 /// Contours the `iso` level set of `volume` with `method`, on the volume's own grid or on a grid
-/// of `res` nodes per axis spanning the same box. The grid is padded with one layer of outside
-/// values so the surface is closed even where it reaches the border.
+/// of `res` nodes along its longest side spanning the same box.
 pub fn decode(
     volume: &CoefficientVolume,
     iso: f32,
     method: MethodArg,
     res: Option<usize>,
 ) -> Result<Mesh> {
-    let g = match res {
+    let grid = match res {
         None => volume.grid,
-        Some(n) => {
-            let side = volume.grid.max_corner() - volume.grid.origin;
-            let spacing = side.max_element() / (n - 1) as f32;
-            let dims = side
-                .to_array()
-                .map(|s| ((s / spacing).round() as usize + 1).max(2));
-            let total = dims.iter().map(|&d| d as u128).product::<u128>();
-            if total > pgvol_field::MAX_GRID_NODES {
-                anyhow::bail!("--res {n} gives a grid of {total} nodes, more than the limit");
-            }
-            Grid {
-                origin: volume.grid.origin,
-                spacing,
-                dims,
-            }
-        }
+        Some(n) => pgvol_contour::resampled_grid(volume, n)
+            .with_context(|| format!("--res {n} gives a grid larger than the limit"))?,
     };
-    let inner = volume.sample(&g);
-    let [nx, ny, nz] = g.dims;
-    let dims = [nx + 2, ny + 2, nz + 2];
-    let outside = iso + g.spacing;
-    let mut values = vec![outside; dims[0] * dims[1] * dims[2]];
-    for k in 0..nz {
-        for j in 0..ny {
-            let src = nx * (j + ny * k);
-            let dst = 1 + dims[0] * ((j + 1) + dims[1] * (k + 1));
-            values[dst..dst + nx].copy_from_slice(&inner[src..src + nx]);
-        }
-    }
-    let origin = g.origin - Vec3::splat(g.spacing);
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let inside_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-    let mesh = match method {
-        MethodArg::Mc => {
-            let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-                if inside_box(a) && inside_box(b) {
-                    volume.root_on_segment(a, va, b, vb, iso)
-                } else {
-                    // An edge into the padding: the padding value is artificial, interpolate.
-                    let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-                    a + (b - a) * t
-                }
-            };
-            pgvol_contour::marching_cubes_with(&values, dims, origin, g.spacing, iso, &refine)
-        }
-        MethodArg::Dc => {
-            let options = pgvol_contour::DualContourOptions::default();
-            pgvol_contour::dual_contour(&values, dims, origin, g.spacing, iso, volume, &options)
-        }
-        MethodArg::Sn => pgvol_contour::surface_nets(&values, dims, origin, g.spacing, iso, volume),
+    let method = match method {
+        MethodArg::Mc => pgvol_contour::Method::MarchingCubes,
+        MethodArg::Sn => pgvol_contour::Method::SurfaceNets,
+        MethodArg::Dc => pgvol_contour::Method::DualContouring,
     };
-    Ok(mesh)
+    Ok(pgvol_contour::contour_volume(volume, &grid, iso, method))
 }

@@ -44,9 +44,11 @@ mod root;
 mod samples;
 mod table;
 mod triangulate;
+mod volume;
 
 pub use field::Field;
 pub use quality::min_angle_histogram;
+pub use volume::{contour_volume, resampled_grid, Method};
 
 use glam::Vec3;
 use pgvol_mesh::Mesh;

@@ -1,0 +1,130 @@
+//! Contouring a coefficient volume as a whole: sampling it on a grid, padding the grid so every
+//! surface closes, and running the chosen method with the continuous field for placement.
+
+use glam::Vec3;
+use pgvol_field::{CoefficientVolume, Grid};
+
+use crate::DualContourOptions;
+
+/// How the mesh is extracted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    /// Marching cubes with vertices on the continuous field: watertight and manifold.
+    #[default]
+    MarchingCubes,
+    /// Surface nets with vertices projected onto the field: closed, not always manifold.
+    SurfaceNets,
+    /// Manifold dual contouring with the analytic gradients: keeps sharp features.
+    DualContouring,
+}
+
+/// The grid of `volume` resampled with `res` nodes along its longest side, same origin and box.
+/// `None` when the grid would exceed [`pgvol_field::MAX_GRID_NODES`].
+pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
+    let side = volume.grid.max_corner() - volume.grid.origin;
+    let spacing = side.max_element() / (res.max(2) - 1) as f32;
+    let dims = side
+        .to_array()
+        .map(|s| ((s / spacing).round() as usize + 1).max(2));
+    let total = dims.iter().map(|&d| d as u128).product::<u128>();
+    (total <= pgvol_field::MAX_GRID_NODES).then_some(Grid {
+        origin: volume.grid.origin,
+        spacing,
+        dims,
+    })
+}
+
+/// Contours the `iso` level set of `volume` sampled on `grid`. The samples are padded with one
+/// layer of outside values (`iso + spacing`) so the surface is closed even where it reaches the
+/// grid's border; edges into the padding place their vertex by linear interpolation, since the
+/// padding values are artificial, and all other vertices lie on the continuous field.
+pub fn contour_volume(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    iso: f32,
+    method: Method,
+) -> pgvol_mesh::Mesh {
+    let inner = volume.sample(grid);
+    let [nx, ny, nz] = grid.dims;
+    let dims = [nx + 2, ny + 2, nz + 2];
+    let mut values = vec![iso + grid.spacing; dims[0] * dims[1] * dims[2]];
+    for k in 0..nz {
+        for j in 0..ny {
+            let src = nx * (j + ny * k);
+            let dst = 1 + dims[0] * ((j + 1) + dims[1] * (k + 1));
+            values[dst..dst + nx].copy_from_slice(&inner[src..src + nx]);
+        }
+    }
+    let origin = grid.origin - Vec3::splat(grid.spacing);
+    let (lo, hi) = (grid.origin, grid.max_corner());
+    match method {
+        Method::MarchingCubes => {
+            let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+            let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
+                if in_box(a) && in_box(b) {
+                    volume.root_on_segment(a, va, b, vb, iso)
+                } else {
+                    let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+                    a + (b - a) * t
+                }
+            };
+            crate::marching_cubes_with(&values, dims, origin, grid.spacing, iso, &refine)
+        }
+        Method::DualContouring => {
+            let options = DualContourOptions::default();
+            crate::dual_contour(&values, dims, origin, grid.spacing, iso, volume, &options)
+        }
+        Method::SurfaceNets => {
+            crate::surface_nets(&values, dims, origin, grid.spacing, iso, volume)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pgvol_field::Basis;
+
+    fn sphere_volume(radius: f32) -> CoefficientVolume {
+        let grid = Grid {
+            origin: Vec3::splat(-1.0),
+            spacing: 2.0 / 19.0,
+            dims: [20, 20, 20],
+        };
+        let mut samples = Vec::with_capacity(grid.len());
+        for k in 0..20 {
+            for j in 0..20 {
+                for i in 0..20 {
+                    samples.push(grid.point(i, j, k).length() - radius);
+                }
+            }
+        }
+        CoefficientVolume::interpolate(grid, Basis::Bspline3, samples).unwrap()
+    }
+
+    #[test]
+    fn surfaces_cut_by_the_border_are_closed_by_the_padding() {
+        // A sphere of radius 1.2 pokes out of the [-1, 1]^3 grid on every face.
+        let volume = sphere_volume(1.2);
+        for method in [Method::MarchingCubes, Method::DualContouring] {
+            let mesh = contour_volume(&volume, &volume.grid, 0.0, method);
+            let s = mesh.stats();
+            assert!(s.watertight && s.winding_consistent, "{method:?}: {s:?}");
+            assert!(s.volume > 0.0 && s.volume < 8.0 + 1e-3, "{method:?}: {s:?}");
+        }
+    }
+
+    #[test]
+    fn resampling_keeps_the_box_and_refines_the_mesh() {
+        let volume = sphere_volume(0.7);
+        let fine = resampled_grid(&volume, 39).unwrap();
+        assert_eq!(fine.dims, [39, 39, 39]);
+        assert!((fine.max_corner() - volume.grid.max_corner()).length() < 1e-5);
+        let coarse = contour_volume(&volume, &volume.grid, 0.0, Method::MarchingCubes);
+        let dense = contour_volume(&volume, &fine, 0.0, Method::MarchingCubes);
+        assert!(dense.triangles.len() > 3 * coarse.triangles.len());
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.7f64.powi(3);
+        assert!((dense.stats().volume - exact).abs() / exact < 0.01);
+        assert!(resampled_grid(&volume, 1 << 20).is_none());
+    }
+}
