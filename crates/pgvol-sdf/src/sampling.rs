@@ -236,7 +236,6 @@ impl MeshSdf {
         let mut slot = seed.slot;
         let mut exact = 0;
         let mut carried = WindingCarry::default();
-        let row = hi[0] - lo[0];
         for_each_node(grid, lo, hi, |p| {
             let start = bvh.closest_on_slot(p, slot);
             let best = bvh.closest_among(p, leaves, start);
@@ -245,8 +244,9 @@ impl MeshSdf {
             let inside = match brick_sign {
                 Some(s) => s,
                 None if self.sign_mode() == SignMode::Winding => {
-                    // Each row starts from an exact winding number, so estimates drift little.
-                    if out.len() % row == 0 || !carry_ok || near_rim(&rims, p, rim_reach) {
+                    // The brick's first node starts from an exact winding number; away from rims
+                    // the carried value stays within rounding of an integer.
+                    if !carry_ok || near_rim(&rims, p, rim_reach) {
                         carried = WindingCarry::default();
                     }
                     carried.winding(self, p) > 0.5
