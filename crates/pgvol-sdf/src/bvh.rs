@@ -313,7 +313,7 @@ impl Bvh {
                 continue;
             }
             for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
-                match segment_crossing(pa, dir, t) {
+                match segment_crossing(pa, dir, t, 1e-4) {
                     Crossing::None => {}
                     Crossing::Unsure => return None,
                     Crossing::IntoBack => jump += 1,
@@ -322,6 +322,49 @@ impl Bvh {
             }
         }
         Some(jump)
+    }
+
+    /// How many triangles the ray `origin + s·dir`, `s > 0`, crosses; `None` when a crossing is
+    /// too close to an edge, a vertex or the origin to count reliably.
+    pub fn ray_crossings(&self, origin: Vec3, dir: Vec3) -> Option<u32> {
+        if self.nodes.is_empty() {
+            return Some(0);
+        }
+        let o = Vec3A::from(origin);
+        let d = Vec3A::from(dir);
+        let inv = d.recip();
+        // Long enough to leave the whole mesh: the segment machinery then counts the crossings.
+        let root = &self.nodes[0];
+        let reach = (root.max - root.min).length() + (o - (root.min + root.max) * 0.5).length();
+        let seg = d * reach;
+        let mut count = 0u32;
+        let mut stack: Vec<u32> = Vec::with_capacity(32);
+        stack.push(0);
+        while let Some(id) = stack.pop() {
+            let node = &self.nodes[id as usize];
+            // Slab test against the ray.
+            let t1 = (node.min - o) * inv;
+            let t2 = (node.max - o) * inv;
+            let tmin = t1.min(t2).max_element().max(0.0);
+            let tmax = t1.max(t2).min_element();
+            if tmin > tmax {
+                continue;
+            }
+            if !node.is_leaf() {
+                stack.push(node.first);
+                stack.push(node.first + 1);
+                continue;
+            }
+            for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
+                // The segment is far longer than the mesh: only a tiny end margin near the origin.
+                match segment_crossing(o, seg, t, 1e-7) {
+                    Crossing::None => {}
+                    Crossing::Unsure => return None,
+                    Crossing::IntoBack | Crossing::IntoFront => count += 1,
+                }
+            }
+        }
+        Some(count)
     }
 
     /// Closest point to `p` on the triangle at leaf slot `slot`.
@@ -350,10 +393,11 @@ enum Crossing {
     IntoFront,
 }
 
-/// Möller–Trumbore on the segment `a + s·dir`, `s ∈ [0, 1]`, with margins that turn near misses
-/// and grazing hits into `Unsure` rather than guesses.
+/// Möller–Trumbore on the segment `a + s·dir`, `s ∈ [0, 1]`, with margins (1e-4 in barycentric
+/// coordinates, `end_margin` in `s`) that turn near misses and grazing hits into `Unsure`
+/// rather than guesses.
 #[inline]
-fn segment_crossing(a: Vec3A, dir: Vec3A, t: &[Vec3A; 3]) -> Crossing {
+fn segment_crossing(a: Vec3A, dir: Vec3A, t: &[Vec3A; 3], end_margin: f32) -> Crossing {
     const EDGE: f32 = 1e-4;
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];
@@ -377,10 +421,10 @@ fn segment_crossing(a: Vec3A, dir: Vec3A, t: &[Vec3A; 3]) -> Crossing {
     let v = dir.dot(q) * inv;
     let s = e2.dot(q) * inv;
     let w = 1.0 - u - v;
-    if u < -EDGE || v < -EDGE || w < -EDGE || !(-EDGE..=1.0 + EDGE).contains(&s) {
+    if u < -EDGE || v < -EDGE || w < -EDGE || !(-end_margin..=1.0 + end_margin).contains(&s) {
         return Crossing::None;
     }
-    if u < EDGE || v < EDGE || w < EDGE || !(EDGE..=1.0 - EDGE).contains(&s) {
+    if u < EDGE || v < EDGE || w < EDGE || !(end_margin..=1.0 - end_margin).contains(&s) {
         return Crossing::Unsure;
     }
     // det > 0 means dir · normal < 0: the segment enters through the front face.

@@ -392,6 +392,32 @@ mod tests {
     }
 
     #[test]
+    fn parity_agrees_with_the_winding_number_on_closed_meshes() {
+        let mesh = sphere(3);
+        let w = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
+        let p = MeshSdf::new(&mesh, SignMode::Parity).unwrap();
+        let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::ONE, 29).unwrap();
+        let reference = w.sample_grid(&grid, &|_| {});
+        // Signs only: separately built trees may break distance ties between triangles sharing
+        // a vertex differently, which changes the last bit of a few distances.
+        let differing = |values: Vec<f32>| {
+            values
+                .iter()
+                .zip(&reference)
+                .filter(|(a, b)| (**a < 0.0) != (**b < 0.0) || (*a - *b).abs() > 1e-6)
+                .count()
+        };
+        assert_eq!(differing(p.sample_grid(&grid, &|_| {})), 0);
+        // Flipped faces do not fool parity.
+        let mut flipped = mesh.clone();
+        for t in flipped.triangles.iter_mut().step_by(2) {
+            t.swap(1, 2);
+        }
+        let pf = MeshSdf::new(&flipped, SignMode::Parity).unwrap();
+        assert_eq!(differing(pf.sample_grid(&grid, &|_| {})), 0);
+    }
+
+    #[test]
     fn auto_picks_winding_for_open_meshes() {
         let mut mesh = sphere(2);
         mesh.triangles.pop();

@@ -16,6 +16,10 @@ pub enum SignMode {
     /// Angle-weighted pseudonormal at the closest point: exact and fast on closed, manifold,
     /// consistently oriented meshes; wrong near holes and overlaps.
     Pseudonormal,
+    /// Ray parity: an odd number of crossings along a ray means inside, by majority of three
+    /// rays (a ray through an edge or a vertex abstains and another direction is tried). For
+    /// closed meshes; orientation-blind.
+    Parity,
 }
 
 impl SignMode {
@@ -24,6 +28,7 @@ impl SignMode {
             SignMode::Auto => "auto",
             SignMode::Winding => "winding",
             SignMode::Pseudonormal => "pseudonormal",
+            SignMode::Parity => "parity",
         }
     }
 }
@@ -168,19 +173,49 @@ impl MeshSdf {
                 let n = pn.normal(closest.slot, closest.feature);
                 (glam::Vec3A::from(p) - glam::Vec3A::from(closest.point)).dot(n) < 0.0
             }
-            None => self.winding_number(p) > 0.5,
+            None => self.is_inside(p),
         }
     }
 
-    /// Whether `p` is inside (for the winding mode, independent of the closest point).
+    /// Whether `p` is inside.
     pub fn is_inside(&self, p: Vec3) -> bool {
-        match self.pseudonormals {
-            Some(_) => match self.bvh.closest(p, f32::INFINITY) {
+        match self.mode {
+            SignMode::Pseudonormal => match self.bvh.closest(p, f32::INFINITY) {
                 Some(c) => self.is_inside_near(p, &c),
                 None => false,
             },
-            None => self.winding_number(p) > 0.5,
+            SignMode::Parity => self.parity_inside(p),
+            _ => self.winding_number(p) > 0.5,
         }
+    }
+
+    /// Majority of three ray-parity votes; rays that graze an edge or a vertex abstain.
+    fn parity_inside(&self, p: Vec3) -> bool {
+        // Directions with no simple rational slope, so they rarely run along mesh features.
+        const DIRECTIONS: [[f32; 3]; 7] = [
+            [0.5773, 0.6118, 0.5407],
+            [-0.7072, 0.3162, 0.6325],
+            [0.2673, -0.8018, 0.5345],
+            [0.9045, 0.1812, -0.3861],
+            [-0.3015, -0.6030, -0.7385],
+            [0.1104, 0.9608, -0.2543],
+            [-0.8729, -0.2182, 0.4364],
+        ];
+        let (mut inside, mut votes) = (0, 0);
+        for d in DIRECTIONS {
+            if let Some(n) = self.bvh.ray_crossings(p, Vec3::from(d).normalize()) {
+                votes += 1;
+                inside += (n % 2) as i32;
+                if votes == 3 {
+                    break;
+                }
+            }
+        }
+        if votes == 0 {
+            // Every ray grazed an edge: rare enough that the slower robust answer is fine.
+            return self.winding_number(p) > 0.5;
+        }
+        2 * inside > votes
     }
 
     /// Signed distance at `p`: exact magnitude, negative inside.

@@ -135,6 +135,8 @@ pub enum SignArg {
     Winding,
     /// Angle-weighted pseudonormal: for closed, consistently oriented meshes only.
     Pseudonormal,
+    /// Ray parity, majority of three rays: for closed meshes, blind to orientation.
+    Parity,
 }
 
 impl From<SignArg> for pgvol_sdf::SignMode {
@@ -143,6 +145,7 @@ impl From<SignArg> for pgvol_sdf::SignMode {
             SignArg::Auto => pgvol_sdf::SignMode::Auto,
             SignArg::Winding => pgvol_sdf::SignMode::Winding,
             SignArg::Pseudonormal => pgvol_sdf::SignMode::Pseudonormal,
+            SignArg::Parity => pgvol_sdf::SignMode::Parity,
         }
     }
 }
