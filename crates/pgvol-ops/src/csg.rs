@@ -1,0 +1,201 @@
+//! New coefficient volumes from constructive operations on a field: offsets, shells, hollowing
+//! with drain holes.
+//!
+//! Apart from the constant offset of partition-of-unity bases, every operation evaluates the
+//! field at the nodes, combines the node values and interpolates them again in the same basis
+//! on the same grid. The results are signed distances only where the input is one: a field
+//! encoded from a mesh in a narrow band of width `W` (values clamped to `±W`) represents
+//! surfaces only up to about `W` minus the basis support from the original one; see
+//! [`needs_wider_band`]. Operations creating creases (the min/max of CSG, the absolute value of
+//! a shell) are smoothed over about one grid spacing by the re-interpolation; surfaces away from
+//! the crease are unaffected.
+
+use glam::Vec3;
+use pgvol_field::{Basis, CoefficientVolume, Grid};
+use rayon::prelude::*;
+
+use crate::OpsError;
+
+/// Where a shell's wall lies relative to the original surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShellSide {
+    /// Between the surface and `thickness` inside it: the outside stays where it was.
+    #[default]
+    Inner,
+    /// Between the surface and `thickness` outside it.
+    Outer,
+    /// `thickness / 2` on either side.
+    Centred,
+}
+
+/// A drain hole: the solid ray-capped cylinder starting at `point` and running along
+/// `direction`, removed from the part. Put `point` in the cavity and aim `direction` out through
+/// the wall.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drain {
+    pub point: Vec3,
+    pub direction: Vec3,
+    pub diameter: f32,
+}
+
+impl Drain {
+    /// Exact signed distance to the half-infinite cylinder (flat cap at `point`), given a unit
+    /// direction.
+    fn distance(&self, unit: Vec3, p: Vec3) -> f32 {
+        let d = p - self.point;
+        let along = d.dot(unit);
+        let radial = (d - unit * along).length() - 0.5 * self.diameter;
+        let cap = -along;
+        radial.max(cap).min(0.0) + Vec3::new(radial.max(0.0), cap.max(0.0), 0.0).length()
+    }
+}
+
+fn check(name: &str, x: f32, positive: bool) -> Result<(), OpsError> {
+    if !x.is_finite() || (positive && x <= 0.0) {
+        let want = if positive {
+            "positive and finite"
+        } else {
+            "finite"
+        };
+        return Err(OpsError::BadParameter(format!(
+            "{name} must be {want}, got {x}"
+        )));
+    }
+    Ok(())
+}
+
+/// The largest magnitude of the field's node values. For a narrow-band encoding this is the
+/// clamp `W`: beyond it the field is not a distance.
+pub fn stored_band(volume: &CoefficientVolume) -> f32 {
+    node_values(volume)
+        .into_iter()
+        .fold(0.0f32, |m, v| m.max(v.abs()))
+}
+
+/// Whether moving the surface by `distance` (an offset, shell thickness or wall) leaves the band
+/// where the field is a distance: `|distance|` plus the basis support (2 spacings for the cubic
+/// B-spline, which is the widest separable one; the pseudo-Gaussian radius otherwise) reaches
+/// [`stored_band`]. Then the result would follow the clamp rather than the shape; re-encode with
+/// a wider band first.
+pub fn needs_wider_band(volume: &CoefficientVolume, distance: f32) -> bool {
+    let support = match volume.basis {
+        Basis::Pg { r, .. } => r.max(2.0),
+        _ => 2.0,
+    } * volume.grid.spacing;
+    distance.abs() + support >= stored_band(volume)
+}
+
+/// The field at every node of its grid (x fastest).
+fn node_values(volume: &CoefficientVolume) -> Vec<f32> {
+    match volume.basis {
+        Basis::Trilinear => volume.coeffs.clone(),
+        _ => volume.sample(&volume.grid),
+    }
+}
+
+/// A map of node positions and values, in parallel, then interpolated in the same basis.
+fn remap(
+    volume: &CoefficientVolume,
+    f: impl Fn(Vec3, f32) -> f32 + Sync,
+) -> Result<CoefficientVolume, OpsError> {
+    let grid: Grid = volume.grid;
+    let mut values = node_values(volume);
+    let [nx, ny, _] = grid.dims;
+    values
+        .par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(k, plane)| {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let v = &mut plane[i + nx * j];
+                    *v = f(grid.point(i, j, k), *v);
+                }
+            }
+        });
+    Ok(CoefficientVolume::interpolate(grid, volume.basis, values)?)
+}
+
+/// The surface moved by `distance` along its normals (outward when positive): the field minus
+/// `distance`. B-spline and trilinear bases sum to one at every point (the mirrored border
+/// nodes included), so subtracting the constant from every coefficient subtracts it from the
+/// field exactly; the pseudo-Gaussian does not, so its node values are shifted and interpolated
+/// again.
+pub fn offset(volume: &CoefficientVolume, distance: f32) -> Result<CoefficientVolume, OpsError> {
+    check("offset distance", distance, false)?;
+    match volume.basis {
+        Basis::Trilinear | Basis::Bspline2 | Basis::Bspline3 => {
+            let coeffs = volume.coeffs.iter().map(|c| c - distance).collect();
+            Ok(CoefficientVolume::new(volume.grid, volume.basis, coeffs)?)
+        }
+        Basis::Pg { .. } => remap(volume, |_, v| v - distance),
+    }
+}
+
+/// A wall of `thickness` following the surface, on the given side: `|f − c| − t/2` with the
+/// wall's mid-surface `c` at `−t/2`, `t/2` or 0.
+pub fn shell(
+    volume: &CoefficientVolume,
+    thickness: f32,
+    side: ShellSide,
+) -> Result<CoefficientVolume, OpsError> {
+    check("shell thickness", thickness, true)?;
+    let half = 0.5 * thickness;
+    let centre = match side {
+        ShellSide::Inner => -half,
+        ShellSide::Outer => half,
+        ShellSide::Centred => 0.0,
+    };
+    remap(volume, |_, v| (v - centre).abs() - half)
+}
+
+/// The part with a cavity leaving walls of `wall` thickness, `max(f, −(f + wall))`, and the
+/// drains cut out of it, `max(·, −drain)`.
+pub fn hollow(
+    volume: &CoefficientVolume,
+    wall: f32,
+    drains: &[Drain],
+) -> Result<CoefficientVolume, OpsError> {
+    check("wall thickness", wall, true)?;
+    let mut units = Vec::with_capacity(drains.len());
+    for d in drains {
+        check("drain diameter", d.diameter, true)?;
+        let u = d.direction.normalize_or_zero();
+        if u == Vec3::ZERO || !d.point.is_finite() {
+            return Err(OpsError::BadParameter(
+                "a drain needs a finite point and a non-zero direction".into(),
+            ));
+        }
+        units.push(u);
+    }
+    remap(volume, |p, v| {
+        let mut g = v.max(-(v + wall));
+        for (d, &u) in drains.iter().zip(&units) {
+            g = g.max(-d.distance(u, p));
+        }
+        g
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn drain_distance_is_exact_on_simple_points() {
+        let d = Drain {
+            point: Vec3::ZERO,
+            direction: Vec3::Z * 3.0,
+            diameter: 1.0,
+        };
+        let u = Vec3::Z;
+        // Radially outside, beside the body.
+        assert!((d.distance(u, Vec3::new(2.0, 0.0, 5.0)) - 1.5).abs() < 1e-6);
+        // Below the cap, on the axis.
+        assert!((d.distance(u, Vec3::new(0.0, 0.0, -2.0)) - 2.0).abs() < 1e-6);
+        // Beyond the cap's rim: distance to the circle.
+        let p = Vec3::new(3.5, 0.0, -4.0);
+        assert!((d.distance(u, p) - 5.0).abs() < 1e-6);
+        // Inside: nearest is the wall (0.3 away) rather than the cap (1 away).
+        assert!((d.distance(u, Vec3::new(0.2, 0.0, 1.0)) + 0.3).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,166 @@
+//! Layer files: SVG to look at, Common Layer Interface (ASCII) for build processors, JSON for
+//! scripts. All are written atomically.
+
+use std::path::Path;
+
+use pgvol_mesh::{write_atomic, MeshError};
+use serde::{Deserialize, Serialize};
+
+use crate::slice::Layer;
+
+/// Bounding box `[min_u, min_v, max_u, max_v]` of every loop point, if any.
+fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
+    let mut pts = layers
+        .iter()
+        .flat_map(|l| &l.loops)
+        .flat_map(|l| &l.points)
+        .peekable();
+    pts.peek()?;
+    Some(pts.fold(
+        [
+            f32::INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+        ],
+        |b, p| {
+            [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ]
+        },
+    ))
+}
+
+/// An SVG of the layers side by side in a near-square grid of equal tiles, bottom layer first,
+/// left to right then top to bottom. Each layer is one `<g id="layer-i" data-height="z">` with a
+/// `<title>` and one even-odd filled path, so holes show as holes. The v axis points up, as in
+/// the layer coordinates, so counter-clockwise loops look counter-clockwise.
+pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), MeshError> {
+    let [u0, v0, u1, v1] = extent(layers).unwrap_or([0.0, 0.0, 1.0, 1.0]);
+    let size = (u1 - u0).max(v1 - v0).max(f32::MIN_POSITIVE);
+    let pad = 0.05 * size;
+    let (tw, th) = (u1 - u0 + 2.0 * pad, v1 - v0 + 2.0 * pad);
+    let columns = (layers.len() as f64).sqrt().ceil().max(1.0) as usize;
+    let rows = layers.len().div_ceil(columns).max(1);
+    let stroke = size / 500.0;
+    write_atomic(path, |w| {
+        writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#)?;
+        writeln!(
+            w,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {} {}" width="{}" height="{}">"#,
+            tw * columns as f32,
+            th * rows as f32,
+            (1024 * columns / columns.max(rows)).max(64),
+            (1024 * rows / columns.max(rows)).max(64),
+        )?;
+        for (i, layer) in layers.iter().enumerate() {
+            let (c, r) = (i % columns, i / columns);
+            writeln!(
+                w,
+                r#"<g id="layer-{i}" data-height="{}" transform="translate({} {})">"#,
+                layer.height,
+                tw * c as f32,
+                th * r as f32
+            )?;
+            writeln!(w, "<title>layer {i} at {}</title>", layer.height)?;
+            write!(
+                w,
+                r##"<rect width="{tw}" height="{th}" fill="none" stroke="#ccc" stroke-width="{stroke}"/>"##
+            )?;
+            if !layer.loops.is_empty() {
+                write!(w, r#"<path d=""#)?;
+                for lp in &layer.loops {
+                    for (k, p) in lp.points.iter().enumerate() {
+                        let cmd = if k == 0 { 'M' } else { 'L' };
+                        write!(w, "{cmd}{} {} ", p[0] - u0 + pad, v1 - p[1] + pad)?;
+                    }
+                    write!(w, "Z ")?;
+                }
+                write!(
+                    w,
+                    r##"" fill="#4a7" fill-rule="evenodd" stroke="#000" stroke-width="{stroke}"/>"##
+                )?;
+            }
+            writeln!(w, "\n</g>")?;
+        }
+        writeln!(w, "</svg>")
+    })
+}
+
+/// A Common Layer Interface file, ASCII, version 2.0: the header (`$$UNITS` is the length of
+/// one coordinate unit in millimetres, e.g. 1 for a mesh in mm) then one `$$LAYER/z` per layer
+/// with one `$$POLYLINE/1,dir,n,…` per loop. Loops are closed by repeating the first point;
+/// `dir` is 1 for counter-clockwise (outer) loops and 0 for clockwise (hole) loops. All
+/// polylines belong to part 1.
+pub fn write_cli(path: &Path, layers: &[Layer], units_mm: f32) -> Result<(), MeshError> {
+    if !(units_mm.is_finite() && units_mm > 0.0) {
+        return Err(MeshError::new(
+            path,
+            format!("units must be a positive length in mm, got {units_mm}"),
+        ));
+    }
+    write_atomic(path, |w| {
+        writeln!(w, "$$HEADERSTART")?;
+        writeln!(w, "$$ASCII")?;
+        writeln!(w, "$$UNITS/{units_mm}")?;
+        writeln!(w, "$$VERSION/200")?;
+        writeln!(w, "$$LABEL/1,part1")?;
+        if let (Some([u0, v0, u1, v1]), Some(first), Some(last)) =
+            (extent(layers), layers.first(), layers.last())
+        {
+            writeln!(
+                w,
+                "$$DIMENSION/{u0},{v0},{},{u1},{v1},{}",
+                first.height, last.height
+            )?;
+        }
+        writeln!(w, "$$LAYERS/{}", layers.len())?;
+        writeln!(w, "$$HEADEREND")?;
+        writeln!(w, "$$GEOMETRYSTART")?;
+        for layer in layers {
+            writeln!(w, "$$LAYER/{}", layer.height)?;
+            for lp in &layer.loops {
+                let Some(start) = lp.points.first() else {
+                    continue;
+                };
+                let dir = if lp.hole { 0 } else { 1 };
+                write!(w, "$$POLYLINE/1,{dir},{}", lp.points.len() + 1)?;
+                for p in lp.points.iter().chain(std::iter::once(start)) {
+                    write!(w, ",{},{}", p[0], p[1])?;
+                }
+                writeln!(w)?;
+            }
+        }
+        writeln!(w, "$$GEOMETRYEND")
+    })
+}
+
+#[derive(Serialize)]
+struct SliceFileRef<'a> {
+    layers: &'a [Layer],
+}
+
+#[derive(Deserialize)]
+struct SliceFile {
+    layers: Vec<Layer>,
+}
+
+/// The layers as JSON: `{"layers": [{"height": z, "loops": [{"points": [[u, v], …], "hole":
+/// false}, …]}, …]}`, numbers written so they read back to the same f32.
+pub fn write_slice_json(path: &Path, layers: &[Layer]) -> Result<(), MeshError> {
+    write_atomic(path, |w| {
+        serde_json::to_writer(&mut *w, &SliceFileRef { layers })?;
+        writeln!(w)
+    })
+}
+
+/// Reads what [`write_slice_json`] wrote.
+pub fn read_slice_json(path: &Path) -> Result<Vec<Layer>, MeshError> {
+    let text = std::fs::read_to_string(path).map_err(|e| MeshError::new(path, e.to_string()))?;
+    serde_json::from_str::<SliceFile>(&text)
+        .map(|f| f.layers)
+        .map_err(|e| MeshError::new(path, format!("not a slice file: {e}")))
+}
