@@ -3,5 +3,12 @@
 
 pub mod grid_files;
 pub mod pgv;
+pub mod sparse;
 
-pub use pgv::{read_pgv, write_pgv, FormatError, PgvFile, PgvHeader};
+pub use pgv::{
+    decode_pgv, encode_pgv, header_for, read_pgv, write_pgv, FormatError, PgvFile, PgvHeader,
+};
+pub use sparse::{
+    encode_pgv_with, pgv_info, read_brick, write_pgv_with, Brick, Compression, EncodeOptions,
+    EncodeReport, PgvInfo, Precision, Predictor, SparseParams,
+};

@@ -41,6 +41,9 @@ pub struct PgvHeader {
     pub source_hash: Option<String>,
     #[serde(default)]
     pub metadata: BTreeMap<String, String>,
+    /// Parameters of the `sparse-bricks` encoding; absent for `dense-f32`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sparse: Option<crate::sparse::SparseParams>,
 }
 
 /// A decoded file.
@@ -58,22 +61,30 @@ pub struct FormatError {
     pub problem: String,
 }
 
-fn err(path: &Path, problem: impl Into<String>) -> FormatError {
+pub(crate) fn err(path: &Path, problem: impl Into<String>) -> FormatError {
     FormatError {
         path: path.to_path_buf(),
         problem: problem.into(),
     }
 }
 
-/// Serialises `file` to bytes.
+/// Serialises `file` to bytes in the `dense-f32` encoding, whatever its header says.
 pub fn encode_pgv(file: &PgvFile) -> Vec<u8> {
-    let header = serde_json::to_vec(&file.header).expect("header serialises");
+    let mut header = file.header.clone();
+    header.encoding = ENCODING_DENSE_F32.to_string();
+    header.sparse = None;
     let payload: Vec<u8> = file
         .volume
         .coeffs
         .iter()
         .flat_map(|v| v.to_le_bytes())
         .collect();
+    container(&header, &payload)
+}
+
+/// Frames a header and a payload: magic, version, header with its CRC, payload with its CRC.
+pub(crate) fn container(header: &PgvHeader, payload: &[u8]) -> Vec<u8> {
+    let header = serde_json::to_vec(header).expect("header serialises");
     let mut out = Vec::with_capacity(32 + header.len() + payload.len());
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
@@ -81,8 +92,8 @@ pub fn encode_pgv(file: &PgvFile) -> Vec<u8> {
     out.extend_from_slice(&header);
     out.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
     out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&payload);
-    out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+    out.extend_from_slice(payload);
+    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
     out
 }
 
@@ -131,8 +142,19 @@ impl<'a> Reader<'a> {
     }
 }
 
-/// Decodes a `.pgv` file from bytes; `path` names the file in errors.
-pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
+/// A checked container: the header and the payload.
+pub(crate) struct Container<'a> {
+    pub header: PgvHeader,
+    pub payload: &'a [u8],
+}
+
+/// Parses and checks everything but the payload's contents. The payload CRC is verified only
+/// when `check_payload` is set, so single bricks can be read without hashing the whole payload.
+pub(crate) fn parse_container<'a>(
+    bytes: &'a [u8],
+    path: &Path,
+    check_payload: bool,
+) -> Result<Container<'a>, FormatError> {
     let mut r = Reader { bytes, at: 0 };
     if bytes.is_empty() {
         return Err(err(path, "empty file"));
@@ -164,17 +186,30 @@ pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
     }
     let header: PgvHeader = serde_json::from_slice(header_bytes)
         .map_err(|e| err(path, format!("header is not valid: {e}")))?;
-    if header.encoding != ENCODING_DENSE_F32 {
+    if header.encoding != ENCODING_DENSE_F32 && header.encoding != crate::sparse::ENCODING_SPARSE {
         return Err(err(
             path,
             format!("unknown coefficient encoding '{}'", header.encoding),
         ));
     }
+    header
+        .basis
+        .validate()
+        .map_err(|e| err(path, format!("invalid basis: {e}")))?;
     let g = header.grid;
     if !(g.origin.is_finite() && g.spacing.is_finite() && g.spacing > 0.0) {
         return Err(err(
             path,
             "grid origin or spacing is not a finite positive number",
+        ));
+    }
+    if g.dims.iter().any(|&n| n < 2) {
+        return Err(err(
+            path,
+            format!(
+                "grid dimensions {:?}: every axis needs at least 2 nodes",
+                g.dims
+            ),
         ));
     }
     let nodes = g
@@ -191,7 +226,7 @@ pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
         }
     };
     let plen = r.u64("the payload length", path)?;
-    if plen != nodes * 4 {
+    if header.encoding == ENCODING_DENSE_F32 && plen != nodes * 4 {
         return Err(err(
             path,
             format!(
@@ -201,9 +236,16 @@ pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
             ),
         ));
     }
-    let payload = r.take(plen as usize, "the coefficients", path)?;
+    let left = (bytes.len() - r.at) as u64;
+    if plen > left {
+        return Err(err(
+            path,
+            format!("truncated file: the payload needs {plen} bytes, {left} left"),
+        ));
+    }
+    let payload = r.take(plen as usize, "the payload", path)?;
     let pcrc = r.u32("the payload checksum", path)?;
-    if crc32fast::hash(payload) != pcrc {
+    if check_payload && crc32fast::hash(payload) != pcrc {
         return Err(err(
             path,
             "coefficient checksum mismatch: the file is corrupt",
@@ -218,13 +260,26 @@ pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
             ),
         ));
     }
-    let coeffs = payload
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
-        .collect();
-    let volume = CoefficientVolume::new(g, header.basis, coeffs)
+    Ok(Container { header, payload })
+}
+
+/// Decodes a `.pgv` file from bytes, in either encoding; `path` names the file in errors.
+pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
+    let c = parse_container(bytes, path, true)?;
+    let coeffs = if c.header.encoding == ENCODING_DENSE_F32 {
+        c.payload
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
+            .collect()
+    } else {
+        crate::sparse::decode_payload(&c.header, c.payload, path)?
+    };
+    let volume = CoefficientVolume::new(c.header.grid, c.header.basis, coeffs)
         .map_err(|e| err(path, format!("invalid coefficients: {e}")))?;
-    Ok(PgvFile { header, volume })
+    Ok(PgvFile {
+        header: c.header,
+        volume,
+    })
 }
 
 /// FNV-1a (64-bit) over a mesh's positions and indices: a cheap content fingerprint.
@@ -267,6 +322,7 @@ pub fn header_for(
         source_bounds: bounds,
         source_hash: source.map(mesh_hash),
         metadata: BTreeMap::new(),
+        sparse: None,
     }
 }
 

@@ -1,0 +1,595 @@
+//! The sparse-bricks encoding: round trips, the band rule, random access, and damaged files.
+
+use std::path::Path;
+
+use glam::Vec3;
+use pgvol_field::{Basis, CoefficientVolume, Grid};
+use pgvol_format::pgv::MAGIC;
+use pgvol_format::{
+    decode_pgv, encode_pgv, encode_pgv_with, header_for, pgv_info, read_brick, read_pgv,
+    write_pgv_with, Compression, EncodeOptions, PgvFile, Precision, Predictor,
+};
+use proptest::prelude::*;
+
+/// A banded sphere distance (clamped at 4 spacings, as `pgvol encode` samples) interpolated by
+/// `basis` on an n³ grid; the sphere sits off-centre so some bricks are background.
+fn sphere_file(n: usize, basis: Basis) -> PgvFile {
+    let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::splat(1.0), n).unwrap();
+    let clamp = 4.0 * grid.spacing;
+    let mut samples = Vec::with_capacity(grid.len());
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let p = grid.point(i, j, k);
+                let d = (p - Vec3::new(0.3, -0.2, 0.1)).length() - 0.45;
+                samples.push(d.clamp(-clamp, clamp));
+            }
+        }
+    }
+    let volume = CoefficientVolume::interpolate(grid, basis, samples).unwrap();
+    let header = header_for(&volume, "interp", None);
+    PgvFile { header, volume }
+}
+
+fn opts(precision: Option<Precision>) -> EncodeOptions {
+    EncodeOptions {
+        precision,
+        ..EncodeOptions::default()
+    }
+}
+
+fn p() -> &'static Path {
+    Path::new("s.pgv")
+}
+
+/// Node index sets of every brick of edge `e`, with their brick coordinates.
+fn bricks(dims: [usize; 3], e: usize) -> Vec<([usize; 3], Vec<usize>)> {
+    let c = dims.map(|n| n.div_ceil(e));
+    let mut out = Vec::new();
+    for bk in 0..c[2] {
+        for bj in 0..c[1] {
+            for bi in 0..c[0] {
+                let mut idx = Vec::new();
+                for k in bk * e..((bk + 1) * e).min(dims[2]) {
+                    for j in bj * e..((bj + 1) * e).min(dims[1]) {
+                        for i in bi * e..((bi + 1) * e).min(dims[0]) {
+                            idx.push(i + dims[0] * (j + dims[1] * k));
+                        }
+                    }
+                }
+                out.push(([bi, bj, bk], idx));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn f32_round_trip_is_exact_on_stored_bricks_and_constant_elsewhere() {
+    let f = sphere_file(30, Basis::Bspline3);
+    let (bytes, r) = encode_pgv_with(&f, &opts(Some(Precision::F32))).unwrap();
+    assert_eq!(r.precision, Precision::F32);
+    assert_eq!(r.max_quantisation_error, 0.0);
+    assert_eq!(r.bricks_total, 64);
+    assert!(
+        r.bricks_stored > 0 && r.bricks_stored < r.bricks_total,
+        "{r:?}"
+    );
+    assert_eq!(
+        r.bytes_header + r.bytes_index + r.bytes_payload,
+        bytes.len()
+    );
+    assert!(bytes.len() < encode_pgv(&f).len());
+    let back = decode_pgv(&bytes, p()).unwrap();
+    assert_eq!(back.header.encoding, "sparse-bricks");
+    let mut stored = 0;
+    for (coords, idx) in bricks(f.volume.grid.dims, 8) {
+        let b = read_brick(&bytes, p(), coords).unwrap();
+        assert_eq!(b.coeffs.len(), idx.len());
+        for (&i, &c) in idx.iter().zip(&b.coeffs) {
+            assert_eq!(back.volume.coeffs[i].to_bits(), c.to_bits());
+            if b.stored {
+                assert_eq!(c.to_bits(), f.volume.coeffs[i].to_bits());
+            } else {
+                assert_eq!(c.abs(), r.clamp);
+                // Background keeps the side of the surface.
+                assert_eq!(c < 0.0, f.volume.coeffs[i] < 0.0);
+            }
+        }
+        stored += b.stored as usize;
+    }
+    assert_eq!(stored, r.bricks_stored);
+}
+
+#[test]
+fn the_field_near_the_surface_is_unchanged() {
+    // Every cell with a corner within the band must evaluate exactly as before: the basis
+    // support of such points lies in stored bricks.
+    for basis in [
+        Basis::Trilinear,
+        Basis::Bspline2,
+        Basis::Bspline3,
+        Basis::Pg { n: 2, r: 1.7 },
+    ] {
+        let f = sphere_file(22, basis);
+        let o = EncodeOptions {
+            precision: Some(Precision::F32),
+            band: 1.5,
+            brick: 4,
+            ..EncodeOptions::default()
+        };
+        let (bytes, r) = encode_pgv_with(&f, &o).unwrap();
+        assert!(r.bricks_stored < r.bricks_total, "{basis:?} {r:?}");
+        let back = decode_pgv(&bytes, p()).unwrap().volume;
+        let g = f.volume.grid;
+        let nodes = f.volume.sample(&g);
+        let mut checked = 0;
+        for n in 0..4000u32 {
+            let t = Vec3::new(
+                (n as f32 * 0.7548).fract(),
+                (n as f32 * 0.5698).fract(),
+                (n as f32 * 0.3141).fract(),
+            );
+            let u = t * (g.dims[0] - 1) as f32;
+            let c = u.floor().as_uvec3();
+            let near = (0..8).any(|m| {
+                let (i, j, k) = (
+                    (c.x + (m & 1)).min(g.dims[0] as u32 - 1) as usize,
+                    (c.y + (m >> 1 & 1)).min(g.dims[1] as u32 - 1) as usize,
+                    (c.z + (m >> 2 & 1)).min(g.dims[2] as u32 - 1) as usize,
+                );
+                nodes[g.index(i, j, k)].abs() <= 1.5 * g.spacing
+            });
+            if near {
+                let x = g.origin + u * g.spacing;
+                assert_eq!(back.value(x), f.volume.value(x), "{basis:?} at {x}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 100, "{basis:?}: {checked}");
+    }
+}
+
+#[test]
+fn auto_precision_stays_within_one_percent_of_the_spacing() {
+    let f = sphere_file(40, Basis::Bspline3);
+    let h = f.volume.grid.spacing;
+    let (auto, r) = encode_pgv_with(&f, &opts(None)).unwrap();
+    assert_ne!(r.precision, Precision::F32);
+    assert!(r.max_quantisation_error <= 0.01 * h, "{r:?}");
+    for p16 in [Precision::F16, Precision::Q16] {
+        let (b, r16) = encode_pgv_with(&f, &opts(Some(p16))).unwrap();
+        assert!(auto.len() <= b.len(), "auto picked the bigger one");
+        assert!(r16.max_quantisation_error > 0.0);
+    }
+    let (b32, _) = encode_pgv_with(&f, &opts(Some(Precision::F32))).unwrap();
+    assert!(auto.len() < b32.len());
+    // A field too large for f16 cannot be written as f16, and auto avoids it.
+    let mut big = f.clone();
+    for c in &mut big.volume.coeffs {
+        *c *= 1e6;
+    }
+    let wide = |precision| EncodeOptions {
+        precision,
+        band: 1e12,
+        ..EncodeOptions::default()
+    };
+    let Err(e) = encode_pgv_with(&big, &wide(Some(Precision::F16))) else {
+        panic!("f16 overflow accepted");
+    };
+    let e = e.to_string();
+    assert!(e.contains("f16"), "{e}");
+    let (_, r) = encode_pgv_with(&big, &wide(None)).unwrap();
+    assert_eq!(r.bricks_stored, r.bricks_total);
+    assert_ne!(r.precision, Precision::F16);
+}
+
+#[test]
+fn every_option_decodes_the_same_coefficients() {
+    let f = sphere_file(19, Basis::Bspline3);
+    let reference = {
+        let (b, _) = encode_pgv_with(&f, &opts(Some(Precision::Q16))).unwrap();
+        decode_pgv(&b, p()).unwrap().volume.coeffs
+    };
+    for predictor in [Predictor::None, Predictor::DeltaX, Predictor::Lorenzo] {
+        for shuffle in [false, true] {
+            for compression in [Compression::None, Compression::Zstd] {
+                let o = EncodeOptions {
+                    precision: Some(Precision::Q16),
+                    predictor,
+                    shuffle,
+                    compression,
+                    zstd_level: 3,
+                    ..EncodeOptions::default()
+                };
+                let (b, _) = encode_pgv_with(&f, &o).unwrap();
+                let got = decode_pgv(&b, p()).unwrap().volume.coeffs;
+                assert_eq!(got, reference, "{predictor:?} {shuffle} {compression:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn info_reads_header_and_index_and_files_round_trip_on_disk() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("a.pgv");
+    let f = sphere_file(20, Basis::Bspline3);
+    let r = write_pgv_with(&path, &f, &opts(None)).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let info = pgv_info(&bytes, &path).unwrap();
+    assert_eq!(info.bricks_total, Some(r.bricks_total));
+    assert_eq!(info.bricks_stored, Some(r.bricks_stored));
+    assert_eq!(info.precision, r.precision);
+    assert_eq!(
+        (info.bytes_header, info.bytes_index, info.bytes_payload),
+        (r.bytes_header, r.bytes_index, r.bytes_payload)
+    );
+    // Info does not touch brick data: a damaged brick still gives info, but not a decode.
+    let mut bad = bytes.clone();
+    let at = bytes.len() - 4 - r.bytes_payload / 2;
+    bad[at] ^= 0x10;
+    assert!(pgv_info(&bad, &path).is_ok());
+    assert!(decode_pgv(&bad, &path).is_err());
+    let back = read_pgv(&path).unwrap();
+    assert_eq!(back.volume.grid, f.volume.grid);
+
+    let dense = encode_pgv(&f);
+    let di = pgv_info(&dense, &path).unwrap();
+    assert_eq!((di.bricks_total, di.precision), (None, Precision::F32));
+    assert_eq!(di.bytes_payload, 4 * f.volume.coeffs.len());
+    let e = read_brick(&dense, &path, [0, 0, 0])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sparse-bricks"), "{e}");
+}
+
+#[test]
+fn dense_files_written_before_still_read() {
+    let f = sphere_file(6, Basis::Trilinear);
+    let bytes = encode_pgv(&f);
+    // The dense header carries no sparse field: byte-compatible with files written earlier.
+    let text = String::from_utf8_lossy(&bytes);
+    assert!(text.contains("\"encoding\":\"dense-f32\"") && !text.contains("sparse"));
+    assert_eq!(decode_pgv(&bytes, p()).unwrap(), f);
+}
+
+// ---- damaged files -------------------------------------------------------------------------
+
+/// A sparse file taken apart: header JSON, payload before the data, the blobs.
+struct Parts {
+    header: serde_json::Value,
+    maps: Vec<u8>,
+    blobs: Vec<Vec<u8>>,
+}
+
+fn split(bytes: &[u8]) -> Parts {
+    let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + hlen]).unwrap();
+    let payload = &bytes[16 + hlen + 12..bytes.len() - 4];
+    let sp = &header["sparse"];
+    let nb: u64 = sp["bricks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .product();
+    let map = nb.div_ceil(8) as usize;
+    let stored = sp["stored"].as_u64().unwrap() as usize;
+    let data = &payload[2 * map + 16 * stored + 4..];
+    let blobs = (0..stored)
+        .map(|e| {
+            let at = 2 * map + 16 * e;
+            let off = u64::from_le_bytes(payload[at..at + 8].try_into().unwrap()) as usize;
+            let len = u32::from_le_bytes(payload[at + 8..at + 12].try_into().unwrap()) as usize;
+            data[off..off + len].to_vec()
+        })
+        .collect();
+    Parts {
+        header,
+        maps: payload[..2 * map].to_vec(),
+        blobs,
+    }
+}
+
+/// Frames the parts again with correct checksums; `entry` may rewrite index entries.
+fn join(parts: &Parts, entry: impl Fn(usize, u64, u32) -> (u64, u32)) -> Vec<u8> {
+    let mut meta = parts.maps.clone();
+    let mut off = 0u64;
+    for (e, b) in parts.blobs.iter().enumerate() {
+        let (o, l) = entry(e, off, b.len() as u32);
+        meta.extend_from_slice(&o.to_le_bytes());
+        meta.extend_from_slice(&l.to_le_bytes());
+        meta.extend_from_slice(&crc32fast::hash(b).to_le_bytes());
+        off += b.len() as u64;
+    }
+    let icrc = crc32fast::hash(&meta);
+    meta.extend_from_slice(&icrc.to_le_bytes());
+    for b in &parts.blobs {
+        meta.extend_from_slice(b);
+    }
+    let header = serde_json::to_vec(&parts.header).unwrap();
+    let mut out = MAGIC.to_vec();
+    out.extend_from_slice(&1u32.to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(&header);
+    out.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
+    out.extend_from_slice(&(meta.len() as u64).to_le_bytes());
+    out.extend_from_slice(&meta);
+    out.extend_from_slice(&crc32fast::hash(&meta).to_le_bytes());
+    out
+}
+
+fn msg(bytes: &[u8]) -> String {
+    let e = decode_pgv(bytes, p()).unwrap_err().to_string();
+    assert!(e.starts_with("s.pgv: "), "{e}");
+    e
+}
+
+#[test]
+fn damaged_sparse_files_give_clear_errors() {
+    let f = sphere_file(20, Basis::Bspline3);
+    let (good, _) = encode_pgv_with(&f, &opts(None)).unwrap();
+    let parts = split(&good);
+    // The test's own framing (JSON keys re-ordered) gives a valid file.
+    assert!(decode_pgv(&join(&parts, |_, o, l| (o, l)), p()).is_ok());
+    assert!(decode_pgv(&good, p()).is_ok());
+
+    assert!(msg(&good[..good.len() / 2]).contains("truncated"));
+    let mut v = good.clone();
+    v[0] = b'X';
+    assert!(msg(&v).contains("magic"));
+    let mut v = good.clone();
+    v[8] = 2;
+    assert!(msg(&v).contains("version 2"));
+
+    // Whole-payload CRC catches a flipped data byte; the brick CRC catches it when the
+    // payload CRC is made to agree, and so does read_brick, which skips the payload CRC.
+    let mut bad = split(&good);
+    bad.blobs[0][3] ^= 0x20;
+    let framed = join(&bad, |_, o, l| (o, l));
+    let hlen = u32::from_le_bytes(framed[12..16].try_into().unwrap()) as usize;
+    let mut v = framed.clone();
+    // Restore the old brick CRC in the index (the one for the undamaged blob), fix the rest.
+    let map = parts.maps.len();
+    let at = 16 + hlen + 12 + map + 12;
+    v[at..at + 4].copy_from_slice(&crc32fast::hash(&parts.blobs[0]).to_le_bytes());
+    let stored = bad.blobs.len();
+    let meta_end = 16 + hlen + 12 + map + 16 * stored;
+    let icrc = crc32fast::hash(&v[16 + hlen + 12..meta_end]);
+    v[meta_end..meta_end + 4].copy_from_slice(&icrc.to_le_bytes());
+    let plen = v.len() - 4 - (16 + hlen + 12);
+    let pcrc = crc32fast::hash(&v[16 + hlen + 12..16 + hlen + 12 + plen]);
+    let n = v.len();
+    v[n - 4..].copy_from_slice(&pcrc.to_le_bytes());
+    let e = msg(&v);
+    assert!(
+        e.contains("brick") && e.contains("checksum mismatch"),
+        "{e}"
+    );
+
+    // Index CRC.
+    let mut v = good.clone();
+    let at = 16 + hlen + 12 + map + 20;
+    v[at] ^= 1;
+    let n = v.len();
+    let pcrc = crc32fast::hash(&v[16 + hlen + 12..n - 4]);
+    v[n - 4..].copy_from_slice(&pcrc.to_le_bytes());
+    let e = msg(&v);
+    assert!(e.contains("index checksum"), "{e}");
+
+    // Index entries pointing outside the brick data.
+    let e = msg(&join(&parts, |e, o, l| {
+        if e == 1 {
+            (o + 1_000_000, l)
+        } else {
+            (o, l)
+        }
+    }));
+    assert!(e.contains("index entry 1"), "{e}");
+    let e = msg(&join(
+        &parts,
+        |e, o, l| if e == 0 { (o, l + 7) } else { (o, l) },
+    ));
+    assert!(
+        e.contains("index entry 1") || e.contains("brick data"),
+        "{e}"
+    );
+
+    // Brick counts inconsistent with the grid.
+    let mut h = split(&good);
+    h.header["sparse"]["bricks"] = serde_json::json!([3, 3, 4]);
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("bricks"));
+    let mut h = split(&good);
+    h.header["sparse"]["stored"] = serde_json::json!(1);
+    let e = msg(&join(&h, |_, o, l| (o, l)));
+    assert!(e.contains("index checksum"), "{e}");
+    let mut h = split(&good);
+    h.header["sparse"]["stored"] = serde_json::json!(1_000_000);
+    let e = msg(&join(&h, |_, o, l| (o, l)));
+    assert!(e.contains("stored bricks claimed"), "{e}");
+    // The map disagreeing with the count, all checksums right.
+    let mut h = split(&good);
+    let first = h.maps.iter().position(|&b| b != 0).unwrap();
+    let low = h.maps[first].trailing_zeros();
+    h.maps[first] &= !(1 << low);
+    let e = msg(&join(&h, |_, o, l| (o, l)));
+    assert!(e.contains("brick map marks"), "{e}");
+    let mut h = split(&good);
+    h.header["sparse"]["brick"] = serde_json::json!(1000);
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("brick edge"));
+
+    // Absurd dimensions are refused before anything is allocated from them.
+    let mut h = split(&good);
+    h.header["grid"]["dims"] = serde_json::json!([1u64 << 40, 1u64 << 40, 4]);
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("too large"));
+
+    // A brick that decompresses to more than a brick holds.
+    let mut h = split(&good);
+    h.blobs[0] = zstd::bulk::compress(&vec![7u8; 1 << 16], 1).unwrap();
+    let e = msg(&join(&h, |_, o, l| (o, l)));
+    assert!(e.contains("does not decompress"), "{e}");
+    // One that decompresses to fewer.
+    let mut h = split(&good);
+    h.blobs[0] = zstd::bulk::compress(&[1u8; 10], 1).unwrap();
+    let e = msg(&join(&h, |_, o, l| (o, l)));
+    assert!(e.contains("needs"), "{e}");
+    // Non-finite clamp.
+    let mut h = split(&good);
+    h.header["sparse"]["clamp"] = serde_json::json!(-1.0);
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("clamp"));
+
+    // read_brick outside the grid.
+    let e = read_brick(&good, p(), [0, 9, 0]).unwrap_err().to_string();
+    assert!(e.contains("outside"), "{e}");
+}
+
+// ---- properties ----------------------------------------------------------------------------
+
+fn tiny_sparse(precision: Precision) -> Vec<u8> {
+    let f = sphere_file(12, Basis::Bspline3);
+    let o = EncodeOptions {
+        precision: Some(precision),
+        brick: 4,
+        zstd_level: 3,
+        ..EncodeOptions::default()
+    };
+    encode_pgv_with(&f, &o).unwrap().0
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn corrupted_sparse_files_never_panic(
+        which in 0usize..3,
+        edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..4),
+        cut in any::<usize>(),
+    ) {
+        let mut bytes = tiny_sparse(Precision::ALL[which]);
+        let n = bytes.len();
+        for (pos, val) in edits {
+            bytes[pos % n] = val;
+        }
+        bytes.truncate(cut % (n + 1));
+        let _ = decode_pgv(&bytes, p());
+        let _ = pgv_info(&bytes, p());
+        let _ = read_brick(&bytes, p(), [cut % 3, 1, 2]);
+    }
+
+    #[test]
+    fn round_trip_keeps_stored_coefficients_within_the_precision(
+        dims in proptest::array::uniform3(2usize..14),
+        seed in any::<u64>(),
+        scale in 1e-3f32..1e3,
+        which in 0usize..3,
+        brick in 2usize..9,
+        band in 0.0f32..3.0,
+        predictor in 0usize..3,
+    ) {
+        let grid = Grid { origin: Vec3::ZERO, spacing: 0.1, dims };
+        let mut s = seed | 1;
+        let coeffs: Vec<f32> = (0..grid.len())
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                ((s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) as f32 * scale
+            })
+            .collect();
+        let volume = CoefficientVolume::new(grid, Basis::Bspline3, coeffs).unwrap();
+        let f = PgvFile { header: header_for(&volume, "interp", None), volume };
+        let precision = Precision::ALL[which];
+        let o = EncodeOptions {
+            precision: Some(precision),
+            brick,
+            band,
+            predictor: [Predictor::None, Predictor::DeltaX, Predictor::Lorenzo][predictor],
+            zstd_level: 1,
+            ..EncodeOptions::default()
+        };
+        let (bytes, r) = encode_pgv_with(&f, &o).unwrap();
+        let back = decode_pgv(&bytes, p()).unwrap().volume.coeffs;
+        let mut worst = 0.0f32;
+        for (coords, idx) in bricks(dims, brick) {
+            let b = read_brick(&bytes, p(), coords).unwrap();
+            if !b.stored {
+                for &i in &idx {
+                    prop_assert_eq!(back[i].abs(), r.clamp);
+                }
+                continue;
+            }
+            let lo = idx.iter().map(|&i| f.volume.coeffs[i]).fold(f32::INFINITY, f32::min);
+            let hi = idx.iter().map(|&i| f.volume.coeffs[i]).fold(f32::NEG_INFINITY, f32::max);
+            for &i in &idx {
+                let (a, d) = (f.volume.coeffs[i], back[i]);
+                let bound = match precision {
+                    Precision::F32 => 0.0,
+                    // Half an f16 ulp: relative 2^-11, absolute 2^-25 among subnormals.
+                    Precision::F16 => a.abs() * 2f32.powi(-11) + 2f32.powi(-25),
+                    // Half a step, plus f32 rounding of lo + q·step.
+                    Precision::Q16 => {
+                        (hi - lo) / 65535.0 * 0.5 + 4.0 * f32::EPSILON * lo.abs().max(hi.abs())
+                    }
+                };
+                if precision == Precision::F32 {
+                    prop_assert_eq!(a.to_bits(), d.to_bits());
+                }
+                prop_assert!((a - d).abs() <= bound, "{a} -> {d}, bound {bound}");
+                worst = worst.max((a - d).abs());
+            }
+        }
+        prop_assert_eq!(worst, r.max_quantisation_error);
+    }
+}
+
+/// The fuzzing seed corpus (`fuzz/corpus/decode_pgv`) holds valid tiny files of each encoding;
+/// `PGVOL_WRITE_CORPUS=1` rewrites it.
+#[test]
+fn fuzz_seed_corpus_decodes() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus/decode_pgv");
+    if std::env::var_os("PGVOL_WRITE_CORPUS").is_some() {
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = sphere_file(10, Basis::Bspline3);
+        std::fs::write(dir.join("dense.pgv"), encode_pgv(&f)).unwrap();
+        for (name, precision, predictor, compression) in [
+            (
+                "sparse-f32.pgv",
+                Precision::F32,
+                Predictor::None,
+                Compression::None,
+            ),
+            (
+                "sparse-f16.pgv",
+                Precision::F16,
+                Predictor::DeltaX,
+                Compression::Zstd,
+            ),
+            (
+                "sparse-q16.pgv",
+                Precision::Q16,
+                Predictor::Lorenzo,
+                Compression::Zstd,
+            ),
+        ] {
+            let o = EncodeOptions {
+                precision: Some(precision),
+                predictor,
+                compression,
+                brick: 4,
+                band: 1.0,
+                ..EncodeOptions::default()
+            };
+            std::fs::write(dir.join(name), encode_pgv_with(&f, &o).unwrap().0).unwrap();
+        }
+    }
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(bytes.len() < 10_000, "{}", path.display());
+        decode_pgv(&bytes, &path).unwrap();
+        seen += 1;
+    }
+    assert!(seen >= 4);
+}
