@@ -89,29 +89,18 @@ pub const ENCODE_BAND: f32 = 4.0;
 
 /// The coefficient volume of `mesh` on `grid`, the fit's report and the seconds spent on
 /// signed distances. `interp` interpolates band-limited node distances (fast); `iso` and `wls`
-/// query the mesh's distance at the points they choose.
+/// query the mesh's distance at the points they choose. `band` is the `interp` band in spacings.
 pub fn encode_with(
     mesh: &Mesh,
     grid: Grid,
     basis: Basis,
     method: FitMethod,
+    band: f32,
     quiet: bool,
 ) -> Result<(CoefficientVolume, FitReport, f64)> {
     let options = FitOptions::default();
     if method == FitMethod::Interp {
-        let t = Instant::now();
-        let (sampled, _) = signed_distance_grid(
-            mesh,
-            &grid,
-            Extent::Band(ENCODE_BAND),
-            SignMode::Auto,
-            quiet,
-        )?;
-        let sdf_time = t.elapsed().as_secs_f64();
-        let (volume, report) =
-            pgvol_field::fit::interp_samples(grid, basis, &sampled.values, &options)
-                .context("cannot fit the coefficients")?;
-        return Ok((volume, report, sdf_time));
+        return encode_banded(mesh, grid, basis, band, quiet);
     }
     let t = Instant::now();
     let sdf = MeshSdf::new(mesh, SignMode::Auto).context("cannot build the distance field")?;
@@ -129,6 +118,24 @@ pub fn encode_with(
     Ok((volume, report, sdf_time))
 }
 
+/// The `interp` fit on distances exact within `band` grid spacings of the surface.
+pub fn encode_banded(
+    mesh: &Mesh,
+    grid: Grid,
+    basis: Basis,
+    band: f32,
+    quiet: bool,
+) -> Result<(CoefficientVolume, FitReport, f64)> {
+    let t = Instant::now();
+    let (sampled, _) =
+        signed_distance_grid(mesh, &grid, Extent::Band(band), SignMode::Auto, quiet)?;
+    let sdf_time = t.elapsed().as_secs_f64();
+    let (volume, report) =
+        pgvol_field::fit::interp_samples(grid, basis, &sampled.values, &FitOptions::default())
+            .context("cannot fit the coefficients")?;
+    Ok((volume, report, sdf_time))
+}
+
 /// [`encode_with`] with the `interp` fit, returning the seconds spent on distances and the fit.
 pub fn encode(
     mesh: &Mesh,
@@ -136,7 +143,8 @@ pub fn encode(
     basis: Basis,
     quiet: bool,
 ) -> Result<(CoefficientVolume, f64, f64)> {
-    let (volume, report, sdf_time) = encode_with(mesh, grid, basis, FitMethod::Interp, quiet)?;
+    let (volume, report, sdf_time) =
+        encode_with(mesh, grid, basis, FitMethod::Interp, ENCODE_BAND, quiet)?;
     Ok((volume, sdf_time, report.seconds))
 }
 

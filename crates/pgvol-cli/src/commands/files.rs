@@ -24,6 +24,10 @@ pub struct EncodeArgs {
     /// How the coefficients are found.
     #[arg(long, value_enum, default_value_t)]
     pub fit: FitArg,
+    /// Exact distances within W grid spacings of the surface (--fit interp); wider bands let
+    /// `pgvol offset` and `pgvol shell` work from the file over larger distances.
+    #[arg(long, value_name = "W", default_value_t = crate::pipeline::ENCODE_BAND, value_parser = parse_band)]
+    pub band: f32,
     /// For --fit iso: the isosurface step in grid spacings (searched when not given).
     #[arg(long)]
     pub z_step: Option<f32>,
@@ -76,6 +80,15 @@ pub struct InfoArgs {
     pub out: OutputArgs,
 }
 
+fn parse_band(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(w) if w.is_finite() && w >= 2.0 => Ok(w),
+        _ => Err(format!(
+            "'{s}' is not a number of grid spacings of at least 2"
+        )),
+    }
+}
+
 fn check_pgv_extension(path: &std::path::Path) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("pgv") => Ok(()),
@@ -103,7 +116,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         }
     }
     let (volume, report, sdf_seconds) =
-        pipeline::encode_with(&mesh, grid, a.basis.basis()?, method, quiet)?;
+        pipeline::encode_with(&mesh, grid, a.basis.basis()?, method, a.band, quiet)?;
     let fit_seconds = report.seconds;
     if a.verbose && !a.out.json {
         eprintln!(

@@ -3,6 +3,7 @@
 mod compare;
 mod eval;
 mod files;
+mod ops;
 mod remesh;
 mod sdf;
 
@@ -36,6 +37,15 @@ pub enum Command {
     Info(files::InfoArgs),
     /// Evaluates a .pgv field (value and gradient) at the points of a CSV file (x,y,z per line).
     Eval(eval::EvalArgs),
+    /// Cuts a field or mesh into layers of closed contours for additive manufacturing.
+    ///
+    /// Outer loops are counter-clockwise and holes clockwise (seen from +axis), simplified to
+    /// --tolerance without breaking closure. Writes SVG, Common Layer Interface or JSON.
+    Slice(ops::SliceArgs),
+    /// Offsets a shape by a distance (positive outward, negative inward).
+    Offset(ops::OffsetArgs),
+    /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes.
+    Shell(ops::ShellArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -47,6 +57,9 @@ pub fn run(command: Command) -> Result<()> {
         Command::Decode(a) => files::decode(a),
         Command::Info(a) => files::info(a),
         Command::Eval(a) => eval::run(a),
+        Command::Slice(a) => ops::slice(a),
+        Command::Offset(a) => ops::offset(a),
+        Command::Shell(a) => ops::shell(a),
     }
 }
 
