@@ -160,16 +160,19 @@ def load_output(path: Path) -> trimesh.Trimesh:
 # ---------------------------------------------------------------------------
 
 
+def manifold_mesh(mesh: trimesh.Trimesh):
+    import manifold3d
+
+    return manifold3d.Mesh(
+        vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
+        tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint32),
+    )
+
+
 def manifold_status(mesh: trimesh.Trimesh):
     import manifold3d
 
-    m = manifold3d.Manifold(
-        manifold3d.Mesh(
-            vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
-            tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint32),
-        )
-    )
-    return m.status()
+    return manifold3d.Manifold(manifold_mesh(mesh)).status()
 
 
 def manifold_ok(status) -> bool:

@@ -31,11 +31,28 @@ pub struct EncodeArgs {
     /// For --fit iso: the isosurface step in grid spacings (searched when not given).
     #[arg(long)]
     pub z_step: Option<f32>,
+    /// Coefficient precision in the file; `auto` picks the smallest that keeps the stored
+    /// coefficients within 1 % of the grid spacing.
+    #[arg(long, value_enum, default_value_t)]
+    pub precision: PrecisionArg,
+    /// Write every coefficient as f32 instead of the sparse, compressed bricks around the surface.
+    #[arg(long, conflicts_with = "precision")]
+    pub dense_file: bool,
     /// Print the solver's iterations and residual.
     #[arg(long, short)]
     pub verbose: bool,
     #[command(flatten)]
     pub out: OutputArgs,
+}
+
+/// Coefficient precision in the file.
+#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+pub enum PrecisionArg {
+    #[default]
+    Auto,
+    F32,
+    F16,
+    Q16,
 }
 
 /// How the coefficients are found.
@@ -150,22 +167,51 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         .metadata
         .insert("fit_solver".into(), report.solver.clone());
     let file = pgvol_format::PgvFile { header, volume };
-    pgvol_format::write_pgv(&a.output, &file)?;
+    let stored = if a.dense_file {
+        pgvol_format::write_pgv(&a.output, &file)?;
+        None
+    } else {
+        let options = pgvol_format::EncodeOptions {
+            precision: match a.precision {
+                PrecisionArg::Auto => None,
+                PrecisionArg::F32 => Some(pgvol_format::Precision::F32),
+                PrecisionArg::F16 => Some(pgvol_format::Precision::F16),
+                PrecisionArg::Q16 => Some(pgvol_format::Precision::Q16),
+            },
+            ..Default::default()
+        };
+        Some(pgvol_format::write_pgv_with(&a.output, &file, &options)?)
+    };
     let bytes = std::fs::metadata(&a.output)?.len();
     if a.out.json {
+        let storage = stored.as_ref().map(|r| {
+            serde_json::json!({
+                "bricks_total": r.bricks_total, "bricks_stored": r.bricks_stored,
+                "bytes_header": r.bytes_header, "bytes_index": r.bytes_index, "bytes_payload": r.bytes_payload,
+                "precision": r.precision, "max_quantisation_error": r.max_quantisation_error,
+            })
+        });
         let v = serde_json::json!({
             "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
-            "fit": report,
+            "storage": storage, "fit": report,
             "seconds": { "sdf": sdf_seconds, "fit": fit_seconds, "total": start.elapsed().as_secs_f64() },
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else if !a.out.quiet {
+        let detail = match &stored {
+            Some(r) => format!(
+                ", {} of {} bricks stored as {:?}",
+                r.bricks_stored, r.bricks_total, r.precision
+            ),
+            None => ", dense f32".to_string(),
+        };
         println!(
-            "{}: {}^3 {} coefficients, {} bytes",
+            "{}: {}^3 {} coefficients, {} bytes{}",
             a.output.display(),
             grid.dims[0],
-            file.volume.basis.name(),
-            bytes
+            file.volume.basis,
+            bytes,
+            detail
         );
     }
     Ok(())
@@ -212,11 +258,20 @@ struct Info<'a> {
     header: &'a pgvol_format::PgvHeader,
     coefficients: usize,
     coefficient_range: [f32; 2],
+    bricks_total: Option<usize>,
+    bricks_stored: Option<usize>,
+    precision: pgvol_format::Precision,
+    bytes_header: usize,
+    bytes_index: usize,
+    bytes_payload: usize,
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
-    let file = pgvol_format::read_pgv(&a.input)?;
-    let bytes = std::fs::metadata(&a.input)?.len();
+    let raw = std::fs::read(&a.input)
+        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", a.input.display()))?;
+    let parts = pgvol_format::pgv_info(&raw, &a.input)?;
+    let file = pgvol_format::decode_pgv(&raw, &a.input)?;
+    let bytes = raw.len() as u64;
     let c = &file.volume.coeffs;
     let range = [
         c.iter().cloned().fold(f32::INFINITY, f32::min),
@@ -228,6 +283,12 @@ pub fn info(a: InfoArgs) -> Result<()> {
         header: &file.header,
         coefficients: c.len(),
         coefficient_range: range,
+        bricks_total: parts.bricks_total,
+        bricks_stored: parts.bricks_stored,
+        precision: parts.precision,
+        bytes_header: parts.bytes_header,
+        bytes_index: parts.bytes_index,
+        bytes_payload: parts.bytes_payload,
     };
     if a.out.json {
         println!("{}", serde_json::to_string_pretty(&info)?);
@@ -241,7 +302,14 @@ pub fn info(a: InfoArgs) -> Result<()> {
         "grid          {} x {} x {}, spacing {}, origin ({}, {}, {})",
         g.dims[0], g.dims[1], g.dims[2], g.spacing, g.origin.x, g.origin.y, g.origin.z
     );
-    println!("encoding      {}", h.encoding);
+    println!("encoding      {} ({:?})", h.encoding, parts.precision);
+    if let (Some(stored), Some(total)) = (parts.bricks_stored, parts.bricks_total) {
+        println!("bricks        {stored} of {total} stored");
+    }
+    println!(
+        "bytes         header {}, index {}, coefficients {}",
+        parts.bytes_header, parts.bytes_index, parts.bytes_payload
+    );
     println!("coefficients  {} in [{}, {}]", c.len(), range[0], range[1]);
     if let Some([lo, hi]) = h.source_bounds {
         println!("source box    {lo:?} .. {hi:?}");
