@@ -13,6 +13,7 @@ mod io;
 mod normals;
 mod obj;
 mod ply;
+pub mod shapes;
 mod stats;
 mod stl;
 mod validate;

@@ -130,32 +130,7 @@ pub fn brute_force_distance(mesh: &Mesh, p: Vec3) -> f32 {
 mod tests {
     use super::*;
 
-    fn box_mesh(lo: Vec3, hi: Vec3) -> Mesh {
-        let p = (0..8)
-            .map(|i| {
-                Vec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                )
-            })
-            .collect();
-        let t = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        Mesh::new(p, t)
-    }
+    use pgvol_mesh::shapes::cuboid as box_mesh;
 
     #[test]
     fn identical_meshes_are_at_distance_zero() {

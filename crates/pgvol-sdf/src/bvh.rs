@@ -293,61 +293,53 @@ impl Bvh {
     /// inside), −1 the other way. `None` when a crossing is too close to an edge, a vertex or an
     /// end of the segment to count reliably.
     pub fn winding_jump(&self, a: Vec3, b: Vec3) -> Option<i32> {
-        if self.nodes.is_empty() {
-            return Some(0);
-        }
         let (pa, pb) = (Vec3A::from(a), Vec3A::from(b));
         let (lo, hi) = (pa.min(pb), pa.max(pb));
-        let dir = pb - pa;
-        let mut jump = 0i32;
-        let mut stack: Vec<u32> = Vec::with_capacity(32);
-        stack.push(0);
-        while let Some(id) = stack.pop() {
-            let node = &self.nodes[id as usize];
-            if node.min.cmpgt(hi).any() || node.max.cmplt(lo).any() {
-                continue;
-            }
-            if !node.is_leaf() {
-                stack.push(node.first);
-                stack.push(node.first + 1);
-                continue;
-            }
-            for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
-                match segment_crossing(pa, dir, t, 1e-4) {
-                    Crossing::None => {}
-                    Crossing::Unsure => return None,
-                    Crossing::IntoBack => jump += 1,
-                    Crossing::IntoFront => jump -= 1,
-                }
-            }
-        }
-        Some(jump)
+        let outside = |node: &Node| node.min.cmpgt(hi).any() || node.max.cmplt(lo).any();
+        self.segment_crossings(pa, pb - pa, 1e-4, outside)
+            .map(|(into_back, into_front)| into_back - into_front)
     }
 
     /// How many triangles the ray `origin + s·dir`, `s > 0`, crosses; `None` when a crossing is
     /// too close to an edge, a vertex or the origin to count reliably.
     pub fn ray_crossings(&self, origin: Vec3, dir: Vec3) -> Option<u32> {
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else {
             return Some(0);
-        }
+        };
         let o = Vec3A::from(origin);
         let d = Vec3A::from(dir);
         let inv = d.recip();
-        // Long enough to leave the whole mesh: the segment machinery then counts the crossings.
-        let root = &self.nodes[0];
+        // A segment long enough to leave the whole mesh stands in for the ray.
         let reach = (root.max - root.min).length() + (o - (root.min + root.max) * 0.5).length();
-        let seg = d * reach;
-        let mut count = 0u32;
+        let missed = |node: &Node| {
+            let t1 = (node.min - o) * inv;
+            let t2 = (node.max - o) * inv;
+            t1.min(t2).max_element().max(0.0) > t1.max(t2).min_element()
+        };
+        // The segment is far longer than the mesh: only a tiny end margin near the origin.
+        self.segment_crossings(o, d * reach, 1e-7, missed)
+            .map(|(b, f)| (b + f) as u32)
+    }
+
+    /// Counts the triangles the segment `a + s·dir`, `s ∈ [0, 1]`, crosses against their normal
+    /// and along it, visiting only nodes that `pruned` does not reject; `None` when a crossing is
+    /// ambiguous (see `segment_crossing`).
+    fn segment_crossings(
+        &self,
+        a: Vec3A,
+        dir: Vec3A,
+        end_margin: f32,
+        pruned: impl Fn(&Node) -> bool,
+    ) -> Option<(i32, i32)> {
+        let (mut into_back, mut into_front) = (0i32, 0i32);
+        if self.nodes.is_empty() {
+            return Some((0, 0));
+        }
         let mut stack: Vec<u32> = Vec::with_capacity(32);
         stack.push(0);
         while let Some(id) = stack.pop() {
             let node = &self.nodes[id as usize];
-            // Slab test against the ray.
-            let t1 = (node.min - o) * inv;
-            let t2 = (node.max - o) * inv;
-            let tmin = t1.min(t2).max_element().max(0.0);
-            let tmax = t1.max(t2).min_element();
-            if tmin > tmax {
+            if pruned(node) {
                 continue;
             }
             if !node.is_leaf() {
@@ -356,15 +348,15 @@ impl Bvh {
                 continue;
             }
             for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
-                // The segment is far longer than the mesh: only a tiny end margin near the origin.
-                match segment_crossing(o, seg, t, 1e-7) {
+                match segment_crossing(a, dir, t, end_margin) {
                     Crossing::None => {}
                     Crossing::Unsure => return None,
-                    Crossing::IntoBack | Crossing::IntoFront => count += 1,
+                    Crossing::IntoBack => into_back += 1,
+                    Crossing::IntoFront => into_front += 1,
                 }
             }
         }
-        Some(count)
+        Some((into_back, into_front))
     }
 
     /// Closest point to `p` on the triangle at leaf slot `slot`.

@@ -318,7 +318,7 @@ fn for_each_node(grid: &Grid, lo: [usize; 3], hi: [usize; 3], mut f: impl FnMut(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::winding::tests_support::sphere;
+    use pgvol_mesh::shapes::octasphere as sphere;
 
     #[test]
     fn band_matches_dense_inside_the_band_and_clamps_outside() {

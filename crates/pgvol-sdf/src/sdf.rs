@@ -242,27 +242,10 @@ impl MeshSdf {
 mod tests {
     use super::*;
     use crate::grid::Grid;
-    use crate::winding::tests_support::sphere;
+    use pgvol_mesh::shapes::octasphere as sphere;
 
     fn unit_cube() -> Mesh {
-        let p = (0..8)
-            .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
-            .collect();
-        let t = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        Mesh::new(p, t)
+        pgvol_mesh::shapes::cuboid(Vec3::ZERO, Vec3::ONE)
     }
 
     /// Exact SDF of the axis-aligned unit cube.

@@ -185,50 +185,10 @@ fn farthest_corner_squared(c: Vec3A, min: Vec3A, max: Vec3A) -> f32 {
 }
 
 #[cfg(test)]
-pub(crate) mod tests_support {
-    use glam::Vec3;
-    use pgvol_mesh::Mesh;
-
-    /// An outward-oriented icosphere-like closed mesh: an octahedron subdivided and projected.
-    pub(crate) fn sphere(levels: u32) -> Mesh {
-        let mut positions = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-        let mut tris: Vec<[u32; 3]> = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        for _ in 0..levels {
-            let mut cache = std::collections::HashMap::new();
-            let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
-                *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    positions
-                        .push(((positions[a as usize] + positions[b as usize]) * 0.5).normalize());
-                    positions.len() as u32 - 1
-                })
-            };
-            let mut next = Vec::new();
-            for [a, b, c] in tris {
-                let ab = mid(a, b, &mut positions);
-                let bc = mid(b, c, &mut positions);
-                let ca = mid(c, a, &mut positions);
-                next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-            }
-            tris = next;
-        }
-        Mesh::new(positions, tris)
-    }
-}
-
-#[cfg(test)]
 mod tests {
-    use super::tests_support::sphere;
     use super::*;
     use glam::Vec3;
+    use pgvol_mesh::shapes::octasphere as sphere;
     use pgvol_mesh::Mesh;
     use rand::{Rng, SeedableRng};
 
