@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Error per byte: a pgvol .pgv file (default settings) against a dense float32 trilinear grid of
-# the same number of bytes, both turned into meshes and compared with the input.
+# the same number of bytes and against OpenVDB's .vdb file at the same grid spacing (meshToVolume
+# +-3 voxels, volumeToMesh; needs Debian's python3-openvdb for /usr/bin/python3), all turned into
+# meshes and compared with the input.
 # Usage: bash tools/bench/bytes_vs_dense.sh [MESH ...]   (names in ../shared/meshes, default three)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -11,8 +13,9 @@ P="${PGVOL_BIN:-$ROOT/target/release/pgvol}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 chamfer() { "$P" compare "$1" "$2" --samples 200000 --json | python3 -c "import json,sys; print('%.5f' % json.load(sys.stdin)['chamfer_l1_pct'])"; }
-echo "| mesh | res | .pgv bytes | Chamfer-L1 % | dense N (same bytes) | dense Chamfer-L1 % | ratio |"
-echo "|---|---|---|---|---|---|---|"
+VDB_PY="${PGVOL_BENCH_SYSTEM_PYTHON:-/usr/bin/python3}"
+echo "| mesh | res | .pgv bytes | Chamfer-L1 % | dense n (same bytes) | dense Chamfer-L1 % | ratio to dense | .vdb bytes (half) | .vdb Chamfer-L1 % | ratio to .vdb |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 if [[ $# -eq 0 ]]; then set -- stanford-bunny fandisk spot; fi
 for m in "$@"; do
   for r in 64 128; do
@@ -24,6 +27,12 @@ for m in "$@"; do
     n=$(python3 -c "print(round(($bytes / 4) ** (1 / 3)))")
     "$P" remesh "$MESHES/$m.obj" -o "$work/t.glb" --res "$n" --basis trilinear -q
     dense=$(chamfer "$work/t.glb" "$MESHES/$m.obj")
-    echo "| $m | $r | $bytes | $ours | $n | $dense | $(python3 -c "print('%.2f' % ($ours / $dense))") |"
+    vdb="n/a"; vdbc="n/a"; vdbr="n/a"
+    if info=$("$VDB_PY" tools/bench/vdb_file.py "$MESHES/$m.obj" "$r" "$work/v" 2>/dev/null); then
+      vdb=$(python3 -c "import json,sys; d=json.loads(sys.argv[1]); print('%d (%d)' % (d['bytes'], d['bytes_half']))" "$info")
+      vdbc=$(chamfer "$work/v.obj" "$MESHES/$m.obj")
+      vdbr=$(python3 -c "print('%.2f' % ($ours / $vdbc))")
+    fi
+    echo "| $m | $r | $bytes | $ours | $n | $dense | $(python3 -c "print('%.2f' % ($ours / $dense))") | $vdb | $vdbc | $vdbr |"
   done
 done
