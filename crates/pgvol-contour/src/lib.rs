@@ -42,6 +42,7 @@ mod quads;
 mod quality;
 mod root;
 mod samples;
+mod sparse_sample;
 mod table;
 mod triangulate;
 mod volume;

@@ -44,7 +44,18 @@ pub fn contour_volume(
     iso: f32,
     method: Method,
 ) -> pgvol_mesh::Mesh {
-    let inner = volume.sample(grid);
+    let inner = crate::sparse_sample::sample_near_level(volume, grid, iso);
+    contour_samples(volume, grid, inner, iso, method)
+}
+
+/// [`contour_volume`] from given samples of `volume` on `grid`.
+pub(crate) fn contour_samples(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    inner: Vec<f32>,
+    iso: f32,
+    method: Method,
+) -> pgvol_mesh::Mesh {
     let [nx, ny, nz] = grid.dims;
     let dims = [nx + 2, ny + 2, nz + 2];
     let mut values = vec![iso + grid.spacing; dims[0] * dims[1] * dims[2]];
