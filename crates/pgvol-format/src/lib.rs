@@ -1,9 +1,11 @@
-//! File formats for fields: pgvol's own `.pgv` coefficient files, and NRRD and NPY grids for
-//! exchange with other tools.
+//! File formats for fields: pgvol's own `.pgv` coefficient files, NRRD and NPY grids for
+//! exchange with other tools, and 3MF level-set packages.
 
 pub mod grid_files;
+pub mod nrrd;
 pub mod pgv;
 pub mod sparse;
+pub mod threemf;
 
 pub use pgv::{
     decode_pgv, encode_pgv, header_for, read_pgv, write_pgv, FormatError, PgvFile, PgvHeader,

@@ -11,9 +11,14 @@ use crate::pipeline;
 use clap::ValueEnum;
 
 #[derive(Args)]
+#[command(group(clap::ArgGroup::new("input").args(["mesh", "from"]).required(true)))]
 pub struct EncodeArgs {
     /// Input mesh.
-    pub mesh: PathArg,
+    pub mesh: Option<PathArg>,
+    /// Read the coefficients from a NRRD written by `pgvol export --what coefficients` instead
+    /// of fitting a mesh; written dense and unchanged unless --precision is given.
+    #[arg(long, value_name = "NRRD", conflicts_with_all = ["res", "voxel", "basis", "pg_n", "pg_r", "fit", "band", "z_step"])]
+    pub from: Option<PathArg>,
     /// Output .pgv file.
     #[arg(short, long)]
     pub output: PathArg,
@@ -32,9 +37,9 @@ pub struct EncodeArgs {
     #[arg(long)]
     pub z_step: Option<f32>,
     /// Coefficient precision in the file; `auto` picks the smallest that keeps the stored
-    /// coefficients within 1 % of the grid spacing.
-    #[arg(long, value_enum, default_value_t)]
-    pub precision: PrecisionArg,
+    /// coefficients within 1 % of the grid spacing [default: auto].
+    #[arg(long, value_enum)]
+    pub precision: Option<PrecisionArg>,
     /// Write every coefficient as f32 instead of the sparse, compressed bricks around the surface.
     #[arg(long, conflicts_with = "precision")]
     pub dense_file: bool,
@@ -113,11 +118,69 @@ fn check_pgv_extension(path: &std::path::Path) -> Result<()> {
     }
 }
 
+/// Writes `file` dense when `dense`, else sparse with `precision` (None: automatic).
+fn write_file(
+    path: &std::path::Path,
+    file: &pgvol_format::PgvFile,
+    dense: bool,
+    precision: Option<PrecisionArg>,
+) -> Result<Option<pgvol_format::EncodeReport>> {
+    if dense {
+        pgvol_format::write_pgv(path, file)?;
+        return Ok(None);
+    }
+    let options = pgvol_format::EncodeOptions {
+        precision: match precision.unwrap_or_default() {
+            PrecisionArg::Auto => None,
+            PrecisionArg::F32 => Some(pgvol_format::Precision::F32),
+            PrecisionArg::F16 => Some(pgvol_format::Precision::F16),
+            PrecisionArg::Q16 => Some(pgvol_format::Precision::Q16),
+        },
+        ..Default::default()
+    };
+    Ok(Some(pgvol_format::write_pgv_with(path, file, &options)?))
+}
+
+/// `encode --from`: a coefficient NRRD to .pgv. Dense by default, so the coefficients are
+/// copied bit for bit; sparse bricks would replace far coefficients with the background value.
+fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
+    let file = pgvol_format::nrrd::read_coefficients_nrrd(from)?;
+    let dense = a.dense_file || a.precision.is_none();
+    let stored = write_file(&a.output, &file, dense, a.precision)?;
+    let bytes = std::fs::metadata(&a.output)?.len();
+    let grid = file.volume.grid;
+    if a.out.json {
+        let v = serde_json::json!({
+            "output": a.output, "from": from, "grid": grid, "basis": file.volume.basis,
+            "bytes": bytes, "dense": stored.is_none(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !a.out.quiet {
+        println!(
+            "{}: {} x {} x {} {} coefficients from {}, {} bytes",
+            a.output.display(),
+            grid.dims[0],
+            grid.dims[1],
+            grid.dims[2],
+            file.volume.basis,
+            from.display(),
+            bytes
+        );
+    }
+    Ok(())
+}
+
 pub fn encode(a: EncodeArgs) -> Result<()> {
     check_pgv_extension(&a.output)?;
+    if let Some(from) = &a.from {
+        return encode_from(&a, from);
+    }
+    let Some(mesh_path) = &a.mesh else {
+        bail!("give a mesh or --from NRRD");
+    };
     let quiet = a.out.silent();
     let start = Instant::now();
-    let mesh = pipeline::load_mesh(&a.mesh, quiet)?;
+    let mesh = pipeline::load_mesh(mesh_path, quiet)?;
     let grid = a.grid.spec(128).grid_for(&mesh)?;
     let method = match a.fit {
         FitArg::Interp => pgvol_field::FitMethod::Interp,
@@ -167,21 +230,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         .metadata
         .insert("fit_solver".into(), report.solver.clone());
     let file = pgvol_format::PgvFile { header, volume };
-    let stored = if a.dense_file {
-        pgvol_format::write_pgv(&a.output, &file)?;
-        None
-    } else {
-        let options = pgvol_format::EncodeOptions {
-            precision: match a.precision {
-                PrecisionArg::Auto => None,
-                PrecisionArg::F32 => Some(pgvol_format::Precision::F32),
-                PrecisionArg::F16 => Some(pgvol_format::Precision::F16),
-                PrecisionArg::Q16 => Some(pgvol_format::Precision::Q16),
-            },
-            ..Default::default()
-        };
-        Some(pgvol_format::write_pgv_with(&a.output, &file, &options)?)
-    };
+    let stored = write_file(&a.output, &file, a.dense_file, a.precision)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     if a.out.json {
         let storage = stored.as_ref().map(|r| {

@@ -2,6 +2,7 @@
 
 mod compare;
 mod eval;
+mod export;
 mod files;
 mod ops;
 mod remesh;
@@ -35,6 +36,12 @@ pub enum Command {
     Decode(files::DecodeArgs),
     /// Prints what a .pgv file holds.
     Info(files::InfoArgs),
+    /// Exports a .pgv file as NRRD (coefficients or sampled field) or as a 3MF level set.
+    ///
+    /// A coefficient NRRD carries the basis in key/value fields and reads back with
+    /// `pgvol encode --from`; a .3mf holds the field as a 16-bit PNG image stack under a
+    /// Volumetric-extension level set.
+    Export(export::ExportArgs),
     /// Evaluates a .pgv field (value and gradient) at the points of a CSV file (x,y,z per line).
     Eval(eval::EvalArgs),
     /// Cuts a field or mesh into layers of closed contours for additive manufacturing.
@@ -56,6 +63,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Encode(a) => files::encode(a),
         Command::Decode(a) => files::decode(a),
         Command::Info(a) => files::info(a),
+        Command::Export(a) => export::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Slice(a) => ops::slice(a),
         Command::Offset(a) => ops::offset(a),
