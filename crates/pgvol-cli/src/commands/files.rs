@@ -102,6 +102,9 @@ pub struct InfoArgs {
     pub out: OutputArgs,
 }
 
+/// Metadata key holding the distance from the surface within which the field is exact.
+pub const BAND_KEY: &str = "band";
+
 fn parse_band(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(w) if w.is_finite() && w >= 2.0 => Ok(w),
@@ -229,6 +232,12 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
     header
         .metadata
         .insert("fit_solver".into(), report.solver.clone());
+    if matches!(a.fit, FitArg::Interp) {
+        // Beyond this distance the stored field is a clamp, not a distance (see `pgvol offset`).
+        header
+            .metadata
+            .insert(BAND_KEY.into(), format!("{}", a.band * grid.spacing));
+    }
     let file = pgvol_format::PgvFile { header, volume };
     let stored = write_file(&a.output, &file, a.dense_file, a.precision)?;
     let bytes = std::fs::metadata(&a.output)?.len();

@@ -16,6 +16,8 @@ struct Source {
     volume: CoefficientVolume,
     bounds: (Vec3, Vec3),
     mesh: Option<pgvol_mesh::Mesh>,
+    /// Distance from the surface within which the field is exact, when the file records it.
+    band: Option<f32>,
 }
 
 fn is_pgv(path: &Path) -> bool {
@@ -33,10 +35,17 @@ fn load(input: &Path, res: usize, grow: f32, extra_band: f32, quiet: bool) -> Re
             Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
             None => pgvol_ops::volume_bounds(&file.volume),
         };
+        let band = file
+            .header
+            .metadata
+            .get(super::files::BAND_KEY)
+            .and_then(|b| b.parse::<f32>().ok())
+            .filter(|b| b.is_finite() && *b > 0.0);
         return Ok(Source {
             volume: file.volume,
             bounds,
             mesh: None,
+            band,
         });
     }
     let mesh = pipeline::load_mesh(input, quiet)?;
@@ -50,6 +59,7 @@ fn load(input: &Path, res: usize, grow: f32, extra_band: f32, quiet: bool) -> Re
         volume,
         bounds: (lo, hi),
         mesh: Some(mesh),
+        band: None,
     })
 }
 
@@ -97,12 +107,22 @@ fn finite_nonzero(name: &str, v: f32) -> Result<()> {
 }
 
 fn refuse_narrow_band(source: &Source, input: &Path, reach: f32) -> Result<()> {
-    if source.mesh.is_none() && pgvol_ops::needs_wider_band(&source.volume, reach) {
+    if source.mesh.is_some() {
+        return Ok(());
+    }
+    // The band recorded at encoding is exact and free; older files are measured instead.
+    let (band, too_narrow) = match source.band {
+        Some(band) => (band, reach.abs() + 2.0 * source.volume.grid.spacing >= band),
+        None => (
+            pgvol_ops::stored_band(&source.volume),
+            pgvol_ops::needs_wider_band(&source.volume, reach),
+        ),
+    };
+    if too_narrow {
         bail!(
-            "{}: the file stores distances only within {:.4} of the surface, too narrow for {reach}; \
+            "{}: the file stores distances only within {band:.4} of the surface, too narrow for {reach}; \
              encode it again with a wider --band, or pass the mesh instead",
             input.display(),
-            pgvol_ops::stored_band(&source.volume)
         );
     }
     Ok(())
