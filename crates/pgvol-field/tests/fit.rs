@@ -191,21 +191,9 @@ fn spurious_sign_changes_are_counted_far_from_the_surface() {
 
 #[test]
 fn mesh_sdf_gradient_points_away_from_the_closest_point() {
-    use pgvol_mesh::Mesh;
     use pgvol_sdf::{MeshSdf, SignMode};
-    // An octahedron, counter-clockwise from outside.
-    let positions = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let triangles = vec![
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
-    let mesh = Mesh::new(positions, triangles);
+    // An octahedron (no subdivision), counter-clockwise from outside.
+    let mesh = pgvol_mesh::shapes::octasphere(0);
     let sdf = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
     for p in [
         Vec3::new(0.9, 0.8, 0.7),
