@@ -60,6 +60,9 @@ impl MeshSdf {
             Extent::Dense => None,
             Extent::Band(_) => Some(self.bricks_near_triangles(grid, bricks, clamp)),
         };
+        let regions = near
+            .as_ref()
+            .and_then(|near| self.region_signs(grid, bricks, near));
         let done = AtomicUsize::new(0);
         let exact = AtomicUsize::new(0);
         let bounds = |b: usize| {
@@ -80,8 +83,13 @@ impl MeshSdf {
             .into_par_iter()
             .map_init(Vec::new, |leaves, b| {
                 let (lo, hi) = bounds(b);
-                let (out, n_exact) = match &near {
-                    Some(near) if !near[b] => (self.sign_only_brick(grid, lo, hi, clamp), 0),
+                let known = regions.as_ref().and_then(|r| r[b]);
+                let (out, n_exact) = match (&near, known) {
+                    (Some(near), Some(inside)) if !near[b] => {
+                        let n = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+                        (vec![if inside { -clamp } else { clamp }; n], 0)
+                    }
+                    (Some(near), _) if !near[b] => (self.sign_only_brick(grid, lo, hi, clamp), 0),
                     _ => self.sample_brick(grid, lo, hi, clamp, leaves),
                 };
                 exact.fetch_add(n_exact, Ordering::Relaxed);
@@ -137,6 +145,76 @@ impl MeshSdf {
             }
         }
         near
+    }
+
+    /// For meshes without rim edges (closed and consistently oriented) the winding number is an
+    /// integer away from the surface, so the sign is constant over each connected region of
+    /// bricks away from the surface (6-connected; the near bricks cover the whole surface, so a
+    /// path between such bricks never crosses it): one winding number per region. `None` per
+    /// brick for near bricks and regions whose winding number is unclear; `None` overall for
+    /// meshes with rims.
+    fn region_signs(
+        &self,
+        grid: &Grid,
+        bricks: [usize; 3],
+        near: &[bool],
+    ) -> Option<Vec<Option<bool>>> {
+        if self.rim_count() > 0 {
+            return None;
+        }
+        let mut sign: Vec<Option<bool>> = vec![None; near.len()];
+        let mut seen = vec![false; near.len()];
+        let mut queue = std::collections::VecDeque::new();
+        let span = grid.spacing * BRICK as f32;
+        for start in 0..near.len() {
+            if near[start] || seen[start] {
+                continue;
+            }
+            let at = [
+                start % bricks[0],
+                (start / bricks[0]) % bricks[1],
+                start / (bricks[0] * bricks[1]),
+            ];
+            let centre = grid.origin
+                + (glam::Vec3::new(at[0] as f32, at[1] as f32, at[2] as f32) + 0.5) * span;
+            let w = self.winding_number(centre);
+            let region_sign = ((w - 0.5).abs() >= BRICK_SIGN_MARGIN).then_some(w > 0.5);
+            seen[start] = true;
+            queue.push_back(start);
+            while let Some(b) = queue.pop_front() {
+                sign[b] = region_sign;
+                let (i, j, k) = (
+                    b % bricks[0],
+                    (b / bricks[0]) % bricks[1],
+                    b / (bricks[0] * bricks[1]),
+                );
+                let mut visit = |n: usize| {
+                    if !near[n] && !seen[n] {
+                        seen[n] = true;
+                        queue.push_back(n);
+                    }
+                };
+                if i > 0 {
+                    visit(b - 1);
+                }
+                if i + 1 < bricks[0] {
+                    visit(b + 1);
+                }
+                if j > 0 {
+                    visit(b - bricks[0]);
+                }
+                if j + 1 < bricks[1] {
+                    visit(b + bricks[0]);
+                }
+                if k > 0 {
+                    visit(b - bricks[0] * bricks[1]);
+                }
+                if k + 1 < bricks[2] {
+                    visit(b + bricks[0] * bricks[1]);
+                }
+            }
+        }
+        Some(sign)
     }
 
     /// A brick farther than `clamp` from every triangle: only signs, magnitude `clamp`.
