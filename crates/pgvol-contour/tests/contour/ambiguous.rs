@@ -1,18 +1,7 @@
 //! Fields where most faces are ambiguous.
 
-use crate::grids::{Rng, Samples};
+use crate::grids::{checkerboard, Rng, Samples};
 use crate::topology::check_surface;
-
-fn checkerboard(n: usize, inside_parity: usize, mut magnitude: impl FnMut() -> f32) -> Samples {
-    Samples::padded([n, n, n], 1.0, |[i, j, k]| {
-        let m = magnitude();
-        if (i + j + k) % 2 == inside_parity {
-            -m
-        } else {
-            m
-        }
-    })
-}
 
 #[test]
 fn checkerboards_with_equal_magnitudes() {

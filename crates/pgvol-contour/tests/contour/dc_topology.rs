@@ -3,7 +3,7 @@
 
 use proptest::prelude::*;
 
-use crate::grids::{Rng, Samples};
+use crate::grids::{checkerboard, random_field, single_cell, Rng, Samples};
 use crate::topology::{check_closed_manifold, check_surface};
 
 /// Checks the dual mesh and that it has the marching cubes surface's topology: the same Euler
@@ -18,18 +18,6 @@ fn check_dual_of_mc(samples: &Samples, iso: f32) {
     let (m, d) = (check_surface(&mc), check_surface(&dc));
     assert_eq!(d.euler, m.euler, "Euler characteristic");
     assert_eq!(d.component_volumes.len(), m.component_volumes.len());
-}
-
-fn single_cell(case: usize, mut magnitude: impl FnMut(usize) -> f32) -> Samples {
-    Samples::padded([4, 4, 4], 1.0, |[i, j, k]| {
-        let c = (i - 1) | ((j - 1) << 1) | ((k - 1) << 2);
-        let m = magnitude(c);
-        if (case >> c) & 1 == 1 {
-            -m
-        } else {
-            m
-        }
-    })
 }
 
 #[test]
@@ -83,17 +71,6 @@ fn all_pairs_of_cells_across_an_ambiguous_face() {
     assert!(tunnels > 0, "no configuration made a tunnel");
 }
 
-fn checkerboard(n: usize, parity: usize, mut magnitude: impl FnMut() -> f32) -> Samples {
-    Samples::padded([n, n, n], 1.0, |[i, j, k]| {
-        let m = magnitude();
-        if (i + j + k) % 2 == parity {
-            -m
-        } else {
-            m
-        }
-    })
-}
-
 #[test]
 fn checkerboards() {
     let mut rng = Rng::new(12);
@@ -105,29 +82,11 @@ fn checkerboards() {
     }
 }
 
-fn value() -> impl Strategy<Value = f32> {
-    prop_oneof![
-        8 => -1.0f32..1.0,
-        1 => Just(0.0f32),
-        1 => Just(f32::NAN),
-        1 => prop_oneof![Just(-1e-30f32), Just(1e-30f32), Just(-1e30f32)],
-    ]
-}
-
-fn field() -> impl Strategy<Value = Samples> {
-    (3usize..9, 3usize..9, 3usize..9).prop_flat_map(|(x, y, z)| {
-        prop::collection::vec(value(), x * y * z).prop_map(move |v| {
-            let mut it = v.into_iter();
-            Samples::padded([x, y, z], 1.0, |_| it.next().unwrap())
-        })
-    })
-}
-
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
     #[test]
-    fn random_fields(samples in field(), iso in -0.5f32..0.5) {
+    fn random_fields(samples in random_field(), iso in -0.5f32..0.5) {
         check_dual_of_mc(&samples, iso);
     }
 

@@ -78,3 +78,51 @@ impl Rng {
         lo + (hi - lo) * unit
     }
 }
+
+/// The 4x4x4 grid whose only non-border cell has inside corners `case`, corner `c` being node
+/// `(1 + (c & 1), 1 + ((c >> 1) & 1), 1 + (c >> 2))`; `magnitude(c)` gives each corner's |value|.
+pub fn single_cell(case: usize, mut magnitude: impl FnMut(usize) -> f32) -> Samples {
+    Samples::padded([4, 4, 4], 1.0, |[i, j, k]| {
+        let c = (i - 1) | ((j - 1) << 1) | ((k - 1) << 2);
+        let m = magnitude(c);
+        if (case >> c) & 1 == 1 {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+/// An n³ checkerboard (inside where `i + j + k` has parity `inside_parity`): every face ambiguous.
+pub fn checkerboard(n: usize, inside_parity: usize, mut magnitude: impl FnMut() -> f32) -> Samples {
+    Samples::padded([n, n, n], 1.0, |[i, j, k]| {
+        let m = magnitude();
+        if (i + j + k) % 2 == inside_parity {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+/// Node values for random fields: mostly ordinary, some exactly zero, NaN or extreme.
+pub fn random_value() -> impl proptest::strategy::Strategy<Value = f32> {
+    use proptest::prelude::*;
+    prop_oneof![
+        8 => -1.0f32..1.0,
+        1 => Just(0.0f32),
+        1 => Just(f32::NAN),
+        1 => prop_oneof![Just(-1e-30f32), Just(1e-30f32), Just(-1e30f32)],
+    ]
+}
+
+/// Random grids of 3 to 8 nodes a side, closed off by an outside border.
+pub fn random_field() -> impl proptest::strategy::Strategy<Value = Samples> {
+    use proptest::prelude::*;
+    (3usize..9, 3usize..9, 3usize..9).prop_flat_map(|(x, y, z)| {
+        prop::collection::vec(random_value(), x * y * z).prop_map(move |v| {
+            let mut it = v.into_iter();
+            Samples::padded([x, y, z], 1.0, |_| it.next().unwrap())
+        })
+    })
+}

@@ -1,21 +1,7 @@
 //! Every corner configuration of one cell, closed off by outside values all around.
 
-use crate::grids::{Rng, Samples};
+use crate::grids::{single_cell, Rng, Samples};
 use crate::topology::check_surface;
-
-/// The 4x4x4 grid whose only non-border cell has inside corners `case`, corner `c` being node
-/// `(1 + (c & 1), 1 + ((c >> 1) & 1), 1 + (c >> 2))`; `magnitude(c)` gives each corner's |value|.
-fn single_cell(case: usize, mut magnitude: impl FnMut(usize) -> f32) -> Samples {
-    Samples::padded([4, 4, 4], 1.0, |[i, j, k]| {
-        let c = (i - 1) | ((j - 1) << 1) | ((k - 1) << 2);
-        let m = magnitude(c);
-        if (case >> c) & 1 == 1 {
-            -m
-        } else {
-            m
-        }
-    })
-}
 
 fn check_case(case: usize, samples: &Samples) {
     let mesh = samples.contour(0.0);
