@@ -14,26 +14,13 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from objfile import read_obj  # noqa: E402
+
 try:
     import pyopenvdb as vdb
 except ImportError:  # newer builds name the module openvdb
     import openvdb as vdb
-
-
-def read_obj(path):
-    verts, faces = [], []
-    with open(path) as f:
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            if parts[0] == "v":
-                verts.append([float(x) for x in parts[1:4]])
-            elif parts[0] == "f":
-                idx = [int(p.split("/")[0]) for p in parts[1:]]
-                idx = [i - 1 if i > 0 else len(verts) + i for i in idx]
-                faces.extend([idx[0], idx[k], idx[k + 1]] for k in range(1, len(idx) - 1))
-    return np.array(verts, dtype=np.float64), np.array(faces, dtype=np.int32)
 
 
 def main(mesh, n, prefix):
@@ -42,7 +29,7 @@ def main(mesh, n, prefix):
     side = 1.1 * float((hi - lo).max())
     h = side / (n - 1)
     xform = vdb.createLinearTransform(voxelSize=h)
-    grid = vdb.FloatGrid.createLevelSetFromPolygons(verts.astype(np.float32), triangles=faces, transform=xform, halfWidth=3.0)
+    grid = vdb.FloatGrid.createLevelSetFromPolygons(verts.astype(np.float32), triangles=faces.astype(np.int32), transform=xform, halfWidth=3.0)
     grid.name = "surface"
     vdb.write(prefix + ".vdb", grids=[grid])
     grid.saveFloatAsHalf = True
