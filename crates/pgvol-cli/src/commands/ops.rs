@@ -233,6 +233,17 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     Ok(())
 }
 
+/// Options shared by the commands that turn a shape into a new shape.
+#[derive(Args, Clone, Copy)]
+pub struct ShapeOutputArgs {
+    /// Grid nodes per axis when the input is a mesh.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    pub res: u32,
+    /// Contouring method for mesh outputs.
+    #[arg(long, value_enum, default_value_t)]
+    pub method: MethodArg,
+}
+
 #[derive(Args)]
 pub struct OffsetArgs {
     /// A .pgv file, or a mesh (distances are then computed as far out as the offset needs).
@@ -243,12 +254,8 @@ pub struct OffsetArgs {
     /// Offset distance in model units: positive grows the shape, negative shrinks it.
     #[arg(long, allow_negative_numbers = true)]
     pub distance: f32,
-    /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=2048))]
-    pub res: u32,
-    /// Contouring method for mesh outputs.
-    #[arg(long, value_enum, default_value_t)]
-    pub method: MethodArg,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -259,7 +266,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     let quiet = a.out.silent();
     let source = load(
         &a.input,
-        a.res as usize,
+        a.shape.res as usize,
         a.distance.max(0.0),
         a.distance.abs(),
         quiet,
@@ -271,7 +278,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
         &volume,
         &source,
         &format!("offset {}", a.distance),
-        a.method,
+        a.shape.method,
     )?;
     report(&a.out, &a.output, triangles)
 }
@@ -308,12 +315,8 @@ pub struct ShellArgs {
     /// cavity, the direction out through the wall, the hole's diameter). Repeat for more holes.
     #[arg(long, value_parser = parse_drain, requires = "hollow")]
     pub drain: Vec<pgvol_ops::Drain>,
-    /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=2048))]
-    pub res: u32,
-    /// Contouring method for mesh outputs.
-    #[arg(long, value_enum, default_value_t)]
-    pub method: MethodArg,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -352,7 +355,7 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         (false, SideArg::Centred) => a.thickness / 2.0,
         _ => 0.0,
     };
-    let source = load(&a.input, a.res as usize, grow, a.thickness, quiet)?;
+    let source = load(&a.input, a.shape.res as usize, grow, a.thickness, quiet)?;
     refuse_narrow_band(&source, &a.input, a.thickness)?;
     let (volume, op) = if a.hollow {
         (
@@ -370,7 +373,7 @@ pub fn shell(a: ShellArgs) -> Result<()> {
             format!("shell {}", a.thickness),
         )
     };
-    let triangles = write_result(&a.output, &volume, &source, &op, a.method)?;
+    let triangles = write_result(&a.output, &volume, &source, &op, a.shape.method)?;
     report(&a.out, &a.output, triangles)
 }
 
