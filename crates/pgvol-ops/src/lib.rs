@@ -3,24 +3,27 @@
 //! * [`slice`] / [`slice_volume`]: cut a field into planar layers of closed, simple, oriented
 //!   contours (marching squares on the continuous field, then bounded-error simplification).
 //! * [`write_svg`], [`write_cli`], [`write_slice_json`]: layer files for viewing, for build
-//!   processors (Common Layer Interface, ASCII) and for scripts.
+//!   processors (Common Layer Interface, ASCII or binary with [`write_cli_with`]) and for
+//!   scripts.
 //! * [`offset`], [`shell`], [`hollow`]: new coefficient volumes from constructive operations on
 //!   the field, with [`needs_wider_band`] telling when a narrow-band field cannot support them.
 //!
 //! Conventions are the workspace's: fields are negative inside, units are those of the mesh.
 
+mod cli_file;
 mod csg;
 mod simplify;
 mod slice;
 mod write;
 
+pub use cli_file::{write_cli, write_cli_with, CliEncoding};
 pub use csg::{hollow, needs_wider_band, offset, shell, stored_band, Drain, ShellSide};
 pub use simplify::simplify_loops;
 pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,
     MAX_LAYER_NODES,
 };
-pub use write::{read_slice_json, write_cli, write_slice_json, write_svg};
+pub use write::{read_slice_json, write_slice_json, write_svg};
 
 /// Why an operation could not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

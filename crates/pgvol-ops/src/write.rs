@@ -1,5 +1,5 @@
-//! Layer files: SVG to look at, Common Layer Interface (ASCII) for build processors, JSON for
-//! scripts. All are written atomically.
+//! Layer files: SVG to look at and JSON for scripts, written atomically. The Common Layer
+//! Interface files for build processors are in `cli_file`.
 
 use std::path::Path;
 
@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::slice::Layer;
 
 /// Bounding box `[min_u, min_v, max_u, max_v]` of every loop point, if any.
-fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
+pub(crate) fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
     let mut pts = layers
         .iter()
         .flat_map(|l| &l.loops)
@@ -87,54 +87,6 @@ pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), MeshError> {
             writeln!(w, "\n</g>")?;
         }
         writeln!(w, "</svg>")
-    })
-}
-
-/// A Common Layer Interface file, ASCII, version 2.0: the header (`$$UNITS` is the length of
-/// one coordinate unit in millimetres, e.g. 1 for a mesh in mm) then one `$$LAYER/z` per layer
-/// with one `$$POLYLINE/1,dir,n,…` per loop. Loops are closed by repeating the first point;
-/// `dir` is 1 for counter-clockwise (outer) loops and 0 for clockwise (hole) loops. All
-/// polylines belong to part 1.
-pub fn write_cli(path: &Path, layers: &[Layer], units_mm: f32) -> Result<(), MeshError> {
-    if !(units_mm.is_finite() && units_mm > 0.0) {
-        return Err(MeshError::new(
-            path,
-            format!("units must be a positive length in mm, got {units_mm}"),
-        ));
-    }
-    write_atomic(path, |w| {
-        writeln!(w, "$$HEADERSTART")?;
-        writeln!(w, "$$ASCII")?;
-        writeln!(w, "$$UNITS/{units_mm}")?;
-        writeln!(w, "$$VERSION/200")?;
-        writeln!(w, "$$LABEL/1,part1")?;
-        if let (Some([u0, v0, u1, v1]), Some(first), Some(last)) =
-            (extent(layers), layers.first(), layers.last())
-        {
-            writeln!(
-                w,
-                "$$DIMENSION/{u0},{v0},{},{u1},{v1},{}",
-                first.height, last.height
-            )?;
-        }
-        writeln!(w, "$$LAYERS/{}", layers.len())?;
-        writeln!(w, "$$HEADEREND")?;
-        writeln!(w, "$$GEOMETRYSTART")?;
-        for layer in layers {
-            writeln!(w, "$$LAYER/{}", layer.height)?;
-            for lp in &layer.loops {
-                let Some(start) = lp.points.first() else {
-                    continue;
-                };
-                let dir = if lp.hole { 0 } else { 1 };
-                write!(w, "$$POLYLINE/1,{dir},{}", lp.points.len() + 1)?;
-                for p in lp.points.iter().chain(std::iter::once(start)) {
-                    write!(w, ",{},{}", p[0], p[1])?;
-                }
-                writeln!(w)?;
-            }
-        }
-        writeln!(w, "$$GEOMETRYEND")
     })
 }
 

@@ -140,7 +140,8 @@ pub enum AxisArg {
 pub struct SliceArgs {
     /// A .pgv file, or a mesh (encoded on the fly at --res).
     pub input: PathArg,
-    /// Output layers: .svg (viewable), .cli (Common Layer Interface, ASCII) or .json.
+    /// Output layers: .svg (viewable), .cli (Common Layer Interface, ASCII unless --binary) or
+    /// .json.
     #[arg(short, long)]
     pub output: PathArg,
     /// Distance between layer planes, in model units.
@@ -161,6 +162,9 @@ pub struct SliceArgs {
     /// Millimetres per model unit, written to the CLI header.
     #[arg(long, default_value_t = 1.0)]
     pub units_mm: f32,
+    /// Write the .cli file's geometry in the binary form (little-endian long commands).
+    #[arg(long)]
+    pub binary: bool,
     /// Grid nodes per axis when the input is a mesh.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(4..=2048))]
     pub res: u32,
@@ -181,6 +185,12 @@ pub fn slice(a: SliceArgs) -> Result<()> {
             a.output.display()
         ),
     };
+    if a.binary && ext != "cli" {
+        bail!(
+            "{}: --binary applies only to .cli outputs",
+            a.output.display()
+        );
+    }
     if !(a.layer_height.is_finite() && a.layer_height > 0.0) {
         bail!(
             "--layer-height must be a positive number, got {}",
@@ -205,7 +215,14 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let slice_seconds = t.elapsed().as_secs_f64();
     match ext.as_str() {
         "svg" => pgvol_ops::write_svg(&a.output, &layers)?,
-        "cli" => pgvol_ops::write_cli(&a.output, &layers, a.units_mm)?,
+        "cli" => {
+            let encoding = if a.binary {
+                pgvol_ops::CliEncoding::Binary
+            } else {
+                pgvol_ops::CliEncoding::Ascii
+            };
+            pgvol_ops::write_cli_with(&a.output, &layers, a.units_mm, encoding)?
+        }
         _ => pgvol_ops::write_slice_json(&a.output, &layers)?,
     }
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
