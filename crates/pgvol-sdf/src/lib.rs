@@ -5,6 +5,7 @@
 //! self-intersecting meshes. Negative inside, positive outside, in the mesh's units.
 
 pub mod bvh;
+pub mod consistency;
 pub mod grid;
 pub mod pseudonormal;
 pub mod sampling;

@@ -2,13 +2,16 @@
 
 use glam::Vec3;
 use pgvol_mesh::Mesh;
+use std::sync::atomic::{AtomicU8, Ordering};
 
 use crate::{bvh::Bvh, bvh::Closest, pseudonormal::Pseudonormals, winding::WindingTree};
 
 /// How inside and outside are told apart.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SignMode {
-    /// Pseudonormal when the mesh is closed, manifold and consistently oriented, else winding.
+    /// Pseudonormal when the mesh is closed, manifold and consistently oriented, else winding;
+    /// a sampled grid whose pseudonormal signs prove wrong (a closed mesh that folds over or
+    /// crosses itself) is sampled again with the winding number.
     #[default]
     Auto,
     /// Generalized winding number > 1/2: robust to holes, flips and self-intersections.
@@ -47,8 +50,12 @@ pub struct MeshSdf {
     bvh: Bvh,
     winding: WindingTree,
     pseudonormals: Option<Pseudonormals>,
-    /// The mode in force (never `Auto`: that is resolved on construction).
-    mode: SignMode,
+    /// The mode in force (never `Auto`: that is resolved on construction). Atomic because a
+    /// pseudonormal sign chosen by `Auto` gives way to the winding number once a sampled grid
+    /// proves the mesh does not bound a solid (see `consistency.rs`).
+    mode: AtomicU8,
+    /// Whether `Auto` chose the pseudonormal, so it may fall back.
+    auto_chose_pseudonormal: bool,
     /// Edges where the triangles' orientations do not cancel (open boundaries, edges used twice
     /// the same way, ...): the winding number varies fast near them.
     rims: Vec<[glam::Vec3A; 2]>,
@@ -95,6 +102,7 @@ impl MeshSdf {
         }
         let bvh = Bvh::build(mesh);
         let winding = WindingTree::new(&bvh);
+        let requested = mode;
         let mode = match mode {
             SignMode::Auto => {
                 let s = mesh.stats();
@@ -117,7 +125,8 @@ impl MeshSdf {
             bvh,
             winding,
             pseudonormals,
-            mode,
+            mode: AtomicU8::new(mode as u8),
+            auto_chose_pseudonormal: requested == SignMode::Auto && mode == SignMode::Pseudonormal,
             rims,
         })
     }
@@ -149,7 +158,21 @@ impl MeshSdf {
 
     /// The sign mode in force (`Auto` resolved).
     pub fn sign_mode(&self) -> SignMode {
-        self.mode
+        match self.mode.load(Ordering::Relaxed) {
+            m if m == SignMode::Pseudonormal as u8 => SignMode::Pseudonormal,
+            m if m == SignMode::Parity as u8 => SignMode::Parity,
+            _ => SignMode::Winding,
+        }
+    }
+
+    /// Switches a pseudonormal sign chosen by `Auto` to the winding number; returns whether it
+    /// did. The mesh is closed, so it has no rims and nothing else changes.
+    pub(crate) fn fall_back_to_winding(&self) -> bool {
+        if self.auto_chose_pseudonormal && self.sign_mode() == SignMode::Pseudonormal {
+            self.mode.store(SignMode::Winding as u8, Ordering::Relaxed);
+            return true;
+        }
+        false
     }
 
     pub fn bvh(&self) -> &Bvh {
@@ -168,7 +191,11 @@ impl MeshSdf {
 
     /// Whether `p` is inside, given its closest point on the mesh.
     pub fn is_inside_near(&self, p: Vec3, closest: &Closest) -> bool {
-        match &self.pseudonormals {
+        match self
+            .pseudonormals
+            .as_ref()
+            .filter(|_| self.sign_mode() == SignMode::Pseudonormal)
+        {
             Some(pn) => {
                 let n = pn.normal(closest.slot, closest.feature);
                 (glam::Vec3A::from(p) - glam::Vec3A::from(closest.point)).dot(n) < 0.0
@@ -179,7 +206,7 @@ impl MeshSdf {
 
     /// Whether `p` is inside.
     pub fn is_inside(&self, p: Vec3) -> bool {
-        match self.mode {
+        match self.sign_mode() {
             SignMode::Pseudonormal => match self.bvh.closest(p, f32::INFINITY) {
                 Some(c) => self.is_inside_near(p, &c),
                 None => false,
