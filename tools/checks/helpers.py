@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +18,9 @@ from typing import Sequence
 import numpy as np
 import pytest
 import trimesh
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import meshcap  # noqa: E402
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 # PGVOL_BIN may point the checks at another build of the binary.
@@ -227,46 +231,8 @@ def rel_diff(value: float, reference: float) -> float:
     return abs(value - reference) / abs(reference)
 
 
-def boundary_loops(faces: np.ndarray) -> list[list[int]]:
-    """Closed loops of boundary edges, each following its faces' orientation.
-
-    A boundary edge is a directed face edge whose reverse no face has. Where several loops meet
-    at one vertex the walk takes any unused outgoing edge, which still yields closed loops.
-    """
-    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    present = {(int(a), int(b)) for a, b in directed}
-    outgoing: dict[int, list[int]] = {}
-    for a, b in present:
-        if (b, a) not in present:
-            outgoing.setdefault(a, []).append(b)
-    loops = []
-    while outgoing:
-        start = next(iter(outgoing))
-        loop, v = [], start
-        while v in outgoing:
-            loop.append(v)
-            nxt = outgoing[v].pop()
-            if not outgoing[v]:
-                del outgoing[v]
-            v = nxt
-        loops.append(loop)
-    return loops
-
 
 def cap_holes(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
-    """The mesh with each hole closed by a fan around its boundary's centroid.
-
-    A reference for open scans such as the bunny, whose holes are small and nearly flat, so the
-    caps are a plausible closed surface to compare slices and volumes with.
-    """
-    vertices = np.asarray(mesh.vertices, dtype=np.float64)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
-    new_vertices, new_faces = [vertices], [faces]
-    next_index = len(vertices)
-    for loop in boundary_loops(faces):
-        ring = np.asarray(loop)
-        new_vertices.append(vertices[ring].mean(axis=0, keepdims=True))
-        # The cap runs against the boundary edges' direction so shared edges pair up.
-        new_faces.append(np.stack([np.roll(ring, -1), ring, np.full(len(ring), next_index)], axis=1))
-        next_index += 1
-    return trimesh.Trimesh(np.concatenate(new_vertices), np.concatenate(new_faces), process=False)
+    """The mesh with each hole closed by a flat cap (see tools/meshcap.py)."""
+    vertices, faces = meshcap.cap_holes(mesh.vertices, mesh.faces)
+    return trimesh.Trimesh(vertices, faces, process=False)
