@@ -210,3 +210,21 @@ def test_binary_flag_needs_a_cli_output(pgvol, mesh_path, work_dir):
     result = helpers.run([pgvol, "slice", mesh_path("spot"), "-o", out, "--layer-height", 0.1, "--binary"])
     assert result.returncode != 0 and "--binary" in result.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize("spacings", [-5, -9])
+def test_offsets_from_a_wide_band_file_match_offsets_from_the_mesh(spacings, pgvol, mesh_path, work_dir):
+    """A file encoded with --band 12 holds the distance 12 spacings deep: offsetting it agrees
+    with offsetting the mesh itself, well inside that band."""
+    folder = work_dir / "ops"
+    folder.mkdir(parents=True, exist_ok=True)
+    wide = folder / "spot-band12.pgv"
+    if not wide.exists():
+        helpers.run_ok([pgvol, "encode", mesh_path("spot"), "-o", wide, "--res", 96, "--band", 12, "-q"])
+    spacing = helpers.run_json([pgvol, "info", wide, "--json"])["header"]["grid"]["spacing"]
+    distance = spacings * spacing
+    from_file, from_mesh = folder / f"spot-file{spacings}.ply", folder / f"spot-mesh{spacings}.ply"
+    helpers.run_ok([pgvol, "offset", wide, "-o", from_file, "--distance", distance, "-q"])
+    helpers.run_ok([pgvol, "offset", mesh_path("spot"), "-o", from_mesh, "--distance", distance, "--res", 96, "-q"])
+    report = helpers.run_json([pgvol, "compare", from_file, from_mesh, "--samples", 50000, "--json"])
+    assert report["hausdorff_pct"] < 0.1, report["hausdorff_pct"]

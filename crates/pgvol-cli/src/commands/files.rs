@@ -121,12 +121,15 @@ fn check_pgv_extension(path: &std::path::Path) -> Result<()> {
     }
 }
 
-/// Writes `file` dense when `dense`, else sparse with `precision` (None: automatic).
+/// Writes `file` dense when `dense`, else sparse with `precision` (None: automatic), storing the
+/// bricks the field needs within `exact_band` grid spacings of the surface (None: the format's
+/// default).
 fn write_file(
     path: &std::path::Path,
     file: &pgvol_format::PgvFile,
     dense: bool,
     precision: Option<PrecisionArg>,
+    exact_band: Option<f32>,
 ) -> Result<Option<pgvol_format::EncodeReport>> {
     if dense {
         pgvol_format::write_pgv(path, file)?;
@@ -141,6 +144,16 @@ fn write_file(
         },
         ..Default::default()
     };
+    // Bricks are kept around nodes within W − 1 spacings, dilated by the basis support: that
+    // covers every cell of a level set the band supports (`pgvol offset` keeps |d| + 2 spacings
+    // within W) without storing the clamped nodes at exactly W, which would keep every brick.
+    let options = match exact_band {
+        Some(w) => pgvol_format::EncodeOptions {
+            band: w - 1.0,
+            ..options
+        },
+        None => options,
+    };
     Ok(Some(pgvol_format::write_pgv_with(path, file, &options)?))
 }
 
@@ -149,7 +162,7 @@ fn write_file(
 fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
     let file = pgvol_format::nrrd::read_coefficients_nrrd(from)?;
     let dense = a.dense_file || a.precision.is_none();
-    let stored = write_file(&a.output, &file, dense, a.precision)?;
+    let stored = write_file(&a.output, &file, dense, a.precision, None)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     let grid = file.volume.grid;
     if a.out.json {
@@ -239,7 +252,8 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             .insert(BAND_KEY.into(), format!("{}", a.band * grid.spacing));
     }
     let file = pgvol_format::PgvFile { header, volume };
-    let stored = write_file(&a.output, &file, a.dense_file, a.precision)?;
+    let exact_band = matches!(a.fit, FitArg::Interp).then_some(a.band);
+    let stored = write_file(&a.output, &file, a.dense_file, a.precision, exact_band)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     if a.out.json {
         let storage = stored.as_ref().map(|r| {
