@@ -243,6 +243,15 @@ fn main() {
     }
 }
 
+/// Four decimals, or two significant digits below 0.001 (B-splines at N = 64 reach 1e-6 k).
+fn small(v: f32) -> String {
+    if v != 0.0 && v.abs() < 1e-3 {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
 fn markdown(rows: &[Row]) -> String {
     let mut out = String::new();
     let mut last = ("", 0);
@@ -257,12 +266,12 @@ fn markdown(rows: &[Row]) -> String {
         }
         let _ = writeln!(
             out,
-            "| {} | {} | {:.4} / {:.4} | {:.4} | {:.3} | {:.2} / {:.2} | {} | {}{} | {:.2} |",
+            "| {} | {} | {} / {} | {} | {:.3} | {:.2} / {:.2} | {} | {}{} | {:.2} |",
             r.basis,
             r.method,
-            r.surf_rms,
-            r.surf_max,
-            r.band_rms,
+            small(r.surf_rms),
+            small(r.surf_max),
+            small(r.band_rms),
             r.box_max,
             r.angle_mean,
             r.angle_p95,
