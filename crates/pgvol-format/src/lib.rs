@@ -1,10 +1,14 @@
 //! File formats for fields: pgvol's own `.pgv` coefficient files, NRRD and NPY grids for
 //! exchange with other tools, and 3MF level-set packages.
 
+mod brick_codec;
+mod dense_alloc;
 pub mod grid_files;
 pub mod nrrd;
 pub mod pgv;
+pub mod read_profile;
 pub mod sparse;
+mod sparse_read;
 pub mod threemf;
 
 pub use pgv::{

@@ -10,6 +10,8 @@
 //! icrc           u32               CRC-32 of the bitmaps and the index
 //! data           the brick blobs, back to back in brick order
 //! ```
+//! This module encodes and checks the layout; `sparse_read` decodes whole payloads (in
+//! parallel) and `brick_codec` the values of one brick.
 
 use std::path::Path;
 
@@ -17,6 +19,7 @@ use pgvol_field::{Basis, CoefficientVolume, Grid};
 use serde::{Deserialize, Serialize};
 
 use crate::pgv::{container, err, parse_container, FormatError, PgvFile, PgvHeader};
+use crate::sparse_read::{background, BrickReader};
 
 /// The header's `encoding` for this payload.
 pub const ENCODING_SPARSE: &str = "sparse-bricks";
@@ -25,7 +28,7 @@ pub const BRICK_RANGE: std::ops::RangeInclusive<usize> = 2..=32;
 /// Bytes of one index entry: offset u64, length u32, CRC-32 u32.
 const ENTRY: usize = 16;
 /// Bytes of the q16 parameters (offset f32, scale f32) in front of a brick's values.
-const Q16_PARAMS: usize = 8;
+pub(crate) const Q16_PARAMS: usize = 8;
 /// Auto precision keeps the surface error proxy under this fraction of the grid spacing.
 pub const AUTO_TOLERANCE: f32 = 0.01;
 
@@ -185,10 +188,10 @@ pub struct Brick {
 
 /// Geometry of the brick decomposition.
 #[derive(Clone, Copy, Debug)]
-struct Bricks {
-    dims: [usize; 3],
-    edge: usize,
-    count: [usize; 3],
+pub(crate) struct Bricks {
+    pub(crate) dims: [usize; 3],
+    pub(crate) edge: usize,
+    pub(crate) count: [usize; 3],
 }
 
 impl Bricks {
@@ -200,11 +203,11 @@ impl Bricks {
         }
     }
 
-    fn total(&self) -> usize {
+    pub(crate) fn total(&self) -> usize {
         self.count.iter().product()
     }
 
-    fn coords(&self, b: usize) -> [usize; 3] {
+    pub(crate) fn coords(&self, b: usize) -> [usize; 3] {
         [
             b % self.count[0],
             (b / self.count[0]) % self.count[1],
@@ -213,7 +216,7 @@ impl Bricks {
     }
 
     /// First node and node counts of brick `b`.
-    fn extent(&self, b: usize) -> ([usize; 3], [usize; 3]) {
+    pub(crate) fn extent(&self, b: usize) -> ([usize; 3], [usize; 3]) {
         let c = self.coords(b);
         let lo = [0, 1, 2].map(|a| c[a] * self.edge);
         let n = [0, 1, 2].map(|a| (lo[a] + self.edge).min(self.dims[a]) - lo[a]);
@@ -315,7 +318,7 @@ fn order16(b: u16) -> u16 {
     }
 }
 
-fn unorder16(m: u16) -> u16 {
+pub(crate) fn unorder16(m: u16) -> u16 {
     if m & 0x8000 != 0 {
         m & 0x7fff
     } else {
@@ -331,7 +334,7 @@ fn order32(b: u32) -> u32 {
     }
 }
 
-fn unorder32(m: u32) -> u32 {
+pub(crate) fn unorder32(m: u32) -> u32 {
     if m & 0x8000_0000 != 0 {
         m & 0x7fff_ffff
     } else {
@@ -353,7 +356,7 @@ fn q16_decode(q: u16, lo: f32, scale: f32) -> f32 {
 
 /// Quantises `values` to words (and the bytes that precede them). `None` if the precision
 /// cannot represent them (f16 overflow, q16 range overflow).
-fn quantise(values: &[f32], p: Precision) -> Option<(Vec<u8>, Vec<u32>)> {
+pub(crate) fn quantise(values: &[f32], p: Precision) -> Option<(Vec<u8>, Vec<u32>)> {
     match p {
         Precision::F32 => Some((
             Vec::new(),
@@ -389,7 +392,7 @@ fn quantise(values: &[f32], p: Precision) -> Option<(Vec<u8>, Vec<u32>)> {
 }
 
 /// The values that `words` decode to.
-fn dequantise(params: &[u8], words: &[u32], p: Precision) -> Vec<f32> {
+pub(crate) fn dequantise(params: &[u8], words: &[u32], p: Precision) -> Vec<f32> {
     match p {
         Precision::F32 => words
             .iter()
@@ -411,7 +414,7 @@ fn dequantise(params: &[u8], words: &[u32], p: Precision) -> Vec<f32> {
 }
 
 /// The prediction of word `at` (x fastest in a brick of `n` nodes) from words before it.
-fn predict(words: &[u32], n: [usize; 3], at: usize, pred: Predictor, mask: u32) -> u32 {
+pub(crate) fn predict(words: &[u32], n: [usize; 3], at: usize, pred: Predictor, mask: u32) -> u32 {
     let (i, j, k) = (at % n[0], (at / n[0]) % n[1], at / (n[0] * n[1]));
     let (sx, sy, sz) = (1, n[0], n[0] * n[1]);
     let get = |di: usize, dj: usize, dk: usize| -> u32 {
@@ -453,18 +456,9 @@ fn zigzag(r: u32, bits: u32) -> u32 {
     (if s >= 0 { 2 * s } else { -2 * s - 1 }) as u32
 }
 
-fn unzigzag(z: u32, bits: u32) -> u32 {
-    let s = if z & 1 == 0 {
-        (z >> 1) as i64
-    } else {
-        -((z >> 1) as i64) - 1
-    };
-    (s.rem_euclid(1i64 << bits)) as u32
-}
-
 /// Encodes one brick's values to its blob (before compression: q16 parameters, then residual
 /// bytes, byte planes if shuffled).
-fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &SparseParams) -> Vec<u8> {
+pub(crate) fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &SparseParams) -> Vec<u8> {
     let w = sp.precision.width();
     let bits = 8 * w as u32;
     let mask = if w == 4 { u32::MAX } else { 0xffff };
@@ -485,44 +479,6 @@ fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &SparseParams) -> 
         }
     }
     raw
-}
-
-/// Inverse of [`brick_raw`]; `raw` has exactly the expected length.
-fn brick_values(raw: &[u8], n: [usize; 3], sp: &SparseParams) -> Vec<f32> {
-    let w = sp.precision.width();
-    let bits = 8 * w as u32;
-    let mask = if w == 4 { u32::MAX } else { 0xffff };
-    let count = n[0] * n[1] * n[2];
-    let pl = if sp.precision == Precision::Q16 {
-        Q16_PARAMS
-    } else {
-        0
-    };
-    let (params, body) = raw.split_at(pl);
-    let mut words = vec![0u32; count];
-    for at in 0..count {
-        let mut z = 0u32;
-        for b in 0..w {
-            let byte = if sp.shuffle {
-                body[b * count + at]
-            } else {
-                body[at * w + b]
-            };
-            z |= (byte as u32) << (8 * b);
-        }
-        let r = unzigzag(z, bits);
-        words[at] = r.wrapping_add(predict(&words, n, at, sp.predictor, mask)) & mask;
-    }
-    dequantise(params, &words, sp.precision)
-}
-
-fn raw_len(n: [usize; 3], sp: &SparseParams) -> usize {
-    let pl = if sp.precision == Precision::Q16 {
-        Q16_PARAMS
-    } else {
-        0
-    };
-    pl + n[0] * n[1] * n[2] * sp.precision.width()
 }
 
 /// The blobs of the stored bricks and their largest coefficient error.
@@ -706,23 +662,23 @@ pub fn write_pgv_with(
 }
 
 /// A checked sparse payload: its parameters, bitmaps and index, and where the data starts.
-struct Layout<'a> {
-    sp: SparseParams,
-    bricks: Bricks,
-    stored: &'a [u8],
-    inside: &'a [u8],
+pub(crate) struct Layout<'a> {
+    pub(crate) sp: SparseParams,
+    pub(crate) bricks: Bricks,
+    pub(crate) stored: &'a [u8],
+    pub(crate) inside: &'a [u8],
     /// (offset, length, crc) per stored brick, in brick order.
-    entries: Vec<(u64, u32, u32)>,
-    data: &'a [u8],
-    index_bytes: usize,
+    pub(crate) entries: Vec<(u64, u32, u32)>,
+    pub(crate) data: &'a [u8],
+    pub(crate) index_bytes: usize,
 }
 
-fn bit(map: &[u8], b: usize) -> bool {
+pub(crate) fn bit(map: &[u8], b: usize) -> bool {
     map[b / 8] >> (b % 8) & 1 == 1
 }
 
 /// Checks the sparse parameters against the grid and the payload, and reads the index.
-fn layout<'a>(
+pub(crate) fn layout<'a>(
     header: &PgvHeader,
     payload: &'a [u8],
     path: &Path,
@@ -838,56 +794,6 @@ fn layout<'a>(
     })
 }
 
-/// Verifies and decodes stored brick `b`, entry `e`.
-fn decode_brick(l: &Layout, b: usize, e: usize, path: &Path) -> Result<Vec<f32>, FormatError> {
-    let (offset, len, crc) = l.entries[e];
-    let blob = &l.data[offset as usize..offset as usize + len as usize];
-    let coords = l.bricks.coords(b);
-    if crc32fast::hash(blob) != crc {
-        return Err(err(
-            path,
-            format!("brick {coords:?} checksum mismatch: the file is corrupt"),
-        ));
-    }
-    let (_, n) = l.bricks.extent(b);
-    let want = raw_len(n, &l.sp);
-    let raw = match l.sp.compression {
-        Compression::None => blob.to_vec(),
-        // The capacity is the brick's known size, never a number read from the file.
-        Compression::Zstd => zstd::bulk::decompress(blob, want).map_err(|e| {
-            err(
-                path,
-                format!("brick {coords:?} does not decompress to {want} bytes: {e}"),
-            )
-        })?,
-    };
-    if raw.len() != want {
-        return Err(err(
-            path,
-            format!(
-                "brick {coords:?} holds {} bytes, a brick of {n:?} nodes needs {want}",
-                raw.len()
-            ),
-        ));
-    }
-    let values = brick_values(&raw, n, &l.sp);
-    if values.iter().any(|v| !v.is_finite()) {
-        return Err(err(
-            path,
-            format!("brick {coords:?} decodes to a non-finite coefficient"),
-        ));
-    }
-    Ok(values)
-}
-
-fn background(l: &Layout, b: usize) -> f32 {
-    if bit(l.inside, b) {
-        -l.sp.clamp
-    } else {
-        l.sp.clamp
-    }
-}
-
 /// Every coefficient of a sparse payload, x fastest.
 pub(crate) fn decode_payload(
     header: &PgvHeader,
@@ -895,24 +801,7 @@ pub(crate) fn decode_payload(
     path: &Path,
 ) -> Result<Vec<f32>, FormatError> {
     let l = layout(header, payload, path)?;
-    // Node count is bounded by the container check (MAX_GRID_NODES).
-    let mut coeffs = vec![0.0f32; header.grid.len()];
-    let mut e = 0;
-    for b in 0..l.bricks.total() {
-        if bit(l.stored, b) {
-            let values = decode_brick(&l, b, e, path)?;
-            e += 1;
-            for (i, v) in l.bricks.nodes(b).zip(values) {
-                coeffs[i] = v;
-            }
-        } else {
-            let v = background(&l, b);
-            for i in l.bricks.nodes(b) {
-                coeffs[i] = v;
-            }
-        }
-    }
-    Ok(coeffs)
+    crate::sparse_read::decode_all(&l, path)
 }
 
 /// Decodes one brick of a `sparse-bricks` file, reading the header, the index and that brick
@@ -948,7 +837,9 @@ pub fn read_brick(bytes: &[u8], path: &Path, coords: [usize; 3]) -> Result<Brick
             .map(|x| x.count_ones() as usize)
             .sum();
         let e = full + (l.stored[b / 8] & ((1u8 << (b % 8)) - 1)).count_ones() as usize;
-        decode_brick(&l, b, e, path)?
+        let mut coeffs = vec![0.0; dims.iter().product()];
+        BrickReader::default().decode(&l, b, e, path, &mut coeffs)?;
+        coeffs
     } else {
         vec![background(&l, b); dims.iter().product()]
     };

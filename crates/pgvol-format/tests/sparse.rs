@@ -5,6 +5,7 @@ use std::path::Path;
 use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_format::pgv::MAGIC;
+use pgvol_format::read_profile::profile_sparse_read;
 use pgvol_format::{
     decode_pgv, encode_pgv, encode_pgv_with, header_for, pgv_info, read_brick, read_pgv,
     write_pgv_with, Compression, EncodeOptions, PgvFile, Precision, Predictor,
@@ -473,6 +474,7 @@ proptest! {
         }
         bytes.truncate(cut % (n + 1));
         let _ = decode_pgv(&bytes, p());
+        let _ = profile_sparse_read(&bytes, p());
         let _ = pgv_info(&bytes, p());
         let _ = read_brick(&bytes, p(), [cut % 3, 1, 2]);
     }

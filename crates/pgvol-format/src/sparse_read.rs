@@ -1,0 +1,302 @@
+//! Reading a whole `sparse-bricks` payload into the dense coefficient array.
+//!
+//! Every stored brick is its own blob (one zstd frame) with its own CRC, so bricks decode
+//! independently. The dense array is cut into brick layers (`nx · ny · E` consecutive
+//! coefficients) and each layer into brick rows (the bricks `(·, bj, bk)`: `E` or fewer grid rows
+//! in each of the layer's z-slices), disjoint slices filled in parallel; each value is written
+//! exactly once, by the same code whatever the thread count, so the result does not depend on
+//! it. A brick row's stored bricks are decoded first, then its grid rows are written in order.
+//! Rows are cut one layer at a time, so their bookkeeping stays small next to the array even for
+//! thin grids in small bricks.
+
+use std::cell::RefCell;
+use std::path::Path;
+
+use rayon::prelude::*;
+use zstd::bulk::Decompressor;
+
+use crate::brick_codec::{decode_values, raw_len, WordScratch};
+use crate::pgv::{err, FormatError};
+use crate::sparse::{bit, Compression, Layout};
+
+thread_local! {
+    /// One zstd context per thread, created on first use and kept from brick to brick and file
+    /// to file: creating one costs more than decompressing a brick.
+    static DCTX: RefCell<Option<Decompressor<'static>>> = const { RefCell::new(None) };
+}
+
+/// Buffers for decoding bricks, reused from brick to brick.
+#[derive(Default)]
+pub(crate) struct BrickReader {
+    raw: Vec<u8>,
+    scratch: WordScratch,
+}
+
+impl BrickReader {
+    /// Verifies and decodes stored brick `b` (index entry `e`) into `out`, one value per node.
+    pub(crate) fn decode(
+        &mut self,
+        l: &Layout,
+        b: usize,
+        e: usize,
+        path: &Path,
+        out: &mut [f32],
+    ) -> Result<(), FormatError> {
+        let blob = checked_blob(l, b, e, path)?;
+        let BrickReader { raw, scratch } = self;
+        // Nothing in here runs other rayon tasks, so the borrow cannot be taken twice.
+        DCTX.with_borrow_mut(|dctx| {
+            let raw = inflate(l, b, blob, dctx, raw, path)?;
+            let (_, n) = l.bricks.extent(b);
+            decode_values(raw, n, &l.sp, scratch, out).map_err(|_| non_finite(l, b, path))
+        })
+    }
+}
+
+/// The error for a brick holding an infinite or NaN coefficient.
+pub(crate) fn non_finite(l: &Layout, b: usize, path: &Path) -> FormatError {
+    err(
+        path,
+        format!(
+            "brick {:?} decodes to a non-finite coefficient",
+            l.bricks.coords(b)
+        ),
+    )
+}
+
+/// The blob of stored brick `b` (index entry `e`), after checking its CRC.
+pub(crate) fn checked_blob<'a>(
+    l: &Layout<'a>,
+    b: usize,
+    e: usize,
+    path: &Path,
+) -> Result<&'a [u8], FormatError> {
+    let (offset, len, crc) = l.entries[e];
+    // The layout check put every entry inside the data.
+    let blob = &l.data[offset as usize..offset as usize + len as usize];
+    if crc32fast::hash(blob) != crc {
+        return Err(err(
+            path,
+            format!(
+                "brick {:?} checksum mismatch: the file is corrupt",
+                l.bricks.coords(b)
+            ),
+        ));
+    }
+    Ok(blob)
+}
+
+/// The brick's bytes before compression: the blob itself, or its zstd frame decompressed into
+/// `buf` sized from the brick's node count (never from a number read in the file).
+pub(crate) fn inflate<'a>(
+    l: &Layout,
+    b: usize,
+    blob: &'a [u8],
+    dctx: &mut Option<Decompressor<'static>>,
+    buf: &'a mut Vec<u8>,
+    path: &Path,
+) -> Result<&'a [u8], FormatError> {
+    let coords = l.bricks.coords(b);
+    let (_, n) = l.bricks.extent(b);
+    let want = raw_len(n, &l.sp);
+    let raw = match l.sp.compression {
+        Compression::None => blob,
+        Compression::Zstd => {
+            if dctx.is_none() {
+                *dctx = Some(
+                    Decompressor::new()
+                        .map_err(|e| err(path, format!("cannot start zstd decompression: {e}")))?,
+                );
+            }
+            let dctx = dctx.as_mut().expect("created above");
+            buf.resize(want, 0);
+            // Fails if the output would be larger than the brick.
+            let got = dctx.decompress_to_buffer(blob, &mut buf[..]).map_err(|e| {
+                err(
+                    path,
+                    format!("brick {coords:?} does not decompress to {want} bytes: {e}"),
+                )
+            })?;
+            &buf[..got]
+        }
+    };
+    if raw.len() != want {
+        return Err(err(
+            path,
+            format!(
+                "brick {coords:?} holds {} bytes, a brick of {n:?} nodes needs {want}",
+                raw.len()
+            ),
+        ));
+    }
+    Ok(raw)
+}
+
+/// The value of every node of background brick `b`.
+pub(crate) fn background(l: &Layout, b: usize) -> f32 {
+    if bit(l.inside, b) {
+        -l.sp.clamp
+    } else {
+        l.sp.clamp
+    }
+}
+
+/// The part of the dense array that brick row `(bj, bk)` covers: in each z-slice of the brick
+/// layer, the `nj` grid rows of the brick row (`nj · nx` consecutive coefficients).
+pub(crate) struct BrickRow<'a> {
+    bj: usize,
+    bk: usize,
+    /// Index entry of the row's first stored brick.
+    first_entry: usize,
+    /// One piece per z-slice.
+    pieces: Vec<&'a mut [f32]>,
+}
+
+/// Index entries before each brick layer: the entry of the layer's first stored brick.
+pub(crate) fn layer_first_entries(l: &Layout) -> Vec<usize> {
+    let [bx, by, bz] = l.bricks.count;
+    let per_layer = bx * by;
+    let mut firsts = Vec::with_capacity(bz);
+    let mut seen = 0;
+    for bk in 0..bz {
+        firsts.push(seen);
+        seen += (bk * per_layer..(bk + 1) * per_layer)
+            .filter(|&b| bit(l.stored, b))
+            .count();
+    }
+    firsts
+}
+
+/// Cuts `slab`, the coefficients of brick layer `bk` (x fastest), into its brick rows, disjoint,
+/// in brick order; `first_entry` is the index entry of the layer's first stored brick.
+pub(crate) fn layer_rows<'a>(
+    l: &Layout,
+    bk: usize,
+    first_entry: usize,
+    slab: &'a mut [f32],
+) -> Vec<BrickRow<'a>> {
+    let [nx, ny, _] = l.bricks.dims;
+    let [bx, by, _] = l.bricks.count;
+    let edge = l.bricks.edge;
+    let mut rows = Vec::with_capacity(by);
+    let mut seen = first_entry;
+    for bj in 0..by {
+        rows.push(BrickRow {
+            bj,
+            bk,
+            first_entry: seen,
+            pieces: Vec::with_capacity(edge),
+        });
+        let first = bx * (bj + by * bk);
+        seen += (first..first + bx).filter(|&b| bit(l.stored, b)).count();
+    }
+    for slice in slab.chunks_mut(nx * ny) {
+        for (row, piece) in rows.iter_mut().zip(slice.chunks_mut(nx * edge)) {
+            row.pieces.push(piece);
+        }
+    }
+    rows
+}
+
+/// A stretch of the grid rows of a brick row: background bricks of one value side by side, or
+/// one stored brick.
+#[derive(Clone, Copy)]
+enum Run {
+    Background { x: usize, len: usize, value: f32 },
+    Stored { bi: usize },
+}
+
+/// Buffers for one brick row, reused: its decoded stored bricks and its runs.
+#[derive(Default)]
+pub(crate) struct RowScratch {
+    bricks: Vec<f32>,
+    runs: Vec<Run>,
+}
+
+/// Fills a brick row with background values and the stored bricks' values as
+/// `decode(b, e, out)` gives them (`e` the index entry).
+pub(crate) fn fill_brick_row(
+    l: &Layout,
+    r: &mut BrickRow,
+    scratch: &mut RowScratch,
+    mut decode: impl FnMut(usize, usize, &mut [f32]) -> Result<(), FormatError>,
+) -> Result<(), FormatError> {
+    let [nx, ny, _] = l.bricks.dims;
+    let [bx, by, _] = l.bricks.count;
+    let edge = l.bricks.edge;
+    let cube = edge * edge * edge;
+    let first = bx * (r.bj + by * r.bk);
+    let nj = edge.min(ny - r.bj * edge);
+    let RowScratch { bricks, runs } = scratch;
+    bricks.resize(bx * cube, 0.0);
+    runs.clear();
+    let mut e = r.first_entry;
+    for bi in 0..bx {
+        let b = first + bi;
+        if bit(l.stored, b) {
+            let (_, n) = l.bricks.extent(b);
+            let count = n[0] * n[1] * n[2];
+            decode(b, e, &mut bricks[bi * cube..bi * cube + count])?;
+            e += 1;
+            runs.push(Run::Stored { bi });
+            continue;
+        }
+        let (value, len) = (background(l, b), edge.min(nx - bi * edge));
+        match runs.last_mut() {
+            Some(Run::Background {
+                len: run, value: v, ..
+            }) if v.to_bits() == value.to_bits() => *run += len,
+            _ => runs.push(Run::Background {
+                x: bi * edge,
+                len,
+                value,
+            }),
+        }
+    }
+    // Whole grid rows, so the dense array is written in order.
+    for (kk, piece) in r.pieces.iter_mut().enumerate() {
+        for (jj, line) in piece.chunks_exact_mut(nx).enumerate() {
+            for run in runs.iter() {
+                match *run {
+                    Run::Background { x, len, value } => line[x..x + len].fill(value),
+                    Run::Stored { bi } => {
+                        let ni = edge.min(nx - bi * edge);
+                        let src = bi * cube + (kk * nj + jj) * ni;
+                        line[bi * edge..bi * edge + ni].copy_from_slice(&bricks[src..src + ni]);
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every coefficient of a checked sparse payload, x fastest, brick rows decoded in parallel.
+/// On a damaged file the error is that of the first bad brick in brick order, as a sequential
+/// reader would report.
+pub(crate) fn decode_all(l: &Layout, path: &Path) -> Result<Vec<f32>, FormatError> {
+    let [nx, ny, nz] = l.bricks.dims;
+    // Node count is bounded by the container check (MAX_GRID_NODES).
+    let mut coeffs = crate::dense_alloc::zeroed(nx * ny * nz);
+    let firsts = layer_first_entries(l);
+    let layers: Vec<Result<(), FormatError>> = coeffs
+        .par_chunks_mut(nx * ny * l.bricks.edge)
+        .enumerate()
+        .map(|(bk, slab)| {
+            let rows: Vec<Result<(), FormatError>> = layer_rows(l, bk, firsts[bk], slab)
+                .into_par_iter()
+                .map_init(
+                    || (BrickReader::default(), RowScratch::default()),
+                    |(reader, scratch), mut r| {
+                        fill_brick_row(l, &mut r, scratch, |b, e, out| {
+                            reader.decode(l, b, e, path, out)
+                        })
+                    },
+                )
+                .collect();
+            rows.into_iter().collect()
+        })
+        .collect();
+    layers.into_iter().collect::<Result<(), _>>()?;
+    Ok(coeffs)
+}
