@@ -21,6 +21,18 @@ pub fn write_atomic(
     if path.is_dir() {
         return Err(MeshError::new(path, "is a directory, not a file"));
     }
+    match fs::metadata(path) {
+        // A device or a pipe (`-o /dev/null`, `-o /dev/stdout`) is written in place: renaming a
+        // file over it would replace the device node itself.
+        Ok(meta) if !meta.is_file() => return write_in_place(path, f),
+        // Through a symbolic link, replace the file it points to and keep the link.
+        Ok(_) if fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) => {
+            let target = fs::canonicalize(path)
+                .map_err(|e| MeshError::new(path, format!("cannot resolve the link: {e}")))?;
+            return write_atomic(&target, f);
+        }
+        _ => {}
+    }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -61,6 +73,20 @@ pub fn write_atomic(
             Err(e)
         }
     }
+}
+
+fn write_in_place(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), MeshError> {
+    let file = OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(|e| MeshError::new(path, format!("cannot open for writing: {e}")))?;
+    let mut w = BufWriter::new(file);
+    f(&mut w)
+        .and_then(|()| w.flush())
+        .map_err(|e| MeshError::new(path, format!("write failed: {e}")))
 }
 
 fn fill_and_sync(file: File, f: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {

@@ -592,3 +592,46 @@ fn gltf_matrix_nodes_unindexed_and_u8_indices() {
     .unwrap();
     assert_eq!(m.triangles, vec![[0, 0, 1]]);
 }
+
+/// A pipe or device given as the output is written in place, never replaced by a file.
+#[cfg(unix)]
+#[test]
+fn writes_to_a_pipe_go_through_it() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(
+        made.is_ok_and(|s| s.success()),
+        "mkfifo is needed for this test"
+    );
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || fs::read(&fifo).unwrap())
+    };
+    write_atomic(&fifo, |w| w.write_all(b"through the pipe")).unwrap();
+    assert_eq!(reader.join().unwrap(), b"through the pipe");
+    assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+    assert_eq!(
+        fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "no temporary left"
+    );
+}
+
+/// Through a symbolic link the target file is replaced and the link kept.
+#[cfg(unix)]
+#[test]
+fn writes_through_a_link_replace_its_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("real.txt");
+    let link = dir.path().join("link.txt");
+    fs::write(&target, "old").unwrap();
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    write_atomic(&link, |w| w.write_all(b"new")).unwrap();
+    assert!(fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(fs::read_to_string(&target).unwrap(), "new");
+}
