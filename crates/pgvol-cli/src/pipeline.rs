@@ -4,7 +4,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitOptions, FitReport, Grid};
+use glam::Vec3;
+use pgvol_field::{Basis, ClosestFn, CoefficientVolume, FitMethod, FitOptions, FitReport, Grid};
 use pgvol_mesh::Mesh;
 use pgvol_sdf::sampling::{Extent, Sampled};
 use pgvol_sdf::{MeshSdf, SignMode};
@@ -88,8 +89,9 @@ pub fn signed_distance_grid(
 pub const ENCODE_BAND: f32 = 4.0;
 
 /// The coefficient volume of `mesh` on `grid`, the fit's report and the seconds spent on
-/// signed distances. `interp` interpolates band-limited node distances (fast); `iso` and `wls`
-/// query the mesh's distance at the points they choose. `band` is the `interp` band in spacings.
+/// signed distances. `interp` interpolates band-limited node distances (fast); `wls` adds the
+/// mesh's closest points to the same band samples; `iso` queries the mesh's distance at every
+/// node. `band` is the band of exact distances in spacings.
 pub fn encode_with(
     mesh: &Mesh,
     grid: Grid,
@@ -99,8 +101,10 @@ pub fn encode_with(
     quiet: bool,
 ) -> Result<(CoefficientVolume, FitReport, f64)> {
     let options = FitOptions::default();
-    if method == FitMethod::Interp {
-        return encode_banded(mesh, grid, basis, band, quiet);
+    match method {
+        FitMethod::Interp => return encode_banded(mesh, grid, basis, band, quiet),
+        FitMethod::Wls => return encode_banded_wls(mesh, grid, basis, band, &options, quiet),
+        FitMethod::Iso { .. } => {}
     }
     let t = Instant::now();
     let sdf = MeshSdf::new(mesh, SignMode::Auto).context("cannot build the distance field")?;
@@ -133,6 +137,33 @@ pub fn encode_banded(
     let (volume, report) =
         pgvol_field::fit::interp_samples(grid, basis, &sampled.values, &FitOptions::default())
             .context("cannot fit the coefficients")?;
+    Ok((volume, report, sdf_time))
+}
+
+/// The `wls` fit on distances exact within `band` grid spacings (at least the fit's own band,
+/// whose nodes give its surface samples), with the mesh's closest points for those samples.
+fn encode_banded_wls(
+    mesh: &Mesh,
+    grid: Grid,
+    basis: Basis,
+    band: f32,
+    options: &FitOptions,
+    quiet: bool,
+) -> Result<(CoefficientVolume, FitReport, f64)> {
+    let t = Instant::now();
+    let sdf = MeshSdf::new(mesh, SignMode::Auto).context("cannot build the distance field")?;
+    let pb = progress::bar(1000, "distance", quiet);
+    let extent = Extent::Band(band.max(options.band));
+    let sampled = sdf.sample(&grid, extent, &|done| {
+        pb.set_position((done * 1000.0) as u64)
+    });
+    pb.finish_and_clear();
+    let sdf_time = t.elapsed().as_secs_f64();
+    // Closest points need no sign, so they skip the winding number.
+    let surface =
+        ClosestFn(|p: Vec3, reach: f32| sdf.bvh().closest(p, reach * reach).map(|c| c.point));
+    let (volume, report) = pgvol_field::wls_band(grid, basis, &sampled.values, &surface, options)
+        .context("cannot fit the coefficients")?;
     Ok((volume, report, sdf_time))
 }
 

@@ -12,7 +12,9 @@ mod stencil;
 pub mod volume;
 
 pub use basis::Basis;
-pub use fit::{fit, FitMethod, FitOptions, FitReport, SignedDistance};
+pub use fit::{
+    fit, wls_band, ClosestFn, ClosestPoint, FitMethod, FitOptions, FitReport, SignedDistance,
+};
 pub use kernel::{Jet, Kernel};
 pub use pgvol_sdf::grid::{Grid, MAX_GRID_NODES};
 pub use volume::{CoefficientVolume, FieldError};

@@ -7,6 +7,9 @@ pub struct SolveOutcome {
     pub iterations: usize,
     /// `‖A x − b‖ / ‖b‖` at the end (the damping term excluded).
     pub residual: f64,
+    /// Least squares: the normal-equation residual `‖Aᵀ(b − A x) − λ² x‖` relative to its start
+    /// (what CGLS drives to zero when the system is inconsistent); 0 for CG.
+    pub normal_residual: f64,
     pub converged: bool,
 }
 
@@ -56,6 +59,7 @@ pub fn cg(
     SolveOutcome {
         iterations: it,
         residual,
+        normal_residual: 0.0,
         converged: residual <= tol,
     }
 }
@@ -64,12 +68,29 @@ pub fn cg(
 /// `tol ‖b‖` (consistent systems) or the normal-equation residual below `tol` times its start
 /// (least squares).
 pub fn cgls(
-    forward: impl Fn(&[f64]) -> Vec<f64>,
-    adjoint: impl Fn(&[f64]) -> Vec<f64>,
+    forward: impl FnMut(&[f64]) -> Vec<f64>,
+    adjoint: impl FnMut(&[f64]) -> Vec<f64>,
     b: &[f64],
     cols: usize,
     damping: f64,
     tol: f64,
+    max_iterations: usize,
+) -> (Vec<f64>, SolveOutcome) {
+    cgls_with_stall(forward, adjoint, b, cols, damping, tol, 0.0, max_iterations)
+}
+
+/// [`cgls`] that also stops once an iteration lowers the objective by at most `stall` times
+/// what all iterations so far have: for inconsistent least squares whose remaining
+/// normal-equation residual lies in directions that barely change the fit.
+#[allow(clippy::too_many_arguments)]
+pub fn cgls_with_stall(
+    mut forward: impl FnMut(&[f64]) -> Vec<f64>,
+    mut adjoint: impl FnMut(&[f64]) -> Vec<f64>,
+    b: &[f64],
+    cols: usize,
+    damping: f64,
+    tol: f64,
+    stall: f64,
     max_iterations: usize,
 ) -> (Vec<f64>, SolveOutcome) {
     let l2 = damping * damping;
@@ -81,14 +102,20 @@ pub fn cgls(
     let mut p = s.clone();
     let mut gamma = dot(&s, &s);
     let mut it = 0;
-    let done = |r: &[f64], gamma: f64| norm(r) <= tol * bn || gamma.sqrt() <= tol * s0;
-    while !done(&r, gamma) && it < max_iterations {
+    let (mut gain, mut total_gain) = (f64::INFINITY, 0.0f64);
+    let done = |r: &[f64], gamma: f64, gain: f64, total: f64| {
+        norm(r) <= tol * bn || gamma.sqrt() <= tol * s0 || gain <= stall * total
+    };
+    while !done(&r, gamma, gain, total_gain) && it < max_iterations {
         let q = forward(&p);
         let delta = dot(&q, &q) + l2 * dot(&p, &p);
         if delta <= 0.0 || !delta.is_finite() {
             break;
         }
         let alpha = gamma / delta;
+        // The objective falls by exactly α γ per step.
+        gain = alpha * gamma;
+        total_gain += gain;
         for (x, p) in x.iter_mut().zip(&p) {
             *x += alpha * p;
         }
@@ -109,13 +136,14 @@ pub fn cgls(
         }
         it += 1;
     }
-    let converged = done(&r, gamma);
+    let converged = done(&r, gamma, gain, total_gain);
     let residual = norm(&r) / bn;
     (
         x,
         SolveOutcome {
             iterations: it,
             residual,
+            normal_residual: gamma.sqrt() / s0,
             converged,
         },
     )
