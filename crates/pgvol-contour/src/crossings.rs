@@ -1,122 +1,220 @@
-//! Surface vertices: one per grid edge whose end values straddle iso.
+//! Surface vertices: one per grid edge whose end values straddle iso, found block by block.
 //!
-//! Edges are grouped by the z layer of their lower node (x and y edges in the layer, z edges
-//! rising from it) and within a layer by row, so a cell finds its vertices in a few short sorted
-//! lists without a dense per-edge index.
+//! Each active block lists the crossings of the edges it owns in node scan order, with a small
+//! table per owned node (which of its three edges are crossed and the block-local index of the
+//! first), so a cell finds any of its vertices in constant time, also across block borders.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::blocks::{
+    active_blocks, local_node, Blocks, BoxMasks, BLOCK, BLOCK_NODES, BLOCK_SHIFT, INACTIVE,
+};
 use crate::place::onto_edge;
 use crate::samples::Samples;
 
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).
 pub(crate) type Refine<'r> = dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + 'r;
 
-/// Crossed edges whose lower node lies in one z layer, in scan order.
-pub(crate) struct Layer {
-    /// Offset into `keys` of each row `j`, plus a final end marker.
-    row_start: Vec<u32>,
-    /// `3 * i + axis` of each crossed edge, ascending within a row.
-    keys: Vec<u32>,
+/// Bits of a node entry holding its crossed axes; the rest hold the index of its first crossing.
+const AXIS_BITS: u32 = 3;
+
+/// Number of axes in a 3-bit set (a table: the baseline x86-64 target has no popcount).
+const AXES_COUNT: [u8; 8] = [0, 1, 1, 2, 1, 2, 2, 3];
+
+/// Crossings of the edges owned by one active block.
+struct BlockVertices {
+    /// Lowest owned node.
+    origin: [usize; 3],
+    /// Inside masks of the box, kept for the cell pass.
+    masks: BoxMasks,
+    /// Per owned node (see [`local_node`]): crossed axes in the low bits, then the block-local
+    /// index of the node's first crossing. Indices grow with the node, which `locate` uses.
+    node_edges: [u16; BLOCK_NODES],
+    positions: Vec<Vec3>,
+}
+
+/// Every crossing of the grid, block by block.
+pub(crate) struct Crossings {
+    pub blocks: Blocks,
+    vertices: Vec<BlockVertices>,
+    /// Global index of each active block's first crossing.
+    base: Vec<u32>,
+    /// All positions in global order: active blocks ascending, node scan order within a block.
     pub positions: Vec<Vec3>,
 }
 
-impl Layer {
-    /// Keys of row `j` and the layer-local index of the row's first vertex.
+impl Crossings {
+    /// Global index of the vertex on the edge along `axis` from node `n`, which must be crossed.
     #[inline]
-    pub fn row(&self, j: usize) -> (&[u32], u32) {
-        let (s, e) = (self.row_start[j], self.row_start[j + 1]);
-        (&self.keys[s as usize..e as usize], s)
+    pub fn find(&self, n: [usize; 3], axis: usize) -> u32 {
+        let slot = self.blocks.slot[self.blocks.id_of(n)];
+        debug_assert_ne!(slot, INACTIVE, "a crossed edge lies in an active block");
+        self.find_in(slot as usize, n, axis)
     }
 
-    /// Row and key of the crossing with layer-local index `local`.
-    pub fn locate(&self, local: u32) -> (usize, u32) {
-        // Empty rows repeat a start offset; the last row starting at or before `local` holds it.
-        let j = self.row_start.partition_point(|&s| s <= local) - 1;
-        (j, self.keys[local as usize])
-    }
-
-    pub fn len(&self) -> usize {
-        self.keys.len()
-    }
-}
-
-/// Finds and places the crossings of the edges owned by layer `z`.
-pub(crate) fn layer_crossings(field: &Samples, z: usize, refine: &Refine) -> Layer {
-    let [nx, ny, nz] = field.dims;
-    let mut layer = Layer {
-        row_start: Vec::with_capacity(ny + 1),
-        keys: Vec::new(),
-        positions: Vec::new(),
-    };
-    let row_of = |j: usize, k: usize| {
-        let s = field.index(0, j, k);
-        &field.values[s..s + nx]
-    };
-    for j in 0..ny {
-        layer.row_start.push(to_u32(layer.keys.len()));
-        let row = row_of(j, z);
-        // A missing neighbour row is replaced by the row itself, which never differs in sign, so
-        // the scan below stays free of per-node bounds logic.
-        let ahead = if j + 1 < ny { row_of(j + 1, z) } else { row };
-        let above = if z + 1 < nz { row_of(j, z + 1) } else { row };
-        for i in 0..nx {
-            let v = row[i];
-            let ins = field.inside(v);
-            let next = [row[(i + 1).min(nx - 1)], ahead[i], above[i]];
-            let differs = next.map(|w| field.inside(w) != ins);
-            if !(differs[0] | differs[1] | differs[2]) {
-                continue;
-            }
-            for axis in (0..3).filter(|&a| differs[a]) {
-                let a = [i, j, z];
-                let mut b = a;
-                b[axis] += 1;
-                let (pa, pb) = (field.node(a), field.node(b));
-                let p = onto_edge(pa, pb, axis, refine(pa, v, pb, next[axis]));
-                layer.keys.push(to_u32(3 * i + axis));
-                layer.positions.push(p);
-            }
+    /// [`Self::find`] with a guess: the active block at `slot`, with lowest owned node `o`, is
+    /// tried first (most of a cell's edges belong to the cell's own block).
+    #[inline]
+    pub fn find_from(&self, slot: usize, o: [usize; 3], n: [usize; 3], axis: usize) -> u32 {
+        let offset =
+            (n[0].wrapping_sub(o[0])) | (n[1].wrapping_sub(o[1])) | (n[2].wrapping_sub(o[2]));
+        if offset < BLOCK {
+            self.find_in(slot, n, axis)
+        } else {
+            self.find(n, axis)
         }
     }
-    layer.row_start.push(to_u32(layer.keys.len()));
-    layer
+
+    #[inline]
+    fn find_in(&self, slot: usize, n: [usize; 3], axis: usize) -> u32 {
+        let entry = u32::from(self.vertices[slot].node_edges[local_node(n)]);
+        let axes = entry & ((1 << AXIS_BITS) - 1);
+        debug_assert!(axes & (1 << axis) != 0, "edge {n:?} {axis} is not crossed");
+        let before = u32::from(AXES_COUNT[(axes & ((1 << axis) - 1)) as usize]);
+        self.base[slot] + (entry >> AXIS_BITS) + before
+    }
+
+    /// Lowest owned node and box masks of the active block at `slot`.
+    pub fn block(&self, slot: usize) -> ([usize; 3], &BoxMasks) {
+        let v = &self.vertices[slot];
+        (v.origin, &v.masks)
+    }
+
+    /// Crossings owned by the active block at `slot`.
+    pub fn block_len(&self, slot: usize) -> usize {
+        self.vertices[slot].positions.len()
+    }
+
+    /// Lower node and axis of the edge holding global vertex `g`.
+    pub fn locate(&self, g: u32) -> ([usize; 3], usize) {
+        let slot = self.base.partition_point(|&b| b <= g) - 1;
+        let local = g - self.base[slot];
+        let table = &self.vertices[slot].node_edges;
+        // The owner is the last node whose first index is not past `local`: nodes after it
+        // start beyond its crossings, nodes before it with the same start have none.
+        let node = table.partition_point(|&e| u32::from(e) >> AXIS_BITS <= local) - 1;
+        let entry = u32::from(table[node]);
+        let mut axes = entry & ((1 << AXIS_BITS) - 1);
+        for _ in (entry >> AXIS_BITS)..local {
+            axes &= axes - 1;
+        }
+        let o = self.vertices[slot].origin;
+        let m = BLOCK - 1;
+        let offset = [
+            node & m,
+            (node >> BLOCK_SHIFT) & m,
+            node >> (2 * BLOCK_SHIFT),
+        ];
+        (
+            [o[0] + offset[0], o[1] + offset[1], o[2] + offset[2]],
+            axes.trailing_zeros() as usize,
+        )
+    }
 }
 
-fn to_u32(n: usize) -> u32 {
-    u32::try_from(n).expect("grid too large for 32-bit indices")
-}
-
-/// Every crossing of the grid: per-layer lists, each layer's first global index, and the
-/// positions in global order (layer by layer, scan order within a layer).
-pub(crate) struct Crossings {
-    pub layers: Vec<Layer>,
-    pub base: Vec<u32>,
-    pub positions: Vec<Vec3>,
-}
-
-/// Finds and places all crossings, in parallel over layers; the order does not depend on the
-/// number of threads.
-pub(crate) fn all_crossings(field: &Samples, refine: &Refine, limit: u32) -> Crossings {
-    let layers: Vec<Layer> = (0..field.dims[2])
-        .into_par_iter()
-        .map(|z| layer_crossings(field, z, refine))
+/// Finds and places all crossings, in parallel over the active blocks; the order does not
+/// depend on the number of threads.
+pub(crate) fn all_crossings(samples: &Samples, refine: &Refine, limit: u32) -> Crossings {
+    let blocks = active_blocks(samples);
+    let vertices: Vec<BlockVertices> = blocks
+        .active
+        .par_iter()
+        .map(|&id| block_crossings(samples, blocks.origin(id), refine))
         .collect();
-    let mut base = Vec::with_capacity(layers.len());
+    let mut base = Vec::with_capacity(vertices.len());
     let mut n = 0usize;
-    for layer in &layers {
+    for v in &vertices {
         base.push(n as u32);
-        n += layer.len();
+        n += v.positions.len();
         assert!(n < limit as usize, "too many vertices");
     }
     let mut positions = Vec::with_capacity(n);
-    for layer in &layers {
-        positions.extend_from_slice(&layer.positions);
+    for v in &vertices {
+        positions.extend_from_slice(&v.positions);
     }
     Crossings {
-        layers,
+        blocks,
+        vertices,
         base,
         positions,
     }
+}
+
+/// Crossings of the edges owned by the block whose lowest node is `o`. The edges are found
+/// with bit operations on the box's inside masks; only crossed ones touch the samples again.
+fn block_crossings(samples: &Samples, o: [usize; 3], refine: &Refine) -> BlockVertices {
+    let masks = BoxMasks::read(samples, o);
+    let mut out = BlockVertices {
+        origin: o,
+        masks,
+        node_edges: [0; BLOCK_NODES],
+        positions: Vec::new(),
+    };
+    let nodes = masks.nodes;
+    // An edge is owned when its lower node is, and exists when its upper node is in the grid.
+    let owned = |a: usize| nodes[a].min(BLOCK);
+    let x_edges = (1u16 << (nodes[0] - 1)) - 1;
+    // The box's last column belongs to the next block.
+    let own_x = (1u16 << owned(0)) - 1;
+    let mut local = 0u16;
+    let mut at = 0usize;
+    for dk in 0..BLOCK {
+        for dj in 0..BLOCK {
+            if dj >= owned(1) || dk >= owned(2) {
+                // Nodes beyond the grid own nothing; their entries keep the starts ascending.
+                out.node_edges[at..at + BLOCK].fill(local << AXIS_BITS);
+                at += BLOCK;
+                continue;
+            }
+            let m = masks.rows[dk][dj];
+            let crossed = [
+                (m ^ (m >> 1)) & x_edges,
+                if dj + 1 < nodes[1] {
+                    m ^ masks.rows[dk][dj + 1]
+                } else {
+                    0
+                },
+                if dk + 1 < nodes[2] {
+                    m ^ masks.rows[dk + 1][dj]
+                } else {
+                    0
+                },
+            ];
+            let crossed = crossed.map(|c| c & own_x);
+            let any = crossed[0] | crossed[1] | crossed[2];
+            if any == 0 {
+                out.node_edges[at..at + BLOCK].fill(local << AXIS_BITS);
+                at += BLOCK;
+                continue;
+            }
+            for di in 0..BLOCK {
+                let axes = (crossed[0] >> di & 1)
+                    | (crossed[1] >> di & 1) << 1
+                    | (crossed[2] >> di & 1) << 2;
+                out.node_edges[at + di] = axes | (local << AXIS_BITS);
+                local += u16::from(AXES_COUNT[axes as usize]);
+            }
+            at += BLOCK;
+            let mut todo = any;
+            while todo != 0 {
+                let di = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let a = [o[0] + di, o[1] + dj, o[2] + dk];
+                let va = samples.values[samples.index(a[0], a[1], a[2])];
+                for (axis, c) in crossed.iter().enumerate() {
+                    if c >> di & 1 == 0 {
+                        continue;
+                    }
+                    let mut b = a;
+                    b[axis] += 1;
+                    let vb = samples.values[samples.index(b[0], b[1], b[2])];
+                    let (pa, pb) = (samples.node(a), samples.node(b));
+                    out.positions
+                        .push(onto_edge(pa, pb, axis, refine(pa, va, pb, vb)));
+                }
+            }
+        }
+    }
+    out
 }

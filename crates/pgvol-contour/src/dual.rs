@@ -13,11 +13,12 @@ use glam::{DVec3, Vec3};
 use pgvol_mesh::Mesh;
 use rayon::prelude::*;
 
+use crate::cells::for_crossed_cells;
 use crate::components::{components, ring_slot};
 use crate::crossings::Crossings;
 use crate::cube::{edge_axis, plane_axes, EDGE_START};
 use crate::decider::joins_inside;
-use crate::extract::{cell_config, row_cells, Vertices, EXTRA_FLAG};
+use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
 use crate::qef::Qef;
 use crate::quads::split_quad;
@@ -29,6 +30,9 @@ use crate::DualContourOptions;
 /// never coincide and every quad projects along its edge onto four distinct open quadrants.
 const CELL_MARGIN: f64 = 1e-3;
 
+/// Longest move, in cells, of a smooth piece's vertex onto the zero set.
+const MAX_PROJECTION: f32 = 0.25;
+
 /// Crossings per parallel task when building quads.
 const QUAD_CHUNK: usize = 4096;
 
@@ -37,13 +41,13 @@ const CENTRE_KEY: u64 = 1 << 63;
 
 const UNSET: u32 = u32::MAX;
 
-struct Slab {
+struct CellVertices {
     positions: Vec<Vec3>,
     double_faces: Vec<u8>,
     links: Vec<Link>,
 }
 
-/// Cell vertex `vertex` (slab-local) is the corner `slot` of the quad of crossing `crossing`.
+/// Cell vertex `vertex` (part-local) is the corner `slot` of the quad of crossing `crossing`.
 struct Link {
     crossing: u32,
     vertex: u32,
@@ -58,26 +62,30 @@ struct QuadRun {
     extra: Vec<u64>,
 }
 
+/// How crossings and their normals are found: `refine` places a crossing on its edge (as in
+/// `marching_cubes_with`), `gradient` gives the field's gradient at a crossing.
+pub(crate) struct Placement<'a> {
+    pub refine: &'a (dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync),
+    pub gradient: &'a (dyn Fn(Vec3) -> Vec3 + Sync),
+}
+
 pub(crate) fn dual_contour(
     samples: &Samples,
     crossings: &Crossings,
     field: &dyn Field,
+    gradient: &(dyn Fn(Vec3) -> Vec3 + Sync),
     options: &DualContourOptions,
 ) -> Mesh {
-    let verts = Vertices {
-        layers: &crossings.layers,
-        base: &crossings.base,
-        positions: &crossings.positions,
-    };
+    let verts = crossings;
     let normals: Vec<Vec3> = crossings
         .positions
         .par_iter()
-        .map(|&p| field.value_gradient(p).1.normalize_or_zero())
+        .map(|&p| gradient(p).normalize_or_zero())
         .collect();
 
-    let slabs: Vec<Slab> = (0..samples.dims[2] - 1)
+    let parts: Vec<CellVertices> = (0..crossings.blocks.active.len())
         .into_par_iter()
-        .map(|k| slab_vertices(samples, &verts, &normals, options, k))
+        .map(|slot| block_vertices(samples, verts, &normals, field, options, slot))
         .collect();
 
     let n_crossings = crossings.positions.len();
@@ -85,14 +93,14 @@ pub(crate) fn dual_contour(
     let mut meta = vec![0u8; n_crossings];
     let mut positions = Vec::new();
     let mut double_faces = Vec::new();
-    for slab in slabs {
+    for part in parts {
         let first = positions.len() as u32;
-        for link in &slab.links {
+        for link in &part.links {
             ring[link.crossing as usize][link.slot as usize] = first + link.vertex;
             meta[link.crossing as usize] = link.meta;
         }
-        positions.extend_from_slice(&slab.positions);
-        double_faces.extend_from_slice(&slab.double_faces);
+        positions.extend_from_slice(&part.positions);
+        double_faces.extend_from_slice(&part.double_faces);
     }
     assert!(positions.len() < EXTRA_FLAG as usize, "too many vertices");
 
@@ -108,7 +116,7 @@ pub(crate) fn dual_contour(
                 let g = (c * QUAD_CHUNK + n) as u32;
                 quad(
                     samples,
-                    &verts,
+                    verts,
                     &positions,
                     &double_faces,
                     g,
@@ -129,7 +137,7 @@ pub(crate) fn dual_contour(
         first_extra + keys.len() < EXTRA_FLAG as usize,
         "too many vertices"
     );
-    positions.extend(keys.iter().map(|&key| extra_position(samples, &verts, key)));
+    positions.extend(keys.iter().map(|&key| extra_position(samples, verts, key)));
 
     let mut triangles = Vec::with_capacity(runs.iter().map(|r| r.triangles.len()).sum());
     for run in runs {
@@ -147,75 +155,134 @@ pub(crate) fn dual_contour(
     Mesh::new(positions, triangles)
 }
 
-/// One vertex per loop of every cell between node layers `k` and `k + 1`.
-fn slab_vertices(
+/// One vertex per loop of every cell owned by the active block at `slot`.
+fn block_vertices(
     samples: &Samples,
-    verts: &Vertices,
+    verts: &Crossings,
     normals: &[Vec3],
+    field: &dyn Field,
     options: &DualContourOptions,
-    k: usize,
-) -> Slab {
-    let [nx, ny, _] = samples.dims;
+    slot: usize,
+) -> CellVertices {
     let table = case_table();
     let threshold = f64::from(options.singular_threshold);
     let inv_h = 1.0 / f64::from(samples.spacing);
-    let mut slab = Slab {
+    let mut part = CellVertices {
         positions: Vec::new(),
         double_faces: Vec::new(),
         links: Vec::new(),
     };
-    let mut cells = Vec::new();
-    for j in 0..ny - 1 {
-        row_cells(verts, nx, j, k, &mut cells);
-        for &i in &cells {
-            let Some((case, joined)) = cell_config(samples, table, [i, j, k]) else {
-                continue;
-            };
-            let comps = components(case, joined);
-            let corner = samples.node([i, j, k]);
-            let mut qefs = [Qef::default(); 4];
-            let first = slab.positions.len() as u32;
-            let mut crossed = table.crossed[case];
-            while crossed != 0 {
-                let e = crossed.trailing_zeros() as usize;
-                crossed &= crossed - 1;
-                let s = EDGE_START[e];
-                let axis = edge_axis(e);
-                let g = verts.find([i + s[0], j + s[1], k + s[2]], axis);
-                let lower = s[0] | (s[1] << 1) | (s[2] << 2);
-                let lower_inside = (case >> lower) & 1 == 1;
-                // Work in cell units about the lowest corner, so the QEF is well scaled.
-                let p = (verts.positions[g as usize] - corner).as_dvec3() * inv_h;
-                let mut n = normals[g as usize].as_dvec3();
-                if n == DVec3::ZERO {
-                    // No usable gradient: the edge itself, from inside to outside, is the best
-                    // available normal.
-                    n = DVec3::ZERO;
-                    n[axis] = if lower_inside { 1.0 } else { -1.0 };
-                }
-                let l = comps.edge_loop[e];
-                qefs[l as usize].add(p, n);
-                slab.links.push(Link {
-                    crossing: g,
-                    vertex: first + u32::from(l),
-                    slot: ring_slot(e) as u8,
-                    meta: axis as u8 | (u8::from(lower_inside) << 2),
-                });
+    let (origin, masks) = verts.block(slot);
+    for_crossed_cells(samples, table, origin, masks, |cell, case, joined| {
+        let [i, j, k] = cell;
+        let comps = components(case, joined);
+        let corner = samples.node([i, j, k]);
+        let mut qefs = [Qef::default(); 4];
+        let first = part.positions.len() as u32;
+        let mut crossed = table.crossed[case];
+        while crossed != 0 {
+            let e = crossed.trailing_zeros() as usize;
+            crossed &= crossed - 1;
+            let s = EDGE_START[e];
+            let axis = edge_axis(e);
+            let g = verts.find([i + s[0], j + s[1], k + s[2]], axis);
+            let lower = s[0] | (s[1] << 1) | (s[2] << 2);
+            let lower_inside = (case >> lower) & 1 == 1;
+            // Work in cell units about the lowest corner, so the QEF is well scaled.
+            let p = (verts.positions[g as usize] - corner).as_dvec3() * inv_h;
+            let mut n = normals[g as usize].as_dvec3();
+            if n == DVec3::ZERO {
+                // No usable gradient: the edge itself, from inside to outside, is the best
+                // available normal.
+                n = DVec3::ZERO;
+                n[axis] = if lower_inside { 1.0 } else { -1.0 };
             }
-            for (l, qef) in qefs.iter().take(comps.n_loops as usize).enumerate() {
-                let mut x = qef.solve(threshold);
-                if !x.is_finite() {
-                    x = qef.mass_point();
-                }
-                if options.clamp_to_cell {
-                    x = x.clamp(DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN));
-                }
-                slab.positions.push(corner + x.as_vec3() * samples.spacing);
-                slab.double_faces.push(comps.double_faces[l]);
-            }
+            let l = comps.edge_loop[e];
+            qefs[l as usize].add(p, n);
+            part.links.push(Link {
+                crossing: g,
+                vertex: first + u32::from(l),
+                slot: ring_slot(e) as u8,
+                meta: axis as u8 | (u8::from(lower_inside) << 2),
+            });
         }
+        for (l, qef) in qefs.iter().take(comps.n_loops as usize).enumerate() {
+            let c = qef.mass_point();
+            let (mut x, feature) = qef.solve_about(c, threshold);
+            if feature && options.feature_offset > 0.0 {
+                let plane = |e: usize| {
+                    let s = EDGE_START[e];
+                    let g = verts.find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
+                    (verts.positions[g as usize], normals[g as usize])
+                };
+                let edges = (0..12).filter(|&e| comps.edge_loop[e] == l as u8);
+                let centre = corner + c.as_vec3() * samples.spacing;
+                let offset = options.feature_offset * samples.spacing;
+                let mut away = Qef::default();
+                for (p, n) in edges.map(plane) {
+                    let (q, m) = plane_away(field, p, n, centre, offset, samples.iso);
+                    away.add((q - corner).as_dvec3() * inv_h, m.as_dvec3());
+                }
+                // Taken only where it stays in the cell: elsewhere the field is not a pair of
+                // smooth faces at this scale, and the crossings' own planes are safer.
+                let y = away.solve_about(c, threshold).0;
+                if y.cmpge(DVec3::ZERO).all() && y.cmple(DVec3::ONE).all() {
+                    x = y;
+                }
+            } else if !feature && options.project_smooth {
+                // A smooth piece: onto the zero set, as marching cubes vertices are. Only a
+                // short move is taken: a long one means the field is not smooth at this
+                // scale, and the QEF point keeps the mesh's orientation safe there.
+                let h = samples.spacing;
+                let p = corner + x.as_vec3() * h;
+                let (lo, hi) = (corner, corner + Vec3::splat(h));
+                let q = crate::project::project(field, p.clamp(lo, hi), samples.iso, lo, hi, 1);
+                if q.distance(p) < MAX_PROJECTION * h {
+                    x = ((q - corner) / h).as_dvec3();
+                }
+            }
+            if !x.is_finite() {
+                x = c;
+            }
+            if options.clamp_to_cell {
+                x = x.clamp(DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN));
+            }
+            part.positions.push(corner + x.as_vec3() * samples.spacing);
+            part.double_faces.push(comps.double_faces[l]);
+        }
+    });
+    part
+}
+
+/// The tangent plane (point and unit normal) of `field` at `offset` from the crossing `p` (with
+/// normal `n`) along the surface, away from `centre`: the point is moved in the tangent plane
+/// and brought back onto the zero set by two Newton steps. Falls back to `(p, n)` where the
+/// direction or the field gives nothing usable.
+fn plane_away(
+    field: &dyn Field,
+    p: Vec3,
+    n: Vec3,
+    centre: Vec3,
+    offset: f32,
+    iso: f32,
+) -> (Vec3, Vec3) {
+    let d = p - centre;
+    let Some(t) = (d - n * n.dot(d)).try_normalize() else {
+        return (p, n);
+    };
+    let mut q = p + t * offset;
+    for _ in 0..2 {
+        let (v, g) = field.value_gradient(q);
+        let g2 = g.length_squared();
+        if !(g2 > 0.0 && v.is_finite()) {
+            return (p, n);
+        }
+        q -= g * ((v - iso) / g2);
     }
-    slab
+    match field.value_gradient(q).1.try_normalize() {
+        Some(m) if q.is_finite() => (q, m),
+        _ => (p, n),
+    }
 }
 
 /// Plane axis that changes between ring corners `q` and `q + 1`, and the face side (0 low,
@@ -229,7 +296,7 @@ const RING_OFFSETS: [[usize; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
 #[allow(clippy::too_many_arguments)]
 fn quad(
     samples: &Samples,
-    verts: &Vertices,
+    verts: &Crossings,
     positions: &[Vec3],
     double_faces: &[u8],
     g: u32,
@@ -334,7 +401,7 @@ fn segment_key(
     (face << 2) | corner as u64
 }
 
-fn extra_position(samples: &Samples, verts: &Vertices, key: u64) -> Vec3 {
+fn extra_position(samples: &Samples, verts: &Crossings, key: u64) -> Vec3 {
     if key & CENTRE_KEY != 0 {
         return verts.positions[(key & !CENTRE_KEY) as usize];
     }

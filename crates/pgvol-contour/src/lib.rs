@@ -19,19 +19,24 @@
 //!   increasing values, so a closed surface around a negative region has positive signed volume.
 //! * **No degenerate triangles**: vertices keep a small margin from the grid nodes, and no three
 //!   crossings of one cell are collinear.
-//! * **Deterministic**: the work runs in parallel over z slabs, but vertex and triangle order do
-//!   not depend on the number of threads.
+//! * **Deterministic**: the work runs in parallel over blocks of 8³ cells, but vertex and
+//!   triangle order do not depend on the number of threads.
+//! * **Sparse**: one read of the samples finds the blocks whose nodes straddle iso; only those
+//!   are visited again, so the cost beyond that read grows with the surface, not the volume.
 //!
 //! Conventions: a node is inside when its value is `< iso` and outside otherwise (`>= iso`), so a
 //! signed distance field (negative inside) gives outward-facing triangles. NaN counts as outside.
 //! Where inside nodes lie on the grid border the surface is left open there; callers wanting a
 //! closed mesh pad the grid with outside values.
 
+mod blocks;
+mod cells;
 mod components;
 mod crossings;
 mod cube;
 mod decider;
 mod dual;
+mod edge_cubic;
 mod extract;
 mod field;
 mod nets;
@@ -49,15 +54,15 @@ mod volume;
 
 pub use field::Field;
 pub use quality::min_angle_histogram;
-pub use volume::{contour_volume, resampled_grid, Method};
+pub use volume::{contour_sampled, contour_volume, resampled_grid, Method};
 
 use glam::Vec3;
 use pgvol_mesh::Mesh;
 use rayon::prelude::*;
 
 use crate::crossings::all_crossings;
-use crate::extract::{slab_triangles, Slab, Vertices, EXTRA_FLAG};
-use crate::root::edge_root;
+use crate::extract::{block_triangles, Part, EXTRA_FLAG};
+use crate::root::cubic_edge_root;
 use crate::samples::Samples;
 
 /// Extracts the surface `value == iso` of a grid of samples, placing each vertex on its grid edge
@@ -105,32 +110,46 @@ pub fn marching_cubes_with(
         return Mesh::default();
     };
     let crossings = all_crossings(&field, refine, EXTRA_FLAG);
-    let verts = Vertices {
-        layers: &crossings.layers,
-        base: &crossings.base,
-        positions: &crossings.positions,
-    };
-    let slabs: Vec<Slab> = (0..dims[2] - 1)
+    let parts: Vec<Part> = (0..crossings.blocks.active.len())
         .into_par_iter()
-        .map(|k| slab_triangles(&field, &verts, k))
+        .map(|slot| block_triangles(&field, &crossings, slot))
         .collect();
-    let positions = crossings.positions;
-    assemble(positions, slabs)
+    assemble(crossings.positions, parts)
 }
 
-/// Concatenates the slabs in order, giving loop centre vertices their places after the edge
-/// vertices.
-fn assemble(mut positions: Vec<Vec3>, slabs: Vec<Slab>) -> Mesh {
-    let n_triangles = slabs.iter().map(|s| s.triangles.len()).sum();
+/// Like [`marching_cubes`], but places each vertex on the zero set of the continuous `field`
+/// (whose node values `values` are) along its grid edge: the root of the cubic through the two
+/// node values and the field at the edge's third points, two evaluations per vertex, exact for
+/// a cubic B-spline field on its own grid. Non-finite samples fall back to regula falsi.
+///
+/// # Panics
+///
+/// As [`marching_cubes`].
+pub fn marching_cubes_on_field(
+    values: &[f32],
+    dims: [usize; 3],
+    origin: Vec3,
+    spacing: f32,
+    iso: f32,
+    field: &dyn Field,
+) -> Mesh {
+    let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
+    marching_cubes_with(values, dims, origin, spacing, iso, &refine)
+}
+
+/// Concatenates the blocks' triangles in order, giving loop centre vertices their places after
+/// the edge vertices.
+fn assemble(mut positions: Vec<Vec3>, parts: Vec<Part>) -> Mesh {
+    let n_triangles = parts.iter().map(|s| s.triangles.len()).sum();
     let mut triangles = Vec::with_capacity(n_triangles);
-    for slab in slabs {
+    for part in parts {
         let first = positions.len() as u32;
         assert!(
-            first as usize + slab.extra.len() < EXTRA_FLAG as usize,
+            first as usize + part.extra.len() < EXTRA_FLAG as usize,
             "too many vertices"
         );
-        if slab.extra.is_empty() {
-            triangles.extend_from_slice(&slab.triangles);
+        if part.extra.is_empty() {
+            triangles.extend_from_slice(&part.triangles);
         } else {
             let resolve = |v: u32| {
                 if v & EXTRA_FLAG != 0 {
@@ -139,9 +158,9 @@ fn assemble(mut positions: Vec<Vec3>, slabs: Vec<Slab>) -> Mesh {
                     v
                 }
             };
-            triangles.extend(slab.triangles.iter().map(|t| t.map(resolve)));
+            triangles.extend(part.triangles.iter().map(|t| t.map(resolve)));
         }
-        positions.extend_from_slice(&slab.extra);
+        positions.extend_from_slice(&part.extra);
     }
     Mesh::new(positions, triangles)
 }
@@ -157,6 +176,18 @@ pub struct DualContourOptions {
     /// treated as zero, leaving the vertex at the crossings' mass point along those directions.
     /// Default 0.1; see `DEFAULT_SINGULAR_THRESHOLD` in the source for the measurements.
     pub singular_threshold: f32,
+    /// At cells where the tangent planes meet at a feature (more than one direction passes the
+    /// singular value cut), replace each crossing's plane by the tangent plane at a point this
+    /// many cells further along the surface, away from the cell's mass point. Smoothed fields
+    /// (a decoded B-spline) round an edge over about two cells, which tilts the normals at the
+    /// crossings next to it; further away they are the faces' own. 0 keeps the crossings'
+    /// planes. See `docs/algorithms.md` for the measurements behind the default.
+    pub feature_offset: f32,
+    /// Move the vertex of every cell without a feature onto the zero set of the field (two
+    /// Newton steps, kept in the cell), where marching cubes puts its vertices; the plain QEF
+    /// leaves it on the least-squares plane of the crossings, which blended normals tilt.
+    /// Default `true`.
+    pub project_smooth: bool,
 }
 
 /// Relative singular value cut of the QEF, measured on a cube rotated 30° about x and y (side
@@ -177,11 +208,16 @@ pub struct DualContourOptions {
 /// `default_threshold_is_near_the_best_on_cube_and_sphere` repeats the measurement.
 pub const DEFAULT_SINGULAR_THRESHOLD: f32 = 0.1;
 
+/// Default of [`DualContourOptions::feature_offset`], in cells.
+pub const DEFAULT_FEATURE_OFFSET: f32 = 0.5;
+
 impl Default for DualContourOptions {
     fn default() -> Self {
         Self {
             clamp_to_cell: true,
             singular_threshold: DEFAULT_SINGULAR_THRESHOLD,
+            feature_offset: DEFAULT_FEATURE_OFFSET,
+            project_smooth: true,
         }
     }
 }
@@ -192,9 +228,10 @@ impl Default for DualContourOptions {
 ///
 /// `values` are the samples of `field` at the grid nodes, laid out as for [`marching_cubes`];
 /// they decide the topology (inside is `< iso`, NaN outside, ambiguous faces by the asymptotic
-/// decider), and `field` only places vertices: edge crossings by regula falsi on
-/// `field.value`, their normals from `field.value_gradient`, and each component's vertex by a
-/// truncated least-squares fit (QEF) about the crossings' mass point.
+/// decider), and `field` only places vertices: edge crossings as in
+/// [`marching_cubes_on_field`], their normals from `field.value_gradient`, and each component's
+/// vertex by a truncated least-squares fit (QEF) about the crossings' mass point, refined as
+/// described at [`DualContourOptions`].
 ///
 /// Guarantees, for every input, wherever the inside region stays away from the grid border:
 ///
@@ -221,12 +258,34 @@ pub fn dual_contour(
     field: &dyn Field,
     options: &DualContourOptions,
 ) -> Mesh {
+    let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
+    let gradient = |p| field.value_gradient(p).1;
+    let placement = dual::Placement {
+        refine: &refine,
+        gradient: &gradient,
+    };
+    dual_contour_with(
+        values, dims, origin, spacing, iso, field, options, &placement,
+    )
+}
+
+/// [`dual_contour`] with the edge crossings and their normals from `placement`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dual_contour_with(
+    values: &[f32],
+    dims: [usize; 3],
+    origin: Vec3,
+    spacing: f32,
+    iso: f32,
+    field: &dyn Field,
+    options: &DualContourOptions,
+    placement: &dual::Placement,
+) -> Mesh {
     let Some(samples) = checked_samples(values, dims, origin, spacing, iso) else {
         return Mesh::default();
     };
-    let refine = |a, va, b, vb| edge_root(field, a, va, b, vb, iso);
-    let crossings = all_crossings(&samples, &refine, EXTRA_FLAG);
-    dual::dual_contour(&samples, &crossings, field, options)
+    let crossings = all_crossings(&samples, placement.refine, EXTRA_FLAG);
+    dual::dual_contour(&samples, &crossings, field, placement.gradient, options)
 }
 
 /// Extracts the surface `value == iso` by naive surface nets (the `fast-surface-nets` crate,

@@ -41,23 +41,61 @@ impl Qef {
     /// root of the eigenvalue of `AᵀA`) is below `rel_threshold` times the largest treated as
     /// unconstrained: along a flat face only the normal direction is fixed, and along a sharp
     /// edge two, so the rest stays at the mass point rather than running off with noise.
+    #[cfg(test)]
     pub fn solve(&self, rel_threshold: f64) -> DVec3 {
-        let c = self.mass_point();
+        self.solve_about(self.mass_point(), rel_threshold).0
+    }
+
+    /// [`Self::solve`] about the point `c` instead of the mass point, and whether more than
+    /// one direction passed the cut (the planes meet at an edge or corner).
+    pub fn solve_about(&self, c: DVec3, rel_threshold: f64) -> (DVec3, bool) {
+        if let Some(x) = self.solve_flat(c, rel_threshold) {
+            return (x, false);
+        }
         let (values, vectors) = symmetric_eigen(self.ata);
         let largest = values.max_element();
         if largest.is_nan() || largest <= 0.0 {
-            return c;
+            return (c, false);
         }
         let cutoff = largest * rel_threshold * rel_threshold;
         let r = self.atb - self.ata * c;
         let mut x = c;
+        let mut kept = 0;
         for i in 0..3 {
             if values[i] > cutoff {
                 let v = vectors.col(i);
                 x += v * (v.dot(r) / values[i]);
+                kept += 1;
             }
         }
-        x
+        (x, kept > 1)
+    }
+}
+
+impl Qef {
+    /// The common case without the eigen decomposition: planes so nearly parallel that only
+    /// one direction passes the cut. With unit normals the eigenvalues sum to the trace; if the
+    /// Rayleigh quotient `q` of a direction leaves less than `cutoff` for the other two, each
+    /// of them is below the cut, and a few power steps refine the direction to the top
+    /// eigenvector, which then alone moves the point. `None` when the test fails.
+    fn solve_flat(&self, c: DVec3, rel_threshold: f64) -> Option<DVec3> {
+        let a = self.ata;
+        let trace = a.x_axis.x + a.y_axis.y + a.z_axis.z;
+        // Start from the column with the largest diagonal, which is never orthogonal to the
+        // top eigenvector of a positive semi-definite matrix with a dominant eigenvalue.
+        let diag = [a.x_axis.x, a.y_axis.y, a.z_axis.z];
+        let col = (0..3).fold(0, |b, i| if diag[i] > diag[b] { i } else { b });
+        let mut v = a.col(col).try_normalize()?;
+        for _ in 0..3 {
+            v = (a * v).try_normalize()?;
+        }
+        let q = v.dot(a * v);
+        let cutoff = q * rel_threshold * rel_threshold;
+        if !(q > 0.0 && trace - q < cutoff) {
+            return None;
+        }
+        let r = self.atb - a * c;
+        Some(c + v * (v.dot(r) / q))
     }
 }
 

@@ -4,6 +4,8 @@
 use glam::Vec3;
 use pgvol_field::{CoefficientVolume, Grid};
 
+use crate::edge_cubic::{gradient_on_grid_edge, thirds_on_grid_edge};
+use crate::root::{cubic_edge_root, root_from_thirds};
 use crate::DualContourOptions;
 
 /// How the mesh is extracted.
@@ -66,28 +68,72 @@ pub(crate) fn contour_samples(
             values[dst..dst + nx].copy_from_slice(&inner[src..src + nx]);
         }
     }
-    let origin = grid.origin - Vec3::splat(grid.spacing);
-    let (lo, hi) = (grid.origin, grid.max_corner());
-    match method {
-        Method::MarchingCubes => {
-            let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-            let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-                if in_box(a) && in_box(b) {
-                    volume.root_on_segment(a, va, b, vb, iso)
-                } else {
-                    let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-                    a + (b - a) * t
-                }
-            };
-            crate::marching_cubes_with(&values, dims, origin, grid.spacing, iso, &refine)
+    let padded = Grid {
+        origin: grid.origin - Vec3::splat(grid.spacing),
+        spacing: grid.spacing,
+        dims,
+    };
+    contour_sampled(volume, &padded, &values, iso, method)
+}
+
+/// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
+/// without padding: surfaces reaching the grid's border stay open there. Vertices lie on the
+/// continuous field wherever both ends of their grid edge are in the volume's box (from the
+/// coefficients directly when `grid` is the volume's own cubic B-spline grid), and are
+/// interpolated linearly outside it, where values are artificial.
+///
+/// # Panics
+///
+/// If `values.len()` does not match `grid.dims`, or `grid.spacing` is not positive and finite.
+pub fn contour_sampled(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    values: &[f32],
+    iso: f32,
+    method: Method,
+) -> pgvol_mesh::Mesh {
+    let (dims, origin, h) = (grid.dims, grid.origin, grid.spacing);
+    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
+        if in_box(a) && in_box(b) {
+            volume_edge_root(volume, a, va, b, vb, iso)
+        } else {
+            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+            a + (b - a) * t
         }
+    };
+    match method {
+        Method::MarchingCubes => crate::marching_cubes_with(values, dims, origin, h, iso, &refine),
         Method::DualContouring => {
             let options = DualContourOptions::default();
-            crate::dual_contour(&values, dims, origin, grid.spacing, iso, volume, &options)
+            let gradient =
+                |p: Vec3| gradient_on_grid_edge(volume, p).unwrap_or_else(|| volume.eval(p).1);
+            let placement = crate::dual::Placement {
+                refine: &refine,
+                gradient: &gradient,
+            };
+            crate::dual_contour_with(values, dims, origin, h, iso, volume, &options, &placement)
         }
-        Method::SurfaceNets => {
-            crate::surface_nets(&values, dims, origin, grid.spacing, iso, volume)
+        Method::SurfaceNets => crate::surface_nets(values, dims, origin, h, iso, volume),
+    }
+}
+
+/// The crossing on a grid edge of the continuous field of `volume`: from the coefficients
+/// directly where the edge lies on the volume's own B-spline grid, else by two evaluations.
+fn volume_edge_root(
+    volume: &CoefficientVolume,
+    a: Vec3,
+    va: f32,
+    b: Vec3,
+    vb: f32,
+    iso: f32,
+) -> Vec3 {
+    match thirds_on_grid_edge(volume, a, b) {
+        Some(thirds) if va.is_finite() && vb.is_finite() => {
+            root_from_thirds(a, va, b, vb, thirds, iso)
         }
+        _ => cubic_edge_root(volume, a, va, b, vb, iso),
     }
 }
 
