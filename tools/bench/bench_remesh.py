@@ -4,7 +4,8 @@ Usage (normally through tools/bench/run.sh):
     python tools/bench/bench_remesh.py [--big] [--meshes a,b,...]
 
 For each mesh and resolution (64 and 128, plus 256 with --big):
-  * pgvol remesh MESH -o OUT.glb --res N: wall time, triangles, Chamfer-L1 to the input
+  * pgvol remesh MESH -o OUT.glb --res N --field decoded (the encode/decode pipeline in one
+    go): wall time, triangles, Chamfer-L1 to the input
   * baseline: pgvol sdf --dense at the same grid, then scikit-image marching cubes
     at level 0: time (sdf + contouring), triangles, Chamfer-L1 to the input
 Chamfer-L1 comes from `pgvol compare OUT INPUT --json` and is shown in % of the
@@ -36,7 +37,7 @@ def chamfer_pct(exe: Path, out: Path, src: Path) -> tuple[float, float]:
 
 def pgvol_remesh(exe: Path, src: Path, res: int, work: Path):
     out = work / f"{src.stem}-{res}.glb"
-    proc, wall = common.run([exe, "remesh", src, "-o", out, "--res", res])
+    proc, wall = common.run([exe, "remesh", src, "-o", out, "--res", res, "--field", "decoded"])
     if proc.returncode != 0:
         raise RuntimeError(f"remesh exited {proc.returncode}: {proc.stderr.strip()[-300:]}")
     mesh = common.load_mesh(out)

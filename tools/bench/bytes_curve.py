@@ -64,7 +64,7 @@ def sweep(pgvol, mesh: Path, work: Path, extra) -> dict:
         points["pgvol"].append((n, pgv.stat().st_size, chamfer(pgvol, out, mesh)))
     for n in DENSE_RES:
         out = work / "d.glb"
-        run([pgvol, "remesh", mesh, "-o", out, "--res", n, "--basis", "trilinear", "-q"])
+        run([pgvol, "remesh", mesh, "-o", out, "--res", n, "--field", "decoded", "--basis", "trilinear", "-q"])
         points["dense-f32"].append((n, 4 * n**3, chamfer(pgvol, out, mesh)))
     system_python = os.environ.get("PGVOL_BENCH_SYSTEM_PYTHON", "/usr/bin/python3")
     script = REPO_ROOT / "tools" / "bench" / "vdb_file.py"

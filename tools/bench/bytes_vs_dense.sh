@@ -25,7 +25,7 @@ for m in "$@"; do
     ours=$(chamfer "$work/a.glb" "$MESHES/$m.obj")
     # A dense float32 grid of n^3 values takes 4 n^3 bytes.
     n=$(python3 -c "print(round(($bytes / 4) ** (1 / 3)))")
-    "$P" remesh "$MESHES/$m.obj" -o "$work/t.glb" --res "$n" --basis trilinear -q
+    "$P" remesh "$MESHES/$m.obj" -o "$work/t.glb" --res "$n" --field decoded --basis trilinear -q
     dense=$(chamfer "$work/t.glb" "$MESHES/$m.obj")
     vdb="n/a"; vdbc="n/a"; vdbr="n/a"
     if info=$("$VDB_PY" tools/bench/vdb_file.py "$MESHES/$m.obj" "$r" "$work/v" 2>/dev/null); then

@@ -1,6 +1,7 @@
 //! `pgvol`: meshes to compact implicit files and back.
 
 pub(crate) mod commands;
+mod exact_field;
 mod pipeline;
 mod progress;
 

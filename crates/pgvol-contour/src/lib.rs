@@ -54,7 +54,7 @@ mod volume;
 
 pub use field::Field;
 pub use quality::min_angle_histogram;
-pub use volume::{contour_sampled, contour_volume, resampled_grid, Method};
+pub use volume::{contour_field, contour_sampled, contour_volume, resampled_grid, Method};
 
 use glam::Vec3;
 use pgvol_mesh::Mesh;

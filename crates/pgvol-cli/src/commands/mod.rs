@@ -16,10 +16,12 @@ use pgvol_field::Basis;
 
 #[derive(Subcommand)]
 pub enum Command {
-    /// Mesh → signed distance → coefficient volume → mesh, in one go.
+    /// Mesh → signed distance → mesh, in one go: a clean, watertight remesh.
     ///
     /// Reads OBJ, glTF/GLB, STL or PLY and writes GLB, glTF, OBJ, STL or PLY (by extension). The
-    /// output is watertight and manifold whatever the input's holes or flipped faces.
+    /// output is watertight and manifold whatever the input's holes or flipped faces. Vertices
+    /// lie on the input's exact distance (sharp edges stay sharp with --method dc), or with
+    /// --field decoded on the coefficient volume that `encode` then `decode` would give.
     Remesh(remesh::RemeshArgs),
     /// Surface distances and statistics of mesh A against reference mesh B.
     ///

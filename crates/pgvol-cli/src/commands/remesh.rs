@@ -3,11 +3,23 @@
 use std::time::Instant;
 
 use anyhow::Result;
-use clap::Args;
+use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use super::{BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
+use crate::exact_field;
 use crate::pipeline::{self, Timings};
+
+/// Which field the vertices are placed on.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FieldArg {
+    /// The exact signed distance of the input mesh: sharp edges stay sharp (no fit, --basis
+    /// unused).
+    #[default]
+    Exact,
+    /// The decoded coefficient volume of --basis, as `encode` then `decode` would give.
+    Decoded,
+}
 
 #[derive(Args)]
 pub struct RemeshArgs {
@@ -23,6 +35,9 @@ pub struct RemeshArgs {
     /// Contouring method.
     #[arg(long, value_enum, default_value_t)]
     pub method: MethodArg,
+    /// Field that places the vertices (node signs always come from the mesh's distance).
+    #[arg(long, value_enum, default_value_t)]
+    pub field: FieldArg,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -49,12 +64,31 @@ pub fn run(a: RemeshArgs) -> Result<()> {
     let mesh = pipeline::load_mesh(&a.input, quiet)?;
     t.read = start.elapsed().as_secs_f64();
     let grid = a.grid.spec(128).grid_for(&mesh)?;
-    let (volume, sdf, fit) = pipeline::encode(&mesh, grid, a.basis.basis()?, quiet)?;
-    t.sdf = sdf;
-    t.fit = fit;
-    let c = Instant::now();
-    let out = pipeline::decode(&volume, 0.0, a.method, None)?;
-    t.contour = c.elapsed().as_secs_f64();
+    if a.field == FieldArg::Exact && a.basis.basis()? != pgvol_field::Basis::Bspline3 {
+        anyhow::bail!("--basis applies to --field decoded; the exact field has no basis");
+    }
+    let (out, basis) = match a.field {
+        FieldArg::Exact => {
+            let method = match a.method {
+                MethodArg::Mc => pgvol_contour::Method::MarchingCubes,
+                MethodArg::Sn => pgvol_contour::Method::SurfaceNets,
+                MethodArg::Dc => pgvol_contour::Method::DualContouring,
+            };
+            let (out, sdf) = exact_field::contour_exact(&mesh, &grid, method, quiet)?;
+            t.sdf = sdf;
+            t.contour = start.elapsed().as_secs_f64() - t.read - sdf;
+            (out, "exact")
+        }
+        FieldArg::Decoded => {
+            let (volume, sdf, fit) = pipeline::encode(&mesh, grid, a.basis.basis()?, quiet)?;
+            t.sdf = sdf;
+            t.fit = fit;
+            let c = Instant::now();
+            let out = pipeline::decode(&volume, 0.0, a.method, None)?;
+            t.contour = c.elapsed().as_secs_f64();
+            (out, volume.basis.name())
+        }
+    };
     if out.triangles.is_empty() {
         anyhow::bail!(
             "{}: the surface vanished at this resolution (no inside region found); try a larger --res",
@@ -68,7 +102,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         input: &a.input,
         output: &a.output,
         grid,
-        basis: volume.basis.name(),
+        basis,
         input_triangles: mesh.triangles.len(),
         triangles: out.triangles.len(),
         vertices: out.positions.len(),
@@ -79,7 +113,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else if !a.out.quiet {
         println!(
-            "{} -> {}: {} triangles at {}^3 ({} basis), {:.2} s",
+            "{} -> {}: {} triangles at {}^3 ({} field), {:.2} s",
             a.input.display(),
             a.output.display(),
             report.triangles,
