@@ -8,7 +8,10 @@ use obvhs::{bvh2::builder::build_bvh2_from_tris, triangle::Triangle, BvhBuildPar
 use pgvol_mesh::Mesh;
 use std::time::Duration;
 
-use crate::triangle::{closest_point, Feature};
+use crate::{
+    lanes::{TriangleLanes, LANES},
+    triangle::{closest_point, Feature},
+};
 
 /// One node: a box and either two children (`count == 0`, children at `first` and `first + 1`)
 /// or `count` triangles starting at `first` in leaf order.
@@ -34,12 +37,14 @@ impl Node {
     }
 }
 
-/// The hierarchy. `tris[n]` are the corners of mesh triangle `tri_ids[n]`.
+/// The hierarchy. `tris[n]` are the corners of mesh triangle `tri_ids[n]`; `lanes` holds
+/// them again for scans four at a time.
 #[derive(Clone, Debug)]
 pub struct Bvh {
     pub nodes: Vec<Node>,
     pub tris: Vec<[Vec3A; 3]>,
     pub tri_ids: Vec<u32>,
+    pub lanes: TriangleLanes,
 }
 
 /// The closest point of the mesh to a query.
@@ -79,6 +84,7 @@ impl Bvh {
             nodes: Vec::with_capacity(bvh2.nodes.len()),
             tris: Vec::with_capacity(tris.len()),
             tri_ids: Vec::with_capacity(tris.len()),
+            lanes: TriangleLanes::default(),
         };
         if bvh2.nodes.is_empty() {
             return out;
@@ -128,6 +134,7 @@ impl Bvh {
                 queue.push_back((n.first_index as usize + 1, child + 1));
             }
         }
+        out.lanes = TriangleLanes::new(&out.tris);
         out
     }
 
@@ -257,31 +264,40 @@ impl Bvh {
     }
 
     /// The closest point to `p` among the triangles of `leaves` (from [`Bvh::leaves_near_box`]
-    /// for a box holding `p`), improving on `start`, the distance to some triangle.
-    pub fn closest_among(&self, p: Vec3, leaves: &[(f32, u32)], start: Closest) -> Closest {
+    /// for a box holding `p`), improving on `start`, the distance to some triangle. Triangles
+    /// farther than `sqrt(limit_squared)` are not looked for: the answer is exact when the
+    /// closest distance is within that limit, and otherwise some triangle beyond it.
+    pub fn closest_among(
+        &self,
+        p: Vec3,
+        leaves: &[(f32, u32)],
+        start: Closest,
+        limit_squared: f32,
+    ) -> Closest {
         let q = Vec3A::from(p);
         let mut best = start;
         for &(box_d2, id) in leaves {
+            let reach = best.distance_squared.min(limit_squared);
             // Sorted by distance to the whole box, which bounds the distance to `p` from below.
-            if box_d2 > best.distance_squared {
+            if box_d2 > reach {
                 break;
             }
             let node = &self.nodes[id as usize];
-            if node.distance_squared(q) > best.distance_squared {
+            if node.distance_squared(q) > reach {
                 continue;
             }
-            for slot in node.first..node.first + node.count {
-                let [a, b, c] = self.tris[slot as usize];
-                let (point, feature) = closest_point(q, a, b, c);
-                let d2 = q.distance_squared(point);
-                if d2 < best.distance_squared {
-                    best = Closest {
-                        point: point.into(),
-                        distance_squared: d2,
-                        triangle: self.tri_ids[slot as usize],
-                        slot,
-                        feature,
-                    };
+            // Four triangles per step; only those that improve are looked at one by one, by
+            // the same arithmetic, so the answer is the scalar scan's.
+            let (first, end) = (node.first as usize, (node.first + node.count) as usize);
+            for start in (first..end).step_by(LANES) {
+                let d2 = self.lanes.distances_squared(q, start).to_array();
+                for (lane, &d2) in d2.iter().enumerate().take(end - start) {
+                    if d2.is_nan() || d2 < best.distance_squared {
+                        let c = self.closest_on_slot(p, (start + lane) as u32);
+                        if c.distance_squared < best.distance_squared {
+                            best = c;
+                        }
+                    }
                 }
             }
         }
@@ -296,7 +312,7 @@ impl Bvh {
         let (pa, pb) = (Vec3A::from(a), Vec3A::from(b));
         let (lo, hi) = (pa.min(pb), pa.max(pb));
         let outside = |node: &Node| node.min.cmpgt(hi).any() || node.max.cmplt(lo).any();
-        self.segment_crossings(pa, pb - pa, 1e-4, outside)
+        self.segment_crossings(pa, pb - pa, JUMP_END_MARGIN, outside)
             .map(|(into_back, into_front)| into_back - into_front)
     }
 
@@ -371,6 +387,20 @@ impl Bvh {
             slot,
             feature,
         }
+    }
+}
+
+/// Crossings this close to an end of a segment (as a fraction of its length) are unsure.
+const JUMP_END_MARGIN: f32 = 1e-4;
+
+/// The part of [`Bvh::winding_jump`] due to one triangle: the same arithmetic, so a sum over the
+/// triangles that can meet the segment gives the same answer.
+pub(crate) fn triangle_jump(a: Vec3A, b: Vec3A, t: &[Vec3A; 3]) -> Option<i32> {
+    match segment_crossing(a, b - a, t, JUMP_END_MARGIN) {
+        Crossing::None => Some(0),
+        Crossing::Unsure => None,
+        Crossing::IntoBack => Some(1),
+        Crossing::IntoFront => Some(-1),
     }
 }
 

@@ -7,7 +7,9 @@
 pub mod bvh;
 pub mod consistency;
 pub mod grid;
+pub mod lanes;
 pub mod pseudonormal;
+pub mod rims;
 pub mod sampling;
 pub mod triangle;
 pub mod winding;
