@@ -42,6 +42,7 @@ fn main() {
         Some(Precision::F32),
         Some(Precision::F16),
         Some(Precision::Q16),
+        Some(Precision::Fixed),
     ] {
         for (predictor, shuffle, compression) in [
             (Predictor::None, false, Compression::None),

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use pgvol_format::read_profile::profile_sparse_read;
-use pgvol_format::{decode_pgv, encode_pgv_with, EncodeOptions};
+use pgvol_format::sparse::basis_weight_bound;
+use pgvol_format::{decode_pgv, encode_pgv_with, EncodeOptions, PgvFile};
 
 fn run() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
@@ -45,6 +46,7 @@ fn run() -> Result<(), String> {
             shuffle: sp.shuffle,
             compression: sp.compression,
             zstd_level: level,
+            ..fixed_options(&file)
         };
         let (encoded, _) = encode_pgv_with(&file, &opts).map_err(|e| e.to_string())?;
         let (mut inflate, mut whole) = (Duration::MAX, Duration::MAX);
@@ -63,6 +65,22 @@ fn run() -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// The default options with the file's `fixed` scale, if it has one.
+fn fixed_options(file: &PgvFile) -> EncodeOptions {
+    let defaults = EncodeOptions::default();
+    let Some(f) = file.header.sparse.as_ref().and_then(|sp| sp.fixed) else {
+        return defaults;
+    };
+    // The encoder divides the step by the basis weight bound; undo that.
+    let unit = file.volume.grid.spacing / basis_weight_bound(file.volume.basis);
+    EncodeOptions {
+        fixed_step: f.step / unit,
+        fixed_knee: f.knee as f32 * f.step / unit,
+        fixed_ratio: f.ratio,
+        ..defaults
+    }
 }
 
 fn main() {

@@ -6,6 +6,7 @@
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
+use crate::fixed_step::FixedScale;
 use crate::sparse::{unorder16, unorder32, Precision, Predictor, SparseParams, Q16_PARAMS};
 
 /// Buffers reused from brick to brick, so that decoding a brick allocates nothing.
@@ -45,6 +46,11 @@ pub(crate) fn decode_values(
     debug_assert_eq!(raw.len(), raw_len(n, sp));
     debug_assert_eq!(out.len(), count);
     let (params, body) = raw.split_at(params_len(sp.precision));
+    if let (Precision::Fixed, Predictor::DeltaX, true, Some(scale)) =
+        (sp.precision, sp.predictor, sp.shuffle, sp.fixed)
+    {
+        return fixed_delta_x(body, n, &scale, &mut scratch.words, out);
+    }
     let w = sp.precision.width();
     let words = &mut scratch.words;
     words.resize(count, 0);
@@ -52,6 +58,16 @@ pub(crate) fn decode_values(
     let mask = if w == 4 { u32::MAX } else { 0xffff };
     unpredict(words, n, sp.predictor, mask);
     match sp.precision {
+        Precision::Fixed => {
+            // The reader checked that a fixed file has a scale.
+            let Some(scale) = sp.fixed else {
+                return Err(NonFinite);
+            };
+            let fast = scale.fast();
+            for (o, &q) in out.iter_mut().zip(words.iter()) {
+                *o = fast.value(q);
+            }
+        }
         Precision::F32 => {
             for (o, &m) in out.iter_mut().zip(words.iter()) {
                 *o = f32::from_bits(unorder32(m));
@@ -79,6 +95,69 @@ pub(crate) fn decode_values(
     }
 }
 
+/// The default `fixed` encoding (byte planes, delta-x): gathering, un-zig-zag and prediction in
+/// one pass (a serial chain through the previous word), then dequantisation in a second, which
+/// vectorises when every word takes the f32 path. The same values as the separate steps.
+fn fixed_delta_x(
+    body: &[u8],
+    n: [usize; 3],
+    scale: &FixedScale,
+    words: &mut Vec<u32>,
+    out: &mut [f32],
+) -> Result<(), NonFinite> {
+    let count = out.len();
+    let (p0, rest) = body.split_at(count);
+    let (p1, rest) = rest.split_at(count);
+    let (p2, p3) = rest.split_at(count);
+    words.resize(count, 0);
+    // The first words of the previous row and slice: the predictions at row and slice starts.
+    let (mut row_first, mut slice_first) = (0u32, 0u32);
+    let mut largest = 0u32;
+    let mut at = 0;
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            let mut prev = if j > 0 {
+                row_first
+            } else if k > 0 {
+                slice_first
+            } else {
+                0
+            };
+            let end = at + n[0];
+            let planes = p0[at..end]
+                .iter()
+                .zip(&p1[at..end])
+                .zip(p2[at..end].iter().zip(&p3[at..end]));
+            for (w, ((&b0, &b1), (&b2, &b3))) in words[at..end].iter_mut().zip(planes) {
+                let z = u32::from_le_bytes([b0, b1, b2, b3]);
+                prev = unzigzag(z, u32::MAX).wrapping_add(prev);
+                *w = prev;
+                largest = largest.max((prev as i32).unsigned_abs());
+            }
+            row_first = words[at];
+            if j == 0 {
+                slice_first = row_first;
+            }
+            at = end;
+        }
+    }
+    let fast = scale.fast();
+    if fast.all_exact(largest) {
+        for (o, &w) in out.iter_mut().zip(words.iter()) {
+            *o = fast.exact_value(w);
+        }
+    } else {
+        for (o, &w) in out.iter_mut().zip(words.iter()) {
+            *o = fast.value(w);
+        }
+    }
+    if out.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(NonFinite)
+    }
+}
+
 /// The zig-zag coded residual words, `w` bytes each, little-endian; with `shuffle` the bytes
 /// come as planes (byte 0 of every word, then byte 1, ...).
 fn gather(body: &[u8], w: usize, shuffle: bool, words: &mut [u32]) {
@@ -88,6 +167,15 @@ fn gather(body: &[u8], w: usize, shuffle: bool, words: &mut [u32]) {
         let (low, high) = body.split_at(count);
         for ((z, &lo), &hi) in words.iter_mut().zip(low).zip(high) {
             *z = lo as u32 | (hi as u32) << 8;
+        }
+    } else if shuffle && w == 4 {
+        // f32 and fixed, also in one pass.
+        let (p0, rest) = body.split_at(count);
+        let (p1, rest) = rest.split_at(count);
+        let (p2, p3) = rest.split_at(count);
+        let planes = p0.iter().zip(p1).zip(p2.iter().zip(p3));
+        for (z, ((&b0, &b1), (&b2, &b3))) in words.iter_mut().zip(planes) {
+            *z = u32::from_le_bytes([b0, b1, b2, b3]);
         }
     } else if shuffle {
         words.fill(0);
@@ -212,7 +300,7 @@ mod tests {
             let r = unzigzag(z, bits);
             words[at] = r.wrapping_add(predict(&words, n, at, sp.predictor, mask)) & mask;
         }
-        dequantise(params, &words, sp.precision)
+        dequantise(params, &words, sp.precision, sp.fixed)
     }
 
     fn params(precision: Precision, predictor: Predictor, shuffle: bool) -> SparseParams {
@@ -226,6 +314,11 @@ mod tests {
             compression: Compression::None,
             clamp: 1.0,
             band: 3.0,
+            fixed: (precision == Precision::Fixed).then_some(crate::fixed_step::FixedScale {
+                step: 1.0 / 1024.0,
+                knee: 700,
+                ratio: 8,
+            }),
         }
     }
 
@@ -237,7 +330,7 @@ mod tests {
         fn fast_decoder_matches_the_reference_bit_for_bit(
             n in proptest::array::uniform3(1usize..10),
             seed in any::<u64>(),
-            which in 0usize..3,
+            which in 0usize..4,
             predictor in 0usize..3,
             shuffle in any::<bool>(),
             q16 in (any::<f32>(), any::<f32>()),
@@ -276,7 +369,7 @@ mod tests {
         fn quantised_values_decode_as_the_encoder_expects(
             n in proptest::array::uniform3(1usize..10),
             seed in any::<u64>(),
-            which in 0usize..3,
+            which in 0usize..4,
             scale in 1e-3f32..1e3,
         ) {
             let precision = Precision::ALL[which];
@@ -290,11 +383,11 @@ mod tests {
                     ((s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) as f32 * scale
                 })
                 .collect();
-            let (head, words) = quantise(&values, precision).unwrap();
+            let (head, words) = quantise(&values, precision, sp.fixed).unwrap();
             let raw = brick_raw(&head, &words, n, &sp);
             let mut got = vec![0.0f32; values.len()];
             decode_values(&raw, n, &sp, &mut WordScratch::default(), &mut got).unwrap();
-            let want = dequantise(&head, &words, precision);
+            let want = dequantise(&head, &words, precision, sp.fixed);
             for (g, w) in got.iter().zip(&want) {
                 prop_assert_eq!(g.to_bits(), w.to_bits());
             }

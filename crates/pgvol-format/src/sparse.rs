@@ -18,8 +18,12 @@ use std::path::Path;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use serde::{Deserialize, Serialize};
 
+use crate::fixed_step::{
+    settle_free_words, FixedScale, FIXED_KNEE, FIXED_RATIO, FIXED_STEP, FREE_TOLERANCE,
+};
 use crate::pgv::{container, err, parse_container, FormatError, PgvFile, PgvHeader};
 use crate::sparse_read::{background, BrickReader};
+use crate::stored_band::needed_nodes;
 
 /// The header's `encoding` for this payload.
 pub const ENCODING_SPARSE: &str = "sparse-bricks";
@@ -42,15 +46,23 @@ pub enum Precision {
     F16,
     /// 16-bit fixed point with a per-brick offset and scale.
     Q16,
+    /// Signed 32-bit integer words on one scale for the whole file (`SparseParams::fixed`):
+    /// steps tied to the grid spacing, fine near the surface and coarser far from it.
+    Fixed,
 }
 
 impl Precision {
-    pub const ALL: [Precision; 3] = [Precision::F32, Precision::F16, Precision::Q16];
+    pub const ALL: [Precision; 4] = [
+        Precision::F32,
+        Precision::F16,
+        Precision::Q16,
+        Precision::Fixed,
+    ];
 
     /// Bytes per quantised value before compression.
     pub fn width(self) -> usize {
         match self {
-            Precision::F32 => 4,
+            Precision::F32 | Precision::Fixed => 4,
             Precision::F16 | Precision::Q16 => 2,
         }
     }
@@ -60,6 +72,7 @@ impl Precision {
             Precision::F32 => "f32",
             Precision::F16 => "f16",
             Precision::Q16 => "q16",
+            Precision::Fixed => "fixed",
         }
     }
 }
@@ -105,12 +118,15 @@ pub struct SparseParams {
     pub clamp: f32,
     /// The band (grid spacings) the encoder kept; informative only.
     pub band: f32,
+    /// With `fixed` precision (and only then): the scale of its words.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed: Option<FixedScale>,
 }
 
 /// Choices for [`encode_pgv_with`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {
-    /// `None`: the smallest of q16/f16 within [`AUTO_TOLERANCE`], else f32.
+    /// `None`: the smallest of q16, f16 and fixed within [`AUTO_TOLERANCE`], else f32.
     pub precision: Option<Precision>,
     /// A brick is stored if the field at any node within the basis support of its nodes is
     /// within `band` grid spacings of zero.
@@ -121,6 +137,15 @@ pub struct EncodeOptions {
     pub shuffle: bool,
     pub compression: Compression,
     pub zstd_level: i32,
+    /// The `fixed` precision's fine step, in grid spacings (divided by the basis weight bound).
+    pub fixed_step: f32,
+    /// The magnitude, in grid spacings, up to which `fixed` uses the fine step.
+    pub fixed_knee: f32,
+    /// The coarse step beyond the knee, in fine steps.
+    pub fixed_ratio: u32,
+    /// With `fixed`: how far (grid spacings) a stored coefficient that no point within the band
+    /// reaches may move towards its prediction; 0 keeps every coefficient within half a step.
+    pub free_tolerance: f32,
 }
 
 impl Default for EncodeOptions {
@@ -129,11 +154,15 @@ impl Default for EncodeOptions {
         EncodeOptions {
             precision: None,
             band: 3.0,
-            brick: 8,
+            brick: 16,
             predictor: Predictor::DeltaX,
             shuffle: true,
             compression: Compression::Zstd,
             zstd_level: 19,
+            fixed_step: FIXED_STEP,
+            fixed_knee: FIXED_KNEE,
+            fixed_ratio: FIXED_RATIO,
+            free_tolerance: FREE_TOLERANCE,
         }
     }
 }
@@ -235,16 +264,6 @@ impl Bricks {
     }
 }
 
-/// Nodes a coefficient reaches, in grid spacings (per axis; Euclidean for pg, bounded by the
-/// same number per axis).
-fn dilation(basis: Basis) -> usize {
-    match basis {
-        Basis::Trilinear => 1,
-        Basis::Bspline2 | Basis::Bspline3 => 2,
-        Basis::Pg { r, .. } => r.ceil().max(1.0) as usize,
-    }
-}
-
 /// Upper bound of `Σ_j |B_j(x)|`: how much a coefficient error of δ can move the field value.
 /// Separable bases are non-negative partitions of unity (1); pg weights are not normalised, so
 /// their sum is taken at nodes, cell centres and face/edge centres (the sum is smooth; these
@@ -274,38 +293,6 @@ pub fn basis_weight_bound(basis: Basis) -> f32 {
         best = best.max(sum);
     }
     best
-}
-
-/// Which bricks hold a coefficient that can reach a point where the field is within `band`
-/// spacings of zero. Judged on the field's node values (not the coefficients: a B-spline
-/// coefficient is not the field value and can differ in sign near thin features), dilated by
-/// the basis support.
-fn stored_bricks(volume: &CoefficientVolume, bricks: &Bricks, band: f32) -> Vec<bool> {
-    let g = &volume.grid;
-    let values = match volume.basis {
-        Basis::Trilinear => volume.coeffs.clone(),
-        _ => volume.sample(g),
-    };
-    let limit = band * g.spacing;
-    let d = dilation(volume.basis);
-    let [nx, ny, _] = g.dims;
-    let mut keep = vec![false; bricks.total()];
-    for (idx, v) in values.iter().enumerate() {
-        if v.abs() > limit {
-            continue;
-        }
-        let at = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
-        let lo = [0, 1, 2].map(|a| at[a].saturating_sub(d) / bricks.edge);
-        let hi = [0, 1, 2].map(|a| (at[a] + d).min(g.dims[a] - 1) / bricks.edge);
-        for bk in lo[2]..=hi[2] {
-            for bj in lo[1]..=hi[1] {
-                for bi in lo[0]..=hi[0] {
-                    keep[bi + bricks.count[0] * (bj + bricks.count[1] * bk)] = true;
-                }
-            }
-        }
-    }
-    keep
 }
 
 /// Maps float bits to integers in the same order as the floats, so that neighbouring values
@@ -355,9 +342,19 @@ fn q16_decode(q: u16, lo: f32, scale: f32) -> f32 {
 }
 
 /// Quantises `values` to words (and the bytes that precede them). `None` if the precision
-/// cannot represent them (f16 overflow, q16 range overflow).
-pub(crate) fn quantise(values: &[f32], p: Precision) -> Option<(Vec<u8>, Vec<u32>)> {
+/// cannot represent them (f16 overflow, q16 range overflow, fixed without a step or beyond
+/// 32 bits).
+pub(crate) fn quantise(
+    values: &[f32],
+    p: Precision,
+    fixed: Option<FixedScale>,
+) -> Option<(Vec<u8>, Vec<u32>)> {
     match p {
+        Precision::Fixed => {
+            let scale = fixed.filter(FixedScale::is_valid)?;
+            let words: Option<Vec<u32>> = values.iter().map(|&v| scale.word(v)).collect();
+            Some((Vec::new(), words?))
+        }
         Precision::F32 => Some((
             Vec::new(),
             values.iter().map(|v| order32(v.to_bits())).collect(),
@@ -392,8 +389,17 @@ pub(crate) fn quantise(values: &[f32], p: Precision) -> Option<(Vec<u8>, Vec<u32
 }
 
 /// The values that `words` decode to.
-pub(crate) fn dequantise(params: &[u8], words: &[u32], p: Precision) -> Vec<f32> {
+pub(crate) fn dequantise(
+    params: &[u8],
+    words: &[u32],
+    p: Precision,
+    fixed: Option<FixedScale>,
+) -> Vec<f32> {
     match p {
+        Precision::Fixed => match fixed {
+            Some(scale) => words.iter().map(|&w| scale.value(w)).collect(),
+            None => vec![f32::NAN; words.len()],
+        },
         Precision::F32 => words
             .iter()
             .map(|&w| f32::from_bits(unorder32(w)))
@@ -484,26 +490,42 @@ pub(crate) fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &Sparse
 /// The blobs of the stored bricks and their largest coefficient error.
 type Encoded = (Vec<Vec<u8>>, f32);
 
-/// Stored bricks under one precision: blobs and the largest coefficient error, or `None` if
-/// the precision cannot hold the values.
+/// Which stored coefficients the band needs (per grid node), and how many `fixed` steps the
+/// others may move.
+struct FreeNodes<'a> {
+    needed: &'a [bool],
+    tolerance_steps: i32,
+}
+
+/// Stored bricks under one precision: blobs and the largest error of a coefficient the band
+/// needs, or `None` if the precision cannot hold the values.
 fn encode_bricks(
     volume: &CoefficientVolume,
     bricks: &Bricks,
     keep: &[bool],
+    free: &FreeNodes,
     sp: &SparseParams,
     level: i32,
 ) -> Result<Option<Encoded>, String> {
     let mut blobs = Vec::new();
     let mut worst = 0.0f32;
     for b in (0..bricks.total()).filter(|&b| keep[b]) {
-        let values: Vec<f32> = bricks.nodes(b).map(|i| volume.coeffs[i]).collect();
-        let Some((params, words)) = quantise(&values, sp.precision) else {
+        let nodes: Vec<usize> = bricks.nodes(b).collect();
+        let values: Vec<f32> = nodes.iter().map(|&i| volume.coeffs[i]).collect();
+        let Some((params, mut words)) = quantise(&values, sp.precision, sp.fixed) else {
             return Ok(None);
         };
-        for (a, d) in values.iter().zip(dequantise(&params, &words, sp.precision)) {
-            worst = worst.max((a - d).abs());
-        }
         let (_, n) = bricks.extent(b);
+        let loose: Vec<bool> = nodes.iter().map(|&i| !free.needed[i]).collect();
+        if sp.precision == Precision::Fixed && free.tolerance_steps > 0 {
+            settle_free_words(&mut words, &loose, n, sp.predictor, free.tolerance_steps);
+        }
+        let decoded = dequantise(&params, &words, sp.precision, sp.fixed);
+        for ((a, d), l) in values.iter().zip(decoded).zip(&loose) {
+            if !l {
+                worst = worst.max((a - d).abs());
+            }
+        }
         let raw = brick_raw(&params, &words, n, sp);
         blobs.push(match sp.compression {
             Compression::None => raw,
@@ -533,8 +555,37 @@ pub fn encode_pgv_with(
     }
     CoefficientVolume::new(g, volume.basis, volume.coeffs.clone())
         .map_err(|e| fail(format!("invalid volume: {e}")))?;
+    // Steps in units of field error: a coefficient error δ moves the field by at most W·δ.
+    let weight = basis_weight_bound(volume.basis);
+    let scale = FixedScale {
+        step: opts.fixed_step * g.spacing / weight,
+        knee: (opts.fixed_knee as f64 / opts.fixed_step as f64)
+            .round()
+            .clamp(0.0, i32::MAX as f64) as u32,
+        ratio: opts.fixed_ratio,
+    };
+    if !scale.is_valid() {
+        return Err(fail(format!(
+            "fixed step {}, knee {}, ratio {}: the step must be finite and > 0, the ratio in \
+             1..={}",
+            opts.fixed_step,
+            opts.fixed_knee,
+            opts.fixed_ratio,
+            crate::fixed_step::MAX_RATIO
+        )));
+    }
     let bricks = Bricks::new(g.dims, opts.brick);
-    let keep = stored_bricks(volume, &bricks, opts.band);
+    let needed = needed_nodes(volume, opts.band);
+    let keep: Vec<bool> = (0..bricks.total())
+        .map(|b| bricks.nodes(b).any(|i| needed[i]))
+        .collect();
+    let free = FreeNodes {
+        needed: &needed,
+        // In coarse words, so that no value moves further than the tolerance.
+        tolerance_steps: (opts.free_tolerance
+            / (opts.fixed_step / weight * opts.fixed_ratio as f32))
+            .clamp(0.0, 1e9) as i32,
+    };
 
     // Background: sign by the brick's mean coefficient, magnitude the largest background one,
     // so a banded distance field keeps its clamp value exactly.
@@ -563,17 +614,19 @@ pub fn encode_pgv_with(
         compression: opts.compression,
         clamp,
         band: opts.band,
+        fixed: None,
     };
     let candidates: Vec<Precision> = match opts.precision {
         Some(p) => vec![p],
-        None => vec![Precision::Q16, Precision::F16],
+        None => vec![Precision::Q16, Precision::F16, Precision::Fixed],
     };
-    let tolerance = AUTO_TOLERANCE * g.spacing / basis_weight_bound(volume.basis);
+    let tolerance = AUTO_TOLERANCE * g.spacing / weight;
     let mut best: Option<(Precision, Vec<Vec<u8>>, f32)> = None;
     for p in candidates {
         sp.precision = p;
+        sp.fixed = (p == Precision::Fixed).then_some(scale);
         let Some((blobs, worst)) =
-            encode_bricks(volume, &bricks, &keep, &sp, opts.zstd_level).map_err(fail)?
+            encode_bricks(volume, &bricks, &keep, &free, &sp, opts.zstd_level).map_err(fail)?
         else {
             if opts.precision.is_some() {
                 return Err(fail(format!(
@@ -599,13 +652,14 @@ pub fn encode_pgv_with(
         Some(b) => b,
         None => {
             sp.precision = Precision::F32;
-            let (blobs, worst) = encode_bricks(volume, &bricks, &keep, &sp, opts.zstd_level)
+            let (blobs, worst) = encode_bricks(volume, &bricks, &keep, &free, &sp, opts.zstd_level)
                 .map_err(fail)?
                 .expect("f32 holds every finite value");
             (Precision::F32, blobs, worst)
         }
     };
     sp.precision = precision;
+    sp.fixed = (precision == Precision::Fixed).then_some(scale);
 
     let nb = bricks.total();
     let mut meta = vec![0u8; 2 * nb.div_ceil(8)];
@@ -712,6 +766,20 @@ pub(crate) fn layout<'a>(
             format!(
                 "{} stored bricks claimed, but there are only {nb}",
                 sp.stored
+            ),
+        ));
+    }
+    let scale_ok = match sp.fixed {
+        None => sp.precision != Precision::Fixed,
+        Some(f) => sp.precision == Precision::Fixed && f.is_valid(),
+    };
+    if !scale_ok {
+        return Err(err(
+            path,
+            format!(
+                "fixed scale {:?} with precision {}: 'fixed' needs a valid scale, others none",
+                sp.fixed,
+                sp.precision.name()
             ),
         ));
     }

@@ -90,6 +90,8 @@ fn variants() -> Vec<EncodeOptions> {
         (5, Precision::F32, Predictor::Lorenzo, Compression::Zstd),
         (3, Precision::Q16, Predictor::None, Compression::None),
         (32, Precision::F16, Predictor::Lorenzo, Compression::None),
+        (8, Precision::Fixed, Predictor::DeltaX, Compression::Zstd),
+        (6, Precision::Fixed, Predictor::Lorenzo, Compression::None),
     ] {
         all.push(EncodeOptions {
             precision: Some(precision),

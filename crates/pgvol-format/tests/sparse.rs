@@ -68,7 +68,11 @@ fn bricks(dims: [usize; 3], e: usize) -> Vec<([usize; 3], Vec<usize>)> {
 #[test]
 fn f32_round_trip_is_exact_on_stored_bricks_and_constant_elsewhere() {
     let f = sphere_file(30, Basis::Bspline3);
-    let (bytes, r) = encode_pgv_with(&f, &opts(Some(Precision::F32))).unwrap();
+    let o = EncodeOptions {
+        brick: 8,
+        ..opts(Some(Precision::F32))
+    };
+    let (bytes, r) = encode_pgv_with(&f, &o).unwrap();
     assert_eq!(r.precision, Precision::F32);
     assert_eq!(r.max_quantisation_error, 0.0);
     assert_eq!(r.bricks_total, 64);
@@ -183,6 +187,68 @@ fn auto_precision_stays_within_one_percent_of_the_spacing() {
     let (_, r) = encode_pgv_with(&big, &wide(None)).unwrap();
     assert_eq!(r.bricks_stored, r.bricks_total);
     assert_ne!(r.precision, Precision::F16);
+}
+
+/// `fixed` keeps the coefficients the band needs within half a step and moves the others by
+/// at most the free tolerance (plus half a coarse step), which makes the file smaller.
+#[test]
+fn fixed_moves_only_coefficients_the_band_does_not_need() {
+    let f = sphere_file(40, Basis::Bspline3);
+    let h = f.volume.grid.spacing;
+    let values = f.volume.sample(&f.volume.grid);
+    let fixed = |free_tolerance| EncodeOptions {
+        precision: Some(Precision::Fixed),
+        free_tolerance,
+        ..EncodeOptions::default()
+    };
+    let (strict, rs) = encode_pgv_with(&f, &fixed(0.0)).unwrap();
+    let (loose, rl) = encode_pgv_with(&f, &fixed(0.5)).unwrap();
+    assert!(
+        loose.len() < strict.len(),
+        "{} {}",
+        loose.len(),
+        strict.len()
+    );
+    assert_eq!(rs.max_quantisation_error, rl.max_quantisation_error);
+    let file = decode_pgv(&loose, p()).unwrap();
+    let s = file.header.sparse.as_ref().unwrap().fixed.unwrap();
+    let coarse = s.step * s.ratio as f32;
+    let clamp = file.header.sparse.as_ref().unwrap().clamp;
+    assert!(rl.max_quantisation_error <= coarse / 2.0 * 1.001, "{rl:?}");
+    let [nx, ny, nz] = f.volume.grid.dims;
+    let (mut moved, mut checked) = (0, 0);
+    for (idx, (&a, &d)) in f.volume.coeffs.iter().zip(&file.volume.coeffs).enumerate() {
+        let at = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
+        // Needed: within 2 nodes (the cubic reach) of a node within the band.
+        let mut needed = false;
+        for k in at[2].saturating_sub(2)..=(at[2] + 2).min(nz - 1) {
+            for j in at[1].saturating_sub(2)..=(at[1] + 2).min(ny - 1) {
+                for i in at[0].saturating_sub(2)..=(at[0] + 2).min(nx - 1) {
+                    needed |= values[i + nx * (j + ny * k)].abs() <= 3.0 * h;
+                }
+            }
+        }
+        if needed {
+            assert!((a - d).abs() <= coarse / 2.0 * 1.001, "{at:?}: {a} -> {d}");
+            checked += 1;
+        } else if d.abs() != clamp {
+            // Not in a background brick (whose value is the clamp).
+            assert!(
+                (a - d).abs() <= 0.5 * h + coarse / 2.0 * 1.001,
+                "{at:?}: {a} -> {d}"
+            );
+            moved += ((a - d).abs() > coarse) as usize;
+        }
+    }
+    assert!(checked > 1000 && moved > 100, "{checked} {moved}");
+    // Free coefficients move only towards zero, so the largest node value, which `pgvol offset`
+    // reads as the stored band, is no larger than without them.
+    let largest = |bytes: &[u8]| {
+        let v = decode_pgv(bytes, p()).unwrap().volume;
+        let values = v.sample(&v.grid);
+        values.iter().fold(0.0f32, |m, x| m.max(x.abs()))
+    };
+    assert!(largest(&loose) <= largest(&strict));
 }
 
 #[test]
@@ -439,6 +505,29 @@ fn damaged_sparse_files_give_clear_errors() {
     let mut h = split(&good);
     h.header["sparse"]["clamp"] = serde_json::json!(-1.0);
     assert!(msg(&join(&h, |_, o, l| (o, l))).contains("clamp"));
+    // The fixed scale: the automatic choice here, checked before any brick is decoded.
+    assert_eq!(parts.header["sparse"]["precision"], "fixed");
+    for (key, value) in [
+        ("ratio", serde_json::json!(0)),
+        ("ratio", serde_json::json!(1 << 20)),
+        ("step", serde_json::json!(-1.0)),
+        ("step", serde_json::json!(0.0)),
+    ] {
+        let mut h = split(&good);
+        h.header["sparse"]["fixed"][key] = value;
+        let e = msg(&join(&h, |_, o, l| (o, l)));
+        assert!(e.contains("fixed scale"), "{key}: {e}");
+    }
+    let mut h = split(&good);
+    h.header["sparse"].as_object_mut().unwrap().remove("fixed");
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("fixed scale"));
+    let mut h = split(&good);
+    h.header["sparse"]["precision"] = serde_json::json!("f16");
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("fixed scale"));
+    // A valid but huge step makes the words overflow f32.
+    let mut h = split(&good);
+    h.header["sparse"]["fixed"]["step"] = serde_json::json!(1e38);
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("non-finite"));
 
     // read_brick outside the grid.
     let e = read_brick(&good, p(), [0, 9, 0]).unwrap_err().to_string();
@@ -463,7 +552,7 @@ proptest! {
 
     #[test]
     fn corrupted_sparse_files_never_panic(
-        which in 0usize..3,
+        which in 0usize..4,
         edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..4),
         cut in any::<usize>(),
     ) {
@@ -484,7 +573,7 @@ proptest! {
         dims in proptest::array::uniform3(2usize..14),
         seed in any::<u64>(),
         scale in 1e-3f32..1e3,
-        which in 0usize..3,
+        which in 0usize..4,
         brick in 2usize..9,
         band in 0.0f32..3.0,
         predictor in 0usize..3,
@@ -508,10 +597,15 @@ proptest! {
             band,
             predictor: [Predictor::None, Predictor::DeltaX, Predictor::Lorenzo][predictor],
             zstd_level: 1,
+            // Every stored coefficient within the precision (free ones are tested apart).
+            free_tolerance: 0.0,
             ..EncodeOptions::default()
         };
         let (bytes, r) = encode_pgv_with(&f, &o).unwrap();
-        let back = decode_pgv(&bytes, p()).unwrap().volume.coeffs;
+        let decoded = decode_pgv(&bytes, p()).unwrap();
+        let fixed = decoded.header.sparse.as_ref().unwrap().fixed;
+        prop_assert_eq!(fixed.is_some(), precision == Precision::Fixed);
+        let back = decoded.volume.coeffs;
         let mut worst = 0.0f32;
         for (coords, idx) in bricks(dims, brick) {
             let b = read_brick(&bytes, p(), coords).unwrap();
@@ -533,6 +627,17 @@ proptest! {
                     Precision::Q16 => {
                         (hi - lo) / 65535.0 * 0.5 + 4.0 * f32::EPSILON * lo.abs().max(hi.abs())
                     }
+                    // Half the step where |a| lies (fine up to the knee, coarse beyond), plus
+                    // f32 rounding.
+                    Precision::Fixed => {
+                        let s = fixed.unwrap();
+                        let step = if a.abs() <= s.knee as f32 * s.step {
+                            s.step
+                        } else {
+                            s.step * s.ratio as f32
+                        };
+                        step * 0.5 + 4.0 * f32::EPSILON * a.abs()
+                    }
                 };
                 if precision == Precision::F32 {
                     prop_assert_eq!(a.to_bits(), d.to_bits());
@@ -541,7 +646,8 @@ proptest! {
                 worst = worst.max((a - d).abs());
             }
         }
-        prop_assert_eq!(worst, r.max_quantisation_error);
+        // The report counts the coefficients the band needs, a subset of the stored ones.
+        prop_assert!(r.max_quantisation_error <= worst);
     }
 }
 
@@ -573,6 +679,12 @@ fn fuzz_seed_corpus_decodes() {
                 Predictor::Lorenzo,
                 Compression::Zstd,
             ),
+            (
+                "sparse-fixed.pgv",
+                Precision::Fixed,
+                Predictor::DeltaX,
+                Compression::Zstd,
+            ),
         ] {
             let o = EncodeOptions {
                 precision: Some(precision),
@@ -593,5 +705,5 @@ fn fuzz_seed_corpus_decodes() {
         decode_pgv(&bytes, &path).unwrap();
         seen += 1;
     }
-    assert!(seen >= 4);
+    assert!(seen >= 5);
 }

@@ -1,0 +1,248 @@
+//! The `fixed` precision: coefficients as integer words on a piecewise-linear scale, a fine step
+//! up to a knee and a coarser one beyond (the surface depends on the small coefficients near
+//! it; the far ones only need the band's accuracy). Also the encoder's choice of the values of
+//! coefficients the surface band does not need, moved towards their prediction so their
+//! residuals are zero.
+
+use serde::{Deserialize, Serialize};
+
+use crate::sparse::{predict, Predictor};
+
+/// Default fine step of `fixed`, in grid spacings (`docs/format.md`, "How the encoder chooses").
+pub const FIXED_STEP: f32 = 1.0 / 512.0;
+/// Default knee of `fixed`, in grid spacings: the fine step holds for |c| up to this.
+pub const FIXED_KNEE: f32 = 1.0;
+/// Default ratio of the coarse step to the fine one.
+pub const FIXED_RATIO: u32 = 8;
+
+/// The header's `sparse.fixed` object: how a word maps to a coefficient.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FixedScale {
+    /// The fine step, in field units.
+    pub step: f32,
+    /// Words of magnitude up to `knee` are multiples of `step`.
+    pub knee: u32,
+    /// Beyond the knee, each word counts `ratio` steps.
+    pub ratio: u32,
+}
+
+/// [`FixedScale::value`], bit for bit, faster: while `n < 2²⁴` every step of the computation
+/// is exact in f32, so only larger words take the 64-bit path.
+pub(crate) struct FastScale {
+    scale: FixedScale,
+    /// Words of smaller magnitude have `n < 2²⁴`.
+    exact: u32,
+    knee: f32,
+    ratio_less_one: f32,
+}
+
+impl FastScale {
+    #[inline]
+    pub(crate) fn value(&self, w: u32) -> f32 {
+        if self.all_exact((w as i32).unsigned_abs()) {
+            self.exact_value(w)
+        } else {
+            self.scale.value(w)
+        }
+    }
+
+    /// Whether words of magnitude up to `largest` all take the f32 path.
+    #[inline]
+    pub(crate) fn all_exact(&self, largest: u32) -> bool {
+        largest < self.exact
+    }
+
+    /// The value of a word whose magnitude passes [`FastScale::all_exact`]; branch-free.
+    #[inline]
+    pub(crate) fn exact_value(&self, w: u32) -> f32 {
+        let a = (w as i32).unsigned_abs() as f32;
+        let v = (a + (a - self.knee).max(0.0) * self.ratio_less_one) * self.scale.step;
+        f32::from_bits(v.to_bits() | (w & 0x8000_0000))
+    }
+}
+
+/// The largest `ratio` a reader accepts.
+pub const MAX_RATIO: u32 = 1 << 16;
+
+impl FixedScale {
+    /// Whether a reader accepts these parameters.
+    pub fn is_valid(&self) -> bool {
+        self.step.is_finite()
+            && self.step > 0.0
+            && self.knee <= i32::MAX as u32
+            && (1..=MAX_RATIO).contains(&self.ratio)
+    }
+
+    /// The coefficient of a word: the word as a two's-complement integer `q`, its magnitude
+    /// `a` counted in steps `n = a` up to the knee, `n = knee + (a − knee) · ratio` beyond, and
+    /// the value `sign(q) · (n as f32) · step` in f32.
+    #[inline]
+    pub fn value(&self, word: u32) -> f32 {
+        // Branch-free (words near the knee would defeat branch prediction):
+        // `a + max(a − K, 0) · (R − 1)` equals both cases of `n`; the value is ≥ 0, so the
+        // word's sign bit is its sign.
+        let a = (word as i32).unsigned_abs() as i64;
+        let n = a + (a - self.knee as i64).max(0) * (self.ratio as i64 - 1);
+        let v = n as f32 * self.step;
+        f32::from_bits(v.to_bits() | (word & 0x8000_0000))
+    }
+
+    /// Constants for decoding many words quickly.
+    pub(crate) fn fast(&self) -> FastScale {
+        FastScale {
+            scale: *self,
+            exact: (1u32 << 24) / self.ratio.max(1),
+            knee: self.knee as f32,
+            ratio_less_one: self.ratio.saturating_sub(1) as f32,
+        }
+    }
+
+    /// The word nearest to `v` on this scale, or `None` if there is none (beyond 31 bits, or a
+    /// non-finite value either way).
+    pub fn word(&self, v: f32) -> Option<u32> {
+        let a = (v as f64 / self.step as f64).abs();
+        let k = self.knee as f64;
+        let m = if a.round() <= k {
+            a.round()
+        } else {
+            k + ((a - k) / self.ratio as f64).round()
+        };
+        if m.is_nan() || m >= i32::MAX as f64 {
+            return None;
+        }
+        let q = if v < 0.0 { -(m as i32) } else { m as i32 };
+        self.value(q as u32).is_finite().then_some(q as u32)
+    }
+}
+
+/// Default bound on how far a coefficient the band does not need may move, in grid spacings.
+pub const FREE_TOLERANCE: f32 = 0.5;
+
+/// Replaces each free word (`free[at]`, in coding order) by the word closest to its prediction
+/// from the words before it (already settled) among those between it and `tolerance` words
+/// nearer to zero, so that its residual is usually zero. Only towards zero: magnitudes never
+/// grow, so the field's largest node value (which `pgvol offset` reads as the stored band) does
+/// not either, and the sign stays. Words are two's-complement integers.
+pub(crate) fn settle_free_words(
+    words: &mut [u32],
+    free: &[bool],
+    n: [usize; 3],
+    pred: Predictor,
+    tolerance: i32,
+) {
+    for at in 0..words.len() {
+        if free[at] {
+            let p = predict(words, n, at, pred, u32::MAX) as i32;
+            let q = words[at] as i32;
+            let (lo, hi) = if q >= 0 {
+                (q.saturating_sub(tolerance).max(0), q)
+            } else {
+                (q, q.saturating_add(tolerance).min(0))
+            };
+            words[at] = p.clamp(lo, hi) as u32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scale_is_fine_up_to_the_knee_and_coarse_beyond() {
+        let s = FixedScale {
+            step: 0.5,
+            knee: 4,
+            ratio: 3,
+        };
+        assert!(s.is_valid());
+        let values: Vec<f32> = [0i32, 1, 4, 5, 6, -5, i32::MIN + 1]
+            .iter()
+            .map(|&q| s.value(q as u32))
+            .collect();
+        assert_eq!(values[..6], [0.0, 0.5, 2.0, 3.5, 5.0, -3.5]);
+        assert!(values[6] < -1e9);
+        // Nearest words: fine steps below the knee, coarse above, the sign kept.
+        assert_eq!(s.word(1.2), Some(2));
+        assert_eq!(s.word(-1.2), Some(-2i32 as u32));
+        assert_eq!(s.word(3.4), Some(5));
+        assert_eq!(s.word(4.4), Some(6));
+        assert_eq!(s.word(f32::NAN), None);
+        assert_eq!(s.word(1e30), None);
+        for bad in [
+            FixedScale { step: 0.0, ..s },
+            FixedScale {
+                step: f32::INFINITY,
+                ..s
+            },
+            FixedScale { ratio: 0, ..s },
+            FixedScale {
+                ratio: MAX_RATIO + 1,
+                ..s
+            },
+            FixedScale {
+                knee: u32::MAX,
+                ..s
+            },
+        ] {
+            assert!(!bad.is_valid(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn the_fast_path_gives_the_same_bits() {
+        for (step, knee, ratio) in [(0.37f32, 512u32, 8u32), (1e-3, 0, 1), (3.1, 5, 65536)] {
+            let scale = FixedScale { step, knee, ratio };
+            let fast = scale.fast();
+            let exact = (1u32 << 24) / ratio;
+            let mut words = Vec::new();
+            for centre in [0, knee, exact, 1 << 24, i32::MAX as u32] {
+                for d in 0..=40u32 {
+                    for q in [
+                        centre.wrapping_add(d).wrapping_sub(20),
+                        centre.wrapping_add(d),
+                    ] {
+                        words.extend([q, (q as i32).wrapping_neg() as u32]);
+                    }
+                }
+            }
+            for w in words {
+                assert_eq!(
+                    fast.value(w).to_bits(),
+                    scale.value(w).to_bits(),
+                    "{scale:?} {w}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn free_words_follow_the_prediction_within_the_tolerance() {
+        // A ramp along x with the middle words free: they become the ramp where it is within
+        // reach, and stop at the tolerance where it is not.
+        let mut words: Vec<u32> = [0i32, 10, 20, 999, 40, -999, 60]
+            .iter()
+            .map(|&v| v as u32)
+            .collect();
+        let free = [false, false, false, true, false, true, false];
+        settle_free_words(&mut words, &free, [7, 1, 1], Predictor::DeltaX, 5);
+        let got: Vec<i32> = words.iter().map(|&w| w as i32).collect();
+        // delta-x predicts the previous word.
+        assert_eq!(got, [0, 10, 20, 994, 40, -994, 60]);
+        let mut words: Vec<u32> = vec![3, 7, 12];
+        settle_free_words(
+            &mut words,
+            &[false, true, false],
+            [3, 1, 1],
+            Predictor::DeltaX,
+            5,
+        );
+        assert_eq!(words, [3, 3, 12]);
+        // Never away from zero, nor across it.
+        let mut words: Vec<u32> = [9i32, 5, -9, -5, 2, -3].iter().map(|&v| v as u32).collect();
+        let free = [false, true, false, true, false, true];
+        settle_free_words(&mut words, &free, [6, 1, 1], Predictor::DeltaX, 5);
+        let got: Vec<i32> = words.iter().map(|&w| w as i32).collect();
+        assert_eq!(got, [9, 5, -9, -5, 2, 0]);
+    }
+}
