@@ -256,3 +256,58 @@ def test_3mf_levelset(pgvol, spot):
     tol = scale / 65535 + 1e-6
     assert err.max() <= tol, f"3MF pixels off by {err.max():.3g} (tol {tol:.3g})"
     assert min(values) < 0 < max(values)
+
+
+def test_3mf_levelset_reads_in_lib3mf(pgvol, spot):
+    """The consortium's own library reads the export: one level set over a function of a 16-bit
+    image stack of the grid's size, and the sheets it hands out hold the field pgvol evaluates."""
+    import lib3mf
+
+    folder, pgv, info = spot
+    out = folder / "spot-lib3mf.3mf"
+    helpers.run_ok([pgvol, "export", pgv, "-o", out])
+    origin, h, (nx, ny, nz) = grid_of(info)
+    wrapper = lib3mf.get_wrapper()
+    model = wrapper.CreateModel()
+    model.QueryReader("3mf").ReadFromFile(str(out))
+
+    levelsets = model.GetLevelSets()
+    found = []
+    while levelsets.MoveNext():
+        found.append(levelsets.GetCurrentLevelSet())
+    assert len(found) == 1
+    levelset = found[0]
+    assert levelset.GetChannelName() == "red"
+    box = model.GetMeshObjectByID(levelset.GetMesh().GetResourceID())
+    assert (box.GetVertexCount(), box.GetTriangleCount()) == (8, 12)
+
+    functions = model.GetFunctions()
+    by_id = {}
+    while functions.MoveNext():
+        f = functions.GetCurrentFunction()
+        by_id[f.GetResourceID()] = f
+    function = by_id[levelset.GetFunction().GetResourceID()]
+    assert isinstance(function, lib3mf.FunctionFromImage3D)
+    stack = model.GetImageStackByID(function.GetImage3D().GetResourceID())
+    assert (stack.GetColumnCount(), stack.GetRowCount(), stack.GetSheetCount()) == (nx, ny, nz)
+    scale, offset = function.GetScale(), function.GetOffset()
+
+    # Node (i, j, k) is pixel (i, j) of sheet k; sample a few sheets through lib3mf's buffers.
+    fields = np.array([list(row) for row in levelset.GetTransform().Fields])
+    lin, trans = fields[:3], fields[3]
+    rng = np.random.default_rng(11)
+    points, values = [], []
+    for k in rng.choice(nz, size=4, replace=False):
+        img = decode_png16(bytes(stack.GetSheet(int(k)).WriteToBuffer()))
+        assert img.shape == (ny, nx)
+        for i, j in rng.integers(0, [nx, ny], size=(50, 2)):
+            uvw = np.array([(i + 0.5) / nx, (j + 0.5) / ny, (k + 0.5) / nz])
+            points.append(np.linalg.solve(lin.T, uvw - trans))
+            values.append(img[j, i] / 65535.0 * scale + offset)
+    points = np.array(points)
+    node = (points - origin) / h
+    assert np.abs(node - np.round(node)).max() < 1e-2
+    expected = evaluate(pgvol, pgv, points, folder, "lib3mf")
+    err = np.abs(np.array(values) - expected)
+    # lib3mf keeps the transform in single precision, which moves points by ~1e-7 of the box.
+    assert err.max() <= scale / 65535 + 1e-4 * h, f"values off by {err.max():.3g}"
