@@ -16,6 +16,32 @@ use crate::samples::Samples;
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).
 pub(crate) type Refine<'r> = dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + 'r;
 
+/// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`) along
+/// `axis` and giving the unit normal there: the position must come from [`onto_edge`].
+pub(crate) type PlaceWithNormal<'r> =
+    dyn Fn(Vec3, f32, Vec3, f32, usize) -> (Vec3, Vec3) + Sync + 'r;
+
+/// How crossings are placed: positions only, or with unit normals (for dual contouring), which
+/// are best taken while the field data around the edge is still in cache.
+#[derive(Clone, Copy)]
+pub(crate) enum Place<'r> {
+    Position(&'r Refine<'r>),
+    WithNormal(&'r PlaceWithNormal<'r>),
+}
+
+/// The crossing `p` found on the edge from `a` to `b` along `axis`, put onto the edge, and the
+/// unit `gradient` there (zero where there is none).
+pub(crate) fn with_normal(
+    a: Vec3,
+    b: Vec3,
+    axis: usize,
+    p: Vec3,
+    gradient: impl Fn(Vec3) -> Vec3,
+) -> (Vec3, Vec3) {
+    let p = onto_edge(a, b, axis, p);
+    (p, gradient(p).normalize_or_zero())
+}
+
 /// Bits of a node entry holding its crossed axes; the rest hold the index of its first crossing.
 const AXIS_BITS: u32 = 3;
 
@@ -32,6 +58,7 @@ struct BlockVertices {
     /// index of the node's first crossing. Indices grow with the node, which `locate` uses.
     node_edges: [u16; BLOCK_NODES],
     positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
 }
 
 /// Every crossing of the grid, block by block.
@@ -42,6 +69,8 @@ pub(crate) struct Crossings {
     base: Vec<u32>,
     /// All positions in global order: active blocks ascending, node scan order within a block.
     pub positions: Vec<Vec3>,
+    /// Unit normals at the positions with [`Place::WithNormal`], else empty.
+    pub normals: Vec<Vec3>,
 }
 
 impl Crossings {
@@ -115,12 +144,12 @@ impl Crossings {
 
 /// Finds and places all crossings, in parallel over the active blocks; the order does not
 /// depend on the number of threads.
-pub(crate) fn all_crossings(samples: &Samples, refine: &Refine, limit: u32) -> Crossings {
+pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Crossings {
     let blocks = active_blocks(samples);
     let vertices: Vec<BlockVertices> = blocks
         .active
         .par_iter()
-        .map(|&id| block_crossings(samples, blocks.origin(id), refine))
+        .map(|&id| block_crossings(samples, blocks.origin(id), place))
         .collect();
     let mut base = Vec::with_capacity(vertices.len());
     let mut n = 0usize;
@@ -130,26 +159,31 @@ pub(crate) fn all_crossings(samples: &Samples, refine: &Refine, limit: u32) -> C
         assert!(n < limit as usize, "too many vertices");
     }
     let mut positions = Vec::with_capacity(n);
+    let with_normals = matches!(place, Place::WithNormal(_));
+    let mut normals = Vec::with_capacity(if with_normals { n } else { 0 });
     for v in &vertices {
         positions.extend_from_slice(&v.positions);
+        normals.extend_from_slice(&v.normals);
     }
     Crossings {
         blocks,
         vertices,
         base,
         positions,
+        normals,
     }
 }
 
 /// Crossings of the edges owned by the block whose lowest node is `o`. The edges are found
 /// with bit operations on the box's inside masks; only crossed ones touch the samples again.
-fn block_crossings(samples: &Samples, o: [usize; 3], refine: &Refine) -> BlockVertices {
+fn block_crossings(samples: &Samples, o: [usize; 3], place: Place) -> BlockVertices {
     let masks = BoxMasks::read(samples, o);
     let mut out = BlockVertices {
         origin: o,
         masks,
         node_edges: [0; BLOCK_NODES],
         positions: Vec::new(),
+        normals: Vec::new(),
     };
     let nodes = masks.nodes;
     // An edge is owned when its lower node is, and exists when its upper node is in the grid.
@@ -210,8 +244,17 @@ fn block_crossings(samples: &Samples, o: [usize; 3], refine: &Refine) -> BlockVe
                     b[axis] += 1;
                     let vb = samples.values[samples.index(b[0], b[1], b[2])];
                     let (pa, pb) = (samples.node(a), samples.node(b));
-                    out.positions
-                        .push(onto_edge(pa, pb, axis, refine(pa, va, pb, vb)));
+                    match place {
+                        Place::Position(refine) => {
+                            let p = refine(pa, va, pb, vb);
+                            out.positions.push(onto_edge(pa, pb, axis, p));
+                        }
+                        Place::WithNormal(place) => {
+                            let (p, n) = place(pa, va, pb, vb, axis);
+                            out.positions.push(p);
+                            out.normals.push(n);
+                        }
+                    }
                 }
             }
         }

@@ -9,6 +9,9 @@
 //! doing the same: a tunnel through the face); such edges get a vertex in their middle, and the
 //! quads along them are fanned around their crossing instead of split in two.
 
+use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, AtomicU8};
+
 use glam::{DVec3, Vec3};
 use pgvol_mesh::Mesh;
 use rayon::prelude::*;
@@ -62,46 +65,46 @@ struct QuadRun {
     extra: Vec<u64>,
 }
 
-/// How crossings and their normals are found: `refine` places a crossing on its edge (as in
-/// `marching_cubes_with`), `gradient` gives the field's gradient at a crossing.
-pub(crate) struct Placement<'a> {
-    pub refine: &'a (dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync),
-    pub gradient: &'a (dyn Fn(Vec3) -> Vec3 + Sync),
-}
-
 pub(crate) fn dual_contour(
     samples: &Samples,
     crossings: &Crossings,
     field: &dyn Field,
-    gradient: &(dyn Fn(Vec3) -> Vec3 + Sync),
     options: &DualContourOptions,
 ) -> Mesh {
     let verts = crossings;
-    let normals: Vec<Vec3> = crossings
-        .positions
-        .par_iter()
-        .map(|&p| gradient(p).normalize_or_zero())
-        .collect();
-
+    let normals = &crossings.normals;
     let parts: Vec<CellVertices> = (0..crossings.blocks.active.len())
         .into_par_iter()
-        .map(|slot| block_vertices(samples, verts, &normals, field, options, slot))
+        .map(|slot| block_vertices(samples, verts, normals, field, options, slot))
         .collect();
 
+    // Each (crossing, ring slot) is written by exactly one cell, so the links can be stored in
+    // parallel; the atomics only make that expressible, the result does not depend on order.
     let n_crossings = crossings.positions.len();
-    let mut ring = vec![[UNSET; 4]; n_crossings];
-    let mut meta = vec![0u8; n_crossings];
-    let mut positions = Vec::new();
-    let mut double_faces = Vec::new();
-    for part in parts {
-        let first = positions.len() as u32;
+    let ring: Vec<[AtomicU32; 4]> = (0..n_crossings)
+        .map(|_| [UNSET; 4].map(AtomicU32::new))
+        .collect();
+    let meta: Vec<AtomicU8> = (0..n_crossings).map(|_| AtomicU8::new(0)).collect();
+    let mut firsts = Vec::with_capacity(parts.len());
+    let mut n_vertices = 0u32;
+    for part in &parts {
+        firsts.push(n_vertices);
+        n_vertices += part.positions.len() as u32;
+    }
+    parts.par_iter().zip(&firsts).for_each(|(part, &first)| {
         for link in &part.links {
-            ring[link.crossing as usize][link.slot as usize] = first + link.vertex;
-            meta[link.crossing as usize] = link.meta;
+            let g = link.crossing as usize;
+            ring[g][link.slot as usize].store(first + link.vertex, Relaxed);
+            meta[g].store(link.meta, Relaxed);
         }
+    });
+    let mut positions = Vec::with_capacity(n_vertices as usize);
+    let mut double_faces = Vec::with_capacity(n_vertices as usize);
+    for part in &parts {
         positions.extend_from_slice(&part.positions);
         double_faces.extend_from_slice(&part.double_faces);
     }
+    drop(parts);
     assert!(positions.len() < EXTRA_FLAG as usize, "too many vertices");
 
     let runs: Vec<QuadRun> = ring
@@ -120,8 +123,8 @@ pub(crate) fn dual_contour(
                     &positions,
                     &double_faces,
                     g,
-                    *r,
-                    meta[g as usize],
+                    r.each_ref().map(|v| v.load(Relaxed)),
+                    meta[g as usize].load(Relaxed),
                     &mut run,
                 );
             }
@@ -167,12 +170,16 @@ fn block_vertices(
     let table = case_table();
     let threshold = f64::from(options.singular_threshold);
     let inv_h = 1.0 / f64::from(samples.spacing);
+    // About one vertex and four links per owned crossing, with room for the crossings of
+    // neighbouring blocks that the block's cells also reach.
+    let owned = verts.block_len(slot);
     let mut part = CellVertices {
-        positions: Vec::new(),
-        double_faces: Vec::new(),
-        links: Vec::new(),
+        positions: Vec::with_capacity(owned + owned / 4),
+        double_faces: Vec::with_capacity(owned + owned / 4),
+        links: Vec::with_capacity(4 * owned + owned),
     };
     let (origin, masks) = verts.block(slot);
+    let find = |n: [usize; 3], axis: usize| verts.find_from(slot, origin, n, axis);
     for_crossed_cells(samples, table, origin, masks, |cell, case, joined| {
         let [i, j, k] = cell;
         let comps = components(case, joined);
@@ -185,7 +192,7 @@ fn block_vertices(
             crossed &= crossed - 1;
             let s = EDGE_START[e];
             let axis = edge_axis(e);
-            let g = verts.find([i + s[0], j + s[1], k + s[2]], axis);
+            let g = find([i + s[0], j + s[1], k + s[2]], axis);
             let lower = s[0] | (s[1] << 1) | (s[2] << 2);
             let lower_inside = (case >> lower) & 1 == 1;
             // Work in cell units about the lowest corner, so the QEF is well scaled.
@@ -212,7 +219,7 @@ fn block_vertices(
             if feature && options.feature_offset > 0.0 {
                 let plane = |e: usize| {
                     let s = EDGE_START[e];
-                    let g = verts.find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
+                    let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
                     (verts.positions[g as usize], normals[g as usize])
                 };
                 let edges = (0..12).filter(|&e| comps.edge_loop[e] == l as u8);

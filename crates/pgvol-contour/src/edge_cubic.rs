@@ -6,22 +6,65 @@
 //! B-spline control values along the edge come from 4 × 3 × 3 coefficients, a quarter of the
 //! reads of two general evaluations, and give the field anywhere on the edge.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use pgvol_field::{Basis, CoefficientVolume};
 
 use crate::cube::plane_axes;
+use crate::place::onto_edge;
+use crate::root::root_from_thirds;
 
 /// Weights of the cubic B-spline at a node, for the coefficients at offsets -1, 0, 1.
 const NODE_WEIGHTS: [f32; 3] = [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0];
 
-/// The field of `volume` at the third points of the grid edge from `a` to `b`, when `volume` is
-/// a cubic B-spline, `a` and `b` are adjacent nodes of its grid, and the edge's stencil lies
-/// inside the grid; `None` otherwise (the caller then evaluates the field in general).
-pub(crate) fn thirds_on_grid_edge(
-    volume: &CoefficientVolume,
-    a: Vec3,
-    b: Vec3,
-) -> Option<[f32; 2]> {
+/// The 4 × 3 × 3 coefficients around a grid edge: `coeffs` starts at the lowest, and
+/// `strides` step along the edge's axis and its two plane axes.
+struct EdgeStencil<'v> {
+    coeffs: &'v [f32],
+    strides: [usize; 3],
+    axis: usize,
+}
+
+impl EdgeStencil<'_> {
+    /// The coefficients at plane offsets `(du, dv)` and offsets -1..=2 along the edge.
+    #[inline]
+    fn line(&self, du: usize, dv: usize) -> Vec4 {
+        let [sa, su, sv] = self.strides;
+        let at = du * su + dv * sv;
+        Vec4::from_array(std::array::from_fn(|m| self.coeffs[at + m * sa]))
+    }
+
+    /// Control values of the field along the edge (lanes: offsets -1..=2): per position, the
+    /// node weights across, summed over the u offsets first, then over v.
+    #[inline]
+    fn value_control(&self) -> Vec4 {
+        let mut sum = Vec4::ZERO;
+        for (dv, &wv) in NODE_WEIGHTS.iter().enumerate() {
+            let across = NODE_WEIGHTS[0] * self.line(0, dv)
+                + NODE_WEIGHTS[1] * self.line(1, dv)
+                + NODE_WEIGHTS[2] * self.line(2, dv);
+            sum += wv * across;
+        }
+        sum
+    }
+
+    /// Control values of the slopes across the edge, along its first and second plane axes.
+    #[inline]
+    fn slope_controls(&self) -> [Vec4; 2] {
+        let mut control = [Vec4::ZERO; 2];
+        for dv in 0..3 {
+            for du in 0..3 {
+                let c = self.line(du, dv);
+                control[0] += (NODE_SLOPES[du] * NODE_WEIGHTS[dv]) * c;
+                control[1] += (NODE_WEIGHTS[du] * NODE_SLOPES[dv]) * c;
+            }
+        }
+        control
+    }
+}
+
+/// The stencil of the grid edge from `a` to `b` when `volume` is a cubic B-spline, `a` and `b`
+/// are adjacent nodes of its grid and the stencil lies inside the grid.
+fn edge_stencil(volume: &CoefficientVolume, a: Vec3, b: Vec3) -> Option<EdgeStencil<'_>> {
     if volume.basis != Basis::Bspline3 {
         return None;
     }
@@ -50,92 +93,72 @@ pub(crate) fn thirds_on_grid_edge(
     let n = n.map(|x| x as usize);
     let (u, v) = plane_axes(axis);
     let [nx, ny, _] = g.dims;
-    let strides = [1, nx, nx * ny];
-    let (sa, su, sv) = (strides[axis], strides[u], strides[v]);
+    let all = [1, nx, nx * ny];
+    let strides = [all[axis], all[u], all[v]];
+    let [sa, su, sv] = strides;
     // The lowest coefficient of the stencil, and the 4 x 3 x 3 block above it.
     let first = (n[0] + nx * (n[1] + ny * n[2])) - sa - su - sv;
-    let stencil = volume
+    let coeffs = volume
         .coeffs
         .get(first..=first + 3 * sa + 2 * su + 2 * sv)?;
-    let mut control = [0.0f32; 4];
-    for (m, c) in control.iter_mut().enumerate() {
-        let mut sum = 0.0f32;
-        for (dv, wv) in NODE_WEIGHTS.iter().enumerate() {
-            let row = m * sa + dv * sv;
-            let across = NODE_WEIGHTS[0] * stencil[row]
-                + NODE_WEIGHTS[1] * stencil[row + su]
-                + NODE_WEIGHTS[2] * stencil[row + 2 * su];
-            sum += wv * across;
-        }
-        *c = sum;
-    }
+    Some(EdgeStencil {
+        coeffs,
+        strides,
+        axis,
+    })
+}
+
+/// The field of `volume` at the third points of the grid edge from `a` to `b`, when `volume` is
+/// a cubic B-spline, `a` and `b` are adjacent nodes of its grid, and the edge's stencil lies
+/// inside the grid; `None` otherwise (the caller then evaluates the field in general).
+pub(crate) fn thirds_on_grid_edge(
+    volume: &CoefficientVolume,
+    a: Vec3,
+    b: Vec3,
+) -> Option<[f32; 2]> {
+    let control = edge_stencil(volume, a, b)?.value_control().to_array();
     Some([1.0 / 3.0, 2.0 / 3.0].map(|t| along_edge(control, t)))
 }
 
 /// Derivative weights of the cubic B-spline at a node, for the coefficients at offsets -1, 0, 1.
 const NODE_SLOPES: [f32; 3] = [-0.5, 0.0, 0.5];
 
-/// The gradient of `volume` at `p` when `volume` is a cubic B-spline and `p` lies on an edge of
-/// its grid whose stencil is inside the grid (as edge crossings do); `None` otherwise. The same
-/// 4 × 3 × 3 coefficients as [`thirds_on_grid_edge`] give the slope along the edge and, with
-/// the node derivative weights (-1/2, 0, 1/2), the two slopes across it.
-pub(crate) fn gradient_on_grid_edge(volume: &CoefficientVolume, p: Vec3) -> Option<Vec3> {
-    if volume.basis != Basis::Bspline3 {
+/// The crossing of `iso` on the grid edge from `a` (value `va`) to `b` (value `vb`), placed as
+/// [`thirds_on_grid_edge`] and `root_from_thirds` place it and put onto the edge, with the unit
+/// gradient there (zero where it vanishes), all from one read of the edge's stencil; `None`
+/// where [`thirds_on_grid_edge`] declines or a node value is not finite.
+pub(crate) fn crossing_on_grid_edge(
+    volume: &CoefficientVolume,
+    a: Vec3,
+    va: f32,
+    b: Vec3,
+    vb: f32,
+    iso: f32,
+) -> Option<(Vec3, Vec3)> {
+    if !(va.is_finite() && vb.is_finite()) {
         return None;
     }
-    let g = &volume.grid;
-    let q = g.to_grid(p);
-    let off = (q - q.round()).abs();
-    // The coordinate furthest from a node runs along the edge; the others sit on nodes.
-    let axis = (0..3).fold(0, |b, i| if off[i] > off[b] { i } else { b });
-    let (u, v) = plane_axes(axis);
-    if off[u] > 1e-3 || off[v] > 1e-3 {
-        return None;
-    }
-    let mut n = q.round().to_array();
-    n[axis] = q[axis].floor();
-    let t = q[axis] - n[axis];
-    let dims = g.dims.map(|d| d as f32);
-    let fits = (0..3).all(|i| {
-        let hi = if i == axis { 2.0 } else { 1.0 };
-        n[i] >= 1.0 && n[i] + hi <= dims[i] - 1.0
-    });
-    if !fits {
-        return None;
-    }
-    let n = n.map(|x| x as usize);
-    let [nx, ny, _] = g.dims;
-    let strides = [1, nx, nx * ny];
-    let (sa, su, sv) = (strides[axis], strides[u], strides[v]);
-    let first = (n[0] + nx * (n[1] + ny * n[2])) - sa - su - sv;
-    let stencil = volume
-        .coeffs
-        .get(first..=first + 3 * sa + 2 * su + 2 * sv)?;
-    // Per position along the edge: the value, u-slope and v-slope control values.
-    let mut control = [[0.0f32; 4]; 3];
-    for m in 0..4 {
-        for dv in 0..3 {
-            for du in 0..3 {
-                let c = stencil[m * sa + du * su + dv * sv];
-                control[0][m] += NODE_WEIGHTS[du] * NODE_WEIGHTS[dv] * c;
-                control[1][m] += NODE_SLOPES[du] * NODE_WEIGHTS[dv] * c;
-                control[2][m] += NODE_WEIGHTS[du] * NODE_SLOPES[dv] * c;
-            }
-        }
-    }
+    let stencil = edge_stencil(volume, a, b)?;
+    let axis = stencil.axis;
+    let value = stencil.value_control().to_array();
+    let thirds = [1.0 / 3.0, 2.0 / 3.0].map(|t| along_edge(value, t));
+    let p = onto_edge(a, b, axis, root_from_thirds(a, va, b, vb, thirds, iso));
+    let t = (p[axis] - a[axis]) / (b[axis] - a[axis]);
+    let [slope_u, slope_v] = stencil.slope_controls().map(|c| c.to_array());
     let s = 1.0 - t;
-    let slopes = [
+    let slopes = Vec4::new(
         -0.5 * s * s,
         1.5 * t * t - 2.0 * t,
         -(1.5 * s * s - 2.0 * s),
         0.5 * t * t,
-    ];
-    let dot = |w: [f32; 4], c: [f32; 4]| w[0] * c[0] + w[1] * c[1] + w[2] * c[2] + w[3] * c[3];
+    );
+    let (u, v) = plane_axes(axis);
     let mut grad = Vec3::ZERO;
-    grad[axis] = dot(slopes, control[0]);
-    grad[u] = along_edge(control[1], t);
-    grad[v] = along_edge(control[2], t);
-    Some(grad / g.spacing)
+    grad[axis] = slopes.dot(Vec4::from_array(value));
+    grad[u] = along_edge(slope_u, t);
+    grad[v] = along_edge(slope_v, t);
+    // Only the direction is wanted, so the spacing does not enter.
+    Some((p, grad.normalize_or_zero()))
 }
 
 /// The cubic B-spline with control values `c` at offsets -1, 0, 1, 2, at `t` in [0, 1].
@@ -183,20 +206,31 @@ mod tests {
                 assert!((got - want).abs() < 1e-5, "{n:?} {axis}: {got} vs {want}");
             }
         }
+        let mut checked = 0;
         for (n, axis, t) in [
             ([3, 4, 5], 0, 0.3),
             ([2, 1, 3], 1, 0.8),
             ([5, 2, 6], 2, 0.55),
         ] {
-            let mut p = grid.point(n[0], n[1], n[2]);
-            p[axis] += t * grid.spacing;
-            let got = gradient_on_grid_edge(&volume, p).unwrap();
-            let want = volume.eval(p).1;
-            assert!(
-                (got - want).length() < 1e-3 * want.length().max(1.0),
-                "{got} vs {want}"
-            );
+            // An iso level crossed at `t` along the edge, and node values on either side.
+            let a = grid.point(n[0], n[1], n[2]);
+            let mut m = n;
+            m[axis] += 1;
+            let b = grid.point(m[0], m[1], m[2]);
+            let iso = volume.value(a + (b - a) * t);
+            let (va, vb) = (volume.value(a), volume.value(b));
+            if (va < iso) == (vb < iso) {
+                continue;
+            }
+            let (p, normal) = crossing_on_grid_edge(&volume, a, va, b, vb, iso).unwrap();
+            assert!((volume.value(p) - iso).abs() < 1e-4, "{n:?} {axis}: {p}");
+            let want = volume.eval(p).1.normalize();
+            assert!((normal - want).length() < 1e-4, "{normal} vs {want}");
+            checked += 1;
         }
+        assert!(checked >= 2, "{checked}");
+        let (a, b) = (grid.point(3, 4, 5), grid.point(4, 4, 5));
+        assert!(crossing_on_grid_edge(&volume, a, f32::NAN, b, 1.0, 0.0).is_none());
         let corner = grid.point(0, 0, 0);
         assert!(thirds_on_grid_edge(&volume, corner, grid.point(1, 0, 0)).is_none());
         let a = grid.point(3, 4, 5);

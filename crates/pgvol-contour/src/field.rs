@@ -3,6 +3,8 @@
 use glam::Vec3;
 use pgvol_field::CoefficientVolume;
 
+use crate::cubic_eval::bspline3_value_gradient;
+
 /// A scalar field defined everywhere in space, with its gradient.
 ///
 /// The contouring functions take node samples for the topology and ask the field for vertex
@@ -21,9 +23,11 @@ impl Field for CoefficientVolume {
         CoefficientVolume::value(self, p)
     }
 
+    /// A cubic B-spline takes a dedicated path away from the border, where dual contouring
+    /// and surface nets make most of their evaluations.
     #[inline]
     fn value_gradient(&self, p: Vec3) -> (f32, Vec3) {
-        self.eval(p)
+        bspline3_value_gradient(self, p).unwrap_or_else(|| self.eval(p))
     }
 }
 

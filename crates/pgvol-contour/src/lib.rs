@@ -34,6 +34,7 @@ mod cells;
 mod components;
 mod crossings;
 mod cube;
+mod cubic_eval;
 mod decider;
 mod dual;
 mod edge_cubic;
@@ -60,7 +61,7 @@ use glam::Vec3;
 use pgvol_mesh::Mesh;
 use rayon::prelude::*;
 
-use crate::crossings::all_crossings;
+use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal};
 use crate::extract::{block_triangles, Part, EXTRA_FLAG};
 use crate::root::cubic_edge_root;
 use crate::samples::Samples;
@@ -109,7 +110,7 @@ pub fn marching_cubes_with(
     let Some(field) = checked_samples(values, dims, origin, spacing, iso) else {
         return Mesh::default();
     };
-    let crossings = all_crossings(&field, refine, EXTRA_FLAG);
+    let crossings = all_crossings(&field, Place::Position(refine), EXTRA_FLAG);
     let parts: Vec<Part> = (0..crossings.blocks.active.len())
         .into_par_iter()
         .map(|slot| block_triangles(&field, &crossings, slot))
@@ -183,8 +184,8 @@ pub struct DualContourOptions {
     /// crossings next to it; further away they are the faces' own. 0 keeps the crossings'
     /// planes. See `docs/algorithms.md` for the measurements behind the default.
     pub feature_offset: f32,
-    /// Move the vertex of every cell without a feature onto the zero set of the field (two
-    /// Newton steps, kept in the cell), where marching cubes puts its vertices; the plain QEF
+    /// Move the vertex of every cell without a feature onto the zero set of the field (one
+    /// Newton step, kept in the cell), where marching cubes puts its vertices; the plain QEF
     /// leaves it on the least-squares plane of the crossings, which blended normals tilt.
     /// Default `true`.
     pub project_smooth: bool,
@@ -258,18 +259,14 @@ pub fn dual_contour(
     field: &dyn Field,
     options: &DualContourOptions,
 ) -> Mesh {
-    let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
-    let gradient = |p| field.value_gradient(p).1;
-    let placement = dual::Placement {
-        refine: &refine,
-        gradient: &gradient,
+    let place = |a, va, b, vb, axis| {
+        let p = cubic_edge_root(field, a, va, b, vb, iso);
+        with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
     };
-    dual_contour_with(
-        values, dims, origin, spacing, iso, field, options, &placement,
-    )
+    dual_contour_with(values, dims, origin, spacing, iso, field, options, &place)
 }
 
-/// [`dual_contour`] with the edge crossings and their normals from `placement`.
+/// [`dual_contour`] with the edge crossings and their normals from `place`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dual_contour_with(
     values: &[f32],
@@ -279,13 +276,13 @@ pub(crate) fn dual_contour_with(
     iso: f32,
     field: &dyn Field,
     options: &DualContourOptions,
-    placement: &dual::Placement,
+    place: &PlaceWithNormal,
 ) -> Mesh {
     let Some(samples) = checked_samples(values, dims, origin, spacing, iso) else {
         return Mesh::default();
     };
-    let crossings = all_crossings(&samples, placement.refine, EXTRA_FLAG);
-    dual::dual_contour(&samples, &crossings, field, placement.gradient, options)
+    let crossings = all_crossings(&samples, Place::WithNormal(place), EXTRA_FLAG);
+    dual::dual_contour(&samples, &crossings, field, options)
 }
 
 /// Extracts the surface `value == iso` by naive surface nets (the `fast-surface-nets` crate,

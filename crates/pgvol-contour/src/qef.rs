@@ -74,24 +74,29 @@ impl Qef {
 
 impl Qef {
     /// The common case without the eigen decomposition: planes so nearly parallel that only
-    /// one direction passes the cut. With unit normals the eigenvalues sum to the trace; if the
-    /// Rayleigh quotient `q` of a direction leaves less than `cutoff` for the other two, each
-    /// of them is below the cut, and a few power steps refine the direction to the top
-    /// eigenvector, which then alone moves the point. `None` when the test fails.
+    /// one direction passes the cut. A few power steps bring a direction `v` close to the top
+    /// eigenvector; its Rayleigh quotient `q` is at most the largest eigenvalue, and the larger
+    /// eigenvalue `mu` of the matrix restricted to the plane orthogonal to `v` is at least the
+    /// second (Courant-Fischer), so `mu < q · threshold²` proves that only one direction passes,
+    /// whichever way the power steps converged. `v` then alone moves the point. `None` when the
+    /// test fails.
     fn solve_flat(&self, c: DVec3, rel_threshold: f64) -> Option<DVec3> {
         let a = self.ata;
-        let trace = a.x_axis.x + a.y_axis.y + a.z_axis.z;
         // Start from the column with the largest diagonal, which is never orthogonal to the
         // top eigenvector of a positive semi-definite matrix with a dominant eigenvalue.
         let diag = [a.x_axis.x, a.y_axis.y, a.z_axis.z];
         let col = (0..3).fold(0, |b, i| if diag[i] > diag[b] { i } else { b });
-        let mut v = a.col(col).try_normalize()?;
-        for _ in 0..3 {
-            v = (a * v).try_normalize()?;
-        }
+        // Unit normals keep every entry within ± the number of planes, so three unnormalised
+        // steps cannot overflow and one normalisation at the end suffices.
+        let v = (a * (a * (a * a.col(col)))).try_normalize()?;
         let q = v.dot(a * v);
         let cutoff = q * rel_threshold * rel_threshold;
-        if !(q > 0.0 && trace - q < cutoff) {
+        let (e1, e2) = v.any_orthonormal_pair();
+        let (ae1, ae2) = (a * e1, a * e2);
+        let (b11, b12, b22) = (e1.dot(ae1), e1.dot(ae2), e2.dot(ae2));
+        let half_gap = 0.5 * (b11 - b22);
+        let mu = 0.5 * (b11 + b22) + (half_gap * half_gap + b12 * b12).sqrt();
+        if !(q > 0.0 && mu < cutoff) {
             return None;
         }
         let r = self.atb - a * c;
@@ -101,50 +106,49 @@ impl Qef {
 
 /// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi rotations,
 /// which converge quadratically and stay accurate for the rank-deficient matrices met here.
+/// Only the six distinct entries are kept and rotated; feature cells solve two of these each.
 pub(crate) fn symmetric_eigen(m: DMat3) -> (DVec3, DMat3) {
-    let mut a = m.to_cols_array_2d();
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let scale: f64 = a.iter().flatten().map(|x| x * x).sum::<f64>();
+    let mut diag = [m.x_axis.x, m.y_axis.y, m.z_axis.z];
+    // `off[r]` is the entry between the two indices other than `r`.
+    let mut off = [m.z_axis.y, m.z_axis.x, m.y_axis.x];
+    let mut vectors = [DVec3::X, DVec3::Y, DVec3::Z];
+    let square = |x: [f64; 3]| x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+    let scale = square(diag) + 2.0 * square(off);
     for _sweep in 0..12 {
-        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        if off <= 1e-30 * scale || off == 0.0 {
+        // Off-diagonal entries below 1e-10 of the matrix leave eigenvector errors of that order
+        // (1e-10 cells in a vertex) and eigenvalue errors of its square: far below f32
+        // positions, and usually a sweep sooner than rounding level.
+        let rest = square(off);
+        if rest <= 1e-20 * scale || rest == 0.0 {
             break;
         }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q] == 0.0 {
+        for (p, q, r) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
+            let apq = off[r];
+            if apq == 0.0 {
                 continue;
             }
-            // Rotation angle zeroing a[p][q] (Golub & Van Loan, symmetric Schur).
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            // Rotation angle zeroing the (p, q) entry (Golub & Van Loan, symmetric Schur).
+            let theta = (diag[q] - diag[p]) / (2.0 * apq);
             let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
             let t = if theta == 0.0 { 1.0 } else { t };
             let c = 1.0 / (t * t + 1.0).sqrt();
             let s = t * c;
-            for row in &mut a {
-                let (akp, akq) = (row[p], row[q]);
-                row[p] = c * akp - s * akq;
-                row[q] = s * akp + c * akq;
-            }
-            let (rp, rq) = (a[p], a[q]);
-            for (k, (apk, aqk)) in rp.into_iter().zip(rq).enumerate() {
-                a[p][k] = c * apk - s * aqk;
-                a[q][k] = s * apk + c * aqk;
-            }
-            for row in &mut v {
-                let (vkp, vkq) = (row[p], row[q]);
-                row[p] = c * vkp - s * vkq;
-                row[q] = s * vkp + c * vkq;
-            }
+            diag[p] -= t * apq;
+            diag[q] += t * apq;
+            off[r] = 0.0;
+            // The entries (r, p) and (r, q).
+            let (arp, arq) = (off[q], off[p]);
+            off[q] = c * arp - s * arq;
+            off[p] = s * arp + c * arq;
+            let (vp, vq) = (vectors[p], vectors[q]);
+            vectors[p] = c * vp - s * vq;
+            vectors[q] = s * vp + c * vq;
         }
     }
-    let values = DVec3::new(a[0][0], a[1][1], a[2][2]);
-    // `v` holds eigenvectors as columns in row-major storage.
-    let vectors = DMat3::from_cols(
-        DVec3::new(v[0][0], v[1][0], v[2][0]),
-        DVec3::new(v[0][1], v[1][1], v[2][1]),
-        DVec3::new(v[0][2], v[1][2], v[2][2]),
-    );
-    (values, vectors)
+    (
+        DVec3::from_array(diag),
+        DMat3::from_cols_array_2d(&vectors.map(|v| v.to_array())),
+    )
 }
 
 #[cfg(test)]

@@ -4,7 +4,8 @@
 use glam::Vec3;
 use pgvol_field::{CoefficientVolume, Grid};
 
-use crate::edge_cubic::{gradient_on_grid_edge, thirds_on_grid_edge};
+use crate::crossings::with_normal;
+use crate::edge_cubic::{crossing_on_grid_edge, thirds_on_grid_edge};
 use crate::field::Field;
 use crate::root::{cubic_edge_root, edge_root, root_from_thirds};
 use crate::DualContourOptions;
@@ -118,12 +119,11 @@ pub fn contour_field(
     match method {
         Method::MarchingCubes => crate::marching_cubes_with(&values, dims, origin, h, iso, &refine),
         Method::DualContouring => {
-            let gradient = |p: Vec3| field.value_gradient(p).1;
-            let placement = crate::dual::Placement {
-                refine: &refine,
-                gradient: &gradient,
+            let place = |a, va, b, vb, axis| {
+                let p = refine(a, va, b, vb);
+                with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
             };
-            crate::dual_contour_with(&values, dims, origin, h, iso, field, options, &placement)
+            crate::dual_contour_with(&values, dims, origin, h, iso, field, options, &place)
         }
         Method::SurfaceNets => crate::surface_nets(&values, dims, origin, h, iso, field),
     }
@@ -160,13 +160,15 @@ pub fn contour_sampled(
         Method::MarchingCubes => crate::marching_cubes_with(values, dims, origin, h, iso, &refine),
         Method::DualContouring => {
             let options = DualContourOptions::default();
-            let gradient =
-                |p: Vec3| gradient_on_grid_edge(volume, p).unwrap_or_else(|| volume.eval(p).1);
-            let placement = crate::dual::Placement {
-                refine: &refine,
-                gradient: &gradient,
+            // On the volume's own grid, crossing and normal come from one read of the edge's
+            // coefficients; elsewhere as for marching cubes, then a general evaluation.
+            let place = |a, va, b, vb, axis| {
+                crossing_on_grid_edge(volume, a, va, b, vb, iso).unwrap_or_else(|| {
+                    let p = refine(a, va, b, vb);
+                    with_normal(a, b, axis, p, |p| volume.value_gradient(p).1)
+                })
             };
-            crate::dual_contour_with(values, dims, origin, h, iso, volume, &options, &placement)
+            crate::dual_contour_with(values, dims, origin, h, iso, volume, &options, &place)
         }
         Method::SurfaceNets => crate::surface_nets(values, dims, origin, h, iso, volume),
     }
