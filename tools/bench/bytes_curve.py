@@ -28,7 +28,7 @@ import meshcap  # noqa: E402
 from common import REPO_ROOT, mesh_file, pgvol_bin  # noqa: E402
 from objfile import read_obj  # noqa: E402
 
-PGV_RES = [40, 48, 64, 80, 96, 128, 160]
+PGV_RES = [40, 48, 64, 80, 96, 128, 160, 192, 256]
 DENSE_RES = [32, 40, 48, 64, 80, 96, 128]
 VDB_RES = [64, 96, 128, 192, 256]
 SAMPLES = 200_000
