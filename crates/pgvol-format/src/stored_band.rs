@@ -20,10 +20,8 @@ pub(crate) fn dilation(basis: Basis) -> usize {
 /// near thin features.
 pub(crate) fn needed_nodes(volume: &CoefficientVolume, band: f32) -> Vec<bool> {
     let g = &volume.grid;
-    let values = match volume.basis {
-        Basis::Trilinear => volume.coeffs.clone(),
-        _ => volume.sample(g),
-    };
+    // Three 3-tap passes for the B-splines instead of a full evaluation per node.
+    let values = pgvol_field::fit::node_values(volume);
     let limit = band * g.spacing;
     let mut mask: Vec<bool> = values.iter().map(|v| v.abs() <= limit).collect();
     let d = dilation(volume.basis);
