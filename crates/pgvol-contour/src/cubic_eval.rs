@@ -61,7 +61,7 @@ pub(crate) fn bspline3_value_gradient(volume: &CoefficientVolume, p: Vec3) -> Op
 /// Weights and derivative weights of the nodes at offsets -1, 0, 1, 2 from the cell start, at
 /// the fraction `t` of the cell.
 #[inline]
-fn weights(t: f32) -> ([f32; 4], [f32; 4]) {
+pub(crate) fn weights(t: f32) -> ([f32; 4], [f32; 4]) {
     let s = 1.0 - t;
     let (t2, s2) = (t * t, s * s);
     let w = [

@@ -164,13 +164,7 @@ pub(crate) fn crossing_on_grid_edge(
 /// The cubic B-spline with control values `c` at offsets -1, 0, 1, 2, at `t` in [0, 1].
 #[inline]
 fn along_edge(c: [f32; 4], t: f32) -> f32 {
-    let s = 1.0 - t;
-    let w = [
-        s * s * s / 6.0,
-        (3.0 * t * t * t - 6.0 * t * t + 4.0) / 6.0,
-        (3.0 * s * s * s - 6.0 * s * s + 4.0) / 6.0,
-        t * t * t / 6.0,
-    ];
+    let (w, _) = crate::cubic_eval::weights(t);
     w[0] * c[0] + w[1] * c[1] + w[2] * c[2] + w[3] * c[3]
 }
 
