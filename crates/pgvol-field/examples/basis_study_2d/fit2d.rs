@@ -5,6 +5,7 @@
 use super::basis2d::{weights, Basis2, Field2, Grid2};
 use super::dense::{cgls_iterations, relative_residual, Lu, Mat};
 use super::shapes::{Shape, P2};
+use pgvol_field::fit::golden_section as golden;
 
 /// One interpolation point per node and the value the field must take there.
 pub struct Points {
@@ -148,33 +149,5 @@ pub fn solve_quiet(basis: Basis2, grid: &Grid2, pts: &Points) -> Field2 {
         basis,
         grid: *grid,
         coeffs,
-    }
-}
-
-/// Golden-section minimisation of `cost` on [a, b] with `evaluations` calls.
-pub fn golden(cost: impl Fn(f64) -> f64, mut a: f64, mut b: f64, evaluations: usize) -> f64 {
-    let phi = 0.618_033_988_75;
-    let mut x1 = b - phi * (b - a);
-    let mut x2 = a + phi * (b - a);
-    let (mut f1, mut f2) = (cost(x1), cost(x2));
-    for _ in 2..evaluations.max(3) {
-        if f1 <= f2 {
-            b = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = b - phi * (b - a);
-            f1 = cost(x1);
-        } else {
-            a = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = a + phi * (b - a);
-            f2 = cost(x2);
-        }
-    }
-    if f1 <= f2 {
-        x1
-    } else {
-        x2
     }
 }

@@ -19,8 +19,9 @@ mod shapes;
 use rayon::prelude::*;
 
 use basis2d::{Basis2, Field2, Grid2};
-use fit2d::{golden, iso_points, node_points, search_like_pgvol, solve, solve_quiet, Points};
+use fit2d::{iso_points, node_points, search_like_pgvol, solve, solve_quiet, Points};
 use isoline::{error, trace, IsoError, Isoline, Samples};
+use pgvol_field::fit::golden_section as golden;
 use shapes::{study_shapes, Shape};
 
 /// The paper's grid: 13 × 13 nodes, spacing 1, so lengths in the tables are in spacings.

@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::golden::golden_section;
 use super::operator::Operator;
 use super::{
     project, report, to_f32, weighted_solve, FitOptions, FitReport, NodeSdf, SignedDistance,
@@ -136,29 +137,5 @@ fn search(
             f64::INFINITY
         }
     };
-    let phi = 0.618_034f32;
-    let (mut a, mut b) = (0.05f32, 1.0f32);
-    let mut x1 = b - phi * (b - a);
-    let mut x2 = a + phi * (b - a);
-    let (mut f1, mut f2) = (cost(x1), cost(x2));
-    for _ in 2..options.z_step_evaluations.max(3) {
-        if f1 <= f2 {
-            b = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = b - phi * (b - a);
-            f1 = cost(x1);
-        } else {
-            a = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = a + phi * (b - a);
-            f2 = cost(x2);
-        }
-    }
-    if f1 <= f2 {
-        x1
-    } else {
-        x2
-    }
+    golden_section(|z| cost(z as f32), 0.05, 1.0, options.z_step_evaluations) as f32
 }

@@ -4,6 +4,7 @@
 
 mod band_operator;
 mod band_rows;
+mod golden;
 mod interp;
 mod iso;
 mod node_values;
@@ -11,6 +12,7 @@ pub mod operator;
 pub mod solve;
 mod wls;
 
+pub use golden::golden_section;
 pub use interp::{collocation_is_spd, lattice_symbol_min};
 pub use node_values::node_values;
 pub use wls::wls_band;
