@@ -74,22 +74,29 @@ pub(crate) fn weights(t: f32) -> ([f32; 4], [f32; 4]) {
     (w, d)
 }
 
+/// A cubic B-spline volume through pseudo-random samples on a small, off-origin grid, for
+/// checking the fast paths against the general evaluation.
+#[cfg(test)]
+pub(crate) fn rough_volume() -> CoefficientVolume {
+    let grid = pgvol_field::Grid {
+        origin: Vec3::new(-1.0, -0.5, 0.25),
+        spacing: 0.1,
+        dims: [12, 10, 9],
+    };
+    let samples: Vec<f32> = (0..grid.len())
+        .map(|i| ((i * 7919) % 101) as f32 / 50.0 - 1.0)
+        .collect();
+    CoefficientVolume::interpolate(grid, Basis::Bspline3, samples).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pgvol_field::Grid;
 
     #[test]
     fn matches_general_evaluation_inside_and_declines_near_the_border() {
-        let grid = Grid {
-            origin: Vec3::new(-1.0, -0.5, 0.25),
-            spacing: 0.1,
-            dims: [12, 10, 9],
-        };
-        let samples: Vec<f32> = (0..grid.len())
-            .map(|i| ((i * 7919) % 101) as f32 / 50.0 - 1.0)
-            .collect();
-        let volume = CoefficientVolume::interpolate(grid, Basis::Bspline3, samples).unwrap();
+        let volume = rough_volume();
+        let grid = volume.grid;
         let mut checked = 0;
         for n in 0..500u32 {
             // A scatter of points over the whole box and a little beyond.

@@ -171,19 +171,11 @@ fn along_edge(c: [f32; 4], t: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pgvol_field::Grid;
 
     #[test]
     fn matches_general_evaluation_inside_and_declines_elsewhere() {
-        let grid = Grid {
-            origin: Vec3::new(-1.0, -0.5, 0.25),
-            spacing: 0.1,
-            dims: [12, 10, 9],
-        };
-        let samples: Vec<f32> = (0..grid.len())
-            .map(|i| ((i * 7919) % 101) as f32 / 50.0 - 1.0)
-            .collect();
-        let volume = CoefficientVolume::interpolate(grid, Basis::Bspline3, samples).unwrap();
+        let volume = crate::cubic_eval::rough_volume();
+        let grid = volume.grid;
         for (n, axis) in [
             ([3, 4, 5], 0),
             ([1, 1, 1], 1),
