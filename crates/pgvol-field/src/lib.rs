@@ -17,4 +17,5 @@ pub use fit::{
 };
 pub use kernel::{Jet, Kernel};
 pub use pgvol_sdf::grid::{Grid, MAX_GRID_NODES};
+pub use stencil::mirror;
 pub use volume::{CoefficientVolume, FieldError};

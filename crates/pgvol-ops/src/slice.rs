@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use pgvol_field::kernel::{axis_window, AxisWindow, Profile};
-use pgvol_field::{Basis, CoefficientVolume};
+use pgvol_field::{mirror, Basis, CoefficientVolume};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -275,19 +275,6 @@ impl LayerField for CollapsedPlane {
         let outside = Vec3::new(u - qu, v - qv, self.off_axis).length();
         value + outside
     }
-}
-
-/// Reflects an index about the end nodes, as the field's evaluation does.
-fn mirror(i: i64, n: usize) -> usize {
-    let n = n as i64;
-    let m = if i < 0 {
-        -i
-    } else if i >= n {
-        2 * (n - 1) - i
-    } else {
-        i
-    };
-    m.clamp(0, n - 1) as usize
 }
 
 /// Cuts the solid `field < 0` by the planes of [`layer_heights`] within `bounds`.

@@ -3,6 +3,7 @@
 //! pseudo-Gaussian sees zero coefficients outside the grid, as in the paper.
 
 use super::shapes::P2;
+use pgvol_field::mirror;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Basis2 {
@@ -75,19 +76,6 @@ impl Grid2 {
     pub fn contains(&self, p: P2) -> bool {
         p.iter().all(|&v| v >= self.origin && v <= self.hi())
     }
-}
-
-/// Reflects an index about the end nodes (whole-sample symmetry).
-fn mirror(i: i64, n: usize) -> usize {
-    let n = n as i64;
-    let m = if i < 0 {
-        -i
-    } else if i >= n {
-        2 * (n - 1) - i
-    } else {
-        i
-    };
-    m.clamp(0, n - 1) as usize
 }
 
 /// The nodes whose basis functions are non-zero at `p`, with their values (a node may appear
