@@ -1,4 +1,5 @@
-//! Dual contouring with one vertex per surface component of each cell.
+//! Dual meshes with one vertex per surface component of each cell: dual contouring and surface
+//! nets, which differ only in where that vertex goes.
 //!
 //! The components are the loops of the face-traced contour that marching cubes triangulates, so
 //! the dual mesh is the polygonal dual of the marching cubes surface: each loop becomes a vertex,
@@ -23,6 +24,7 @@ use crate::cube::{edge_axis, plane_axes, EDGE_START};
 use crate::decider::joins_inside;
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
+use crate::project::project;
 use crate::qef::Qef;
 use crate::quads::split_quad;
 use crate::samples::Samples;
@@ -36,6 +38,9 @@ const CELL_MARGIN: f64 = 1e-3;
 /// Longest move, in cells, of a smooth piece's vertex onto the zero set.
 const MAX_PROJECTION: f32 = 0.25;
 
+/// Newton steps taking a surface nets vertex onto the zero set.
+const NEWTON_STEPS: usize = 3;
+
 /// Crossings per parallel task when building quads.
 const QUAD_CHUNK: usize = 4096;
 
@@ -43,6 +48,16 @@ const QUAD_CHUNK: usize = 4096;
 const CENTRE_KEY: u64 = 1 << 63;
 
 const UNSET: u32 = u32::MAX;
+
+/// How the vertex of each loop is placed.
+#[derive(Clone, Copy)]
+pub(crate) enum Placement<'o> {
+    /// At the least-squares meeting point of the crossings' tangent planes (dual contouring);
+    /// the crossings must carry normals.
+    Planes(&'o DualContourOptions),
+    /// At the mean of the crossings, moved onto the zero set (surface nets).
+    Mean,
+}
 
 struct CellVertices {
     positions: Vec<Vec3>,
@@ -69,13 +84,12 @@ pub(crate) fn dual_contour(
     samples: &Samples,
     crossings: &Crossings,
     field: &dyn Field,
-    options: &DualContourOptions,
+    placement: Placement,
 ) -> Mesh {
     let verts = crossings;
-    let normals = &crossings.normals;
     let parts: Vec<CellVertices> = (0..crossings.blocks.active.len())
         .into_par_iter()
-        .map(|slot| block_vertices(samples, verts, normals, field, options, slot))
+        .map(|slot| block_vertices(samples, verts, field, placement, slot))
         .collect();
 
     // Each (crossing, ring slot) is written by exactly one cell, so the links can be stored in
@@ -162,13 +176,12 @@ pub(crate) fn dual_contour(
 fn block_vertices(
     samples: &Samples,
     verts: &Crossings,
-    normals: &[Vec3],
     field: &dyn Field,
-    options: &DualContourOptions,
+    placement: Placement,
     slot: usize,
 ) -> CellVertices {
     let table = case_table();
-    let threshold = f64::from(options.singular_threshold);
+    let normals = &verts.normals;
     let inv_h = 1.0 / f64::from(samples.spacing);
     // About one vertex and four links per owned crossing, with room for the crossings of
     // neighbouring blocks that the block's cells also reach.
@@ -197,68 +210,102 @@ fn block_vertices(
             let lower_inside = (case >> lower) & 1 == 1;
             // Work in cell units about the lowest corner, so the QEF is well scaled.
             let p = (verts.positions[g as usize] - corner).as_dvec3() * inv_h;
-            let mut n = normals[g as usize].as_dvec3();
-            if n == DVec3::ZERO {
-                // No usable gradient: the edge itself, from inside to outside, is the best
-                // available normal.
-                n = DVec3::ZERO;
-                n[axis] = if lower_inside { 1.0 } else { -1.0 };
+            let l = comps.edge_loop[e] as usize;
+            if let Placement::Planes(_) = placement {
+                let mut n = normals[g as usize].as_dvec3();
+                if n == DVec3::ZERO {
+                    // No usable gradient: the edge itself, from inside to outside, is the best
+                    // available normal.
+                    n[axis] = if lower_inside { 1.0 } else { -1.0 };
+                }
+                qefs[l].add(p, n);
+            } else {
+                qefs[l].add_point(p);
             }
-            let l = comps.edge_loop[e];
-            qefs[l as usize].add(p, n);
             part.links.push(Link {
                 crossing: g,
-                vertex: first + u32::from(l),
+                vertex: first + l as u32,
                 slot: ring_slot(e) as u8,
                 meta: axis as u8 | (u8::from(lower_inside) << 2),
             });
         }
         for (l, qef) in qefs.iter().take(comps.n_loops as usize).enumerate() {
-            let c = qef.mass_point();
-            let (mut x, feature) = qef.solve_about(c, threshold);
-            if feature && options.feature_offset > 0.0 {
-                let plane = |e: usize| {
-                    let s = EDGE_START[e];
-                    let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
-                    (verts.positions[g as usize], normals[g as usize])
-                };
-                let edges = (0..12).filter(|&e| comps.edge_loop[e] == l as u8);
-                let centre = corner + c.as_vec3() * samples.spacing;
-                let offset = options.feature_offset * samples.spacing;
-                let mut away = Qef::default();
-                for (p, n) in edges.map(plane) {
-                    let (q, m) = plane_away(field, p, n, centre, offset, samples.iso);
-                    away.add((q - corner).as_dvec3() * inv_h, m.as_dvec3());
+            let x = match placement {
+                Placement::Mean => mean_on_surface(field, samples, corner, qef.mass_point()),
+                Placement::Planes(options) => {
+                    let planes = (0..12).filter(|&e| comps.edge_loop[e] == l as u8).map(|e| {
+                        let s = EDGE_START[e];
+                        let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
+                        (verts.positions[g as usize], normals[g as usize])
+                    });
+                    plane_vertex(qef, planes, field, samples, corner, options)
                 }
-                // Taken only where it stays in the cell: elsewhere the field is not a pair of
-                // smooth faces at this scale, and the crossings' own planes are safer.
-                let y = away.solve_about(c, threshold).0;
-                if y.cmpge(DVec3::ZERO).all() && y.cmple(DVec3::ONE).all() {
-                    x = y;
-                }
-            } else if !feature && options.project_smooth {
-                // A smooth piece: onto the zero set, as marching cubes vertices are. Only a
-                // short move is taken: a long one means the field is not smooth at this
-                // scale, and the QEF point keeps the mesh's orientation safe there.
-                let h = samples.spacing;
-                let p = corner + x.as_vec3() * h;
-                let (lo, hi) = (corner, corner + Vec3::splat(h));
-                let q = crate::project::project(field, p.clamp(lo, hi), samples.iso, lo, hi, 1);
-                if q.distance(p) < MAX_PROJECTION * h {
-                    x = ((q - corner) / h).as_dvec3();
-                }
-            }
-            if !x.is_finite() {
-                x = c;
-            }
-            if options.clamp_to_cell {
-                x = x.clamp(DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN));
-            }
+            };
             part.positions.push(corner + x.as_vec3() * samples.spacing);
             part.double_faces.push(comps.double_faces[l]);
         }
     });
     part
+}
+
+/// Dual contouring's vertex, in cell units about `corner`, of a loop whose crossings give the
+/// tangent planes `qef` and, one by one, `planes` (point and unit normal).
+fn plane_vertex(
+    qef: &Qef,
+    planes: impl Iterator<Item = (Vec3, Vec3)>,
+    field: &dyn Field,
+    samples: &Samples,
+    corner: Vec3,
+    options: &DualContourOptions,
+) -> DVec3 {
+    let threshold = f64::from(options.singular_threshold);
+    let h = samples.spacing;
+    let inv_h = 1.0 / f64::from(h);
+    let c = qef.mass_point();
+    let (mut x, feature) = qef.solve_about(c, threshold);
+    if feature && options.feature_offset > 0.0 {
+        let centre = corner + c.as_vec3() * h;
+        let offset = options.feature_offset * h;
+        let mut away = Qef::default();
+        for (p, n) in planes {
+            let (q, m) = plane_away(field, p, n, centre, offset, samples.iso);
+            away.add((q - corner).as_dvec3() * inv_h, m.as_dvec3());
+        }
+        // Taken only where it stays in the cell: elsewhere the field is not a pair of smooth
+        // faces at this scale, and the crossings' own planes are safer.
+        let y = away.solve_about(c, threshold).0;
+        if y.cmpge(DVec3::ZERO).all() && y.cmple(DVec3::ONE).all() {
+            x = y;
+        }
+    } else if !feature && options.project_smooth {
+        // A smooth piece: onto the zero set, as marching cubes vertices are. Only a short move
+        // is taken: a long one means the field is not smooth at this scale, and the QEF point
+        // keeps the mesh's orientation safe there.
+        let p = corner + x.as_vec3() * h;
+        let (lo, hi) = (corner, corner + Vec3::splat(h));
+        let q = project(field, p.clamp(lo, hi), samples.iso, lo, hi, 1);
+        if q.distance(p) < MAX_PROJECTION * h {
+            x = ((q - corner) / h).as_dvec3();
+        }
+    }
+    if !x.is_finite() {
+        x = c;
+    }
+    if options.clamp_to_cell {
+        x = x.clamp(DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN));
+    }
+    x
+}
+
+/// Surface nets' vertex, in cell units about `corner`: the mean `c` of the loop's crossings,
+/// moved onto the zero set by Newton steps that stay in the cell, clear of its faces.
+fn mean_on_surface(field: &dyn Field, samples: &Samples, corner: Vec3, c: DVec3) -> DVec3 {
+    let h = samples.spacing;
+    let margin = Vec3::splat(CELL_MARGIN as f32 * h);
+    let (lo, hi) = (corner + margin, corner + Vec3::splat(h) - margin);
+    let p = (corner + c.as_vec3() * h).clamp(lo, hi);
+    let q = project(field, p, samples.iso, lo, hi, NEWTON_STEPS);
+    ((q - corner) / h).as_dvec3()
 }
 
 /// The tangent plane (point and unit normal) of `field` at `offset` from the crossing `p` (with

@@ -3,8 +3,8 @@
 //! Three methods share the conventions below: [`marching_cubes`] (vertices on grid edges),
 //! [`dual_contour`] (one vertex per surface component of a cell, placed by the tangent planes
 //! of a continuous [`Field`], so sharp features survive; same topology guarantees as marching
-//! cubes) and [`surface_nets`] (one vertex per cell through the `fast-surface-nets` crate,
-//! projected onto the field; closed and oriented but not manifold at ambiguous faces).
+//! cubes) and [`surface_nets`] (the same topology, each vertex at the mean of its crossings
+//! moved onto the field).
 //! [`min_angle_histogram`] reports triangle quality.
 //!
 //! [`marching_cubes`] extracts the iso-surface of values sampled on a regular grid. Unlike the
@@ -40,7 +40,6 @@ mod dual;
 mod edge_cubic;
 mod extract;
 mod field;
-mod nets;
 mod place;
 mod project;
 mod qef;
@@ -62,6 +61,7 @@ use pgvol_mesh::Mesh;
 use rayon::prelude::*;
 
 use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal};
+use crate::dual::Placement;
 use crate::extract::{block_triangles, Part, EXTRA_FLAG};
 use crate::root::cubic_edge_root;
 use crate::samples::Samples;
@@ -282,27 +282,22 @@ pub(crate) fn dual_contour_with(
         return Mesh::default();
     };
     let crossings = all_crossings(&samples, Place::WithNormal(place), EXTRA_FLAG);
-    dual::dual_contour(&samples, &crossings, field, options)
+    dual::dual_contour(&samples, &crossings, field, Placement::Planes(options))
 }
 
-/// Extracts the surface `value == iso` by naive surface nets (the `fast-surface-nets` crate,
-/// run on 32³-cell chunks in parallel), then moves each vertex onto the zero set of `field` by
-/// Newton steps along its gradient, kept inside the vertex's cell.
+/// Extracts the surface `value == iso` by surface nets: one vertex per surface component of
+/// each cell, at the mean of the component's edge crossings, moved onto the zero set of `field`
+/// by Newton steps along its gradient that stay inside the cell.
 ///
-/// Inputs are as for [`dual_contour`]. One vertex per cell with a sign change, so cells with
-/// several surface components join them into one vertex. Guarantees, wherever the inside region
-/// stays away from the grid border:
+/// Inputs are as for [`dual_contour`], and so is the topology: the mesh is the dual of the
+/// [`marching_cubes`] surface, with the same guarantees (watertight, manifold, oriented,
+/// non-degenerate, deterministic, sparse). Crossings are the roots of the field along each edge
+/// as in [`marching_cubes_on_field`]; no normals are needed, so this is cheaper than
+/// [`dual_contour`] and rounds sharp features off where dual contouring keeps them.
 ///
-/// * **Watertight and oriented**: every directed edge is matched by exactly one opposite one
-///   per triangle pair, i.e. each edge has two triangles, or four at a grid face whose four
-///   edges are all crossed (there the mesh is not manifold); normals point towards increasing
-///   values; chunk seams are welded by cell, so there is no border inside the grid.
-/// * **Non-degenerate**: vertices stay a 1e-3 fraction of a cell clear of the cell faces, and
-///   each quad is split along the diagonal giving two triangles facing its edge.
-/// * **Deterministic**: identical output for any number of threads.
-///
-/// Not guaranteed: manifold edges and vertices at ambiguous faces (see the tests for how often
-/// that happens).
+/// Classic surface nets (and the `fast-surface-nets` crate) make one vertex per cell, which
+/// joins two sheets passing through one cell into a vertex that is not a manifold; the tests
+/// compare this function with that crate wherever every cell holds one component.
 ///
 /// # Panics
 ///
@@ -318,7 +313,9 @@ pub fn surface_nets(
     let Some(samples) = checked_samples(values, dims, origin, spacing, iso) else {
         return Mesh::default();
     };
-    nets::surface_nets(&samples, field)
+    let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
+    let crossings = all_crossings(&samples, Place::Position(&refine), EXTRA_FLAG);
+    dual::dual_contour(&samples, &crossings, field, Placement::Mean)
 }
 
 /// Checks the grid description; `None` when the grid has no cells.

@@ -33,6 +33,12 @@ impl Qef {
         self.count += 1;
     }
 
+    /// Adds a crossing without its plane, for callers that only need the mass point.
+    pub fn add_point(&mut self, p: DVec3) {
+        self.sum += p;
+        self.count += 1;
+    }
+
     pub fn mass_point(&self) -> DVec3 {
         self.sum / f64::from(self.count.max(1))
     }

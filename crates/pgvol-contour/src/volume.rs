@@ -16,7 +16,7 @@ pub enum Method {
     /// Marching cubes with vertices on the continuous field: watertight and manifold.
     #[default]
     MarchingCubes,
-    /// Surface nets with vertices projected onto the field: closed, not always manifold.
+    /// Surface nets with vertices projected onto the field: watertight and manifold, smooth.
     SurfaceNets,
     /// Manifold dual contouring with the analytic gradients: keeps sharp features.
     DualContouring,

@@ -142,7 +142,7 @@ pub enum MethodArg {
     /// Marching cubes, vertices on the continuous field: watertight and manifold.
     #[default]
     Mc,
-    /// Surface nets, vertices projected onto the field: closed, smooth, not always manifold.
+    /// Surface nets, vertices projected onto the field: watertight, manifold, smooth.
     Sn,
     /// Dual contouring with the analytic gradients: keeps sharp edges, manifold.
     Dc,

@@ -2,8 +2,8 @@
 
 mod ambiguous;
 mod dc_features;
-mod dc_topology;
 mod determinism;
+mod dual_topology;
 mod fields;
 mod grids;
 mod nets;

@@ -1,23 +1,35 @@
-//! Dual contouring is the dual of the marching cubes surface: the same closed, oriented
-//! manifold topology on every input.
+//! Dual contouring and surface nets are duals of the marching cubes surface: the same closed,
+//! oriented manifold topology on every input.
 
 use proptest::prelude::*;
 
 use crate::grids::{checkerboard, random_field, single_cell, Rng, Samples};
 use crate::topology::{check_closed_manifold, check_surface};
 
-/// Checks the dual mesh and that it has the marching cubes surface's topology: the same Euler
-/// characteristic and the same number of components.
-fn check_dual_of_mc(samples: &Samples, iso: f32) {
+/// Checks both dual meshes and that they have the marching cubes surface's topology: the same
+/// Euler characteristic and the same number of components.
+pub fn check_dual_of_mc(samples: &Samples, iso: f32) {
     let mc = samples.contour(iso);
-    let dc = samples.dual_trilinear(iso);
-    assert_eq!(mc.triangles.is_empty(), dc.triangles.is_empty());
-    if mc.triangles.is_empty() {
-        return;
+    for (method, dual) in [
+        ("dual contouring", samples.dual_trilinear(iso)),
+        ("surface nets", samples.nets_trilinear(iso)),
+    ] {
+        assert_eq!(
+            mc.triangles.is_empty(),
+            dual.triangles.is_empty(),
+            "{method}"
+        );
+        if mc.triangles.is_empty() {
+            continue;
+        }
+        let (m, d) = (check_surface(&mc), check_surface(&dual));
+        assert_eq!(d.euler, m.euler, "{method}: Euler characteristic");
+        assert_eq!(
+            d.component_volumes.len(),
+            m.component_volumes.len(),
+            "{method}: components"
+        );
     }
-    let (m, d) = (check_surface(&mc), check_surface(&dc));
-    assert_eq!(d.euler, m.euler, "Euler characteristic");
-    assert_eq!(d.component_volumes.len(), m.component_volumes.len());
 }
 
 #[test]
