@@ -17,9 +17,7 @@ mod npy;
 use std::time::Instant;
 
 use glam::Vec3;
-use pgvol_contour::{
-    contour_sampled, marching_cubes, marching_cubes_on_field, surface_nets, Method,
-};
+use pgvol_contour::{contour_sampled, marching_cubes, marching_cubes_on_field, Method};
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_mesh::Mesh;
 
@@ -94,7 +92,7 @@ fn main() {
         }),
         ("sn", &|| {
             let (volume, decoded) = field();
-            surface_nets(decoded, dims, origin, h, 0.0, volume)
+            contour_sampled(volume, &grid, decoded, 0.0, Method::SurfaceNets)
         }),
     ];
     let mut rows = Vec::new();

@@ -38,8 +38,10 @@ const CELL_MARGIN: f64 = 1e-3;
 /// Longest move, in cells, of a smooth piece's vertex onto the zero set.
 const MAX_PROJECTION: f32 = 0.25;
 
-/// Newton steps taking a surface nets vertex onto the zero set.
-const NEWTON_STEPS: usize = 3;
+/// Newton steps taking a surface nets vertex onto the zero set. The mean of a loop's crossings
+/// lies a fraction of a cell off the surface and each step squares that error (relative to the
+/// curvature radius), so two reach float rounding on surfaces the grid resolves.
+const NEWTON_STEPS: usize = 2;
 
 /// Crossings per parallel task when building quads.
 const QUAD_CHUNK: usize = 4096;

@@ -310,11 +310,24 @@ pub fn surface_nets(
     iso: f32,
     field: &dyn Field,
 ) -> Mesh {
+    let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
+    surface_nets_with(values, dims, origin, spacing, iso, field, &refine)
+}
+
+/// [`surface_nets`] with the edge crossings placed by `refine`, as in [`marching_cubes_with`].
+pub(crate) fn surface_nets_with(
+    values: &[f32],
+    dims: [usize; 3],
+    origin: Vec3,
+    spacing: f32,
+    iso: f32,
+    field: &dyn Field,
+    refine: &(dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync),
+) -> Mesh {
     let Some(samples) = checked_samples(values, dims, origin, spacing, iso) else {
         return Mesh::default();
     };
-    let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
-    let crossings = all_crossings(&samples, Place::Position(&refine), EXTRA_FLAG);
+    let crossings = all_crossings(&samples, Place::Position(refine), EXTRA_FLAG);
     dual::dual_contour(&samples, &crossings, field, Placement::Mean)
 }
 

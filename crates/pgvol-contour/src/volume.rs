@@ -125,7 +125,9 @@ pub fn contour_field(
             };
             crate::dual_contour_with(&values, dims, origin, h, iso, field, options, &place)
         }
-        Method::SurfaceNets => crate::surface_nets(&values, dims, origin, h, iso, field),
+        Method::SurfaceNets => {
+            crate::surface_nets_with(&values, dims, origin, h, iso, field, &refine)
+        }
     }
 }
 
@@ -170,7 +172,9 @@ pub fn contour_sampled(
             };
             crate::dual_contour_with(values, dims, origin, h, iso, volume, &options, &place)
         }
-        Method::SurfaceNets => crate::surface_nets(values, dims, origin, h, iso, volume),
+        Method::SurfaceNets => {
+            crate::surface_nets_with(values, dims, origin, h, iso, volume, &refine)
+        }
     }
 }
 
