@@ -8,6 +8,7 @@ mod fields;
 mod grids;
 mod nets;
 mod random_fields;
+mod reference_mc;
 mod shapes;
 mod single_cell;
 mod topology;
