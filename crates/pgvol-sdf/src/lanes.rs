@@ -1,14 +1,20 @@
-//! Squared distances from a point to four consecutive triangles at once.
+//! Squared distances from a point to several triangles at once (four, or eight in the grid
+//! scans).
 //!
 //! The corners are stored as a structure of arrays, and every lane repeats the arithmetic of
 //! [`closest_point`](crate::triangle::closest_point) operation for operation, so the distances
-//! are bit-identical to it. A scan compares four triangles per step without branching on the
+//! are bit-identical to it. A scan compares several triangles per step without branching on the
 //! Voronoi region and asks the scalar code only about the triangles that improve.
 
-use glam::{BVec4A, Vec3A, Vec4};
+use glam::{Vec3A, Vec4};
 
-/// Triangles per step.
+use crate::wide::Wide;
+
+/// Triangles per step of [`TriangleLanes::distances_squared`].
 pub const LANES: usize = 4;
+
+/// The widest step any scan takes: the padding after the last triangle.
+const WIDEST: usize = 8;
 
 /// Corners of the triangles in leaf order, one array per corner and axis, padded so that a
 /// step starting at any triangle stays in bounds.
@@ -17,41 +23,45 @@ pub struct TriangleLanes {
     corners: [[Vec<f32>; 3]; 3],
 }
 
-/// Three lanes of coordinates: four points.
+/// Three coordinates of `W::LANES` points.
 #[derive(Clone, Copy)]
-struct V4 {
-    x: Vec4,
-    y: Vec4,
-    z: Vec4,
+struct Points<W> {
+    x: W,
+    y: W,
+    z: W,
 }
 
-impl V4 {
-    fn splat(p: Vec3A) -> V4 {
-        V4 {
-            x: Vec4::splat(p.x),
-            y: Vec4::splat(p.y),
-            z: Vec4::splat(p.z),
+impl<W: Wide> Points<W> {
+    #[inline(always)]
+    fn splat(p: Vec3A) -> Self {
+        Points {
+            x: W::splat(p.x),
+            y: W::splat(p.y),
+            z: W::splat(p.z),
         }
     }
 
-    fn sub(self, o: V4) -> V4 {
-        V4 {
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Points {
             x: self.x - o.x,
             y: self.y - o.y,
             z: self.z - o.z,
         }
     }
 
-    fn add(self, o: V4) -> V4 {
-        V4 {
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Points {
             x: self.x + o.x,
             y: self.y + o.y,
             z: self.z + o.z,
         }
     }
 
-    fn scale(self, t: Vec4) -> V4 {
-        V4 {
+    #[inline(always)]
+    fn scale(self, t: W) -> Self {
+        Points {
             x: self.x * t,
             y: self.y * t,
             z: self.z * t,
@@ -59,15 +69,17 @@ impl V4 {
     }
 
     /// `(x·x' + y·y') + z·z'`, the order of glam's `Vec3A::dot`.
-    fn dot(self, o: V4) -> Vec4 {
+    #[inline(always)]
+    fn dot(self, o: Self) -> W {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
-    fn select(mask: BVec4A, t: V4, f: V4) -> V4 {
-        V4 {
-            x: Vec4::select(mask, t.x, f.x),
-            y: Vec4::select(mask, t.y, f.y),
-            z: Vec4::select(mask, t.z, f.z),
+    #[inline(always)]
+    fn select(mask: W::Mask, t: Self, f: Self) -> Self {
+        Points {
+            x: W::select(mask, t.x, f.x),
+            y: W::select(mask, t.y, f.y),
+            z: W::select(mask, t.z, f.z),
         }
     }
 }
@@ -78,18 +90,37 @@ impl TriangleLanes {
         for (c, axes) in corners.iter_mut().enumerate() {
             for (axis, values) in axes.iter_mut().enumerate() {
                 values.extend(tris.iter().map(|t| t[c][axis]));
-                values.extend([0.0; LANES - 1]);
+                values.extend([0.0; WIDEST - 1]);
             }
         }
         TriangleLanes { corners }
     }
 
-    fn corner(&self, c: usize, start: usize) -> V4 {
-        let lane = |axis: usize| Vec4::from_slice(&self.corners[c][axis][start..start + LANES]);
-        V4 {
-            x: lane(0),
-            y: lane(1),
-            z: lane(2),
+    // No closures in the kernels: a closure is not always inlined into its caller, and
+    // outside the AVX2 build its wide operations become calls.
+    #[inline(always)]
+    fn corner<W: Wide>(&self, c: usize, start: usize) -> Points<W> {
+        let [x, y, z] = &self.corners[c];
+        Points {
+            x: W::load(&x[start..]),
+            y: W::load(&y[start..]),
+            z: W::load(&z[start..]),
+        }
+    }
+
+    #[inline(always)]
+    fn corner_split<W: Wide>(
+        &self,
+        c: usize,
+        low: usize,
+        high: usize,
+        split: W::Mask,
+    ) -> Points<W> {
+        let [x, y, z] = &self.corners[c];
+        Points {
+            x: W::select(split, W::load(&x[low..]), W::load(&x[high..])),
+            y: W::select(split, W::load(&y[low..]), W::load(&y[high..])),
+            z: W::select(split, W::load(&z[low..]), W::load(&z[high..])),
         }
     }
 
@@ -98,52 +129,80 @@ impl TriangleLanes {
     /// the edges of a degenerate triangle: the caller asks it.
     #[inline]
     pub fn distances_squared(&self, p: Vec3A, start: usize) -> Vec4 {
-        let zero = Vec4::ZERO;
-        let (a, b, c) = (
-            self.corner(0, start),
-            self.corner(1, start),
-            self.corner(2, start),
-        );
-        let p = V4::splat(p);
-        let ab = b.sub(a);
-        let ac = c.sub(a);
-        let ap = p.sub(a);
-        let d1 = ab.dot(ap);
-        let d2 = ac.dot(ap);
-        let bp = p.sub(b);
-        let d3 = ab.dot(bp);
-        let d4 = ac.dot(bp);
-        let vc = d1 * d4 - d3 * d2;
-        let cp = p.sub(c);
-        let d5 = ab.dot(cp);
-        let d6 = ac.dot(cp);
-        let vb = d5 * d2 - d1 * d6;
-        let va = d3 * d6 - d5 * d4;
-        let (d43, d56) = (d4 - d3, d5 - d6);
-        // The regions in the scalar code's order; the first that holds wins, so they are
-        // applied last to first.
-        let vertex_a = d1.cmple(zero) & d2.cmple(zero);
-        let vertex_b = d3.cmpge(zero) & d4.cmple(d3);
-        let edge_ab = vc.cmple(zero) & d1.cmpge(zero) & d3.cmple(zero);
-        let vertex_c = d6.cmpge(zero) & d5.cmple(d6);
-        let edge_ac = vb.cmple(zero) & d2.cmpge(zero) & d6.cmple(zero);
-        let edge_bc = va.cmple(zero) & d43.cmpge(zero) & d56.cmpge(zero);
-        let sum = va + vb + vc;
-        let denom = Vec4::ONE / sum;
-        let face = a.add(ab.scale(vb * denom)).add(ac.scale(vc * denom));
-        let mut q = face;
-        q = V4::select(edge_bc, b.add(c.sub(b).scale(d43 / (d43 + d56))), q);
-        q = V4::select(edge_ac, a.add(ac.scale(d2 / (d2 - d6))), q);
-        q = V4::select(vertex_c, c, q);
-        q = V4::select(edge_ab, a.add(ab.scale(d1 / (d1 - d3))), q);
-        q = V4::select(vertex_b, b, q);
-        q = V4::select(vertex_a, a, q);
-        let pq = p.sub(q);
-        let distance = pq.dot(pq);
-        let regions = vertex_a | vertex_b | edge_ab | vertex_c | edge_ac | edge_bc;
-        let degenerate = !(sum.cmpgt(zero) & sum.cmplt(Vec4::INFINITY)) & !regions;
-        Vec4::select(degenerate, Vec4::NAN, distance)
+        self.distances_squared_wide(p, start)
     }
+
+    /// As [`TriangleLanes::distances_squared`], for the `W::LANES` triangles from `start`.
+    #[inline(always)]
+    pub(crate) fn distances_squared_wide<W: Wide>(&self, p: Vec3A, start: usize) -> W {
+        let a = self.corner::<W>(0, start);
+        let b = self.corner::<W>(1, start);
+        let c = self.corner::<W>(2, start);
+        distances_to_corners(p, [a, b, c])
+    }
+
+    /// As [`TriangleLanes::distances_squared_wide`] for two runs of triangles in one step:
+    /// lanes `l < split` for the triangles `low + l`, the others for `high + l - split`.
+    /// Needs `high >= split`.
+    #[inline(always)]
+    pub(crate) fn distances_squared_split<W: Wide>(
+        &self,
+        p: Vec3A,
+        low: usize,
+        high: usize,
+        split: usize,
+    ) -> W {
+        let (high, mask) = (high - split, W::lanes_below(split));
+        let a = self.corner_split::<W>(0, low, high, mask);
+        let b = self.corner_split::<W>(1, low, high, mask);
+        let c = self.corner_split::<W>(2, low, high, mask);
+        distances_to_corners(p, [a, b, c])
+    }
+}
+
+/// The kernel of [`TriangleLanes::distances_squared`] on triangles with corners `a`, `b`, `c`.
+#[inline(always)]
+fn distances_to_corners<W: Wide>(p: Vec3A, [a, b, c]: [Points<W>; 3]) -> W {
+    let zero = W::splat(0.0);
+    let p = Points::<W>::splat(p);
+    let ab = b.sub(a);
+    let ac = c.sub(a);
+    let ap = p.sub(a);
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    let bp = p.sub(b);
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    let vc = d1 * d4 - d3 * d2;
+    let cp = p.sub(c);
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    let vb = d5 * d2 - d1 * d6;
+    let va = d3 * d6 - d5 * d4;
+    let (d43, d56) = (d4 - d3, d5 - d6);
+    // The regions in the scalar code's order; the first that holds wins, so they are
+    // applied last to first.
+    let vertex_a = d1.le(zero) & d2.le(zero);
+    let vertex_b = d3.ge(zero) & d4.le(d3);
+    let edge_ab = vc.le(zero) & d1.ge(zero) & d3.le(zero);
+    let vertex_c = d6.ge(zero) & d5.le(d6);
+    let edge_ac = vb.le(zero) & d2.ge(zero) & d6.le(zero);
+    let edge_bc = va.le(zero) & d43.ge(zero) & d56.ge(zero);
+    let sum = va + vb + vc;
+    let denom = W::splat(1.0) / sum;
+    let face = a.add(ab.scale(vb * denom)).add(ac.scale(vc * denom));
+    let mut q = face;
+    q = Points::select(edge_bc, b.add(c.sub(b).scale(d43 / (d43 + d56))), q);
+    q = Points::select(edge_ac, a.add(ac.scale(d2 / (d2 - d6))), q);
+    q = Points::select(vertex_c, c, q);
+    q = Points::select(edge_ab, a.add(ab.scale(d1 / (d1 - d3))), q);
+    q = Points::select(vertex_b, b, q);
+    q = Points::select(vertex_a, a, q);
+    let pq = p.sub(q);
+    let distance = pq.dot(pq);
+    let regions = vertex_a | vertex_b | edge_ab | vertex_c | edge_ac | edge_bc;
+    let degenerate = !(sum.gt(zero) & sum.lt(W::splat(f32::INFINITY))) & !regions;
+    W::select(degenerate, W::splat(f32::NAN), distance)
 }
 
 #[cfg(test)]

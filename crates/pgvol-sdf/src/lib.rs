@@ -12,6 +12,7 @@ pub mod pseudonormal;
 pub mod rims;
 pub mod sampling;
 pub mod triangle;
+mod wide;
 pub mod winding;
 
 pub use bvh::{Bvh, Closest};

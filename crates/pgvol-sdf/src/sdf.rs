@@ -61,6 +61,8 @@ pub struct MeshSdf {
     /// Edges where the triangles' orientations do not cancel (open boundaries, edges used twice
     /// the same way, ...): the winding number varies fast near them.
     rims: Rims,
+    /// Whether grid scans run their AVX2 build (detected on construction).
+    avx2: bool,
 }
 
 /// Winding numbers within this margin of 1/2 are recomputed with a finer expansion before the
@@ -107,6 +109,7 @@ impl MeshSdf {
             mode: AtomicU8::new(mode as u8),
             auto_chose_pseudonormal: requested == SignMode::Auto && mode == SignMode::Pseudonormal,
             rims,
+            avx2: crate::wide::avx2_available(),
         })
     }
 
@@ -137,6 +140,17 @@ impl MeshSdf {
             return true;
         }
         false
+    }
+
+    /// Whether grid scans run their AVX2 build.
+    pub(crate) fn avx2(&self) -> bool {
+        self.avx2
+    }
+
+    /// Makes grid scans run their baseline build, to compare it with the AVX2 one.
+    #[cfg(test)]
+    pub(crate) fn use_baseline_scans(&mut self) {
+        self.avx2 = false;
     }
 
     pub fn bvh(&self) -> &Bvh {

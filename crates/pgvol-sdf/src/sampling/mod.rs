@@ -8,6 +8,7 @@
 //! distances (`near.rs`).
 
 mod brick;
+mod candidates;
 mod carry;
 mod near;
 mod row;
@@ -206,6 +207,24 @@ mod tests {
             pseudo.signed_distance(p) > 0.0,
             "the pseudonormal sign is wrong here"
         );
+    }
+
+    #[test]
+    fn avx2_and_baseline_scans_give_identical_grids() {
+        // Fine triangles (smaller than a grid spacing) and both signs that use closest points.
+        let mesh = sphere(5);
+        let grid = Grid::cube_res(Vec3::splat(-1.3), Vec3::splat(1.2), 37).unwrap();
+        for mode in [SignMode::Winding, SignMode::Pseudonormal] {
+            let avx2 = MeshSdf::new(&mesh, mode).unwrap();
+            let mut baseline = MeshSdf::new(&mesh, mode).unwrap();
+            baseline.use_baseline_scans();
+            for extent in [Extent::Dense, Extent::Band(2.0)] {
+                let a = avx2.sample(&grid, extent, &|_| {}).values;
+                let b = baseline.sample(&grid, extent, &|_| {}).values;
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a), bits(&b), "{mode:?} {extent:?}");
+            }
+        }
     }
 
     #[test]

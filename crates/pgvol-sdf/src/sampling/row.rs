@@ -6,6 +6,7 @@ use glam::Vec3;
 
 use super::{
     brick::{Brick, BrickSegment, LocalTriangle},
+    candidates::LeafTable,
     carry::WindingCarry,
     near::REGION_SIGN_MARGIN,
     Plan, RowValues, BRICK,
@@ -30,6 +31,7 @@ pub(super) struct TileGradient {
 #[derive(Default)]
 pub(super) struct Scratch {
     leaves: Vec<(f32, u32)>,
+    table: LeafTable,
     triangles: Vec<LocalTriangle>,
     tiles: TileGradient,
 }
@@ -224,6 +226,7 @@ impl MeshSdf {
             f32::INFINITY
         };
         self.brick_leaves(brick, &seed, limit, &mut scratch.leaves);
+        scratch.table.fill(bvh, &scratch.leaves, self.avx2());
         scratch.triangles.clear();
         if winding && !surface_free {
             self.brick_triangles(brick, &scratch.leaves, &mut scratch.triangles);
@@ -248,13 +251,13 @@ impl MeshSdf {
         let mut exact = 0;
         brick.for_each_node(grid, |at, p| {
             let start = bvh.closest_on_slot(Vec3::from(p), slot);
-            let best = bvh.closest_among(Vec3::from(p), &scratch.leaves, start, limit);
+            let best = scratch.table.closest(bvh, p, &start, limit);
             slot = best.slot;
             let d = best.distance_squared.sqrt();
             let inside = match brick_sign {
                 Some(s) => s,
                 None if winding => carry.winding_near(self, p, &segment).value > 0.5,
-                None => self.is_inside_near(Vec3::from(p), &best),
+                None => self.is_inside_near(Vec3::from(p), &best.closest(bvh, p, &start)),
             };
             if d <= clamp {
                 exact += 1;

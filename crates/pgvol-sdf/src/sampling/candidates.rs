@@ -1,0 +1,368 @@
+//! The candidate leaves of one brick laid out as a structure of arrays, and the closest-point
+//! scan of a node over them: eight leaf boxes and eight triangles per step.
+//!
+//! The scan makes the decisions of [`Bvh::closest_among`] in the same order (which leaves to
+//! open, which triangle wins), so its answers are identical; the wide steps only compute the
+//! same box and triangle distances several at a time. It runs as an AVX2 build where the CPU
+//! has it and as a baseline SSE2 build otherwise, with identical answers.
+
+use glam::{Vec3, Vec3A};
+
+use crate::{
+    bvh::{Bvh, Closest},
+    wide::{Pair, Wide},
+};
+
+/// Leaves per step of the box test, and triangles per step of a leaf scan.
+const STEP: usize = 8;
+
+/// The leaves from [`Bvh::leaves_near_box`] for one brick, one array per field, padded to a
+/// multiple of [`STEP`] with boxes at infinity.
+#[derive(Default)]
+pub(super) struct LeafTable {
+    min: [Vec<f32>; 3],
+    max: [Vec<f32>; 3],
+    /// Squared distance from each leaf's box to the brick's box, ascending.
+    brick_distance: Vec<f32>,
+    first: Vec<u32>,
+    count: Vec<u32>,
+    /// Whether the scans run their AVX2 build.
+    avx2: bool,
+}
+
+impl LeafTable {
+    /// Refills the table with `leaves` (sorted as [`Bvh::leaves_near_box`] returns them).
+    pub fn fill(&mut self, bvh: &Bvh, leaves: &[(f32, u32)], avx2: bool) {
+        self.avx2 = avx2;
+        let padded = leaves.len().next_multiple_of(STEP);
+        for v in self.min.iter_mut().chain(&mut self.max) {
+            v.clear();
+            v.reserve(padded);
+        }
+        self.brick_distance.clear();
+        self.first.clear();
+        self.count.clear();
+        for &(distance, id) in leaves {
+            let node = &bvh.nodes[id as usize];
+            for axis in 0..3 {
+                self.min[axis].push(node.min[axis]);
+                self.max[axis].push(node.max[axis]);
+            }
+            self.brick_distance.push(distance);
+            self.first.push(node.first);
+            self.count.push(node.count);
+        }
+        for v in self.min.iter_mut().chain(&mut self.max) {
+            v.resize(padded, f32::INFINITY);
+        }
+    }
+
+    /// As [`Bvh::closest_among`] over the table's leaves, for a point `p` of the brick, but
+    /// without the closest point itself (see [`Nearest::closest`]).
+    #[inline]
+    pub fn closest(&self, bvh: &Bvh, p: Vec3A, start: &Closest, limit_squared: f32) -> Nearest {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only where `wide::avx2_available` said the CPU has AVX2.
+            return unsafe { self.closest_avx2(bvh, p, start, limit_squared) };
+        }
+        self.closest_wide::<Pair>(bvh, p, start, limit_squared)
+    }
+
+    /// The AVX2 build of the scan.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_avx2(
+        &self,
+        bvh: &Bvh,
+        p: Vec3A,
+        start: &Closest,
+        limit_squared: f32,
+    ) -> Nearest {
+        self.closest_wide::<crate::wide::Avx>(bvh, p, start, limit_squared)
+    }
+
+    #[inline(always)]
+    fn closest_wide<W: Wide>(
+        &self,
+        bvh: &Bvh,
+        p: Vec3A,
+        start: &Closest,
+        limit_squared: f32,
+    ) -> Nearest {
+        debug_assert_eq!(W::LANES, STEP);
+        let mut scan = Scan {
+            bvh,
+            p,
+            best_squared: start.distance_squared,
+            best_slot: None,
+            limit_squared,
+            waiting: None,
+        };
+        // Leaves are sorted by their distance to the brick, which bounds their distance to `p`
+        // from below: beyond the first reach, none can be opened.
+        let end = self.brick_distance.partition_point(|&d| d <= scan.reach());
+        let (px, py, pz) = (W::splat(p.x), W::splat(p.y), W::splat(p.z));
+        let mut box_distances = [0.0f32; STEP];
+        for at in (0..end).step_by(STEP) {
+            // The arithmetic of `Node::distance_squared`, lane by lane.
+            let dx = self.gap::<W>(0, at, px);
+            let dy = self.gap::<W>(1, at, py);
+            let dz = self.gap::<W>(2, at, pz);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let in_range = (1u32 << (end - at).min(STEP)) - 1;
+            let mut open = W::bits(d2.le(W::splat(scan.reach()))) & in_range;
+            if open == 0 {
+                continue;
+            }
+            d2.store(&mut box_distances);
+            while open != 0 {
+                let lane = open.trailing_zeros() as usize;
+                open &= open - 1;
+                scan.leaf::<W>(Leaf {
+                    distance_squared: box_distances[lane],
+                    first: self.first[at + lane] as usize,
+                    count: self.count[at + lane] as usize,
+                });
+            }
+        }
+        if let Some(waiting) = scan.waiting.take() {
+            scan.whole_leaf::<W>(waiting);
+        }
+        Nearest {
+            distance_squared: scan.best_squared,
+            slot: scan.best_slot.map_or(start.slot, |s| s as u32),
+        }
+    }
+}
+
+/// The answer of [`LeafTable::closest`]: the squared distance to the mesh and the leaf slot of
+/// a closest triangle.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Nearest {
+    pub distance_squared: f32,
+    pub slot: u32,
+}
+
+impl Nearest {
+    /// The closest point, as [`Bvh::closest_among`] finds it from `start`. Only the pseudonormal
+    /// sign needs it.
+    pub fn closest(&self, bvh: &Bvh, p: Vec3A, start: &Closest) -> Closest {
+        if self.slot == start.slot {
+            *start
+        } else {
+            bvh.closest_on_slot(Vec3::from(p), self.slot)
+        }
+    }
+}
+
+/// A leaf: the squared distance from the node to its box and its triangles' slots.
+#[derive(Clone, Copy)]
+struct Leaf {
+    distance_squared: f32,
+    first: usize,
+    count: usize,
+}
+
+/// One node's scan.
+///
+/// It makes the scalar scan's decisions in its order: a leaf is opened only if its box is within
+/// the reach when its turn comes, and a triangle wins only if its distance is smaller than the
+/// best so far. A leaf waits for the next one, to share a step of the kernel when their
+/// triangles fit in it; lanes computed for a leaf that is not opened at its turn are ignored.
+struct Scan<'a> {
+    bvh: &'a Bvh,
+    p: Vec3A,
+    /// The smallest squared distance so far, and the slot of its triangle (`None`: the start).
+    /// Lanes hold the scalar code's distances, so only the winner's closest point is needed.
+    best_squared: f32,
+    best_slot: Option<usize>,
+    limit_squared: f32,
+    /// A leaf waiting for a partner to share a step with.
+    waiting: Option<Leaf>,
+}
+
+impl Scan<'_> {
+    /// The scalar scan's reach: leaves farther than this are not opened.
+    #[inline(always)]
+    fn reach(&self) -> f32 {
+        self.best_squared.min(self.limit_squared)
+    }
+
+    /// Takes the next leaf in order.
+    #[inline(always)]
+    fn leaf<W: Wide>(&mut self, leaf: Leaf) {
+        // The reach only shrinks, so a leaf out of reach now is out of reach at its turn.
+        if leaf.distance_squared > self.reach() {
+            return;
+        }
+        let Some(waiting) = self.waiting.take() else {
+            if leaf.count < STEP {
+                self.waiting = Some(leaf);
+            } else {
+                self.whole_leaf::<W>(leaf);
+            }
+            return;
+        };
+        let split = waiting.count;
+        if split + leaf.count > STEP || leaf.first < split {
+            self.whole_leaf::<W>(waiting);
+            if leaf.count < STEP {
+                self.waiting = Some(leaf);
+            } else {
+                self.whole_leaf::<W>(leaf);
+            }
+            return;
+        }
+        let lanes = &self.bvh.lanes;
+        let d2 = lanes.distances_squared_split::<W>(self.p, waiting.first, leaf.first, split);
+        let ask = W::bits(!d2.ge(W::splat(self.best_squared)));
+        if ask == 0 {
+            return;
+        }
+        let mut lanes = [0.0; STEP];
+        d2.store(&mut lanes);
+        let low = ask & ((1 << split) - 1);
+        self.take_lanes(waiting, waiting.first, low, &lanes);
+        let high = (ask >> split) & ((1 << leaf.count) - 1);
+        self.take_lanes(leaf, leaf.first, high, &lanes[split..]);
+    }
+
+    /// Scans a leaf on its own, `STEP` triangles at a time.
+    #[inline(always)]
+    fn whole_leaf<W: Wide>(&mut self, leaf: Leaf) {
+        if leaf.distance_squared > self.reach() {
+            return;
+        }
+        let end = leaf.first + leaf.count;
+        for start in (leaf.first..end).step_by(STEP) {
+            let d2 = self.bvh.lanes.distances_squared_wide::<W>(self.p, start);
+            let valid = (1u32 << (end - start).min(STEP)) - 1;
+            let ask = W::bits(!d2.ge(W::splat(self.best_squared))) & valid;
+            if ask != 0 {
+                let mut lanes = [0.0; STEP];
+                d2.store(&mut lanes);
+                self.take_lanes(leaf, start, ask, &lanes);
+            }
+        }
+    }
+
+    /// Takes the triangles `start + l`, at squared distances `lanes[l]`, for the set bits `l`
+    /// of `ask`, if `leaf` is opened now. NaN lanes (degenerate triangles) are asked of the
+    /// scalar code.
+    #[inline(always)]
+    fn take_lanes(&mut self, leaf: Leaf, start: usize, mut ask: u32, lanes: &[f32]) {
+        if leaf.distance_squared > self.reach() {
+            return;
+        }
+        while ask != 0 {
+            let lane = ask.trailing_zeros() as usize;
+            ask &= ask - 1;
+            let mut d2 = lanes[lane];
+            if d2.is_nan() {
+                d2 = self
+                    .bvh
+                    .closest_on_slot(Vec3::from(self.p), (start + lane) as u32)
+                    .distance_squared;
+            }
+            if d2 < self.best_squared {
+                self.best_squared = d2;
+                self.best_slot = Some(start + lane);
+            }
+        }
+    }
+}
+
+impl LeafTable {
+    /// How far `p` lies outside the boxes of the leaves `at .. at + STEP` along `axis` (0 inside).
+    #[inline(always)]
+    fn gap<W: Wide>(&self, axis: usize, at: usize, p: W) -> W {
+        let lo = W::load(&self.min[axis][at..]);
+        let hi = W::load(&self.max[axis][at..]);
+        (lo - p).max(p - hi).max(W::splat(0.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{triangle::closest_point, wide::avx2_available};
+    use glam::Vec3;
+    use pgvol_mesh::Mesh;
+    use rand::{Rng, SeedableRng};
+
+    /// Small triangles in clusters, as on a finely tessellated surface, with degenerate ones
+    /// (points, segments, collinear corners) mixed in.
+    fn soup(seed: u64) -> Mesh {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for t in 0..3000u32 {
+            let c = Vec3::new(rng.gen(), rng.gen(), rng.gen()) * 2.0;
+            let corner = |rng: &mut rand_pcg::Pcg64| {
+                c + (Vec3::new(rng.gen(), rng.gen(), rng.gen()) - 0.5) * 0.05
+            };
+            let (a, b) = (corner(&mut rng), corner(&mut rng));
+            let c = match t % 50 {
+                0 => a,
+                1 => b,
+                2 => a + (b - a) * 2.0,
+                _ => corner(&mut rng),
+            };
+            positions.extend([a, b, c]);
+            triangles.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        Mesh::new(positions, triangles)
+    }
+
+    #[test]
+    fn table_scans_match_the_scalar_scan_and_brute_force() {
+        let mesh = soup(7);
+        let tris: Vec<[Vec3A; 3]> = (0..mesh.triangles.len())
+            .map(|t| mesh.triangle(t).map(Vec3A::from))
+            .collect();
+        let bvh = Bvh::build(&mesh);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(8);
+        let (mut leaves, mut table) = (Vec::new(), LeafTable::default());
+        for _ in 0..60 {
+            let lo = Vec3A::new(rng.gen(), rng.gen(), rng.gen()) * 3.0 - 0.5;
+            let hi = lo + Vec3A::splat(0.06);
+            let seed = bvh.closest((lo + hi).into(), f32::INFINITY).unwrap();
+            let bound = (0..8)
+                .map(|c| {
+                    let corner =
+                        Vec3A::select(glam::BVec3A::new(c & 1 > 0, c & 2 > 0, c & 4 > 0), hi, lo);
+                    bvh.closest_on_slot(corner.into(), seed.slot)
+                        .distance_squared
+                })
+                .fold(0.0f32, f32::max);
+            bvh.leaves_near_box(lo, hi, bound * (1.0 + 1e-4), &mut leaves);
+            for avx2 in [false, avx2_available()] {
+                table.fill(&bvh, &leaves, avx2);
+                let mut slot = seed.slot;
+                for n in 0..27 {
+                    let f = Vec3A::new((n % 3) as f32, ((n / 3) % 3) as f32, (n / 9) as f32) / 2.0;
+                    let p = lo + (hi - lo) * f;
+                    let start = bvh.closest_on_slot(p.into(), slot);
+                    for limit in [f32::INFINITY, seed.distance_squared] {
+                        let want = bvh.closest_among(p.into(), &leaves, start, limit);
+                        let got = table.closest(&bvh, p, &start, limit);
+                        assert_eq!(
+                            got.distance_squared.to_bits(),
+                            want.distance_squared.to_bits()
+                        );
+                        assert_eq!(got.slot, want.slot);
+                        assert_eq!(got.closest(&bvh, p, &start), want);
+                    }
+                    let got = table.closest(&bvh, p, &start, f32::INFINITY);
+                    let brute = tris
+                        .iter()
+                        .map(|&[a, b, c]| p.distance_squared(closest_point(p, a, b, c).0))
+                        .fold(f32::INFINITY, f32::min);
+                    assert_eq!(got.distance_squared, brute, "point {p}");
+                    slot = got.slot;
+                }
+            }
+        }
+    }
+}
