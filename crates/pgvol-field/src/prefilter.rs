@@ -10,6 +10,9 @@ pub const CUBIC_POLE: f64 = -0.267_949_192_431_122_7;
 /// The pole of the quadratic B-spline's inverse filter, 2√2 − 3.
 pub const QUADRATIC_POLE: f64 = -0.171_572_875_253_809_9;
 
+/// y values per batch of the z pass.
+const Z_BATCH: usize = 16;
+
 /// Turns samples along one line into cubic B-spline coefficients, in place, assuming the signal
 /// continues by mirror symmetry about both end samples.
 pub fn prefilter_line(line: &mut [f64]) {
@@ -69,43 +72,49 @@ pub fn prefilter_volume(values: &mut [f32], dims: [usize; 3]) {
 /// As [`prefilter_volume`] with the pole `z` of another spline degree.
 pub fn prefilter_volume_with(values: &mut [f32], dims: [usize; 3], z: f64) {
     let [nx, ny, nz] = dims;
-    // x lines are contiguous.
-    values.par_chunks_mut(nx).for_each(|row| {
-        let mut line: Vec<f64> = row.iter().map(|&v| v as f64).collect();
-        prefilter_line_with(&mut line, z);
-        for (d, s) in row.iter_mut().zip(&line) {
-            *d = *s as f32;
-        }
-    });
-    // y lines: within each z-plane.
+    // x and y lines, a z-plane at a time, all lines of the plane at once: the plane held with
+    // the filtered axis slowest (transposed for x), so each step runs along contiguous lanes.
     values.par_chunks_mut(nx * ny).for_each(|plane| {
-        let mut line = vec![0.0f64; ny];
-        for i in 0..nx {
-            for (j, v) in line.iter_mut().enumerate() {
-                *v = plane[i + nx * j] as f64;
+        let mut lanes = vec![0.0f64; nx * ny];
+        for (j, row) in plane.chunks(nx).enumerate() {
+            for (i, &v) in row.iter().enumerate() {
+                lanes[j + ny * i] = v as f64;
             }
-            prefilter_line_with(&mut line, z);
-            for (j, v) in line.iter().enumerate() {
-                plane[i + nx * j] = *v as f32;
+        }
+        prefilter_lanes(&mut lanes, ny, nx, z);
+        for (j, row) in plane.chunks_mut(nx).enumerate() {
+            for (i, v) in row.iter_mut().enumerate() {
+                *v = lanes[j + ny * i] as f32;
             }
+        }
+        for (lane, &v) in lanes.iter_mut().zip(plane.iter()) {
+            *lane = v as f64;
+        }
+        prefilter_lanes(&mut lanes, nx, ny, z);
+        for (v, &lane) in plane.iter_mut().zip(&lanes) {
+            *v = lane as f32;
         }
     });
     // z lines: per y, every x at once (rows along x are contiguous at each z), in parallel over
-    // y; each lane does exactly the operations of `prefilter_line_with` on its column.
+    // y; each lane does exactly the operations of `prefilter_line_with` on its column. A batch
+    // of y at a time, so the filtered slabs waiting to be copied back stay few and their memory
+    // is reused rather than freshly mapped.
     let plane = nx * ny;
-    let slabs: Vec<Vec<f32>> = (0..ny)
-        .into_par_iter()
-        .map(|j| {
-            let mut slab: Vec<f64> = (0..nz)
-                .flat_map(|k| values[nx * j + plane * k..][..nx].iter().map(|&v| v as f64))
-                .collect();
-            prefilter_lanes(&mut slab, nx, nz, z);
-            slab.into_iter().map(|v| v as f32).collect()
-        })
-        .collect();
-    for (j, slab) in slabs.iter().enumerate() {
-        for k in 0..nz {
-            values[nx * j + plane * k..][..nx].copy_from_slice(&slab[nx * k..][..nx]);
+    for batch in (0..ny).collect::<Vec<_>>().chunks(Z_BATCH) {
+        let slabs: Vec<Vec<f32>> = batch
+            .par_iter()
+            .map(|&j| {
+                let mut slab: Vec<f64> = (0..nz)
+                    .flat_map(|k| values[nx * j + plane * k..][..nx].iter().map(|&v| v as f64))
+                    .collect();
+                prefilter_lanes(&mut slab, nx, nz, z);
+                slab.into_iter().map(|v| v as f32).collect()
+            })
+            .collect();
+        for (&j, slab) in batch.iter().zip(&slabs) {
+            for k in 0..nz {
+                values[nx * j + plane * k..][..nx].copy_from_slice(&slab[nx * k..][..nx]);
+            }
         }
     }
 }

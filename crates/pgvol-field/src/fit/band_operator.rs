@@ -1,224 +1,236 @@
 //! The fitting matrix restricted to the coefficients a set of sample points can move (the
 //! "active" ones), applied without storing it. Unknown vectors hold only the active
 //! coefficients, in grid order; a grid-sized scratch array lets the forward product read
-//! coefficients by grid index, and the transposed product accumulates per z-slab.
+//! coefficients by grid index, and the transposed product accumulate into it by blocks of
+//! z-layers (see [`LayerBlocks`]).
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::ops::Range;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::kernel::{axis_window, Profile};
-use crate::stencil::{self, mirror, VALUE};
+use super::layer_blocks::{LayerBlocks, LAYERS};
+use super::row_kernels;
+use super::row_window::{windows, Window};
+
+use crate::stencil::{self, VALUE};
 use crate::Basis;
 
-/// Rows per chunk of the transposed product: about a dozen z-layers of band rows at 256³, so
-/// the slab each chunk accumulates into is not mostly margin. Fixed so that results do not
-/// depend on the number of threads.
-const CHUNK: usize = 131_072;
+/// Where the basis functions of each sample point lie: the point's window, for bases that have
+/// one on grids of at least 4 nodes per axis (other cases go through the generic stencil), and
+/// the rows grouped by the z-layers they reach.
+pub(crate) struct RowStencils<'a> {
+    pub basis: Basis,
+    pub dims: [usize; 3],
+    pub points: &'a [Vec3],
+    windows: Option<Vec<Window>>,
+    blocks: LayerBlocks,
+}
 
-/// The grid indices (ascending) of every coefficient whose basis function is non-zero at some
-/// point of `points` (grid coordinates, inside the grid box).
-pub(crate) fn active_columns(basis: Basis, dims: [usize; 3], points: &[Vec3]) -> Vec<usize> {
-    let len = dims.iter().product::<usize>();
-    let touched: Vec<AtomicBool> = (0..len).map(|_| AtomicBool::new(false)).collect();
-    let mark = |j: usize| touched[j].store(true, Ordering::Relaxed);
-    let [nx, ny, _] = dims;
-    match windows(basis, dims, points) {
-        Some(windows) => windows.par_iter().for_each(|win| {
-            win.for_each(nx, nx * ny, |j, w| {
-                if w != 0.0 {
-                    mark(j)
-                }
-            })
-        }),
-        None => points.par_iter().for_each(|&u| {
-            stencil::visit::<VALUE>(basis, dims, u, |j, jet| {
-                if jet.value != 0.0 {
-                    mark(j)
-                }
-            });
-        }),
+impl<'a> RowStencils<'a> {
+    /// The stencils of `points` (grid coordinates, inside the grid box).
+    pub fn new(basis: Basis, dims: [usize; 3], points: &'a [Vec3]) -> Self {
+        Self::with_windows(basis, dims, points, windows(basis, dims, points))
     }
-    let plane = nx * ny;
-    touched
-        .par_chunks(plane)
-        .enumerate()
-        .flat_map_iter(|(k, layer)| {
-            layer
-                .iter()
-                .enumerate()
-                .filter(|(_, t)| t.load(Ordering::Relaxed))
-                .map(move |(i, _)| k * plane + i)
-        })
-        .collect()
+
+    fn with_windows(
+        basis: Basis,
+        dims: [usize; 3],
+        points: &'a [Vec3],
+        windows: Option<Vec<Window>>,
+    ) -> Self {
+        let [nx, ny, nz] = dims;
+        let blocks = match &windows {
+            Some(w) => LayerBlocks::new(nz, LAYERS, w.len(), |i| {
+                let k = w[i].layer(nx * ny);
+                k..=k + 3
+            }),
+            None => {
+                // Nodes past the support, and mirrored ones, lie within one more spacing.
+                let reach = basis.support() + 1.0;
+                let layers = LAYERS.max(2 * reach.ceil() as usize);
+                LayerBlocks::new(nz, layers, points.len(), |i| {
+                    let z = points[i].z;
+                    let lo = (z - reach).floor().max(0.0) as usize;
+                    let hi = ((z + reach).ceil() as usize).min(nz - 1);
+                    lo..=hi
+                })
+            }
+        };
+        RowStencils {
+            basis,
+            dims,
+            points,
+            windows,
+            blocks,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Calls `f(flat index, weight)` for the nodes of row `i` in the z-layers `layers`.
+    #[inline]
+    fn visit_layers(&self, i: usize, layers: &Range<usize>, mut f: impl FnMut(usize, f64)) {
+        let [nx, ny, _] = self.dims;
+        let plane = nx * ny;
+        match &self.windows {
+            Some(windows) => {
+                let win = &windows[i];
+                let within = win.layers_within(layers, plane);
+                win.for_each(within, nx, plane, f);
+            }
+            None => {
+                let nodes = layers.start * plane..layers.end * plane;
+                stencil::visit::<VALUE>(self.basis, self.dims, self.points[i], |j, jet| {
+                    if nodes.contains(&j) {
+                        f(j, jet.value as f64);
+                    }
+                });
+            }
+        }
+    }
+
+    /// Runs `f(first node, slab)` on every block of layers, in parallel, `slab` being the
+    /// block's part of the grid-sized `grid`; returns the results in block order.
+    fn per_block<R: Send>(
+        &self,
+        grid: &mut [f64],
+        f: impl Fn(usize, &mut [f64]) -> R + Sync,
+    ) -> Vec<R> {
+        let [nx, ny, _] = self.dims;
+        let span = self.blocks.layers * nx * ny;
+        grid.par_chunks_mut(span)
+            .enumerate()
+            .map(|(b, slab)| f(b * span, slab))
+            .collect()
+    }
+
+    /// Adds `value(i) · B_j(p_i)` (`B_j²` when `SQUARED`) to `slab[j − lo]` for the nodes j of
+    /// the block starting at node `lo`, row by row in order.
+    fn accumulate<const SQUARED: bool>(
+        &self,
+        slab: &mut [f64],
+        lo: usize,
+        value: &(impl Fn(usize) -> f64 + Sync),
+    ) {
+        let [nx, ny, nz] = self.dims;
+        let plane = nx * ny;
+        let b = lo / (self.blocks.layers * plane);
+        let layers = self.blocks.layer_range(b, nz);
+        let rows = self.blocks.rows[b].clone();
+        match &self.windows {
+            Some(windows) => row_kernels::accumulate::<SQUARED>(
+                windows, rows, &layers, value, slab, lo, nx, plane,
+            ),
+            None => {
+                for i in rows {
+                    let v = value(i);
+                    self.visit_layers(i, &layers, |j, w| {
+                        slab[j - lo] += v * if SQUARED { w * w } else { w };
+                    });
+                }
+            }
+        }
+    }
+
+    /// The columns where `Σ_i value(i) · B_j(p_i)²` is non-zero (ascending) with those sums,
+    /// accumulated in `grid`, which must be zero and is left holding them.
+    fn squared_column_sums(
+        &self,
+        grid: &mut [f64],
+        value: impl Fn(usize) -> f64 + Sync,
+    ) -> (Vec<usize>, Vec<f64>) {
+        let [nx, ny, nz] = self.dims;
+        let blocks = self.per_block(grid, |lo, slab| {
+            self.accumulate::<true>(slab, lo, &value);
+            // Only x lines some window reaches can hold non-zeros: the rest of the slab, most
+            // of it, is neither read nor brought into memory.
+            let lines = self.reached_lines(lo, nx, ny, nz);
+            let columns: Vec<usize> = (0..lines.len())
+                .filter(|&l| lines[l])
+                .flat_map(|l| l * nx..(l + 1) * nx)
+                .filter(|&j| slab[j] != 0.0)
+                .collect();
+            let sums = columns.iter().map(|&j| slab[j]).collect::<Vec<f64>>();
+            (
+                columns.into_iter().map(|j| lo + j).collect::<Vec<_>>(),
+                sums,
+            )
+        });
+        let (columns, sums): (Vec<_>, Vec<_>) = blocks.into_iter().unzip();
+        (columns.concat(), sums.concat())
+    }
+
+    /// Which x lines of the block starting at node `lo` (by `y + ny · layer`, layers counted
+    /// from the block's first) some row reaches; every line for stencils without windows.
+    fn reached_lines(&self, lo: usize, nx: usize, ny: usize, nz: usize) -> Vec<bool> {
+        let plane = nx * ny;
+        let b = lo / (self.blocks.layers * plane);
+        let layers = self.blocks.layer_range(b, nz);
+        let Some(windows) = &self.windows else {
+            return vec![true; layers.len() * ny];
+        };
+        let mut lines = vec![false; layers.len() * ny];
+        for win in &windows[self.blocks.rows[b].clone()] {
+            let k = win.layer(plane);
+            let j = (win.first % plane) / nx;
+            for c in win.layers_within(&layers, plane) {
+                let line = j + ny * (k + c - layers.start);
+                lines[line..line + 4].fill(true);
+            }
+        }
+        lines
+    }
+
+    /// `Σ_i value(i) · B_j(p_i)` for every column j of `active`. Each block zeroes the active
+    /// entries of its part of `grid`, adds its rows' terms there and reads them out; entries off
+    /// `active` only ever receive zeros.
+    fn scatter(
+        &self,
+        grid: &mut [f64],
+        active: &[usize],
+        value: impl Fn(usize) -> f64 + Sync,
+    ) -> Vec<f64> {
+        let blocks = self.per_block(grid, |lo, slab| {
+            let first = active.partition_point(|&j| j < lo);
+            let last = active.partition_point(|&j| j < lo + slab.len());
+            let columns = &active[first..last];
+            for &j in columns {
+                slab[j - lo] = 0.0;
+            }
+            self.accumulate::<false>(slab, lo, &value);
+            columns.iter().map(|&j| slab[j - lo]).collect::<Vec<f64>>()
+        });
+        blocks.concat()
+    }
 }
 
 /// `W^½ A` on the active columns stacked over `anchor · I` (one row per unknown holding it to its
 /// start), each column scaled by `scale` (the Jacobi preconditioner).
 pub(crate) struct BandOperator<'a> {
-    pub basis: Basis,
-    pub dims: [usize; 3],
-    pub points: &'a [Vec3],
+    pub stencils: RowStencils<'a>,
     pub sqrt_weights: &'a [f64],
-    pub active: &'a [usize],
+    /// The coefficients some weighted sample reaches (grid indices, ascending): the unknowns.
+    /// The others cannot lower the objective, so they keep their start.
+    pub active: Vec<usize>,
     pub anchor: f64,
+    /// One over each column's norm.
     pub scale: Vec<f64>,
     /// Grid-sized, zero outside the active columns.
     scratch: Vec<f64>,
-    /// Each row's separable window, for bases that have one on grids of at least 4 nodes per
-    /// axis; other cases go through the generic stencil.
-    windows: Option<Vec<Window>>,
-}
-
-/// A separable basis at one point: 4 nodes per axis from flat index `first`, with their weights
-/// (mirrored nodes folded in, unused ones zero), so products need no per-iteration kernel work.
-struct Window {
-    first: usize,
-    w: [[f32; 4]; 3],
-}
-
-/// The windows of every point, or `None` when the basis or the grid has none.
-fn windows(basis: Basis, dims: [usize; 3], points: &[Vec3]) -> Option<Vec<Window>> {
-    let profile = match basis {
-        Basis::Trilinear => Profile::Linear,
-        Basis::Bspline2 => Profile::Quadratic,
-        Basis::Bspline3 => Profile::Cubic,
-        Basis::Pg { .. } => return None,
-    };
-    if dims.iter().any(|&n| n < 4) {
-        return None;
-    }
-    let axis = |u: f32, n: usize| -> (usize, [f32; 4]) {
-        let win = axis_window(profile, u, n);
-        let mut nodes = [0usize; 4];
-        for (a, m) in nodes.iter_mut().enumerate().take(win.len) {
-            *m = mirror(win.first + a as i64, n);
-        }
-        let nodes = &nodes[..win.len];
-        let lo = nodes.iter().copied().min().unwrap_or(0).min(n - 4);
-        let mut w = [0.0f32; 4];
-        for (a, &m) in nodes.iter().enumerate() {
-            w[m - lo] += win.w[a][0];
-        }
-        (lo, w)
-    };
-    let [nx, ny, _] = dims;
-    Some(
-        points
-            .par_iter()
-            .map(|u| {
-                let (i, wx) = axis(u.x, dims[0]);
-                let (j, wy) = axis(u.y, dims[1]);
-                let (k, wz) = axis(u.z, dims[2]);
-                Window {
-                    first: i + nx * (j + ny * k),
-                    w: [wx, wy, wz],
-                }
-            })
-            .collect(),
-    )
-}
-
-impl Window {
-    /// `Σ w · x` over the window.
-    #[inline]
-    fn dot<T: Copy + Into<f64>>(&self, x: &[T], nx: usize, plane: usize) -> f64 {
-        let [wx, wy, wz] = self.w;
-        let mut s = 0.0f64;
-        for (c, &z) in wz.iter().enumerate() {
-            for (b, &y) in wy.iter().enumerate() {
-                let at = self.first + c * plane + b * nx;
-                let row = &x[at..at + 4];
-                let line = wx[0] as f64 * row[0].into()
-                    + wx[1] as f64 * row[1].into()
-                    + wx[2] as f64 * row[2].into()
-                    + wx[3] as f64 * row[3].into();
-                s += (z * y) as f64 * line;
-            }
-        }
-        s
-    }
-
-    /// Calls `f(flat index, weight)` for the 64 nodes of the window.
-    #[inline]
-    fn for_each(&self, nx: usize, plane: usize, mut f: impl FnMut(usize, f32)) {
-        let [wx, wy, wz] = self.w;
-        for (c, &z) in wz.iter().enumerate() {
-            for (b, &y) in wy.iter().enumerate() {
-                let at = self.first + c * plane + b * nx;
-                for (a, &x) in wx.iter().enumerate() {
-                    f(at + a, x * y * z);
-                }
-            }
-        }
-    }
-
-    /// The window of the squared weights.
-    fn squared(&self) -> Window {
-        Window {
-            first: self.first,
-            w: self.w.map(|axis| axis.map(|w| w * w)),
-        }
-    }
-
-    /// `x += v · w` over the window, `x` starting at flat index `offset`.
-    #[inline]
-    fn add(&self, x: &mut [f64], offset: usize, v: f64, nx: usize, plane: usize) {
-        let [wx, wy, wz] = self.w;
-        for (c, &z) in wz.iter().enumerate() {
-            for (b, &y) in wy.iter().enumerate() {
-                let at = self.first - offset + c * plane + b * nx;
-                let zy = v * (z * y) as f64;
-                for (o, &w) in x[at..at + 4].iter_mut().zip(&wx) {
-                    *o += zy * w as f64;
-                }
-            }
-        }
-    }
 }
 
 impl<'a> BandOperator<'a> {
-    /// The operator with unit column scales.
-    pub fn new(
-        basis: Basis,
-        dims: [usize; 3],
-        points: &'a [Vec3],
-        sqrt_weights: &'a [f64],
-        active: &'a [usize],
-        anchor: f64,
-    ) -> Self {
-        BandOperator {
-            basis,
-            dims,
-            points,
-            sqrt_weights,
-            active,
-            anchor,
-            scale: vec![1.0; active.len()],
-            scratch: vec![0.0; dims.iter().product()],
-            windows: windows(basis, dims, points),
-        }
-    }
-
-    /// Sets each column's scale to one over its norm (zero for empty columns).
-    pub fn precondition(&mut self) {
-        let squared = self
-            .windows
-            .as_ref()
-            .map(|w| w.par_iter().map(Window::squared).collect::<Vec<_>>());
-        // Squared windows turn the squared column norms into a linear scatter.
-        let sq = match squared {
-            Some(squared) => {
-                let linear = self.windows.replace(squared);
-                let sq = self.scatter(true, |i, v| self.sqrt_weights[i].powi(2) * v);
-                self.windows = linear;
-                sq
-            }
-            None => self.scatter(false, |i, v| (self.sqrt_weights[i] * v).powi(2)),
-        };
-        let a2 = self.anchor * self.anchor;
-        self.scale = sq
+    /// The operator on the columns the rows reach, Jacobi-scaled: each column's squared norm
+    /// is found with the column itself.
+    pub fn new(stencils: RowStencils<'a>, sqrt_weights: &'a [f64], anchor: f64) -> Self {
+        let mut scratch = vec![0.0; stencils.dims.iter().product()];
+        let w = sqrt_weights;
+        let (active, norms_sq) = stencils.squared_column_sums(&mut scratch, |i| w[i] * w[i]);
+        let a2 = anchor * anchor;
+        let scale = norms_sq
             .iter()
             .map(|&s| {
                 if s + a2 > 1e-24 {
@@ -228,11 +240,19 @@ impl<'a> BandOperator<'a> {
                 }
             })
             .collect();
+        BandOperator {
+            stencils,
+            sqrt_weights,
+            active,
+            anchor,
+            scale,
+            scratch,
+        }
     }
 
     /// Sample rows then anchor rows.
     pub fn rows(&self) -> usize {
-        self.points.len() + self.active.len()
+        self.stencils.len() + self.active.len()
     }
 
     /// `[W^½ A; anchor I] D y`.
@@ -240,101 +260,58 @@ impl<'a> BandOperator<'a> {
         for ((&j, &y), &s) in self.active.iter().zip(y).zip(&self.scale) {
             self.scratch[j] = y * s;
         }
-        let mut out = self.full_product(&self.scratch);
+        let mut out = Vec::with_capacity(self.rows());
+        self.product_into(&self.scratch, &mut out);
         out.extend(y.iter().zip(&self.scale).map(|(y, s)| self.anchor * s * y));
         out
     }
 
     /// `W^½ A c` for a grid-sized coefficient vector `c`, every column included.
     pub fn full_product<T: Copy + Into<f64> + Sync>(&self, c: &[T]) -> Vec<f64> {
-        let [nx, ny, _] = self.dims;
-        if let Some(windows) = &self.windows {
+        let mut out = Vec::new();
+        self.product_into(c, &mut out);
+        out
+    }
+
+    fn product_into<T: Copy + Into<f64> + Sync>(&self, c: &[T], out: &mut Vec<f64>) {
+        let RowStencils {
+            basis,
+            dims,
+            points,
+            ..
+        } = self.stencils;
+        let [nx, ny, _] = dims;
+        if let Some(windows) = &self.stencils.windows {
             return windows
                 .par_iter()
                 .zip(self.sqrt_weights)
                 .map(|(win, &w)| win.dot(c, nx, nx * ny) * w)
-                .collect();
+                .collect_into_vec(out);
         }
-        self.points
+        points
             .par_iter()
             .zip(self.sqrt_weights)
             .map(|(&u, &w)| {
                 let mut s = 0.0f64;
-                stencil::visit::<VALUE>(self.basis, self.dims, u, |j, jet| {
+                stencil::visit::<VALUE>(basis, dims, u, |j, jet| {
                     s += c[j].into() * jet.value as f64;
                 });
                 s * w
             })
-            .collect()
+            .collect_into_vec(out)
     }
 
     /// `D [Aᵀ W^½, anchor I] r`.
-    pub fn adjoint(&self, r: &[f64]) -> Vec<f64> {
-        let (samples, anchors) = r.split_at(self.points.len());
-        let mut g = self.scatter(true, |i, v| samples[i] * self.sqrt_weights[i] * v);
+    pub fn adjoint(&mut self, r: &[f64]) -> Vec<f64> {
+        let (samples, anchors) = r.split_at(self.stencils.len());
+        let w = self.sqrt_weights;
+        let mut g = self
+            .stencils
+            .scatter(&mut self.scratch, &self.active, |i| samples[i] * w[i]);
         for ((g, s), a) in g.iter_mut().zip(&self.scale).zip(anchors) {
             *g = (*g + self.anchor * a) * s;
         }
         g
-    }
-
-    /// `Σ_i term(i, B_j(p_i))` for every active column j, accumulated per chunk of rows over the
-    /// z-slab the chunk reaches and added in chunk order.
-    /// `linear` says that `term(i, v)` is `term(i, 1) · v`, which lets the windows be used.
-    fn scatter(&self, linear: bool, term: impl Fn(usize, f64) -> f64 + Sync) -> Vec<f64> {
-        let [nx, ny, nz] = self.dims;
-        let plane = nx * ny;
-        // Windows span 4 nodes from at most one below the point.
-        let reach = (self.basis.support() + 1.0).max(3.0);
-        let mut out = vec![0.0f64; self.active.len()];
-        let chunks: Vec<(usize, &[Vec3])> = self
-            .points
-            .chunks(CHUNK)
-            .enumerate()
-            .map(|(n, c)| (n * CHUNK, c))
-            .collect();
-        // Bounded batches keep at most a few slabs alive at once.
-        let group = rayon::current_num_threads().max(1);
-        for batch in chunks.chunks(group) {
-            let partial: Vec<(usize, Vec<f64>)> = batch
-                .par_iter()
-                .map(|&(start, pts)| {
-                    let (zlo, zhi) = pts
-                        .iter()
-                        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), u| {
-                            (a.min(u.z), b.max(u.z))
-                        });
-                    let lo = plane * ((zlo - reach).floor().max(0.0) as usize);
-                    let hi = plane * (((zhi + reach).ceil() as usize).min(nz - 1) + 1);
-                    let mut acc = vec![0.0f64; hi - lo];
-                    match &self.windows {
-                        // Linear terms: one value per row, spread by the window's weights.
-                        Some(windows) if linear => {
-                            for (n, win) in windows[start..start + pts.len()].iter().enumerate() {
-                                win.add(&mut acc, lo, term(start + n, 1.0), nx, plane);
-                            }
-                        }
-                        _ => {
-                            for (n, &u) in pts.iter().enumerate() {
-                                let i = start + n;
-                                stencil::visit::<VALUE>(self.basis, self.dims, u, |j, jet| {
-                                    acc[j - lo] += term(i, jet.value as f64);
-                                });
-                            }
-                        }
-                    }
-                    (lo, acc)
-                })
-                .collect();
-            for (lo, acc) in partial {
-                let first = self.active.partition_point(|&j| j < lo);
-                let last = self.active.partition_point(|&j| j < lo + acc.len());
-                for (o, &j) in out[first..last].iter_mut().zip(&self.active[first..last]) {
-                    *o += acc[j - lo];
-                }
-            }
-        }
-        out
     }
 }
 
@@ -362,11 +339,10 @@ mod tests {
             Basis::Trilinear,
             Basis::Pg { n: 3, r: 1.5 },
         ] {
-            let active = active_columns(basis, dims, &points);
+            let mut op = BandOperator::new(RowStencils::new(basis, dims, &points), &w, 0.3);
+            let active = op.active.clone();
             // The points fill only part of the grid.
             assert!(!active.is_empty() && active.len() < 14 * 12 * 16 / 2);
-            let mut op = BandOperator::new(basis, dims, &points, &w, &active, 0.3);
-            op.precondition();
             let y: Vec<f64> = (0..active.len())
                 .map(|i| ((i * 7) % 5) as f64 - 2.0)
                 .collect();
@@ -404,11 +380,17 @@ mod tests {
             .collect();
         let w = vec![1.0; points.len()];
         for basis in [Basis::Bspline3, Basis::Bspline2, Basis::Trilinear] {
-            let active = active_columns(basis, dims, &points);
-            let mut fast = BandOperator::new(basis, dims, &points, &w, &active, 0.3);
-            let mut slow = BandOperator::new(basis, dims, &points, &w, &active, 0.3);
-            slow.windows = None;
+            let fast = RowStencils::new(basis, dims, &points);
             assert!(fast.windows.is_some());
+            let slow = RowStencils::with_windows(basis, dims, &points, None);
+            let mut fast = BandOperator::new(fast, &w, 0.3);
+            let mut slow = BandOperator::new(slow, &w, 0.3);
+            assert_eq!(fast.active, slow.active, "{basis}");
+            let active = fast.active.clone();
+            // Compare the products, not the scales: the stencil counts a mirrored node once per
+            // visit in its column norm, the window once with the folded weight.
+            fast.scale.fill(1.0);
+            slow.scale.fill(1.0);
             let y: Vec<f64> = (0..active.len())
                 .map(|i| ((i * 7) % 5) as f64 - 2.0)
                 .collect();
@@ -420,6 +402,67 @@ mod tests {
                 .collect();
             for (a, b) in fast.adjoint(&r).iter().zip(&slow.adjoint(&r)) {
                 assert!((a - b).abs() < 1e-6, "{basis}: {a} vs {b}");
+            }
+        }
+    }
+
+    /// Points spread over many z-layers in scrambled order, so that rows reach several blocks
+    /// and blocks take rows from all over.
+    fn scattered_points(dims: [usize; 3], n: usize) -> Vec<Vec3> {
+        (0..n)
+            .map(|i| {
+                let t = (i * 7919 % n) as f32;
+                Vec3::new(
+                    (dims[0] - 1) as f32 * (0.5 + 0.5 * (t * 0.37).sin()),
+                    (dims[1] - 1) as f32 * (0.5 + 0.5 * (t * 0.71).cos()),
+                    (dims[2] - 1) as f32 * (0.5 + 0.5 * (t * 0.013).sin()),
+                )
+            })
+            .collect()
+    }
+
+    /// The active columns are exactly the nodes some point's stencil weighs.
+    #[test]
+    fn active_columns_are_the_nodes_the_stencils_reach() {
+        let dims = [9, 7, 40];
+        let points = scattered_points(dims, 150);
+        for basis in [Basis::Bspline3, Basis::Bspline2, Basis::Pg { n: 3, r: 1.5 }] {
+            let mut want = vec![false; dims.iter().product()];
+            for &u in &points {
+                stencil::visit::<VALUE>(basis, dims, u, |j, jet| {
+                    want[j] |= jet.value != 0.0;
+                });
+            }
+            let want: Vec<usize> = (0..want.len()).filter(|&j| want[j]).collect();
+            let w = vec![1.0; points.len()];
+            let op = BandOperator::new(RowStencils::new(basis, dims, &points), &w, 0.3);
+            assert_eq!(op.active, want, "{basis}");
+        }
+    }
+
+    /// Products are bit for bit the same on one thread as on several.
+    #[test]
+    fn products_do_not_depend_on_the_thread_count() {
+        let dims = [12, 10, 50];
+        let points = scattered_points(dims, 2000);
+        let w: Vec<f64> = (0..points.len()).map(|i| 0.5 + (i % 3) as f64).collect();
+        for basis in [Basis::Bspline3, Basis::Pg { n: 3, r: 1.5 }] {
+            let run = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let mut op = BandOperator::new(RowStencils::new(basis, dims, &points), &w, 0.3);
+                    let r: Vec<f64> = (0..op.rows()).map(|i| (i as f64 * 0.37).sin()).collect();
+                    let g = op.adjoint(&r);
+                    let f = op.forward(&g);
+                    (op.active.clone(), op.scale.clone(), g, f)
+                })
+            };
+            let one = run(1);
+            for threads in [2, 3, 8] {
+                assert!(one == run(threads), "{basis}: {threads} threads");
             }
         }
     }

@@ -7,9 +7,13 @@ mod band_rows;
 mod golden;
 mod interp;
 mod iso;
+mod layer_blocks;
 mod node_values;
 pub mod operator;
+mod row_kernels;
+mod row_window;
 pub mod solve;
+mod vector;
 mod wls;
 
 pub use golden::golden_section;
@@ -236,12 +240,10 @@ pub fn interp_samples(
 /// Counts nodes with `|SDF| > k` where the field's sign differs from the SDF's.
 pub fn spurious_sign_changes(volume: &CoefficientVolume, node_sdf: &[f32]) -> usize {
     let k = volume.grid.spacing;
-    let field = node_values(volume);
-    field
-        .par_iter()
-        .zip(node_sdf)
-        .filter(|(f, d)| d.abs() > k && (**f < 0.0) != (**d < 0.0))
-        .count()
+    node_values::count_nodes(volume, |f, i| {
+        let d = node_sdf[i];
+        d.abs() > k && (f < 0.0) != (d < 0.0)
+    })
 }
 
 /// The SDF and its gradient at every node (x fastest).

@@ -1,6 +1,9 @@
 //! Krylov solvers on operators given as closures: conjugate gradients for symmetric positive
 //! definite systems, CGLS for everything else (least squares, with optional damping).
 
+pub use super::vector::dot;
+use super::vector::{axpy, axpy_norm_sq, xpby};
+
 /// How a solve ended.
 #[derive(Clone, Copy, Debug)]
 pub struct SolveOutcome {
@@ -11,10 +14,6 @@ pub struct SolveOutcome {
     /// (what CGLS drives to zero when the system is inconsistent); 0 for CG.
     pub normal_residual: f64,
     pub converged: bool,
-}
-
-pub fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn norm(a: &[f64]) -> f64 {
@@ -43,16 +42,11 @@ pub fn cg(
             break; // not positive definite along p: report what we have
         }
         let alpha = rr / pap;
-        for ((x, r), (p, ap)) in x.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(&ap)) {
-            *x += alpha * p;
-            *r -= alpha * ap;
-        }
-        let rr_new = dot(&r, &r);
+        axpy(x, alpha, &p);
+        let rr_new = axpy_norm_sq(&mut r, -alpha, &ap);
         let beta = rr_new / rr;
         rr = rr_new;
-        for (p, r) in p.iter_mut().zip(&r) {
-            *p = r + beta * *p;
-        }
+        xpby(&mut p, &r, beta);
         it += 1;
     }
     let residual = rr.sqrt() / bn;
@@ -94,7 +88,9 @@ pub fn cgls_with_stall(
     max_iterations: usize,
 ) -> (Vec<f64>, SolveOutcome) {
     let l2 = damping * damping;
-    let bn = norm(b).max(f64::MIN_POSITIVE);
+    // ‖r‖² comes out of the update of r, so the stopping test needs no pass of its own.
+    let mut rr = dot(b, b);
+    let bn = rr.sqrt().max(f64::MIN_POSITIVE);
     let mut x = vec![0.0f64; cols];
     let mut r = b.to_vec();
     let mut s = adjoint(&r);
@@ -103,10 +99,10 @@ pub fn cgls_with_stall(
     let mut gamma = dot(&s, &s);
     let mut it = 0;
     let (mut gain, mut total_gain) = (f64::INFINITY, 0.0f64);
-    let done = |r: &[f64], gamma: f64, gain: f64, total: f64| {
-        norm(r) <= tol * bn || gamma.sqrt() <= tol * s0 || gain <= stall * total
+    let done = |rr: f64, gamma: f64, gain: f64, total: f64| {
+        rr.sqrt() <= tol * bn || gamma.sqrt() <= tol * s0 || gain <= stall * total
     };
-    while !done(&r, gamma, gain, total_gain) && it < max_iterations {
+    while !done(rr, gamma, gain, total_gain) && it < max_iterations {
         let q = forward(&p);
         let delta = dot(&q, &q) + l2 * dot(&p, &p);
         if delta <= 0.0 || !delta.is_finite() {
@@ -116,28 +112,21 @@ pub fn cgls_with_stall(
         // The objective falls by exactly α γ per step.
         gain = alpha * gamma;
         total_gain += gain;
-        for (x, p) in x.iter_mut().zip(&p) {
-            *x += alpha * p;
-        }
-        for (r, q) in r.iter_mut().zip(&q) {
-            *r -= alpha * q;
-        }
+        axpy(&mut x, alpha, &p);
+        rr = axpy_norm_sq(&mut r, -alpha, &q);
         s = adjoint(&r);
-        if l2 > 0.0 {
-            for (s, x) in s.iter_mut().zip(&x) {
-                *s -= l2 * x;
-            }
-        }
-        let gamma_new = dot(&s, &s);
+        let gamma_new = if l2 > 0.0 {
+            axpy_norm_sq(&mut s, -l2, &x)
+        } else {
+            dot(&s, &s)
+        };
         let beta = gamma_new / gamma;
         gamma = gamma_new;
-        for (p, s) in p.iter_mut().zip(&s) {
-            *p = s + beta * *p;
-        }
+        xpby(&mut p, &s, beta);
         it += 1;
     }
-    let converged = done(&r, gamma, gain, total_gain);
-    let residual = norm(&r) / bn;
+    let converged = done(rr, gamma, gain, total_gain);
+    let residual = rr.sqrt() / bn;
     (
         x,
         SolveOutcome {

@@ -10,7 +10,7 @@
 use std::cell::RefCell;
 use std::time::Instant;
 
-use super::band_operator::{active_columns, BandOperator};
+use super::band_operator::{BandOperator, RowStencils};
 use super::band_rows::projection_rows;
 use super::{report, solve, ClosestPoint, FitOptions, FitReport};
 use crate::volume::check_inputs;
@@ -56,11 +56,11 @@ pub(crate) fn fit(
     let projections = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let active = active_columns(basis, grid.dims, &rows.points);
     let sqrt_w: Vec<f64> = rows.weights.iter().map(|&w| (w as f64).sqrt()).collect();
     let anchor = (options.node_weight as f64).sqrt();
-    let mut op = BandOperator::new(basis, grid.dims, &rows.points, &sqrt_w, &active, anchor);
-    op.precondition();
+    let stencils = RowStencils::new(basis, grid.dims, &rows.points);
+    let op = BandOperator::new(stencils, &sqrt_w, anchor);
+    let unknowns = op.active.len();
     // The right-hand side is what the warm start leaves unexplained; the solve finds the change.
     // The anchor rows ask for no change: the warm start already fits the node samples.
     let mut b: Vec<f64> = op
@@ -78,7 +78,7 @@ pub(crate) fn fit(
         .zip(&rows.weights)
         .map(|(&t, &w)| (w * t * t) as f64)
         .sum::<f64>()
-        + active
+        + op.active
             .iter()
             .map(|&j| (options.node_weight * samples[j] * samples[j]) as f64)
             .sum::<f64>())
@@ -88,15 +88,15 @@ pub(crate) fn fit(
     let setup = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let (c, outcome) = if active.is_empty() {
+    let (c, outcome) = if unknowns == 0 {
         (warm, None)
     } else {
         let op = RefCell::new(op);
         let (y, outcome) = solve::cgls_with_stall(
             |y| op.borrow_mut().forward(y),
-            |r| op.borrow().adjoint(r),
+            |r| op.borrow_mut().adjoint(r),
             &b,
-            active.len(),
+            unknowns,
             options.damping,
             options.tolerance,
             options.stall,
@@ -105,7 +105,7 @@ pub(crate) fn fit(
         let op = op.into_inner();
         let mut c = warm;
         if y.iter().all(|y| y.is_finite()) {
-            for ((&j, y), s) in active.iter().zip(&y).zip(&op.scale) {
+            for ((&j, y), s) in op.active.iter().zip(&y).zip(&op.scale) {
                 c[j] = (c[j] as f64 + y * s) as f32;
             }
             (c, Some(outcome))
@@ -130,8 +130,8 @@ pub(crate) fn fit(
         rep.residual = initial / target_norm;
     }
     rep.initial_residual = Some(initial / target_norm);
-    rep.unknowns = active.len();
-    rep.rows = rows.len() + active.len();
+    rep.unknowns = unknowns;
+    rep.rows = rows.len() + unknowns;
     rep.stages.warm_start = warm_start;
     rep.stages.projections = projections;
     rep.stages.setup = setup;
