@@ -365,6 +365,78 @@ mod tests {
     }
 
     /// Precomputed windows, mirrored nodes folded in, give the generic stencil's products.
+    /// The operator assembled as a stored sparse matrix (sprs) from the generic stencil, entry
+    /// by entry: the matrix-free products must equal its products and its transpose's.
+    #[test]
+    fn products_equal_a_stored_matrix_built_from_the_stencil() {
+        use sprs::{CsMat, TriMat};
+        let dims = [11, 9, 13];
+        let points = scattered_points(dims, 400);
+        let w: Vec<f64> = (0..points.len()).map(|i| 0.3 + (i % 4) as f64).collect();
+        for basis in [
+            Basis::Bspline3,
+            Basis::Bspline2,
+            Basis::Trilinear,
+            Basis::Pg { n: 2, r: 2.0 },
+        ] {
+            let mut op = BandOperator::new(RowStencils::new(basis, dims, &points), &w, 0.2);
+            let (n_rows, n_cols) = (op.rows(), op.active.len());
+            let column = |j: usize| op.active.binary_search(&j).ok();
+            let mut entries = TriMat::new((n_rows, n_cols));
+            for (i, &u) in points.iter().enumerate() {
+                stencil::visit::<VALUE>(basis, dims, u, |j, jet| {
+                    if jet.value != 0.0 {
+                        let c = column(j).expect("a reached coefficient is an unknown");
+                        entries.add_triplet(i, c, w[i] * f64::from(jet.value) * op.scale[c]);
+                    }
+                });
+            }
+            for c in 0..n_cols {
+                entries.add_triplet(points.len() + c, c, op.anchor * op.scale[c]);
+            }
+            let matrix: CsMat<f64> = entries.to_csr();
+            let y: Vec<f64> = (0..n_cols).map(|i| ((i * 5) % 7) as f64 - 3.0).collect();
+            let r: Vec<f64> = (0..n_rows).map(|i| ((i * 3) % 5) as f64 - 2.0).collect();
+            let stored_ay = &matrix * &sparse(&y);
+            let stored_atr = &matrix.transpose_view() * &sparse(&r);
+            // The operator keeps per-axis weights in f32 and multiplies them out in its own
+            // order, so entries agree to single precision; a wrong index or weight is O(1).
+            let close = |a: &[f64], b: &[f64]| {
+                a.len() == b.len()
+                    && a.iter()
+                        .zip(b)
+                        .all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()))
+            };
+            assert!(
+                close(&op.forward(&y), &dense(&stored_ay, n_rows)),
+                "{basis}: A y"
+            );
+            assert!(
+                close(&op.adjoint(&r), &dense(&stored_atr, n_cols)),
+                "{basis}: Aᵀ r"
+            );
+        }
+    }
+
+    /// `v` as a sparse vector, for products with a stored matrix.
+    fn sparse(v: &[f64]) -> sprs::CsVec<f64> {
+        let (idx, val): (Vec<usize>, Vec<f64>) = v
+            .iter()
+            .enumerate()
+            .filter(|(_, x)| **x != 0.0)
+            .map(|(i, &x)| (i, x))
+            .unzip();
+        sprs::CsVec::new(v.len(), idx, val)
+    }
+
+    fn dense(v: &sprs::CsVec<f64>, len: usize) -> Vec<f64> {
+        let mut out = vec![0.0; len];
+        for (i, &x) in v.iter() {
+            out[i] = x;
+        }
+        out
+    }
+
     #[test]
     fn windows_match_the_stencil_at_the_border() {
         let dims = [5, 6, 4];
