@@ -10,6 +10,7 @@ use std::time::Duration;
 
 use crate::{
     lanes::{TriangleLanes, LANES},
+    leaf_bounds::OrientedBox,
     triangle::{closest_point, Feature},
 };
 
@@ -42,6 +43,9 @@ impl Node {
 #[derive(Clone, Debug)]
 pub struct Bvh {
     pub nodes: Vec<Node>,
+    /// Per node, the oriented box around a leaf's triangles ([`OrientedBox::EVERYWHERE`] for
+    /// inner nodes).
+    pub oriented: Vec<OrientedBox>,
     pub tris: Vec<[Vec3A; 3]>,
     pub tri_ids: Vec<u32>,
     pub lanes: TriangleLanes,
@@ -82,6 +86,7 @@ impl Bvh {
         let bvh2 = build_bvh2_from_tris(&tris, BvhBuildParams::very_fast_build(), &mut build_time);
         let mut out = Bvh {
             nodes: Vec::with_capacity(bvh2.nodes.len()),
+            oriented: Vec::new(),
             tris: Vec::with_capacity(tris.len()),
             tri_ids: Vec::with_capacity(tris.len()),
             lanes: TriangleLanes::default(),
@@ -135,6 +140,18 @@ impl Bvh {
             }
         }
         out.lanes = TriangleLanes::new(&out.tris);
+        out.oriented = out
+            .nodes
+            .iter()
+            .map(|n| {
+                if n.is_leaf() {
+                    let tris = &out.tris[n.first as usize..(n.first + n.count) as usize];
+                    OrientedBox::around(tris, n.min, n.max)
+                } else {
+                    OrientedBox::EVERYWHERE
+                }
+            })
+            .collect();
         out
     }
 

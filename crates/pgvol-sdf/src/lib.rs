@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod consistency;
 pub mod grid;
 pub mod lanes;
+pub mod leaf_bounds;
 pub mod pseudonormal;
 pub mod rims;
 pub mod sampling;

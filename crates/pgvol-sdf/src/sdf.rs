@@ -63,6 +63,8 @@ pub struct MeshSdf {
     rims: Rims,
     /// Whether grid scans run their AVX2 build (detected on construction).
     avx2: bool,
+    /// Whether grid scans skip leaves by their oriented boxes.
+    oriented: bool,
 }
 
 /// Winding numbers within this margin of 1/2 are recomputed with a finer expansion before the
@@ -110,6 +112,7 @@ impl MeshSdf {
             auto_chose_pseudonormal: requested == SignMode::Auto && mode == SignMode::Pseudonormal,
             rims,
             avx2: crate::wide::avx2_available(),
+            oriented: true,
         })
     }
 
@@ -151,6 +154,17 @@ impl MeshSdf {
     #[cfg(test)]
     pub(crate) fn use_baseline_scans(&mut self) {
         self.avx2 = false;
+    }
+
+    /// Whether grid scans skip leaves by their oriented boxes.
+    pub(crate) fn skips_by_oriented_boxes(&self) -> bool {
+        self.oriented
+    }
+
+    /// Makes grid scans open leaves by their axis-aligned boxes only, to compare with.
+    #[cfg(test)]
+    pub(crate) fn use_axis_aligned_boxes_only(&mut self) {
+        self.oriented = false;
     }
 
     pub fn bvh(&self) -> &Bvh {

@@ -5,11 +5,17 @@
 //! open, which triangle wins), so its answers are identical; the wide steps only compute the
 //! same box and triangle distances several at a time. It runs as an AVX2 build where the CPU
 //! has it and as a baseline SSE2 build otherwise, with identical answers.
+//!
+//! It also skips the leaves whose oriented box (see `leaf_bounds.rs`) lies no nearer than the
+//! best distance so far. None of their triangles is nearer, and a triangle wins only by being
+//! strictly nearer, so skipping them changes no answer: the same triangles win in the same
+//! order.
 
 use glam::{Vec3, Vec3A};
 
 use crate::{
     bvh::{Bvh, Closest},
+    leaf_bounds::SHRINK,
     wide::{Pair, Wide},
 };
 
@@ -26,16 +32,24 @@ pub(super) struct LeafTable {
     brick_distance: Vec<f32>,
     first: Vec<u32>,
     count: Vec<u32>,
+    /// Each leaf's oriented box (see `leaf_bounds.rs`): its first two axes and half extents.
+    first_axis: [Vec<f32>; 3],
+    second_axis: [Vec<f32>; 3],
+    half: [Vec<f32>; 3],
     /// Whether the scans run their AVX2 build.
     avx2: bool,
+    /// Whether leaves are skipped by their oriented boxes.
+    oriented: bool,
 }
 
 impl LeafTable {
     /// Refills the table with `leaves` (sorted as [`Bvh::leaves_near_box`] returns them).
-    pub fn fill(&mut self, bvh: &Bvh, leaves: &[(f32, u32)], avx2: bool) {
+    /// `oriented` turns the skipping of leaves by their oriented boxes on.
+    pub fn fill(&mut self, bvh: &Bvh, leaves: &[(f32, u32)], avx2: bool, oriented: bool) {
         self.avx2 = avx2;
+        self.oriented = oriented;
         let padded = leaves.len().next_multiple_of(STEP);
-        for v in self.min.iter_mut().chain(&mut self.max) {
+        for v in self.coordinates_mut() {
             v.clear();
             v.reserve(padded);
         }
@@ -48,13 +62,37 @@ impl LeafTable {
                 self.min[axis].push(node.min[axis]);
                 self.max[axis].push(node.max[axis]);
             }
+            let oriented = &bvh.oriented[id as usize];
+            for c in 0..3 {
+                self.first_axis[c].push(oriented.first[c]);
+                self.second_axis[c].push(oriented.second[c]);
+                self.half[c].push(oriented.half[c]);
+            }
             self.brick_distance.push(distance);
             self.first.push(node.first);
             self.count.push(node.count);
         }
-        for v in self.min.iter_mut().chain(&mut self.max) {
+        // Padding lanes are never opened; boxes at infinity keep them out of reach anyway.
+        for v in self.coordinates_mut() {
             v.resize(padded, f32::INFINITY);
         }
+    }
+
+    /// Every per-leaf coordinate array.
+    fn coordinates_mut(&mut self) -> impl Iterator<Item = &mut Vec<f32>> {
+        let Self {
+            min,
+            max,
+            first_axis,
+            second_axis,
+            half,
+            ..
+        } = self;
+        min.iter_mut()
+            .chain(max)
+            .chain(first_axis)
+            .chain(second_axis)
+            .chain(half)
     }
 
     /// As [`Bvh::closest_among`] over the table's leaves, for a point `p` of the brick, but
@@ -104,6 +142,7 @@ impl LeafTable {
         let end = self.brick_distance.partition_point(|&d| d <= scan.reach());
         let (px, py, pz) = (W::splat(p.x), W::splat(p.y), W::splat(p.z));
         let mut box_distances = [0.0f32; STEP];
+        let mut oriented_bounds = [0.0f32; STEP];
         for at in (0..end).step_by(STEP) {
             // The arithmetic of `Node::distance_squared`, lane by lane.
             let dx = self.gap::<W>(0, at, px);
@@ -115,10 +154,19 @@ impl LeafTable {
             if open == 0 {
                 continue;
             }
+            if self.oriented {
+                let bound = self.oriented_bound::<W>(at, [px, py, pz]);
+                open &= W::bits(bound.lt(W::splat(scan.best_squared)));
+                bound.store(&mut oriented_bounds);
+            }
             d2.store(&mut box_distances);
             while open != 0 {
                 let lane = open.trailing_zeros() as usize;
                 open &= open - 1;
+                // The best only shrinks: a leaf may fall out as the leaves before it open.
+                if self.oriented && oriented_bounds[lane] >= scan.best_squared {
+                    continue;
+                }
                 scan.leaf::<W>(Leaf {
                     distance_squared: box_distances[lane],
                     first: self.first[at + lane] as usize,
@@ -281,6 +329,35 @@ impl LeafTable {
         let hi = W::load(&self.max[axis][at..]);
         (lo - p).max(p - hi).max(W::splat(0.0))
     }
+
+    /// [`OrientedBox::distance_squared_bound`](crate::leaf_bounds::OrientedBox) for `p` and
+    /// the leaves `at .. at + STEP`, by the same arithmetic.
+    #[inline(always)]
+    fn oriented_bound<W: Wide>(&self, at: usize, p: [W; 3]) -> W {
+        // No closures: outside the AVX2 build they are not always inlined.
+        let mut d = [W::splat(0.0); 3];
+        let (mut a, mut b, mut half) = (d, d, d);
+        for c in 0..3 {
+            let (lo, hi) = (W::load(&self.min[c][at..]), W::load(&self.max[c][at..]));
+            d[c] = p[c] - (lo + hi) * W::splat(0.5);
+            a[c] = W::load(&self.first_axis[c][at..]);
+            b[c] = W::load(&self.second_axis[c][at..]);
+            half[c] = W::load(&self.half[c][at..]);
+        }
+        let third = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let zero = W::splat(0.0);
+        let mut sum = zero;
+        for (axis, half) in [a, b, third].into_iter().zip(half) {
+            let along = d[0] * axis[0] + d[1] * axis[1] + d[2] * axis[2];
+            let gap = (along - half).max(zero - along - half).max(zero);
+            sum = sum + gap * gap;
+        }
+        sum * W::splat(SHRINK)
+    }
 }
 
 #[cfg(test)]
@@ -337,8 +414,9 @@ mod tests {
                 })
                 .fold(0.0f32, f32::max);
             bvh.leaves_near_box(lo, hi, bound * (1.0 + 1e-4), &mut leaves);
-            for avx2 in [false, avx2_available()] {
-                table.fill(&bvh, &leaves, avx2);
+            for (avx2, oriented) in [(false, false), (false, true), (avx2_available(), true)] {
+                table.fill(&bvh, &leaves, avx2, oriented);
+                oriented_bounds_match_the_scalar_ones(&bvh, &table, &leaves, lo, hi);
                 let mut slot = seed.slot;
                 for n in 0..27 {
                     let f = Vec3A::new((n % 3) as f32, ((n / 3) % 3) as f32, (n / 9) as f32) / 2.0;
@@ -361,6 +439,30 @@ mod tests {
                         .fold(f32::INFINITY, f32::min);
                     assert_eq!(got.distance_squared, brute, "point {p}");
                     slot = got.slot;
+                }
+            }
+        }
+    }
+
+    /// The wide oriented bounds are [`OrientedBox::distance_squared_bound`]'s, bit for bit.
+    fn oriented_bounds_match_the_scalar_ones(
+        bvh: &Bvh,
+        table: &LeafTable,
+        leaves: &[(f32, u32)],
+        lo: Vec3A,
+        hi: Vec3A,
+    ) {
+        for n in 0..5 {
+            let p = lo + (hi - lo) * (n as f32 / 4.0);
+            let splat = [p.x, p.y, p.z].map(Pair::splat);
+            for at in (0..leaves.len()).step_by(STEP) {
+                let mut wide = [0.0; STEP];
+                table.oriented_bound::<Pair>(at, splat).store(&mut wide);
+                for (lane, &(_, id)) in leaves[at..].iter().take(STEP).enumerate() {
+                    let node = &bvh.nodes[id as usize];
+                    let scalar =
+                        bvh.oriented[id as usize].distance_squared_bound(p, node.min, node.max);
+                    assert_eq!(wide[lane].to_bits(), scalar.to_bits());
                 }
             }
         }

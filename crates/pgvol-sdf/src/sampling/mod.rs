@@ -228,6 +228,32 @@ mod tests {
     }
 
     #[test]
+    fn skipping_leaves_by_oriented_boxes_changes_no_bit() {
+        let grid = Grid::cube_res(Vec3::splat(-1.3), Vec3::splat(1.2), 37).unwrap();
+        let mut cases = vec![(sphere(5), grid)];
+        if let Some(dir) = std::env::var_os("PGVOL_SHARED_MESHES") {
+            let bunny = pgvol_mesh::read(&std::path::Path::new(&dir).join("stanford-bunny.obj"))
+                .expect("the shared bunny");
+            let (lo, hi) = bunny.bounds().expect("not empty");
+            let grid = Grid::cube_res(lo - (hi - lo) * 0.05, hi + (hi - lo) * 0.05, 40).unwrap();
+            cases.push((bunny, grid));
+        }
+        for (mesh, grid) in cases {
+            for mode in [SignMode::Winding, SignMode::Pseudonormal] {
+                let oriented = MeshSdf::new(&mesh, mode).unwrap();
+                let mut axis_aligned = MeshSdf::new(&mesh, mode).unwrap();
+                axis_aligned.use_axis_aligned_boxes_only();
+                for extent in [Extent::Dense, Extent::Band(2.0)] {
+                    let a = oriented.sample(&grid, extent, &|_| {}).values;
+                    let b = axis_aligned.sample(&grid, extent, &|_| {}).values;
+                    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&a), bits(&b), "{mode:?} {extent:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn sign_modes_agree_on_a_closed_mesh() {
         let mesh = sphere(3);
         let w = MeshSdf::new(&mesh, SignMode::Winding).unwrap();

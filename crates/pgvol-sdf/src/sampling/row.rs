@@ -226,7 +226,12 @@ impl MeshSdf {
             f32::INFINITY
         };
         self.brick_leaves(brick, &seed, limit, &mut scratch.leaves);
-        scratch.table.fill(bvh, &scratch.leaves, self.avx2());
+        scratch.table.fill(
+            bvh,
+            &scratch.leaves,
+            self.avx2(),
+            self.skips_by_oriented_boxes(),
+        );
         scratch.triangles.clear();
         if winding && !surface_free {
             self.brick_triangles(brick, &scratch.leaves, &mut scratch.triangles);
