@@ -62,23 +62,27 @@ impl LeafTable {
                 self.min[axis].push(node.min[axis]);
                 self.max[axis].push(node.max[axis]);
             }
-            let oriented = &bvh.oriented[id as usize];
-            for c in 0..3 {
-                self.first_axis[c].push(oriented.first[c]);
-                self.second_axis[c].push(oriented.second[c]);
-                self.half[c].push(oriented.half[c]);
+            if self.oriented {
+                let oriented = &bvh.oriented[id as usize];
+                for c in 0..3 {
+                    self.first_axis[c].push(oriented.first[c]);
+                    self.second_axis[c].push(oriented.second[c]);
+                    self.half[c].push(oriented.half[c]);
+                }
             }
             self.brick_distance.push(distance);
             self.first.push(node.first);
             self.count.push(node.count);
         }
         // Padding lanes are never opened; boxes at infinity keep them out of reach anyway.
-        for v in self.coordinates_mut() {
+        // Without the oriented boxes their arrays stay empty: the scan never reads them.
+        let used = if self.oriented { 15 } else { 6 };
+        for v in self.coordinates_mut().take(used) {
             v.resize(padded, f32::INFINITY);
         }
     }
 
-    /// Every per-leaf coordinate array.
+    /// Every per-leaf coordinate array: the axis-aligned boxes' six, then the oriented boxes' nine.
     fn coordinates_mut(&mut self) -> impl Iterator<Item = &mut Vec<f32>> {
         let Self {
             min,
@@ -416,7 +420,9 @@ mod tests {
             bvh.leaves_near_box(lo, hi, bound * (1.0 + 1e-4), &mut leaves);
             for (avx2, oriented) in [(false, false), (false, true), (avx2_available(), true)] {
                 table.fill(&bvh, &leaves, avx2, oriented);
-                oriented_bounds_match_the_scalar_ones(&bvh, &table, &leaves, lo, hi);
+                if oriented {
+                    oriented_bounds_match_the_scalar_ones(&bvh, &table, &leaves, lo, hi);
+                }
                 let mut slot = seed.slot;
                 for n in 0..27 {
                     let f = Vec3A::new((n % 3) as f32, ((n / 3) % 3) as f32, (n / 9) as f32) / 2.0;

@@ -20,6 +20,9 @@ const TILE: usize = 4;
 /// A shared bound serves a brick when the drift over its half diagonal stays below this.
 const TILE_DRIFT: f32 = 0.01;
 
+/// Bricks at least this many grid spacings from the surface skip leaves by their oriented boxes.
+const ORIENTED_FROM: f32 = 4.0;
+
 /// The gradient bound of the last tile: rows `j`, `k` of the bricks and tile number.
 #[derive(Default)]
 pub(super) struct TileGradient {
@@ -226,11 +229,14 @@ impl MeshSdf {
             f32::INFINITY
         };
         self.brick_leaves(brick, &seed, limit, &mut scratch.leaves);
+        // Near the surface a node's ball touches few leaves beyond its closest one, and copying
+        // the oriented boxes costs more than they save (band runs were 10-15 % slower).
+        let far = centre_distance - half_diagonal > ORIENTED_FROM * grid.spacing;
         scratch.table.fill(
             bvh,
             &scratch.leaves,
             self.avx2(),
-            self.skips_by_oriented_boxes(),
+            far && self.skips_by_oriented_boxes(),
         );
         scratch.triangles.clear();
         if winding && !surface_free {
