@@ -9,7 +9,7 @@ use super::{
     candidates::LeafTable,
     carry::WindingCarry,
     near::REGION_SIGN_MARGIN,
-    Plan, RowValues, BRICK,
+    Plan, RowValues,
 };
 use crate::{sdf::MeshSdf, SignMode};
 
@@ -58,9 +58,10 @@ impl MeshSdf {
     pub(super) fn sample_row(&self, plan: &Plan, row: usize, scratch: &mut Scratch) -> RowValues {
         let grid = plan.grid;
         let [nx, ny, nz] = grid.dims;
+        let size = plan.brick;
         let (bj, bk) = (row % plan.bricks[1], row / plan.bricks[1]);
-        let (j0, j1) = (bj * BRICK, (bj * BRICK + BRICK).min(ny));
-        let (k0, k1) = (bk * BRICK, (bk * BRICK + BRICK).min(nz));
+        let (j0, j1) = (bj * size, (bj * size + size).min(ny));
+        let (k0, k1) = (bk * size, (bk * size + size).min(nz));
         let mut values = vec![0.0f32; nx * (j1 - j0) * (k1 - k0)];
         let mut out = RowOut {
             values: &mut values,
@@ -76,8 +77,8 @@ impl MeshSdf {
             let b = bi + plan.bricks[0] * row;
             let brick = Brick::new(
                 grid,
-                [bi * BRICK, j0, k0],
-                [(bi * BRICK + BRICK).min(nx), j1, k1],
+                [bi * size, j0, k0],
+                [(bi * size + size).min(nx), j1, k1],
             );
             let far = plan.near.as_ref().is_some_and(|near| !near[b]);
             if far {
@@ -163,10 +164,11 @@ impl MeshSdf {
         carry: &WindingCarry,
         tiles: &mut TileGradient,
     ) -> f32 {
-        let tile = brick.lo[0] / (BRICK * TILE);
+        let size = plan.brick;
+        let tile = brick.lo[0] / (size * TILE);
         if tiles.row_tile != Some((brick.lo[1], brick.lo[2], tile)) {
-            let first = (tile * TILE * BRICK).saturating_sub(BRICK);
-            let last = ((tile + 1) * TILE * BRICK).min(plan.grid.dims[0]) - 1;
+            let first = (tile * TILE * size).saturating_sub(size);
+            let last = ((tile + 1) * TILE * size).min(plan.grid.dims[0]) - 1;
             let lo = plan.grid.point(first, brick.lo[1], brick.lo[2]).into();
             let hi = plan
                 .grid
