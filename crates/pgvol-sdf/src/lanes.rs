@@ -189,13 +189,25 @@ fn distances_to_corners<W: Wide>(p: Vec3A, [a, b, c]: [Points<W>; 3]) -> W {
     let edge_ac = vb.le(zero) & d2.ge(zero) & d6.le(zero);
     let edge_bc = va.le(zero) & d43.ge(zero) & d56.ge(zero);
     let sum = va + vb + vc;
-    let denom = W::splat(1.0) / sum;
-    let face = a.add(ab.scale(vb * denom)).add(ac.scale(vc * denom));
+    // Each lane uses one quotient: the face's `1 / sum` or its edge's parameter. Dividing
+    // once by per-lane operands gives the same bits as the four divisions.
+    let mut numerator = W::splat(1.0);
+    let mut denominator = sum;
+    for (edge, n, d) in [
+        (edge_bc, d43, d43 + d56),
+        (edge_ac, d2, d2 - d6),
+        (edge_ab, d1, d1 - d3),
+    ] {
+        numerator = W::select(edge, n, numerator);
+        denominator = W::select(edge, d, denominator);
+    }
+    let quotient = numerator / denominator;
+    let face = a.add(ab.scale(vb * quotient)).add(ac.scale(vc * quotient));
     let mut q = face;
-    q = Points::select(edge_bc, b.add(c.sub(b).scale(d43 / (d43 + d56))), q);
-    q = Points::select(edge_ac, a.add(ac.scale(d2 / (d2 - d6))), q);
+    q = Points::select(edge_bc, b.add(c.sub(b).scale(quotient)), q);
+    q = Points::select(edge_ac, a.add(ac.scale(quotient)), q);
     q = Points::select(vertex_c, c, q);
-    q = Points::select(edge_ab, a.add(ab.scale(d1 / (d1 - d3))), q);
+    q = Points::select(edge_ab, a.add(ab.scale(quotient)), q);
     q = Points::select(vertex_b, b, q);
     q = Points::select(vertex_a, a, q);
     let pq = p.sub(q);

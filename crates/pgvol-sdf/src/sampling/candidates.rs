@@ -22,24 +22,59 @@ use crate::{
 /// Leaves per step of the box test, and triangles per step of a leaf scan.
 const STEP: usize = 8;
 
-/// The leaves from [`Bvh::leaves_near_box`] for one brick, one array per field, padded to a
-/// multiple of [`STEP`] with boxes at infinity.
+/// The leaves from [`Bvh::leaves_near_box`] for one brick in groups of [`STEP`], one array
+/// per field within a group, the last group padded with boxes at infinity. One group is one
+/// step of the scan: its fields sit together in memory and need no bounds checks.
 #[derive(Default)]
 pub(super) struct LeafTable {
-    min: [Vec<f32>; 3],
-    max: [Vec<f32>; 3],
-    /// Squared distance from each leaf's box to the brick's box, ascending.
-    brick_distance: Vec<f32>,
-    first: Vec<u32>,
-    count: Vec<u32>,
-    /// Each leaf's oriented box (see `leaf_bounds.rs`): its first two axes and half extents.
-    first_axis: [Vec<f32>; 3],
-    second_axis: [Vec<f32>; 3],
-    half: [Vec<f32>; 3],
+    groups: Vec<Group>,
+    /// Per group, the leaves' oriented boxes (filled only when they are used).
+    oriented_groups: Vec<OrientedGroup>,
     /// Whether the scans run their AVX2 build.
     avx2: bool,
     /// Whether leaves are skipped by their oriented boxes.
     oriented: bool,
+}
+
+/// [`STEP`] leaves: their axis-aligned boxes and triangles.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Group {
+    min: [[f32; STEP]; 3],
+    max: [[f32; STEP]; 3],
+    /// Squared distance from each leaf's box to the brick's box, ascending over the table.
+    brick_distance: [f32; STEP],
+    first: [u32; STEP],
+    count: [u32; STEP],
+}
+
+impl Group {
+    /// Padding: boxes at infinity, never within reach, with no triangles.
+    const EMPTY: Group = Group {
+        min: [[f32::INFINITY; STEP]; 3],
+        max: [[f32::INFINITY; STEP]; 3],
+        brick_distance: [f32::INFINITY; STEP],
+        first: [0; STEP],
+        count: [0; STEP],
+    };
+}
+
+/// The oriented boxes (see `leaf_bounds.rs`) of a group's leaves: first two axes and half
+/// extents.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct OrientedGroup {
+    first_axis: [[f32; STEP]; 3],
+    second_axis: [[f32; STEP]; 3],
+    half: [[f32; STEP]; 3],
+}
+
+impl OrientedGroup {
+    const EMPTY: OrientedGroup = OrientedGroup {
+        first_axis: [[f32::INFINITY; STEP]; 3],
+        second_axis: [[f32::INFINITY; STEP]; 3],
+        half: [[f32::INFINITY; STEP]; 3],
+    };
 }
 
 impl LeafTable {
@@ -48,55 +83,37 @@ impl LeafTable {
     pub fn fill(&mut self, bvh: &Bvh, leaves: &[(f32, u32)], avx2: bool, oriented: bool) {
         self.avx2 = avx2;
         self.oriented = oriented;
-        let padded = leaves.len().next_multiple_of(STEP);
-        for v in self.coordinates_mut() {
-            v.clear();
-            v.reserve(padded);
+        let groups = leaves.len().div_ceil(STEP);
+        self.groups.clear();
+        self.groups.resize(groups, Group::EMPTY);
+        self.oriented_groups.clear();
+        if oriented {
+            self.oriented_groups.resize(groups, OrientedGroup::EMPTY);
         }
-        self.brick_distance.clear();
-        self.first.clear();
-        self.count.clear();
-        for &(distance, id) in leaves {
-            let node = &bvh.nodes[id as usize];
-            for axis in 0..3 {
-                self.min[axis].push(node.min[axis]);
-                self.max[axis].push(node.max[axis]);
+        for (chunk, group) in leaves.chunks(STEP).zip(&mut self.groups) {
+            for (lane, &(distance, id)) in chunk.iter().enumerate() {
+                let node = &bvh.nodes[id as usize];
+                for axis in 0..3 {
+                    group.min[axis][lane] = node.min[axis];
+                    group.max[axis][lane] = node.max[axis];
+                }
+                group.brick_distance[lane] = distance;
+                group.first[lane] = node.first;
+                group.count[lane] = node.count;
             }
-            if self.oriented {
-                let oriented = &bvh.oriented[id as usize];
-                for c in 0..3 {
-                    self.first_axis[c].push(oriented.first[c]);
-                    self.second_axis[c].push(oriented.second[c]);
-                    self.half[c].push(oriented.half[c]);
+        }
+        if oriented {
+            for (chunk, group) in leaves.chunks(STEP).zip(&mut self.oriented_groups) {
+                for (lane, &(_, id)) in chunk.iter().enumerate() {
+                    let oriented = &bvh.oriented[id as usize];
+                    for c in 0..3 {
+                        group.first_axis[c][lane] = oriented.first[c];
+                        group.second_axis[c][lane] = oriented.second[c];
+                        group.half[c][lane] = oriented.half[c];
+                    }
                 }
             }
-            self.brick_distance.push(distance);
-            self.first.push(node.first);
-            self.count.push(node.count);
         }
-        // Padding lanes are never opened; boxes at infinity keep them out of reach anyway.
-        // Without the oriented boxes their arrays stay empty: the scan never reads them.
-        let used = if self.oriented { 15 } else { 6 };
-        for v in self.coordinates_mut().take(used) {
-            v.resize(padded, f32::INFINITY);
-        }
-    }
-
-    /// Every per-leaf coordinate array: the axis-aligned boxes' six, then the oriented boxes' nine.
-    fn coordinates_mut(&mut self) -> impl Iterator<Item = &mut Vec<f32>> {
-        let Self {
-            min,
-            max,
-            first_axis,
-            second_axis,
-            half,
-            ..
-        } = self;
-        min.iter_mut()
-            .chain(max)
-            .chain(first_axis)
-            .chain(second_axis)
-            .chain(half)
     }
 
     /// As [`Bvh::closest_among`] over the table's leaves, for a point `p` of the brick, but
@@ -141,25 +158,28 @@ impl LeafTable {
             limit_squared,
             waiting: None,
         };
-        // Leaves are sorted by their distance to the brick, which bounds their distance to `p`
-        // from below: beyond the first reach, none can be opened.
-        let end = self.brick_distance.partition_point(|&d| d <= scan.reach());
         let (px, py, pz) = (W::splat(p.x), W::splat(p.y), W::splat(p.z));
         let mut box_distances = [0.0f32; STEP];
         let mut oriented_bounds = [0.0f32; STEP];
-        for at in (0..end).step_by(STEP) {
+        for (g, group) in self.groups.iter().enumerate() {
+            // Leaves are sorted by their distance to the brick, which bounds their distance to
+            // `p` from below: from the first one beyond the reach on, none can be opened.
+            let reach = W::splat(scan.reach());
+            if group.brick_distance[0] > scan.reach() {
+                break;
+            }
             // The arithmetic of `Node::distance_squared`, lane by lane.
-            let dx = self.gap::<W>(0, at, px);
-            let dy = self.gap::<W>(1, at, py);
-            let dz = self.gap::<W>(2, at, pz);
+            let dx = gap::<W>(group, 0, px);
+            let dy = gap::<W>(group, 1, py);
+            let dz = gap::<W>(group, 2, pz);
             let d2 = dx * dx + dy * dy + dz * dz;
-            let in_range = (1u32 << (end - at).min(STEP)) - 1;
-            let mut open = W::bits(d2.le(W::splat(scan.reach()))) & in_range;
+            let near_brick = W::load(&group.brick_distance).le(reach);
+            let mut open = W::bits(d2.le(reach) & near_brick);
             if open == 0 {
                 continue;
             }
             if self.oriented {
-                let bound = self.oriented_bound::<W>(at, [px, py, pz]);
+                let bound = self.oriented_bound::<W>(g, [px, py, pz]);
                 open &= W::bits(bound.lt(W::splat(scan.best_squared)));
                 bound.store(&mut oriented_bounds);
             }
@@ -173,8 +193,8 @@ impl LeafTable {
                 }
                 scan.leaf::<W>(Leaf {
                     distance_squared: box_distances[lane],
-                    first: self.first[at + lane] as usize,
-                    count: self.count[at + lane] as usize,
+                    first: group.first[lane] as usize,
+                    count: group.count[lane] as usize,
                 });
             }
         }
@@ -186,6 +206,14 @@ impl LeafTable {
             slot: scan.best_slot.map_or(start.slot, |s| s as u32),
         }
     }
+}
+
+/// How far `p` lies outside the boxes of the group's leaves along `axis` (0 inside).
+#[inline(always)]
+fn gap<W: Wide>(group: &Group, axis: usize, p: W) -> W {
+    let lo = W::load(&group.min[axis]);
+    let hi = W::load(&group.max[axis]);
+    (lo - p).max(p - hi).max(W::splat(0.0))
 }
 
 /// The answer of [`LeafTable::closest`]: the squared distance to the mesh and the leaf slot of
@@ -326,27 +354,20 @@ impl Scan<'_> {
 }
 
 impl LeafTable {
-    /// How far `p` lies outside the boxes of the leaves `at .. at + STEP` along `axis` (0 inside).
-    #[inline(always)]
-    fn gap<W: Wide>(&self, axis: usize, at: usize, p: W) -> W {
-        let lo = W::load(&self.min[axis][at..]);
-        let hi = W::load(&self.max[axis][at..]);
-        (lo - p).max(p - hi).max(W::splat(0.0))
-    }
-
     /// [`OrientedBox::distance_squared_bound`](crate::leaf_bounds::OrientedBox) for `p` and
-    /// the leaves `at .. at + STEP`, by the same arithmetic.
+    /// the leaves of group `g`, by the same arithmetic.
     #[inline(always)]
-    fn oriented_bound<W: Wide>(&self, at: usize, p: [W; 3]) -> W {
+    fn oriented_bound<W: Wide>(&self, g: usize, p: [W; 3]) -> W {
+        let (group, oriented) = (&self.groups[g], &self.oriented_groups[g]);
         // No closures: outside the AVX2 build they are not always inlined.
         let mut d = [W::splat(0.0); 3];
         let (mut a, mut b, mut half) = (d, d, d);
         for c in 0..3 {
-            let (lo, hi) = (W::load(&self.min[c][at..]), W::load(&self.max[c][at..]));
+            let (lo, hi) = (W::load(&group.min[c]), W::load(&group.max[c]));
             d[c] = p[c] - (lo + hi) * W::splat(0.5);
-            a[c] = W::load(&self.first_axis[c][at..]);
-            b[c] = W::load(&self.second_axis[c][at..]);
-            half[c] = W::load(&self.half[c][at..]);
+            a[c] = W::load(&oriented.first_axis[c]);
+            b[c] = W::load(&oriented.second_axis[c]);
+            half[c] = W::load(&oriented.half[c]);
         }
         let third = [
             a[1] * b[2] - a[2] * b[1],
@@ -463,7 +484,9 @@ mod tests {
             let splat = [p.x, p.y, p.z].map(Pair::splat);
             for at in (0..leaves.len()).step_by(STEP) {
                 let mut wide = [0.0; STEP];
-                table.oriented_bound::<Pair>(at, splat).store(&mut wide);
+                table
+                    .oriented_bound::<Pair>(at / STEP, splat)
+                    .store(&mut wide);
                 for (lane, &(_, id)) in leaves[at..].iter().take(STEP).enumerate() {
                     let node = &bvh.nodes[id as usize];
                     let scalar =
