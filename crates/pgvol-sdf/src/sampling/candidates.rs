@@ -116,10 +116,11 @@ impl LeafTable {
         }
     }
 
-    /// As [`Bvh::closest_among`] over the table's leaves, for a point `p` of the brick, but
-    /// without the closest point itself (see [`Nearest::closest`]).
+    /// As [`Bvh::closest_among`] over the table's leaves, for a point `p` of the brick, starting
+    /// from the triangle at leaf slot `start`, but without the closest point itself (see
+    /// [`Nearest::closest`]).
     #[inline]
-    pub fn closest(&self, bvh: &Bvh, p: Vec3A, start: &Closest, limit_squared: f32) -> Nearest {
+    pub fn closest(&self, bvh: &Bvh, p: Vec3A, start: u32, limit_squared: f32) -> Nearest {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only where `wide::avx2_available` said the CPU has AVX2.
@@ -131,13 +132,7 @@ impl LeafTable {
     /// The AVX2 build of the scan.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn closest_avx2(
-        &self,
-        bvh: &Bvh,
-        p: Vec3A,
-        start: &Closest,
-        limit_squared: f32,
-    ) -> Nearest {
+    unsafe fn closest_avx2(&self, bvh: &Bvh, p: Vec3A, start: u32, limit_squared: f32) -> Nearest {
         self.closest_wide::<crate::wide::Avx>(bvh, p, start, limit_squared)
     }
 
@@ -146,14 +141,25 @@ impl LeafTable {
         &self,
         bvh: &Bvh,
         p: Vec3A,
-        start: &Closest,
+        start: u32,
         limit_squared: f32,
     ) -> Nearest {
         debug_assert_eq!(W::LANES, STEP);
+        // The start's distance from a kernel step (its first lane): the same bits as the
+        // scalar code's, without its branches on the Voronoi region.
+        let mut lanes = [0.0f32; STEP];
+        bvh.lanes
+            .distances_squared_wide::<W>(p, start as usize)
+            .store(&mut lanes);
+        let start_squared = if lanes[0].is_nan() {
+            bvh.closest_on_slot(Vec3::from(p), start).distance_squared
+        } else {
+            lanes[0]
+        };
         let mut scan = Scan {
             bvh,
             p,
-            best_squared: start.distance_squared,
+            best_squared: start_squared,
             best_slot: None,
             limit_squared,
             waiting: None,
@@ -203,7 +209,7 @@ impl LeafTable {
         }
         Nearest {
             distance_squared: scan.best_squared,
-            slot: scan.best_slot.map_or(start.slot, |s| s as u32),
+            slot: scan.best_slot.map_or(start, |s| s as u32),
         }
     }
 }
@@ -225,14 +231,10 @@ pub(super) struct Nearest {
 }
 
 impl Nearest {
-    /// The closest point, as [`Bvh::closest_among`] finds it from `start`. Only the pseudonormal
-    /// sign needs it.
-    pub fn closest(&self, bvh: &Bvh, p: Vec3A, start: &Closest) -> Closest {
-        if self.slot == start.slot {
-            *start
-        } else {
-            bvh.closest_on_slot(Vec3::from(p), self.slot)
-        }
+    /// The closest point, as [`Bvh::closest_among`] finds it. Only the pseudonormal sign needs
+    /// it.
+    pub fn closest(&self, bvh: &Bvh, p: Vec3A) -> Closest {
+        bvh.closest_on_slot(Vec3::from(p), self.slot)
     }
 }
 
@@ -451,15 +453,15 @@ mod tests {
                     let start = bvh.closest_on_slot(p.into(), slot);
                     for limit in [f32::INFINITY, seed.distance_squared] {
                         let want = bvh.closest_among(p.into(), &leaves, start, limit);
-                        let got = table.closest(&bvh, p, &start, limit);
+                        let got = table.closest(&bvh, p, slot, limit);
                         assert_eq!(
                             got.distance_squared.to_bits(),
                             want.distance_squared.to_bits()
                         );
                         assert_eq!(got.slot, want.slot);
-                        assert_eq!(got.closest(&bvh, p, &start), want);
+                        assert_eq!(got.closest(&bvh, p), want);
                     }
-                    let got = table.closest(&bvh, p, &start, f32::INFINITY);
+                    let got = table.closest(&bvh, p, slot, f32::INFINITY);
                     let brute = tris
                         .iter()
                         .map(|&[a, b, c]| p.distance_squared(closest_point(p, a, b, c).0))

@@ -263,14 +263,13 @@ impl MeshSdf {
         let mut slot = seed.slot;
         let mut exact = 0;
         brick.for_each_node(grid, |at, p| {
-            let start = bvh.closest_on_slot(Vec3::from(p), slot);
-            let best = scratch.table.closest(bvh, p, &start, limit);
+            let best = scratch.table.closest(bvh, p, slot, limit);
             slot = best.slot;
             let d = best.distance_squared.sqrt();
             let inside = match brick_sign {
                 Some(s) => s,
                 None if winding => carry.winding_near(self, p, &segment).value > 0.5,
-                None => self.is_inside_near(Vec3::from(p), &best.closest(bvh, p, &start)),
+                None => self.is_inside_near(Vec3::from(p), &best.closest(bvh, p)),
             };
             if d <= clamp {
                 exact += 1;
