@@ -1,5 +1,5 @@
-//! The candidate leaves of one brick laid out as a structure of arrays, and the closest-point
-//! scan of a node over them: eight leaf boxes and eight triangles per step.
+//! The candidate leaves of one brick in groups of eight (one array per field within a group), and
+//! the closest-point scan of a node over them: eight leaf boxes and eight triangles per step.
 //!
 //! The scan makes the decisions of [`Bvh::closest_among`] in the same order (which leaves to
 //! open, which triangle wins), so its answers are identical; the wide steps only compute the
