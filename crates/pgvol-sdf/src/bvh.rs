@@ -255,9 +255,12 @@ fn box_box_distance_squared(lo: Vec3A, hi: Vec3A, node: &Node) -> f32 {
 }
 
 impl Bvh {
-    /// Leaves whose box lies within `sqrt(bound_squared)` of the box `[lo, hi]`, as
-    /// `(squared box distance, node id)` sorted by distance: every triangle that can be closest
-    /// to a point of the box, given that each such point is within that bound of the surface.
+    /// Leaves whose box lies within `sqrt(bound_squared)` of the box `[lo, hi]`: every triangle
+    /// that can be closest to a point of the box, given that each such point is within that
+    /// bound of the surface. Returned as `(distance from the box's centre to the leaf's box,
+    /// node id)`, sorted by that distance: for a point `p` of the box at `r` from the centre, a
+    /// leaf's distance minus `r` bounds its distance to `p` from below, so a scan from `p` can
+    /// stop where that bound passes its best.
     pub fn leaves_near_box(
         &self,
         lo: Vec3A,
@@ -269,16 +272,16 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
+        let centre = (lo + hi) * 0.5;
         let mut stack: Vec<u32> = Vec::with_capacity(64);
         stack.push(0);
         while let Some(id) = stack.pop() {
             let node = &self.nodes[id as usize];
-            let d2 = box_box_distance_squared(lo, hi, node);
-            if d2 > bound_squared {
+            if box_box_distance_squared(lo, hi, node) > bound_squared {
                 continue;
             }
             if node.is_leaf() {
-                out.push((d2, id));
+                out.push((node.distance_squared(centre).sqrt(), id));
             } else {
                 stack.push(node.first);
                 stack.push(node.first + 1);
@@ -286,13 +289,14 @@ impl Bvh {
         }
         // By distance, then id. Distances are not negative, so their bits sort as they do, and
         // one integer key sorts faster than a comparison of pairs.
-        out.sort_unstable_by_key(|&(d2, id)| (u64::from(d2.to_bits()) << 32) | u64::from(id));
+        out.sort_unstable_by_key(|&(d, id)| (u64::from(d.to_bits()) << 32) | u64::from(id));
     }
 
-    /// The closest point to `p` among the triangles of `leaves` (from [`Bvh::leaves_near_box`]
-    /// for a box holding `p`), improving on `start`, the distance to some triangle. Triangles
-    /// farther than `sqrt(limit_squared)` are not looked for: the answer is exact when the
-    /// closest distance is within that limit, and otherwise some triangle beyond it.
+    /// The closest point to `p` among the triangles of `leaves` (from [`Bvh::leaves_near_box`]),
+    /// in their order, improving on `start`, the distance to some triangle. Triangles farther
+    /// than `sqrt(limit_squared)` are not looked for: the answer is exact when the closest
+    /// distance is within that limit, and otherwise some triangle beyond it. The reference the
+    /// grid scans are tested against: it tests every leaf's box.
     pub fn closest_among(
         &self,
         p: Vec3,
@@ -302,12 +306,8 @@ impl Bvh {
     ) -> Closest {
         let q = Vec3A::from(p);
         let mut best = start;
-        for &(box_d2, id) in leaves {
+        for &(_, id) in leaves {
             let reach = best.distance_squared.min(limit_squared);
-            // Sorted by distance to the whole box, which bounds the distance to `p` from below.
-            if box_d2 > reach {
-                break;
-            }
             let node = &self.nodes[id as usize];
             if node.distance_squared(q) > reach {
                 continue;

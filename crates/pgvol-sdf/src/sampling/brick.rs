@@ -56,7 +56,7 @@ impl Brick {
 
 impl MeshSdf {
     /// The leaves that can hold the closest triangle of a node of `brick` whose distance is at
-    /// most `sqrt(limit_squared)`, nearest first, given `seed`, the closest triangle to the
+    /// most `sqrt(limit_squared)`, nearest to its centre first, given `seed`, the closest triangle to the
     /// centre. The distance to `seed`'s triangle is convex, so its largest value over the brick,
     /// at a corner, bounds every node's distance.
     pub(super) fn brick_leaves(
@@ -92,9 +92,11 @@ impl MeshSdf {
     ) {
         out.clear();
         let bvh = self.bvh();
-        // Sorted by box distance: the leaves meeting the box come first.
-        for &(_, id) in leaves.iter().take_while(|l| l.0 <= 0.0) {
+        for &(_, id) in leaves {
             let node = &bvh.nodes[id as usize];
+            if !(node.min.cmple(brick.pmax).all() && node.max.cmpge(brick.pmin).all()) {
+                continue;
+            }
             for t in &bvh.tris[node.first as usize..(node.first + node.count) as usize] {
                 let (min, max) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
                 if min.cmple(brick.pmax).all() && max.cmpge(brick.pmin).all() {

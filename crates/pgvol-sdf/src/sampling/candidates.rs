@@ -22,11 +22,17 @@ use crate::{
 /// Leaves per step of the box test, and triangles per step of a leaf scan.
 const STEP: usize = 8;
 
+/// Relative slack on the distances that decide where a node's scan stops: a few hundred times
+/// their rounding error.
+const CUT_SLACK: f32 = 1e-5;
+
 /// The leaves from [`Bvh::leaves_near_box`] for one brick in groups of [`STEP`], one array
 /// per field within a group, the last group padded with boxes at infinity. One group is one
 /// step of the scan: its fields sit together in memory and need no bounds checks.
 #[derive(Default)]
 pub(super) struct LeafTable {
+    /// The centre of the box the leaves were gathered for.
+    centre: Vec3A,
     groups: Vec<Group>,
     /// Per group, the leaves' oriented boxes (filled only when they are used).
     oriented_groups: Vec<OrientedGroup>,
@@ -42,8 +48,8 @@ pub(super) struct LeafTable {
 struct Group {
     min: [[f32; STEP]; 3],
     max: [[f32; STEP]; 3],
-    /// Squared distance from each leaf's box to the brick's box, ascending over the table.
-    brick_distance: [f32; STEP],
+    /// Distance from the brick's centre to each leaf's box, ascending over the table.
+    centre_distance: [f32; STEP],
     first: [u32; STEP],
     count: [u32; STEP],
 }
@@ -53,7 +59,7 @@ impl Group {
     const EMPTY: Group = Group {
         min: [[f32::INFINITY; STEP]; 3],
         max: [[f32::INFINITY; STEP]; 3],
-        brick_distance: [f32::INFINITY; STEP],
+        centre_distance: [f32::INFINITY; STEP],
         first: [0; STEP],
         count: [0; STEP],
     };
@@ -78,9 +84,17 @@ impl OrientedGroup {
 }
 
 impl LeafTable {
-    /// Refills the table with `leaves` (sorted as [`Bvh::leaves_near_box`] returns them).
-    /// `oriented` turns the skipping of leaves by their oriented boxes on.
-    pub fn fill(&mut self, bvh: &Bvh, leaves: &[(f32, u32)], avx2: bool, oriented: bool) {
+    /// Refills the table with `leaves`, as [`Bvh::leaves_near_box`] returns them for a box
+    /// centred on `centre`. `oriented` turns the skipping of leaves by their oriented boxes on.
+    pub fn fill(
+        &mut self,
+        bvh: &Bvh,
+        centre: Vec3A,
+        leaves: &[(f32, u32)],
+        avx2: bool,
+        oriented: bool,
+    ) {
+        self.centre = centre;
         self.avx2 = avx2;
         self.oriented = oriented;
         let groups = leaves.len().div_ceil(STEP);
@@ -97,7 +111,7 @@ impl LeafTable {
                     group.min[axis][lane] = node.min[axis];
                     group.max[axis][lane] = node.max[axis];
                 }
-                group.brick_distance[lane] = distance;
+                group.centre_distance[lane] = distance;
                 group.first[lane] = node.first;
                 group.count[lane] = node.count;
             }
@@ -167,11 +181,14 @@ impl LeafTable {
         let (px, py, pz) = (W::splat(p.x), W::splat(p.y), W::splat(p.z));
         let mut box_distances = [0.0f32; STEP];
         let mut oriented_bounds = [0.0f32; STEP];
+        // Leaves are sorted by their distance from the centre, which less `p`'s distance from
+        // it bounds their distance to `p` from below: from the first one whose bound is beyond
+        // the reach on, none can be opened. The relative slack covers the rounding of the
+        // three distances, so the scan never stops before a leaf its box test would open.
+        let from_centre = (p - self.centre).length() * (1.0 + CUT_SLACK);
         for (g, group) in self.groups.iter().enumerate() {
-            // Leaves are sorted by their distance to the brick, which bounds their distance to
-            // `p` from below: from the first one beyond the reach on, none can be opened.
-            let reach = W::splat(scan.reach());
-            if group.brick_distance[0] > scan.reach() {
+            let below = group.centre_distance[0] * (1.0 - CUT_SLACK) - from_centre;
+            if below > 0.0 && below * below > scan.reach() * (1.0 + CUT_SLACK) {
                 break;
             }
             // The arithmetic of `Node::distance_squared`, lane by lane.
@@ -179,8 +196,7 @@ impl LeafTable {
             let dy = gap::<W>(group, 1, py);
             let dz = gap::<W>(group, 2, pz);
             let d2 = dx * dx + dy * dy + dz * dz;
-            let near_brick = W::load(&group.brick_distance).le(reach);
-            let mut open = W::bits(d2.le(reach) & near_brick);
+            let mut open = W::bits(d2.le(W::splat(scan.reach())));
             if open == 0 {
                 continue;
             }
@@ -442,7 +458,7 @@ mod tests {
                 .fold(0.0f32, f32::max);
             bvh.leaves_near_box(lo, hi, bound * (1.0 + 1e-4), &mut leaves);
             for (avx2, oriented) in [(false, false), (false, true), (avx2_available(), true)] {
-                table.fill(&bvh, &leaves, avx2, oriented);
+                table.fill(&bvh, (lo + hi) * 0.5, &leaves, avx2, oriented);
                 if oriented {
                     oriented_bounds_match_the_scalar_ones(&bvh, &table, &leaves, lo, hi);
                 }

@@ -236,6 +236,7 @@ impl MeshSdf {
         let far = centre_distance - half_diagonal > ORIENTED_FROM * grid.spacing;
         scratch.table.fill(
             bvh,
+            brick.centre(),
             &scratch.leaves,
             self.avx2(),
             far && self.skips_by_oriented_boxes(),
