@@ -104,27 +104,23 @@ impl LeafTable {
         if oriented {
             self.oriented_groups.resize(groups, OrientedGroup::EMPTY);
         }
-        for (chunk, group) in leaves.chunks(STEP).zip(&mut self.groups) {
-            for (lane, &(distance, id)) in chunk.iter().enumerate() {
-                let node = &bvh.nodes[id as usize];
-                for axis in 0..3 {
-                    group.min[axis][lane] = node.min[axis];
-                    group.max[axis][lane] = node.max[axis];
-                }
-                group.centre_distance[lane] = distance;
-                group.first[lane] = node.first;
-                group.count[lane] = node.count;
+        for (i, &(distance, id)) in leaves.iter().enumerate() {
+            let (g, lane) = (i / STEP, i % STEP);
+            let node = &bvh.nodes[id as usize];
+            let group = &mut self.groups[g];
+            for axis in 0..3 {
+                group.min[axis][lane] = node.min[axis];
+                group.max[axis][lane] = node.max[axis];
             }
-        }
-        if oriented {
-            for (chunk, group) in leaves.chunks(STEP).zip(&mut self.oriented_groups) {
-                for (lane, &(_, id)) in chunk.iter().enumerate() {
-                    let oriented = &bvh.oriented[id as usize];
-                    for c in 0..3 {
-                        group.first_axis[c][lane] = oriented.first[c];
-                        group.second_axis[c][lane] = oriented.second[c];
-                        group.half[c][lane] = oriented.half[c];
-                    }
+            group.centre_distance[lane] = distance;
+            group.first[lane] = node.first;
+            group.count[lane] = node.count;
+            if oriented {
+                let (group, box_) = (&mut self.oriented_groups[g], &bvh.oriented[id as usize]);
+                for c in 0..3 {
+                    group.first_axis[c][lane] = box_.first[c];
+                    group.second_axis[c][lane] = box_.second[c];
+                    group.half[c][lane] = box_.half[c];
                 }
             }
         }
