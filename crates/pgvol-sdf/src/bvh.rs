@@ -49,6 +49,8 @@ pub struct Bvh {
     pub tris: Vec<[Vec3A; 3]>,
     pub tri_ids: Vec<u32>,
     pub lanes: TriangleLanes,
+    /// Per leaf slot, the first slot of its leaf and the leaf's triangle count.
+    pub leaf_of_slot: Vec<[u32; 2]>,
 }
 
 /// The closest point of the mesh to a query.
@@ -97,6 +99,7 @@ impl Bvh {
             tris: Vec::with_capacity(tris.len()),
             tri_ids: Vec::with_capacity(tris.len()),
             lanes: TriangleLanes::default(),
+            leaf_of_slot: Vec::new(),
         };
         if bvh2.nodes.is_empty() {
             return out;
@@ -147,6 +150,12 @@ impl Bvh {
             }
         }
         out.lanes = TriangleLanes::new(&out.tris);
+        out.leaf_of_slot = vec![[0, 0]; out.tris.len()];
+        for n in out.nodes.iter().filter(|n| n.is_leaf()) {
+            for slot in n.first..n.first + n.count {
+                out.leaf_of_slot[slot as usize] = [n.first, n.count];
+            }
+        }
         out.oriented = out
             .nodes
             .iter()
@@ -292,42 +301,53 @@ impl Bvh {
         out.sort_unstable_by_key(|&(d, id)| (u64::from(d.to_bits()) << 32) | u64::from(id));
     }
 
-    /// The closest point to `p` among the triangles of `leaves` (from [`Bvh::leaves_near_box`]),
-    /// in their order, improving on `start`, the distance to some triangle. Triangles farther
-    /// than `sqrt(limit_squared)` are not looked for: the answer is exact when the closest
-    /// distance is within that limit, and otherwise some triangle beyond it. The reference the
-    /// grid scans are tested against: it tests every leaf's box.
+    /// The closest point to `p` among the triangles of `leaves` (from [`Bvh::leaves_near_box`])
+    /// and of the leaf holding slot `start` (typically a neighbour's answer): that leaf first,
+    /// then the others in their order, a triangle winning only by being strictly nearer than
+    /// the best so far. Triangles farther than `sqrt(limit_squared)` are not looked for: the
+    /// answer is exact when the closest distance is within that limit, and otherwise some
+    /// triangle beyond it. The reference the grid scans are tested against: it tests every
+    /// leaf's box.
     pub fn closest_among(
         &self,
         p: Vec3,
         leaves: &[(f32, u32)],
-        start: Closest,
+        start: u32,
         limit_squared: f32,
     ) -> Closest {
         let q = Vec3A::from(p);
-        let mut best = start;
-        for &(_, id) in leaves {
-            let reach = best.distance_squared.min(limit_squared);
-            let node = &self.nodes[id as usize];
-            if node.distance_squared(q) > reach {
-                continue;
-            }
+        let [first, count] = self.leaf_of_slot[start as usize];
+        let mut best: Option<Closest> = None;
+        let scan = |first: usize, end: usize, best: &mut Option<Closest>| {
             // Four triangles per step; only those that improve are looked at one by one, by
             // the same arithmetic, so the answer is the scalar scan's.
-            let (first, end) = (node.first as usize, (node.first + node.count) as usize);
-            for start in (first..end).step_by(LANES) {
-                let d2 = self.lanes.distances_squared(q, start).to_array();
-                for (lane, &d2) in d2.iter().enumerate().take(end - start) {
-                    if d2.is_nan() || d2 < best.distance_squared {
-                        let c = self.closest_on_slot(p, (start + lane) as u32);
-                        if c.distance_squared < best.distance_squared {
-                            best = c;
+            for step in (first..end).step_by(LANES) {
+                let d2 = self.lanes.distances_squared(q, step).to_array();
+                for (lane, &d2) in d2.iter().enumerate().take(end - step) {
+                    let best_d2 = best.map_or(f32::INFINITY, |b| b.distance_squared);
+                    if d2.is_nan() || d2 < best_d2 || best.is_none() {
+                        let c = self.closest_on_slot(p, (step + lane) as u32);
+                        if c.distance_squared < best_d2 || best.is_none() {
+                            *best = Some(c);
                         }
                     }
                 }
             }
+        };
+        scan(first as usize, (first + count) as usize, &mut best);
+        for &(_, id) in leaves {
+            let node = &self.nodes[id as usize];
+            let reach = best.map_or(f32::INFINITY, |b| b.distance_squared);
+            if node.first == first || node.distance_squared(q) > reach.min(limit_squared) {
+                continue;
+            }
+            scan(
+                node.first as usize,
+                (node.first + node.count) as usize,
+                &mut best,
+            );
         }
-        best
+        best.expect("a leaf holds at least one triangle")
     }
 
     /// The change of the generalized winding number from `a` to `b` caused by the triangles the

@@ -16,11 +16,13 @@ pub const LANES: usize = 4;
 /// The widest step any scan takes: the padding after the last triangle.
 const WIDEST: usize = 8;
 
-/// Corners of the triangles in leaf order, one array per corner and axis, padded so that a
-/// step starting at any triangle stays in bounds.
+/// Corners of the triangles in leaf order, one run of `stride` floats per corner and axis (the
+/// triangles, then padding so that a step starting at any triangle stays in the run). One
+/// buffer lets a step check its bounds once instead of once per load.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleLanes {
-    corners: [[Vec<f32>; 3]; 3],
+    values: Vec<f32>,
+    stride: usize,
 }
 
 /// Three coordinates of `W::LANES` points.
@@ -86,41 +88,44 @@ impl<W: Wide> Points<W> {
 
 impl TriangleLanes {
     pub fn new(tris: &[[Vec3A; 3]]) -> TriangleLanes {
-        let mut corners: [[Vec<f32>; 3]; 3] = Default::default();
-        for (c, axes) in corners.iter_mut().enumerate() {
-            for (axis, values) in axes.iter_mut().enumerate() {
+        let stride = tris.len() + WIDEST - 1;
+        let mut values = Vec::with_capacity(9 * stride);
+        for c in 0..3 {
+            for axis in 0..3 {
                 values.extend(tris.iter().map(|t| t[c][axis]));
                 values.extend([0.0; WIDEST - 1]);
             }
         }
-        TriangleLanes { corners }
+        TriangleLanes { values, stride }
+    }
+
+    /// Panics unless a step of `W::LANES` triangles from `start` stays in the runs: what the
+    /// unchecked loads of [`TriangleLanes::corner`] need.
+    #[inline(always)]
+    fn check_step<W: Wide>(&self, start: usize) {
+        assert!(
+            start + W::LANES <= self.stride,
+            "triangle step out of bounds"
+        );
     }
 
     // No closures in the kernels: a closure is not always inlined into its caller, and
     // outside the AVX2 build its wide operations become calls.
+    /// Corner `c` of the triangles `start .. start + W::LANES`.
+    ///
+    /// # Safety
+    /// [`TriangleLanes::check_step`] passed for `start`.
     #[inline(always)]
-    fn corner<W: Wide>(&self, c: usize, start: usize) -> Points<W> {
-        let [x, y, z] = &self.corners[c];
-        Points {
-            x: W::load(&x[start..]),
-            y: W::load(&y[start..]),
-            z: W::load(&z[start..]),
-        }
-    }
-
-    #[inline(always)]
-    fn corner_split<W: Wide>(
-        &self,
-        c: usize,
-        low: usize,
-        high: usize,
-        split: W::Mask,
-    ) -> Points<W> {
-        let [x, y, z] = &self.corners[c];
-        Points {
-            x: W::select(split, W::load(&x[low..]), W::load(&x[high..])),
-            y: W::select(split, W::load(&y[low..]), W::load(&y[high..])),
-            z: W::select(split, W::load(&z[low..]), W::load(&z[high..])),
+    unsafe fn corner<W: Wide>(&self, c: usize, start: usize) -> Points<W> {
+        // SAFETY: `start + LANES <= stride`, so the step stays in runs `3 c .. 3 c + 3`.
+        unsafe {
+            let x = self.values.as_ptr().add(3 * c * self.stride + start);
+            let (y, z) = (x.add(self.stride), x.add(2 * self.stride));
+            Points {
+                x: W::load_unchecked(x),
+                y: W::load_unchecked(y),
+                z: W::load_unchecked(z),
+            }
         }
     }
 
@@ -135,9 +140,15 @@ impl TriangleLanes {
     /// As [`TriangleLanes::distances_squared`], for the `W::LANES` triangles from `start`.
     #[inline(always)]
     pub(crate) fn distances_squared_wide<W: Wide>(&self, p: Vec3A, start: usize) -> W {
-        let a = self.corner::<W>(0, start);
-        let b = self.corner::<W>(1, start);
-        let c = self.corner::<W>(2, start);
+        self.check_step::<W>(start);
+        // SAFETY: checked above.
+        let (a, b, c) = unsafe {
+            (
+                self.corner::<W>(0, start),
+                self.corner::<W>(1, start),
+                self.corner::<W>(2, start),
+            )
+        };
         distances_to_corners(p, [a, b, c])
     }
 
@@ -153,9 +164,16 @@ impl TriangleLanes {
         split: usize,
     ) -> W {
         let (high, mask) = (high - split, W::lanes_below(split));
-        let a = self.corner_split::<W>(0, low, high, mask);
-        let b = self.corner_split::<W>(1, low, high, mask);
-        let c = self.corner_split::<W>(2, low, high, mask);
+        self.check_step::<W>(low);
+        self.check_step::<W>(high);
+        // SAFETY: both steps checked above.
+        let (a, b, c) = unsafe {
+            (
+                Points::select(mask, self.corner::<W>(0, low), self.corner::<W>(0, high)),
+                Points::select(mask, self.corner::<W>(1, low), self.corner::<W>(1, high)),
+                Points::select(mask, self.corner::<W>(2, low), self.corner::<W>(2, high)),
+            )
+        };
         distances_to_corners(p, [a, b, c])
     }
 }

@@ -25,6 +25,12 @@ pub(crate) trait Wide:
     /// The first `LANES` values of `s` (panics when it is shorter).
     fn load(s: &[f32]) -> Self;
 
+    /// The `LANES` values from `p`, without a bounds check.
+    ///
+    /// # Safety
+    /// `p` points to `LANES` readable floats.
+    unsafe fn load_unchecked(p: *const f32) -> Self;
+
     /// Writes the lanes to `out[..LANES]` (panics when it is shorter).
     fn store(self, out: &mut [f32]);
 
@@ -58,6 +64,11 @@ impl Wide for Vec4 {
     #[inline(always)]
     fn splat(x: f32) -> Self {
         Vec4::splat(x)
+    }
+    #[inline(always)]
+    unsafe fn load_unchecked(p: *const f32) -> Self {
+        // SAFETY: the caller promises four readable floats.
+        Vec4::from_array(unsafe { p.cast::<[f32; 4]>().read_unaligned() })
     }
     #[inline(always)]
     fn load(s: &[f32]) -> Self {
@@ -141,6 +152,11 @@ impl Wide for Pair {
     #[inline(always)]
     fn load(s: &[f32]) -> Self {
         Pair(Vec4::from_slice(&s[..4]), Vec4::from_slice(&s[4..8]))
+    }
+    #[inline(always)]
+    unsafe fn load_unchecked(p: *const f32) -> Self {
+        // SAFETY: the caller promises eight readable floats.
+        unsafe { Pair(Vec4::load_unchecked(p), Vec4::load_unchecked(p.add(4))) }
     }
     #[inline(always)]
     fn store(self, out: &mut [f32]) {
@@ -251,6 +267,11 @@ mod avx {
             let s = &s[..8];
             // SAFETY: `s` holds eight floats; unaligned loads are allowed. AVX: see the module.
             Avx(unsafe { _mm256_loadu_ps(s.as_ptr()) })
+        }
+        #[inline(always)]
+        unsafe fn load_unchecked(p: *const f32) -> Self {
+            // SAFETY: the caller promises eight readable floats; AVX: see the module.
+            Avx(unsafe { _mm256_loadu_ps(p) })
         }
         #[inline(always)]
         fn store(self, out: &mut [f32]) {

@@ -126,9 +126,8 @@ impl LeafTable {
         }
     }
 
-    /// As [`Bvh::closest_among`] over the table's leaves, for a point `p` of the brick, starting
-    /// from the triangle at leaf slot `start`, but without the closest point itself (see
-    /// [`Nearest::closest`]).
+    /// As [`Bvh::closest_among`] over the table's leaves and the leaf of slot `start`, for a
+    /// point `p` of the brick, but without the closest point itself (see [`Nearest::closest`]).
     #[inline]
     pub fn closest(&self, bvh: &Bvh, p: Vec3A, start: u32, limit_squared: f32) -> Nearest {
         #[cfg(target_arch = "x86_64")]
@@ -155,25 +154,17 @@ impl LeafTable {
         limit_squared: f32,
     ) -> Nearest {
         debug_assert_eq!(W::LANES, STEP);
-        // The start's distance from a kernel step (its first lane): the same bits as the
-        // scalar code's, without its branches on the Voronoi region.
-        let mut lanes = [0.0f32; STEP];
-        bvh.lanes
-            .distances_squared_wide::<W>(p, start as usize)
-            .store(&mut lanes);
-        let start_squared = if lanes[0].is_nan() {
-            bvh.closest_on_slot(Vec3::from(p), start).distance_squared
-        } else {
-            lanes[0]
-        };
+        // The start's leaf first, whole: the scan below skips it.
+        let [start_first, start_count] = bvh.leaf_of_slot[start as usize];
         let mut scan = Scan {
             bvh,
             p,
-            best_squared: start_squared,
+            best_squared: f32::INFINITY,
             best_slot: None,
             limit_squared,
             waiting: None,
         };
+        scan.start_leaf::<W>(start_first as usize, start_count as usize);
         let (px, py, pz) = (W::splat(p.x), W::splat(p.y), W::splat(p.z));
         let mut box_distances = [0.0f32; STEP];
         let mut oriented_bounds = [0.0f32; STEP];
@@ -209,6 +200,9 @@ impl LeafTable {
                 if self.oriented && oriented_bounds[lane] >= scan.best_squared {
                     continue;
                 }
+                if group.first[lane] == start_first {
+                    continue;
+                }
                 scan.leaf::<W>(Leaf {
                     distance_squared: box_distances[lane],
                     first: group.first[lane] as usize,
@@ -221,7 +215,7 @@ impl LeafTable {
         }
         Nearest {
             distance_squared: scan.best_squared,
-            slot: scan.best_slot.map_or(start, |s| s as u32),
+            slot: scan.best_slot.expect("the start leaf sets a best") as u32,
         }
     }
 }
@@ -320,6 +314,37 @@ impl Scan<'_> {
         self.take_lanes(waiting, waiting.first, low, &lanes);
         let high = (ask >> split) & ((1 << leaf.count) - 1);
         self.take_lanes(leaf, leaf.first, high, &lanes[split..]);
+    }
+
+    /// The start's leaf, before any other: its nearest triangle, the first of equals (as
+    /// [`Bvh::closest_among`] takes it), found without a branch per triangle. Leaves hold at
+    /// most [`STEP`] triangles (see `Bvh::build`).
+    #[inline(always)]
+    fn start_leaf<W: Wide>(&mut self, first: usize, count: usize) {
+        assert!((1..=STEP).contains(&count), "a leaf of {count} triangles");
+        let mut d2 = self.bvh.lanes.distances_squared_wide::<W>(self.p, first);
+        let valid = (1u32 << count) - 1;
+        let mut lanes = [f32::INFINITY; STEP];
+        d2.store(&mut lanes);
+        let mut nan = !W::bits(d2.le(W::splat(f32::INFINITY))) & valid;
+        if nan != 0 {
+            while nan != 0 {
+                let lane = nan.trailing_zeros() as usize;
+                nan &= nan - 1;
+                lanes[lane] = self
+                    .bvh
+                    .closest_on_slot(Vec3::from(self.p), (first + lane) as u32)
+                    .distance_squared;
+            }
+            d2 = W::load(&lanes);
+        }
+        let mut best = f32::INFINITY;
+        for &d in &lanes[..count] {
+            best = best.min(d);
+        }
+        let lane = (W::bits(d2.le(W::splat(best))) & valid).trailing_zeros() as usize;
+        self.best_squared = best;
+        self.best_slot = Some(first + lane.min(count - 1));
     }
 
     /// Scans a leaf on its own, `STEP` triangles at a time.
@@ -462,9 +487,8 @@ mod tests {
                 for n in 0..27 {
                     let f = Vec3A::new((n % 3) as f32, ((n / 3) % 3) as f32, (n / 9) as f32) / 2.0;
                     let p = lo + (hi - lo) * f;
-                    let start = bvh.closest_on_slot(p.into(), slot);
                     for limit in [f32::INFINITY, seed.distance_squared] {
-                        let want = bvh.closest_among(p.into(), &leaves, start, limit);
+                        let want = bvh.closest_among(p.into(), &leaves, slot, limit);
                         let got = table.closest(&bvh, p, slot, limit);
                         assert_eq!(
                             got.distance_squared.to_bits(),
