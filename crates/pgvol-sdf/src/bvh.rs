@@ -65,6 +65,9 @@ pub struct Closest {
     pub feature: Feature,
 }
 
+/// Most triangles in a leaf: one step of the eight-lane scans.
+pub const MAX_LEAF: usize = 8;
+
 /// Enough for any tree obvhs builds on meshes that fit in memory; deeper trees spill to the heap.
 const STACK: usize = 96;
 
@@ -90,6 +93,8 @@ impl Bvh {
         // less time on one core, fandisk's the same.
         let params = BvhBuildParams {
             collapse_traversal_cost: 6.0,
+            // One kernel step per leaf in the grid scans.
+            max_prims_per_leaf: MAX_LEAF as u32,
             ..BvhBuildParams::very_fast_build()
         };
         let bvh2 = build_bvh2_from_tris(&tris, params, &mut build_time);
@@ -116,6 +121,11 @@ impl Bvh {
             let n = &bvh2.nodes[src];
             let (min, max) = (n.aabb.min, n.aabb.max);
             if n.prim_count > 0 {
+                assert!(
+                    n.prim_count as usize <= MAX_LEAF,
+                    "a leaf of {} triangles",
+                    n.prim_count
+                );
                 let first = out.tris.len() as u32;
                 let range = n.first_index as usize..(n.first_index + n.prim_count) as usize;
                 for &prim in &bvh2.primitive_indices[range] {

@@ -151,31 +151,6 @@ impl TriangleLanes {
         };
         distances_to_corners(p, [a, b, c])
     }
-
-    /// As [`TriangleLanes::distances_squared_wide`] for two runs of triangles in one step:
-    /// lanes `l < split` for the triangles `low + l`, the others for `high + l - split`.
-    /// Needs `high >= split`.
-    #[inline(always)]
-    pub(crate) fn distances_squared_split<W: Wide>(
-        &self,
-        p: Vec3A,
-        low: usize,
-        high: usize,
-        split: usize,
-    ) -> W {
-        let (high, mask) = (high - split, W::lanes_below(split));
-        self.check_step::<W>(low);
-        self.check_step::<W>(high);
-        // SAFETY: both steps checked above.
-        let (a, b, c) = unsafe {
-            (
-                Points::select(mask, self.corner::<W>(0, low), self.corner::<W>(0, high)),
-                Points::select(mask, self.corner::<W>(1, low), self.corner::<W>(1, high)),
-                Points::select(mask, self.corner::<W>(2, low), self.corner::<W>(2, high)),
-            )
-        };
-        distances_to_corners(p, [a, b, c])
-    }
 }
 
 /// The kernel of [`TriangleLanes::distances_squared`] on triangles with corners `a`, `b`, `c`.

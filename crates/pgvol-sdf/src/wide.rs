@@ -47,13 +47,6 @@ pub(crate) trait Wide:
 
     /// Bit `l` set where lane `l` of `mask` holds.
     fn bits(mask: Self::Mask) -> u32;
-
-    /// The lanes `l < n`.
-    #[inline(always)]
-    fn lanes_below(n: usize) -> Self::Mask {
-        const INDICES: [f32; 8] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
-        Self::load(&INDICES).lt(Self::splat(n as f32))
-    }
 }
 
 /// Four lanes: one SSE2 register on x86-64.
