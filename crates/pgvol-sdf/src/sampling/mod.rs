@@ -132,21 +132,25 @@ impl MeshSdf {
                 out
             })
             .collect();
+        // Rows with the same `k` range fill one slab of the grid, x fastest: slabs in parallel.
         let mut values = vec![0.0f32; grid.len()];
-        let mut exact_nodes = 0;
-        for (r, row) in results.iter().enumerate() {
-            let (bj, bk) = (r % bricks[1], r / bricks[1]);
-            let (j0, j1) = (bj * brick, (bj * brick + brick).min(ny));
-            let (k0, k1) = (bk * brick, (bk * brick + brick).min(nz));
-            let mut lines = row.values.chunks_exact(nx);
-            for k in k0..k1 {
-                for j in j0..j1 {
-                    let at = grid.index(0, j, k);
-                    values[at..at + nx].copy_from_slice(lines.next().expect("row size"));
+        values
+            .par_chunks_mut(nx * ny * brick)
+            .zip(results.par_chunks(bricks[1]))
+            .for_each(|(slab, rows)| {
+                let layers = slab.len() / (nx * ny);
+                for (bj, row) in rows.iter().enumerate() {
+                    let (j0, j1) = (bj * brick, (bj * brick + brick).min(ny));
+                    let mut lines = row.values.chunks_exact(nx);
+                    for k in 0..layers {
+                        for j in j0..j1 {
+                            let at = nx * (j + ny * k);
+                            slab[at..at + nx].copy_from_slice(lines.next().expect("row size"));
+                        }
+                    }
                 }
-            }
-            exact_nodes += row.exact;
-        }
+            });
+        let exact_nodes = results.iter().map(|row| row.exact).sum();
         Sampled {
             values,
             exact_nodes,
