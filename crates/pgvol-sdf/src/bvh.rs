@@ -11,7 +11,7 @@ use std::time::Duration;
 use crate::{
     lanes::{TriangleLanes, LANES},
     leaf_bounds::OrientedBox,
-    triangle::{closest_point, Feature},
+    triangle::{closest_point_and_distance, Feature},
 };
 
 /// One node: a box and either two children (`count == 0`, children at `first` and `first + 1`)
@@ -203,8 +203,7 @@ impl Bvh {
         let mut best_d2 = bound_squared;
         let consider = |slot: u32, best: &mut Option<Closest>, best_d2: &mut f32| {
             let [a, b, c] = self.tris[slot as usize];
-            let (point, feature) = closest_point(q, a, b, c);
-            let d2 = q.distance_squared(point);
+            let (point, feature, d2) = closest_point_and_distance(q, a, b, c);
             if d2 < *best_d2 || (best.is_none() && d2 <= *best_d2) {
                 *best_d2 = d2;
                 *best = Some(Closest {
@@ -435,10 +434,10 @@ impl Bvh {
     pub fn closest_on_slot(&self, p: Vec3, slot: u32) -> Closest {
         let q = Vec3A::from(p);
         let [a, b, c] = self.tris[slot as usize];
-        let (point, feature) = closest_point(q, a, b, c);
+        let (point, feature, distance_squared) = closest_point_and_distance(q, a, b, c);
         Closest {
             point: point.into(),
-            distance_squared: q.distance_squared(point),
+            distance_squared,
             triangle: self.tri_ids[slot as usize],
             slot,
             feature,
@@ -555,13 +554,12 @@ mod tests {
             let brute = (0..mesh.triangles.len())
                 .map(|t| {
                     let [a, b, c] = mesh.triangle(t);
-                    let (q, _) = closest_point(p.into(), a.into(), b.into(), c.into());
-                    Vec3::from(q).distance_squared(p)
+                    closest_point_and_distance(p.into(), a.into(), b.into(), c.into()).2
                 })
                 .fold(f32::INFINITY, f32::min);
             assert_eq!(got.distance_squared, brute, "query {p}");
             let [a, b, c] = mesh.triangle(got.triangle as usize);
-            let (q, _) = closest_point(p.into(), a.into(), b.into(), c.into());
+            let (q, _, _) = closest_point_and_distance(p.into(), a.into(), b.into(), c.into());
             assert_eq!(Vec3::from(q), got.point);
         }
     }

@@ -171,7 +171,7 @@ fn eigenvectors(mut m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{bvh::Bvh, triangle::closest_point};
+    use crate::{bvh::Bvh, triangle::closest_point_and_distance};
     use glam::{DVec3, Vec3};
     use pgvol_mesh::{shapes::octasphere, Mesh};
     use rand::{Rng, SeedableRng};
@@ -233,7 +233,7 @@ mod tests {
                     let p = on + direction * (offset * size);
                     let bound = oriented.distance_squared_bound(p, node.min, node.max);
                     for &[a, b, c] in tris {
-                        let scanned = p.distance_squared(closest_point(p, a, b, c).0);
+                        let scanned = closest_point_and_distance(p, a, b, c).2;
                         assert!(bound <= scanned, "{bound} > {scanned} at {p}");
                         let corners = [a, b, c].map(|x| DVec3::from(Vec3::from(x)));
                         let exact = exact_distance(DVec3::from(Vec3::from(p)), corners);

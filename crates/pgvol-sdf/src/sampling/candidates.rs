@@ -366,7 +366,7 @@ impl LeafTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{triangle::closest_point, wide::avx2_available};
+    use crate::{triangle::closest_point_and_distance, wide::avx2_available};
     use glam::Vec3;
     use pgvol_mesh::Mesh;
     use rand::{Rng, SeedableRng};
@@ -439,7 +439,7 @@ mod tests {
                     let got = table.closest(&bvh, p, slot, f32::INFINITY);
                     let brute = tris
                         .iter()
-                        .map(|&[a, b, c]| p.distance_squared(closest_point(p, a, b, c).0))
+                        .map(|&[a, b, c]| closest_point_and_distance(p, a, b, c).2)
                         .fold(f32::INFINITY, f32::min);
                     assert_eq!(got.distance_squared, brute, "point {p}");
                     slot = got.slot;
