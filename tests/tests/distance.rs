@@ -1,7 +1,7 @@
 //! The BVH closest-point search against an exhaustive search, on every shared mesh.
 
 use glam::{Vec3, Vec3A};
-use pgvol_sdf::{triangle::closest_point, Bvh, MeshSdf, SignMode};
+use pgvol_sdf::{triangle::closest_point_and_distance, Bvh, MeshSdf, SignMode};
 use pgvol_tests::{load_shared, margin_cube, random_points, SHARED_MESHES};
 use rayon::prelude::*;
 
@@ -12,8 +12,7 @@ fn brute_force_d2(mesh: &pgvol_mesh::Mesh, p: Vec3) -> f32 {
     (0..mesh.triangles.len())
         .map(|t| {
             let [a, b, c] = mesh.triangle(t);
-            let (x, _) = closest_point(q, a.into(), b.into(), c.into());
-            q.distance_squared(x)
+            closest_point_and_distance(q, a.into(), b.into(), c.into()).2
         })
         .fold(f32::INFINITY, f32::min)
 }
@@ -45,7 +44,7 @@ fn bvh_and_sdf_distances_equal_brute_force_on_every_shared_mesh() {
                 let s = sdf.signed_distance(p);
                 // The reported triangle and point must be consistent with the distance.
                 let [a, b, t] = mesh.triangle(c.triangle as usize);
-                let (x, _) = closest_point(p.into(), a.into(), b.into(), t.into());
+                let (x, _, _) = closest_point_and_distance(p.into(), a.into(), b.into(), t.into());
                 let ok = c.distance_squared == d2
                     && c.distance_squared.sqrt() == d
                     && s.abs() == d

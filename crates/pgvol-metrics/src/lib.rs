@@ -4,7 +4,7 @@
 
 pub mod sampling;
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use pgvol_mesh::{Mesh, MeshStats};
 use pgvol_sdf::Bvh;
 use rayon::prelude::*;
@@ -120,10 +120,17 @@ pub fn brute_force_distance(mesh: &Mesh, p: Vec3) -> f32 {
     (0..mesh.triangles.len())
         .map(|t| {
             let [a, b, c] = mesh.triangle(t);
-            let (q, _) = pgvol_sdf::triangle::closest_point(p.into(), a.into(), b.into(), c.into());
-            Vec3::from(q).distance(p)
+            let corners = [a, b, c].map(Vec3A::from);
+            pgvol_sdf::triangle::closest_point_and_distance(
+                p.into(),
+                corners[0],
+                corners[1],
+                corners[2],
+            )
+            .2
         })
         .fold(f32::INFINITY, f32::min)
+        .sqrt()
 }
 
 #[cfg(test)]
