@@ -484,7 +484,14 @@ fn invalid_content_errors_name_file_and_problem() {
     let msg = err_of(obj("v 0 0 0\nv 1 0 0\nv 0 3e38 0\nf 1 2 3\n"));
     assert_mentions(
         &msg,
-        &["m.obj", "at vertex 2 is out of range (|x| must be < 1e15)"],
+        &["m.obj", "at vertex 2 is out of range (|x| must be < 1e8)"],
+    );
+    let msg = err_of(obj("v 0 0 0\nv 1 0 0\nv 0 2e8 0\nf 1 2 3\n"));
+    assert_mentions(&msg, &["m.obj", "vertex 2 is out of range"]);
+    let msg = err_of(obj("v 0 0 0\nv 1e-7 0 0\nv 0 1e-7 0\nf 1 2 3\n"));
+    assert_mentions(
+        &msg,
+        &["m.obj", "too small to process", "largest extent is 1e-7"],
     );
     let msg = err_of(obj(
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n",

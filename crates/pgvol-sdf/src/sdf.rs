@@ -45,6 +45,10 @@ pub enum SdfError {
     Empty,
     #[error("the mesh has a non-finite vertex coordinate")]
     NonFinite,
+    /// Outside the sizes whose distances stay exact in f32 (see [`pgvol_mesh::MAX_COORDINATE`]
+    /// and [`pgvol_mesh::MIN_EXTENT`]).
+    #[error("the mesh is out of range: coordinates must be below 1e8 and its largest extent at least 1e-6")]
+    OutOfRange,
 }
 
 /// A mesh prepared for signed-distance queries.
@@ -82,6 +86,12 @@ impl MeshSdf {
         }
         if mesh.positions.iter().any(|p| !p.is_finite()) {
             return Err(SdfError::NonFinite);
+        }
+        let (lo, hi) = mesh.bounds().ok_or(SdfError::Empty)?;
+        let largest = lo.abs().max(hi.abs()).max_element();
+        if largest >= pgvol_mesh::MAX_COORDINATE || (hi - lo).max_element() < pgvol_mesh::MIN_EXTENT
+        {
+            return Err(SdfError::OutOfRange);
         }
         let bvh = Bvh::build(mesh);
         let winding = WindingTree::new(&bvh);

@@ -162,6 +162,7 @@ impl MeshSdf {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SdfError;
     use glam::Vec3;
     use pgvol_mesh::shapes::octasphere as sphere;
 
@@ -269,6 +270,49 @@ mod tests {
                     assert_eq!(bits(&a), bits(&b), "{mode:?} {extent:?}");
                 }
             }
+        }
+    }
+
+    /// The accepted sizes: at the largest and smallest scales the validation lets through, the
+    /// grid is the unit mesh's grid scaled, and out of range the field is refused rather than
+    /// wrong (a mesh of size 1e10 used to get distances 38 % off, one of size 1e-10 a panic).
+    #[test]
+    fn meshes_at_the_extremes_of_the_accepted_range_scale_exactly() {
+        let unit = sphere(3);
+        let grid = Grid::cube_res(Vec3::splat(-1.3), Vec3::splat(1.2), 21).unwrap();
+        for scale in [2f32.powi(-19), 2f32.powi(26)] {
+            let mut mesh = unit.clone();
+            mesh.positions.iter_mut().for_each(|p| *p *= scale);
+            let scaled_grid = Grid {
+                origin: grid.origin * scale,
+                spacing: grid.spacing * scale,
+                dims: grid.dims,
+            };
+            for mode in [SignMode::Winding, SignMode::Pseudonormal] {
+                let want = MeshSdf::new(&unit, mode).unwrap();
+                let got = MeshSdf::new(&mesh, mode).unwrap();
+                for extent in [Extent::Dense, Extent::Band(2.0)] {
+                    let want = want.sample(&grid, extent, &|_| {}).values;
+                    let got = got.sample(&scaled_grid, extent, &|_| {}).values;
+                    for (w, g) in want.iter().zip(&got) {
+                        // Same sign, and the same distance up to rounding at the unit scale.
+                        assert_eq!(*g < 0.0, *w < 0.0, "scale {scale} {mode:?} {extent:?}");
+                        assert!(
+                            (g / scale - w).abs() <= 1e-6,
+                            "scale {scale} {mode:?} {extent:?}: {} against {w}",
+                            g / scale
+                        );
+                    }
+                }
+            }
+        }
+        for scale in [1e9, 1e-7] {
+            let mut mesh = unit.clone();
+            mesh.positions.iter_mut().for_each(|p| *p *= scale);
+            assert_eq!(
+                MeshSdf::new(&mesh, SignMode::Winding).err(),
+                Some(SdfError::OutOfRange)
+            );
         }
     }
 
