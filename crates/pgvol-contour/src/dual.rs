@@ -38,6 +38,13 @@ const CELL_MARGIN: f64 = 1e-3;
 /// Longest move, in cells, of a smooth piece's vertex onto the zero set.
 const MAX_PROJECTION: f32 = 0.25;
 
+/// A plane vertex farther from the mass point than this many times the loop's own radius (the
+/// largest distance of a crossing from the mass point) gives way to the mass point. A loop
+/// around a sub-voxel blob has crossings a hundredth of a cell apart whose planes can meet a
+/// fifth of a cell away, folding the blob inside out (found by the random-field topology test);
+/// a corner or an edge of a sharp feature lies within a few loop radii.
+const MAX_REACH: f64 = 4.0;
+
 /// Newton steps taking a surface nets vertex onto the zero set. The mean of a loop's crossings
 /// lies a fraction of a cell off the surface and each step squares that error (relative to the
 /// curvature radius), so two reach float rounding on surfaces the grid resolves.
@@ -254,7 +261,7 @@ fn block_vertices(
 /// tangent planes `qef` and, one by one, `planes` (point and unit normal).
 fn plane_vertex(
     qef: &Qef,
-    planes: impl Iterator<Item = (Vec3, Vec3)>,
+    planes: impl Iterator<Item = (Vec3, Vec3)> + Clone,
     field: &dyn Field,
     samples: &Samples,
     corner: Vec3,
@@ -264,6 +271,10 @@ fn plane_vertex(
     let h = samples.spacing;
     let inv_h = 1.0 / f64::from(h);
     let c = qef.mass_point();
+    let radius = planes
+        .clone()
+        .map(|(p, _)| ((p - corner).as_dvec3() * inv_h).distance(c))
+        .fold(0.0, f64::max);
     let (mut x, feature) = qef.solve_about(c, threshold);
     if feature && options.feature_offset > 0.0 {
         let centre = corner + c.as_vec3() * h;
@@ -290,7 +301,7 @@ fn plane_vertex(
             x = ((q - corner) / h).as_dvec3();
         }
     }
-    if !x.is_finite() {
+    if !x.is_finite() || x.distance(c) > MAX_REACH * radius + CELL_MARGIN {
         x = c;
     }
     if options.clamp_to_cell {
