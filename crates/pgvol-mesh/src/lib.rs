@@ -25,7 +25,7 @@ pub use format::MeshFormat;
 pub use io::{read, read_bytes, write};
 pub use normals::{face_normal, vertex_normals};
 pub use stats::MeshStats;
-pub use validate::{MAX_COORDINATE, MIN_EXTENT};
+pub use validate::{coordinate_out_of_range, too_small, MAX_COORDINATE, MIN_EXTENT};
 
 /// An indexed triangle mesh in the units of its source file.
 ///

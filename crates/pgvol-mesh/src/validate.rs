@@ -21,17 +21,15 @@ pub(crate) fn problem(mesh: &Mesh, owner: &str) -> Option<String> {
         return Some("no triangles".into());
     }
     for (i, p) in mesh.positions.iter().enumerate() {
-        for c in p.to_array() {
-            if !c.is_finite() {
-                let what = if c.is_nan() { "NaN" } else { "infinity" };
-                return Some(format!("vertex {i} has a non-finite coordinate ({what})"));
-            }
-            if c.abs() >= MAX_COORDINATE {
-                return Some(format!(
-                    "coordinate {c:e} at vertex {i} is out of range (|x| must be < 1e8)"
-                ));
-            }
+        if let Some(c) = p.to_array().into_iter().find(|c| !c.is_finite()) {
+            let what = if c.is_nan() { "NaN" } else { "infinity" };
+            return Some(format!("vertex {i} has a non-finite coordinate ({what})"));
         }
+    }
+    if let Some((i, c)) = coordinate_out_of_range(mesh) {
+        return Some(format!(
+            "coordinate {c:e} at vertex {i} is out of range (|x| must be < 1e8)"
+        ));
     }
     let n = mesh.positions.len();
     for (t, tri) in mesh.triangles.iter().enumerate() {
@@ -42,13 +40,28 @@ pub(crate) fn problem(mesh: &Mesh, owner: &str) -> Option<String> {
         }
     }
     // After the index check: the bounds read the vertices the faces name.
-    let (lo, hi) = mesh.bounds()?;
-    let extent = (hi - lo).max_element();
-    if extent < MIN_EXTENT {
-        return Some(format!(
+    too_small(mesh).map(|extent| {
+        format!(
             "the mesh is too small to process: its largest extent is {extent:e} (must be at \
              least 1e-6; give it in smaller units)"
-        ));
-    }
-    None
+        )
+    })
+}
+
+/// The first vertex with a coordinate at or beyond [`MAX_COORDINATE`], and that coordinate.
+pub fn coordinate_out_of_range(mesh: &Mesh) -> Option<(usize, f32)> {
+    mesh.positions.iter().enumerate().find_map(|(i, p)| {
+        p.to_array()
+            .into_iter()
+            .find(|c| c.abs() >= MAX_COORDINATE)
+            .map(|c| (i, c))
+    })
+}
+
+/// The largest bounding-box extent of the faces' vertices when it is below [`MIN_EXTENT`]
+/// (`None` also for a mesh without faces). The faces must name existing vertices.
+pub fn too_small(mesh: &Mesh) -> Option<f32> {
+    let (lo, hi) = mesh.bounds()?;
+    let extent = (hi - lo).max_element();
+    (extent < MIN_EXTENT).then_some(extent)
 }

@@ -87,9 +87,9 @@ impl MeshSdf {
         if mesh.positions.iter().any(|p| !p.is_finite()) {
             return Err(SdfError::NonFinite);
         }
-        let (lo, hi) = mesh.bounds().ok_or(SdfError::Empty)?;
-        let largest = lo.abs().max(hi.abs()).max_element();
-        if largest >= pgvol_mesh::MAX_COORDINATE || (hi - lo).max_element() < pgvol_mesh::MIN_EXTENT
+        // The same limits as the mesh readers and writers apply.
+        if pgvol_mesh::coordinate_out_of_range(mesh).is_some()
+            || pgvol_mesh::too_small(mesh).is_some()
         {
             return Err(SdfError::OutOfRange);
         }
