@@ -1,8 +1,9 @@
-//! `pgvol`: meshes to compact implicit files and back.
+//! `pgvol`: meshes to compact implicit files and back. Argument parsing and printing only; the
+//! work is the `pgvol` library's.
 
-pub(crate) mod commands;
-mod exact_field;
-mod pipeline;
+#![forbid(unsafe_code)]
+
+mod commands;
 mod progress;
 
 use clap::Parser;
@@ -12,6 +13,8 @@ use clap::Parser;
 /// Signed distance is negative inside and positive outside, in the units of the input mesh. The
 /// grid is a cube of side 1.1 × the longest bounding-box extent, centred on the mesh, with N nodes
 /// per axis (--res N) or a given spacing (--voxel H).
+///
+/// Example: pgvol remesh part.stl -o part.glb --res 256
 #[derive(Parser)]
 #[command(name = "pgvol", version, about, long_about = None, propagate_version = true)]
 struct Cli {

@@ -14,7 +14,7 @@ use std::sync::atomic::Ordering::Relaxed;
 use std::sync::atomic::{AtomicU32, AtomicU8};
 
 use glam::{DVec3, Vec3};
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 use rayon::prelude::*;
 
 use crate::cells::for_crossed_cells;

@@ -57,7 +57,7 @@ pub use quality::min_angle_histogram;
 pub use volume::{contour_field, contour_sampled, contour_volume, resampled_grid, Method};
 
 use glam::Vec3;
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 use rayon::prelude::*;
 
 use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal};

@@ -1,6 +1,6 @@
 //! Triangle shape statistics.
 
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 
 /// Counts of triangles by their smallest angle, in 10° bins: `[0°, 10°)`, `[10°, 20°)`, …,
 /// `[50°, 60°]` (no triangle's smallest angle exceeds 60°). Degenerate triangles, whose angles

@@ -47,7 +47,7 @@ pub fn contour_volume(
     grid: &Grid,
     iso: f32,
     method: Method,
-) -> pgvol_mesh::Mesh {
+) -> pgvol_core::Mesh {
     let inner = crate::sparse_sample::sample_near_level(volume, grid, iso);
     contour_samples(volume, grid, inner, iso, method)
 }
@@ -59,7 +59,7 @@ pub(crate) fn contour_samples(
     inner: Vec<f32>,
     iso: f32,
     method: Method,
-) -> pgvol_mesh::Mesh {
+) -> pgvol_core::Mesh {
     let (padded, values) = pad(grid, &inner, iso);
     contour_sampled(volume, &padded, &values, iso, method)
 }
@@ -100,10 +100,10 @@ pub fn contour_field(
     iso: f32,
     method: Method,
     options: &DualContourOptions,
-) -> pgvol_mesh::Mesh {
+) -> pgvol_core::Mesh {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
     if nodes != Some(inner.len()) || !(grid.spacing.is_finite() && grid.spacing > 0.0) {
-        return pgvol_mesh::Mesh::default();
+        return pgvol_core::Mesh::default();
     }
     let (padded, values) = pad(grid, inner, iso);
     let (dims, origin, h) = (padded.dims, padded.origin, padded.spacing);
@@ -146,7 +146,7 @@ pub fn contour_sampled(
     values: &[f32],
     iso: f32,
     method: Method,
-) -> pgvol_mesh::Mesh {
+) -> pgvol_core::Mesh {
     let (dims, origin, h) = (grid.dims, grid.origin, grid.spacing);
     let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
     let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
@@ -292,7 +292,7 @@ mod tests {
             ..DualContourOptions::default()
         };
         // Mean distance of a cube corner from its nearest vertex, in grid spacings.
-        let corner_gap = |mesh: &pgvol_mesh::Mesh| {
+        let corner_gap = |mesh: &pgvol_core::Mesh| {
             let nearest = |c: &Vec3| {
                 let d = mesh.positions.iter().map(|p| p.distance(*c));
                 d.fold(f32::INFINITY, f32::min) / grid.spacing

@@ -6,7 +6,6 @@ pub mod analytic;
 pub mod basis;
 pub mod fit;
 pub mod kernel;
-mod mesh_sdf;
 pub mod prefilter;
 mod stencil;
 pub mod volume;
@@ -16,6 +15,6 @@ pub use fit::{
     fit, wls_band, ClosestFn, ClosestPoint, FitMethod, FitOptions, FitReport, SignedDistance,
 };
 pub use kernel::{Jet, Kernel};
-pub use pgvol_sdf::grid::{Grid, MAX_GRID_NODES};
+pub use pgvol_core::grid::{Grid, MAX_GRID_NODES};
 pub use stencil::mirror;
 pub use volume::{CoefficientVolume, FieldError};

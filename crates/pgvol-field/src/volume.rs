@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::basis::Basis;
 use crate::prefilter::{prefilter_volume_with, CUBIC_POLE, QUADRATIC_POLE};
 use crate::stencil::{self, GRADIENT, HESSIAN, VALUE};
-use pgvol_sdf::Grid;
+use pgvol_core::Grid;
 
 /// Why a coefficient volume could not be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
+use pgvol_core::{write_atomic, FileError};
 use pgvol_field::Grid;
-use pgvol_mesh::{write_atomic, MeshError};
 
 /// Raw little-endian bytes of `values`.
 fn le_bytes(values: &[f32]) -> Vec<u8> {
@@ -41,7 +41,7 @@ pub fn write_nrrd(
     grid: &Grid,
     values: &[f32],
     fields: &[(&str, String)],
-) -> Result<(), MeshError> {
+) -> Result<(), FileError> {
     let header = nrrd_header(grid, "signed distance, negative inside (pgvol)", fields);
     write_atomic(path, |w| {
         w.write_all(header.as_bytes())?;
@@ -51,7 +51,7 @@ pub fn write_nrrd(
 
 /// Writes `values` as a C-ordered `.npy` array of shape `(nz, ny, nx)`, so `a[k, j, i]` is node
 /// `(i, j, k)`.
-pub fn write_npy(path: &Path, grid: &Grid, values: &[f32]) -> Result<(), MeshError> {
+pub fn write_npy(path: &Path, grid: &Grid, values: &[f32]) -> Result<(), FileError> {
     let [nx, ny, nz] = grid.dims;
     let mut dict =
         format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({nz}, {ny}, {nx}), }}");

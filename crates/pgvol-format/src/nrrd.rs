@@ -49,7 +49,7 @@ fn write(
 ) -> Result<(), FormatError> {
     let fields: Vec<(&str, String)> = fields.iter().map(|(k, v)| (*k, escape(v))).collect();
     let header = nrrd_header(grid, comment, &fields);
-    pgvol_mesh::write_atomic(path, |w| {
+    pgvol_core::write_atomic(path, |w| {
         w.write_all(header.as_bytes())?;
         let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
         w.write_all(&bytes)

@@ -101,7 +101,7 @@ pub(crate) fn container(header: &PgvHeader, payload: &[u8]) -> Vec<u8> {
 /// Writes `file` to `path` atomically.
 pub fn write_pgv(path: &Path, file: &PgvFile) -> Result<(), FormatError> {
     let bytes = encode_pgv(file);
-    pgvol_mesh::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| err(path, e.problem))
+    pgvol_core::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| err(path, e.problem))
 }
 
 /// Reads and verifies a `.pgv` file.
@@ -331,7 +331,7 @@ fn dense_coeffs(payload: &[u8], path: &Path) -> Result<Vec<f32>, FormatError> {
 }
 
 /// FNV-1a (64-bit) over a mesh's positions and indices: a cheap content fingerprint.
-pub fn mesh_hash(mesh: &pgvol_mesh::Mesh) -> String {
+pub fn mesh_hash(mesh: &pgvol_core::Mesh) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |bytes: &[u8]| {
         for &b in bytes {
@@ -356,7 +356,7 @@ pub fn mesh_hash(mesh: &pgvol_mesh::Mesh) -> String {
 pub fn header_for(
     volume: &CoefficientVolume,
     fit: &str,
-    source: Option<&pgvol_mesh::Mesh>,
+    source: Option<&pgvol_core::Mesh>,
 ) -> PgvHeader {
     let bounds = source
         .and_then(|m| m.bounds())

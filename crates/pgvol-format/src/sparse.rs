@@ -743,7 +743,7 @@ pub fn write_pgv_with(
     opts: &EncodeOptions,
 ) -> Result<EncodeReport, FormatError> {
     let (bytes, report) = encode_pgv_with(file, opts).map_err(|e| err(path, e.problem))?;
-    pgvol_mesh::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| err(path, e.problem))?;
+    pgvol_core::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| err(path, e.problem))?;
     Ok(report)
 }
 

@@ -248,7 +248,7 @@ pub fn write_3mf(path: &Path, grid: &Grid, values: &[f32], unit: &str) -> Result
         Ok(())
     })();
     result.map_err(|e| err(path, format!("cannot build the 3MF package: {e}")))?;
-    pgvol_mesh::write_atomic(path, |w| w.write_all(&zip_bytes)).map_err(|e| err(path, e.problem))
+    pgvol_core::write_atomic(path, |w| w.write_all(&zip_bytes)).map_err(|e| err(path, e.problem))
 }
 
 #[cfg(test)]

@@ -1,11 +1,7 @@
-//! Repairs that make soup-like input (STL, per-face vertices) usable: welding coincident
-//! vertices, dropping zero-area triangles and compacting unreferenced vertices.
+//! Reading with the repairs that make soup-like input (STL, per-face vertices) usable: bit-exact
+//! welding and dropping zero-area triangles (the repairs themselves are `Mesh` methods).
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::path::Path;
-
-use glam::Vec3;
 
 use crate::{read, Mesh, MeshError};
 
@@ -19,181 +15,23 @@ pub struct CleanReport {
 /// Reads `path`, welds bit-identical vertices and drops degenerate triangles.
 pub fn read_clean(path: &Path) -> Result<(Mesh, CleanReport), MeshError> {
     let mut mesh = read(path)?;
+    let report = clean(&mut mesh, path)?;
+    Ok((mesh, report))
+}
+
+/// Welds bit-identical vertices of `mesh` and drops its degenerate triangles, refusing a mesh
+/// with none left; `name` labels the error.
+pub fn clean(mesh: &mut Mesh, name: &Path) -> Result<CleanReport, MeshError> {
     let vertices_merged = mesh.weld(0.0);
     let degenerate_dropped = mesh.drop_degenerate();
     if mesh.triangles.is_empty() {
         return Err(MeshError::new(
-            path,
+            name,
             format!("no triangles left after dropping {degenerate_dropped} degenerate triangles"),
         ));
     }
-    Ok((
-        mesh,
-        CleanReport {
-            vertices_merged,
-            degenerate_dropped,
-        },
-    ))
+    Ok(CleanReport {
+        vertices_merged,
+        degenerate_dropped,
+    })
 }
-
-/// Bit pattern of a coordinate with -0.0 folded onto 0.0, so the two zeros weld.
-fn key_bits(p: Vec3) -> [u32; 3] {
-    p.to_array().map(|c| if c == 0.0 { 0 } else { c.to_bits() })
-}
-
-impl Mesh {
-    /// Merges vertices that coincide: bit-exactly (treating -0.0 as 0.0) when `tolerance` is 0,
-    /// otherwise within `tolerance` of an earlier kept vertex (first-come representatives in a
-    /// hash grid, so the cost is linear). Triangles are remapped and unreferenced vertices
-    /// removed. Returns the number of vertices merged into another.
-    pub fn weld(&mut self, tolerance: f32) -> usize {
-        let n = self.positions.len();
-        let mut rep: Vec<u32> = Vec::with_capacity(n);
-        let mut merged = 0;
-        if tolerance > 0.0 && tolerance.is_finite() {
-            // Cells twice the tolerance wide: a ball of radius `tolerance` then touches at most
-            // two cells per axis, the point's own and the neighbour on its nearer side.
-            let size = 2.0 * f64::from(tolerance);
-            let tol2 = f64::from(tolerance).powi(2);
-            // Cell -> most recent representative in it; `next` chains earlier ones.
-            let mut heads: HashMap<[i64; 3], u32, FastHash> =
-                HashMap::with_capacity_and_hasher(n, FastHash::default());
-            let mut next: Vec<u32> = vec![u32::MAX; n];
-            for (i, &p) in self.positions.iter().enumerate() {
-                let q = p.as_dvec3() / size;
-                let cell = q.floor();
-                let side = (q - cell).to_array().map(|f| if f < 0.5 { -1 } else { 1 });
-                let base = cell.to_array().map(|c| c as i64);
-                let mut found = None;
-                'search: for mask in 0..8 {
-                    let mut key = base;
-                    for (axis, k) in key.iter_mut().enumerate() {
-                        if mask >> axis & 1 == 1 {
-                            *k = k.saturating_add(side[axis]);
-                        }
-                    }
-                    let mut j = heads.get(&key).copied().unwrap_or(u32::MAX);
-                    while j != u32::MAX {
-                        let other = self.positions[j as usize].as_dvec3();
-                        if p.as_dvec3().distance_squared(other) <= tol2 {
-                            found = Some(j);
-                            break 'search;
-                        }
-                        j = next[j as usize];
-                    }
-                }
-                match found {
-                    Some(j) => {
-                        rep.push(j);
-                        merged += 1;
-                    }
-                    None => {
-                        rep.push(i as u32);
-                        if let Some(old) = heads.insert(base, i as u32) {
-                            next[i] = old;
-                        }
-                    }
-                }
-            }
-        } else {
-            let mut first: HashMap<[u32; 3], u32, FastHash> =
-                HashMap::with_capacity_and_hasher(n, FastHash::default());
-            for (i, &p) in self.positions.iter().enumerate() {
-                let j = *first.entry(key_bits(p)).or_insert(i as u32);
-                merged += usize::from(j as usize != i);
-                rep.push(j);
-            }
-        }
-        for t in &mut self.triangles {
-            for i in t.iter_mut() {
-                if let Some(&r) = rep.get(*i as usize) {
-                    *i = r;
-                }
-            }
-        }
-        self.drop_unused_vertices();
-        merged
-    }
-
-    /// Removes triangles that repeat a vertex or whose cross product is exactly zero (computed
-    /// in f64, so tiny but real triangles are kept). Returns how many were removed.
-    pub fn drop_degenerate(&mut self) -> usize {
-        let before = self.triangles.len();
-        let positions = &self.positions;
-        self.triangles.retain(|&[a, b, c]| {
-            if a == b || b == c || a == c {
-                return false;
-            }
-            let get = |i: u32| positions.get(i as usize).map(|p| p.as_dvec3());
-            match (get(a), get(b), get(c)) {
-                (Some(p), Some(q), Some(r)) => (q - p).cross(r - p) != glam::DVec3::ZERO,
-                // Dangling indices are a validation matter, not degeneracy; keep them visible.
-                _ => true,
-            }
-        });
-        before - self.triangles.len()
-    }
-
-    /// Removes vertices no triangle refers to, keeping the order of the rest. Returns how many
-    /// were removed.
-    pub fn drop_unused_vertices(&mut self) -> usize {
-        let n = self.positions.len();
-        let mut used = vec![false; n];
-        for &i in self.triangles.iter().flatten() {
-            if let Some(u) = used.get_mut(i as usize) {
-                *u = true;
-            }
-        }
-        let mut new_index = vec![u32::MAX; n];
-        let mut kept = 0u32;
-        for i in 0..n {
-            if used[i] {
-                new_index[i] = kept;
-                self.positions[kept as usize] = self.positions[i];
-                kept += 1;
-            }
-        }
-        self.positions.truncate(kept as usize);
-        for i in self.triangles.iter_mut().flatten() {
-            // Out-of-range indices stay out of range rather than aliasing a real vertex.
-            *i = new_index.get(*i as usize).copied().unwrap_or(u32::MAX);
-        }
-        n - kept as usize
-    }
-}
-
-/// Multiply-rotate hashing for integer keys: much faster than SipHash, and weld keys come from
-/// geometry, not from an adversary who could exploit collisions to any useful end.
-#[derive(Default)]
-struct KeyHasher(u64);
-
-impl Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        // Fold the well-mixed high half into the low bits, which pick the hash bucket.
-        self.0 ^ (self.0 >> 32)
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        let mut chunks = bytes.chunks_exact(8);
-        for c in &mut chunks {
-            self.write_u64(u64::from_le_bytes(c.try_into().unwrap_or_default()));
-        }
-        for &b in chunks.remainder() {
-            self.write_u64(u64::from(b));
-        }
-    }
-
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(u64::from(v));
-    }
-
-    fn write_i64(&mut self, v: i64) {
-        self.write_u64(v as u64);
-    }
-
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(26) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
-}
-
-type FastHash = BuildHasherDefault<KeyHasher>;

@@ -3,9 +3,8 @@
 use std::path::Path;
 
 use crate::validate::problem;
-use crate::{
-    atomic::write_atomic, gltf_io, obj, ply, stl, vertex_normals, Mesh, MeshError, MeshFormat,
-};
+use crate::{gltf_io, obj, ply, stl, vertex_normals, Mesh, MeshError, MeshFormat};
+use pgvol_core::write_atomic;
 
 /// Reads the mesh in `path`, choosing the format by extension, and validates it.
 pub fn read(path: &Path) -> Result<Mesh, MeshError> {
@@ -51,18 +50,39 @@ fn parse(
 /// per-vertex normals (facet normals for STL).
 pub fn write(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
     let format = MeshFormat::from_path(path)?;
-    if let Some(p) = problem(mesh, "mesh") {
-        return Err(MeshError::new(path, format!("refusing to write: {p}")));
+    check_writable(mesh, path)?;
+    write_atomic(path, |w| encode(w, mesh, format))
+}
+
+/// Writes `mesh` in `format` to any writer (a buffer, a socket); `name` labels errors. The same
+/// checks as [`write`] come first, so nothing is written for a mesh that would be refused.
+pub fn write_to(
+    w: &mut dyn std::io::Write,
+    mesh: &Mesh,
+    format: MeshFormat,
+    name: &Path,
+) -> Result<(), MeshError> {
+    check_writable(mesh, name)?;
+    encode(w, mesh, format).map_err(|e| MeshError::new(name, format!("write failed: {e}")))
+}
+
+fn check_writable(mesh: &Mesh, name: &Path) -> Result<(), MeshError> {
+    match problem(mesh, "mesh") {
+        Some(p) => Err(MeshError::new(name, format!("refusing to write: {p}"))),
+        None => Ok(()),
     }
+}
+
+fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: MeshFormat) -> std::io::Result<()> {
     let normals = match format {
         MeshFormat::Stl => Vec::new(),
         _ => vertex_normals(mesh),
     };
-    write_atomic(path, |w| match format {
+    match format {
         MeshFormat::Obj => obj::write(w, mesh, &normals),
         MeshFormat::Gltf => gltf_io::write(w, mesh, &normals, false),
         MeshFormat::Glb => gltf_io::write(w, mesh, &normals, true),
         MeshFormat::Stl => stl::write(w, mesh),
         MeshFormat::Ply => ply::write(w, mesh, &normals),
-    })
+    }
 }

@@ -9,7 +9,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use pgvol_mesh::{write_atomic, MeshError};
+use pgvol_core::{write_atomic, FileError};
 
 use crate::slice::Layer;
 use crate::write::extent;
@@ -32,9 +32,9 @@ pub fn write_cli_with(
     layers: &[Layer],
     units_mm: f32,
     encoding: CliEncoding,
-) -> Result<(), MeshError> {
+) -> Result<(), FileError> {
     if !(units_mm.is_finite() && units_mm > 0.0) {
-        return Err(MeshError::new(
+        return Err(FileError::new(
             path,
             format!("units must be a positive length in mm, got {units_mm}"),
         ));
@@ -49,7 +49,7 @@ pub fn write_cli_with(
 }
 
 /// Writes `layers` as an ASCII CLI file.
-pub fn write_cli(path: &Path, layers: &[Layer], units_mm: f32) -> Result<(), MeshError> {
+pub fn write_cli(path: &Path, layers: &[Layer], units_mm: f32) -> Result<(), FileError> {
     write_cli_with(path, layers, units_mm, CliEncoding::Ascii)
 }
 

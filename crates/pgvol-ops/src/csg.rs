@@ -78,11 +78,18 @@ pub fn stored_band(volume: &CoefficientVolume) -> f32 {
 /// [`stored_band`]. Then the result would follow the clamp rather than the shape; re-encode with
 /// a wider band first.
 pub fn needs_wider_band(volume: &CoefficientVolume, distance: f32) -> bool {
-    let support = match volume.basis {
+    distance.abs() + support_reach(volume) >= stored_band(volume)
+}
+
+/// How far from a level set, in model units, the coefficients that shape it reach: 2 spacings
+/// for the B-splines and trilinear (the cubic B-spline's support, the widest separable one),
+/// the radius for the pseudo-Gaussian when larger.
+pub fn support_reach(volume: &CoefficientVolume) -> f32 {
+    let spacings = match volume.basis {
         Basis::Pg { r, .. } => r.max(2.0),
         _ => 2.0,
-    } * volume.grid.spacing;
-    distance.abs() + support >= stored_band(volume)
+    };
+    spacings * volume.grid.spacing
 }
 
 /// The field at every node of its grid (x fastest).

@@ -17,7 +17,9 @@ mod slice;
 mod write;
 
 pub use cli_file::{write_cli, write_cli_with, CliEncoding};
-pub use csg::{hollow, needs_wider_band, offset, shell, stored_band, Drain, ShellSide};
+pub use csg::{
+    hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
+};
 pub use simplify::simplify_loops;
 pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,

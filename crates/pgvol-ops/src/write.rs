@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use pgvol_mesh::{write_atomic, MeshError};
+use pgvol_core::{write_atomic, FileError};
 use serde::{Deserialize, Serialize};
 
 use crate::slice::Layer;
@@ -38,7 +38,7 @@ pub(crate) fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
 /// left to right then top to bottom. Each layer is one `<g id="layer-i" data-height="z">` with a
 /// `<title>` and one even-odd filled path, so holes show as holes. The v axis points up, as in
 /// the layer coordinates, so counter-clockwise loops look counter-clockwise.
-pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), MeshError> {
+pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
     let [u0, v0, u1, v1] = extent(layers).unwrap_or([0.0, 0.0, 1.0, 1.0]);
     let size = (u1 - u0).max(v1 - v0).max(f32::MIN_POSITIVE);
     let pad = 0.05 * size;
@@ -102,7 +102,7 @@ struct SliceFile {
 
 /// The layers as JSON: `{"layers": [{"height": z, "loops": [{"points": [[u, v], …], "hole":
 /// false}, …]}, …]}`, numbers written so they read back to the same f32.
-pub fn write_slice_json(path: &Path, layers: &[Layer]) -> Result<(), MeshError> {
+pub fn write_slice_json(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
     write_atomic(path, |w| {
         serde_json::to_writer(&mut *w, &SliceFileRef { layers })?;
         writeln!(w)
@@ -110,9 +110,9 @@ pub fn write_slice_json(path: &Path, layers: &[Layer]) -> Result<(), MeshError> 
 }
 
 /// Reads what [`write_slice_json`] wrote.
-pub fn read_slice_json(path: &Path) -> Result<Vec<Layer>, MeshError> {
-    let text = std::fs::read_to_string(path).map_err(|e| MeshError::new(path, e.to_string()))?;
+pub fn read_slice_json(path: &Path) -> Result<Vec<Layer>, FileError> {
+    let text = std::fs::read_to_string(path).map_err(|e| FileError::new(path, e.to_string()))?;
     serde_json::from_str::<SliceFile>(&text)
         .map(|f| f.layers)
-        .map_err(|e| MeshError::new(path, format!("not a slice file: {e}")))
+        .map_err(|e| FileError::new(path, format!("not a slice file: {e}")))
 }

@@ -6,7 +6,7 @@
 
 pub mod bvh;
 pub mod consistency;
-pub mod grid;
+pub use pgvol_core::grid;
 pub mod lanes;
 pub mod leaf_bounds;
 pub mod pseudonormal;

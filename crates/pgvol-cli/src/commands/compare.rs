@@ -3,17 +3,17 @@
 use anyhow::Result;
 use clap::Args;
 
-use super::{OutputArgs, PathArg};
-use crate::pipeline;
+use super::{load_mesh, print_json, OutputArgs, PathArg};
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol compare remeshed.glb original.obj --samples 500000")]
 pub struct CompareArgs {
     /// The mesh to measure.
     pub a: PathArg,
     /// The reference mesh (its bounding-box diagonal is the unit of the % figures).
     pub b: PathArg,
     /// Area-uniform samples drawn on each mesh.
-    #[arg(long, default_value_t = 200_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    #[arg(long, default_value_t = pgvol::COMPARE_SAMPLES as u64, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
     pub samples: u64,
     /// Seed of the sampler (the same seed gives the same figures).
     #[arg(long, default_value_t = 1)]
@@ -24,12 +24,11 @@ pub struct CompareArgs {
 
 pub fn run(a: CompareArgs) -> Result<()> {
     let quiet = a.out.silent();
-    let ma = pipeline::load_mesh(&a.a, quiet)?;
-    let mb = pipeline::load_mesh(&a.b, quiet)?;
-    let c = pgvol_metrics::compare(&ma, &mb, a.samples as usize, a.seed)?;
+    let ma = load_mesh(&a.a, quiet)?;
+    let mb = load_mesh(&a.b, quiet)?;
+    let c = pgvol::compare(&ma, &mb, a.samples as usize, a.seed)?;
     if a.out.json {
-        println!("{}", serde_json::to_string_pretty(&c)?);
-        return Ok(());
+        return print_json(&c);
     }
     println!("A: {}\nB: {}", a.a.display(), a.b.display());
     println!("samples per mesh      {}", c.samples);

@@ -6,18 +6,19 @@ use anyhow::{bail, Result};
 use clap::Args;
 use serde::Serialize;
 
-use super::{BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
-use crate::pipeline;
+use super::{load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg};
+use crate::progress::Bars;
 use clap::ValueEnum;
 
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("input").args(["mesh", "from"]).required(true)))]
+#[command(after_help = "Example: pgvol encode bunny.obj -o bunny.pgv --res 256")]
 pub struct EncodeArgs {
     /// Input mesh.
     pub mesh: Option<PathArg>,
     /// Read the coefficients from a NRRD written by `pgvol export --what coefficients` instead
     /// of fitting a mesh; written dense and unchanged unless --precision is given.
-    #[arg(long, value_name = "NRRD", conflicts_with_all = ["res", "voxel", "basis", "pg_n", "pg_r", "fit", "band", "z_step"])]
+    #[arg(long, value_name = "NRRD", conflicts_with_all = ["res", "voxel", "basis", "pg_n", "pg_r", "fit", "band", "z_step", "sign"])]
     pub from: Option<PathArg>,
     /// Output .pgv file.
     #[arg(short, long)]
@@ -31,8 +32,11 @@ pub struct EncodeArgs {
     pub fit: FitArg,
     /// Exact distances within W grid spacings of the surface (--fit interp); wider bands let
     /// `pgvol offset` and `pgvol shell` work from the file over larger distances.
-    #[arg(long, value_name = "W", default_value_t = crate::pipeline::ENCODE_BAND, value_parser = parse_band)]
+    #[arg(long, value_name = "W", default_value_t = pgvol::ENCODE_BAND, value_parser = parse_band)]
     pub band: f32,
+    /// How inside is told from outside.
+    #[arg(long, value_enum, default_value_t)]
+    pub sign: SignArg,
     /// For --fit iso: the isosurface step in grid spacings (searched when not given).
     #[arg(long)]
     pub z_step: Option<f32>,
@@ -77,6 +81,7 @@ pub enum FitArg {
 }
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol decode bunny.pgv -o bunny.glb --method dc")]
 pub struct DecodeArgs {
     /// Input .pgv file.
     pub input: PathArg,
@@ -98,6 +103,7 @@ pub struct DecodeArgs {
 }
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol info bunny.pgv --json")]
 pub struct InfoArgs {
     /// A .pgv file.
     pub input: PathArg,
@@ -105,77 +111,53 @@ pub struct InfoArgs {
     pub out: OutputArgs,
 }
 
-/// Metadata key holding the distance from the surface within which the field is exact.
-pub const BAND_KEY: &str = "band";
-
 fn parse_band(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
-        Ok(w) if w.is_finite() && w >= 2.0 => Ok(w),
+        Ok(w) if w.is_finite() && w >= pgvol::MIN_BAND => Ok(w),
         _ => Err(format!(
-            "'{s}' is not a number of grid spacings of at least 2"
+            "'{s}' is not a number of grid spacings of at least {}",
+            pgvol::MIN_BAND
         )),
     }
 }
 
-fn check_pgv_extension(path: &std::path::Path) -> Result<()> {
-    match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("pgv") => Ok(()),
-        _ => bail!("{}: expected a .pgv file name", path.display()),
-    }
-}
-
-/// Writes `file` dense when `dense`, else sparse with `precision` (None: automatic), storing the
-/// bricks the field needs within `exact_band` grid spacings of the surface (None: the format's
-/// default).
-fn write_file(
-    path: &std::path::Path,
-    file: &pgvol_format::PgvFile,
-    dense: bool,
-    precision: Option<PrecisionArg>,
-    exact_band: Option<f32>,
-) -> Result<Option<pgvol_format::EncodeReport>> {
-    if dense {
-        pgvol_format::write_pgv(path, file)?;
-        return Ok(None);
-    }
-    let options = pgvol_format::EncodeOptions {
-        precision: match precision.unwrap_or_default() {
+impl PrecisionArg {
+    fn precision(self) -> Option<pgvol::Precision> {
+        match self {
             PrecisionArg::Auto => None,
-            PrecisionArg::F32 => Some(pgvol_format::Precision::F32),
-            PrecisionArg::F16 => Some(pgvol_format::Precision::F16),
-            PrecisionArg::Q16 => Some(pgvol_format::Precision::Q16),
-            PrecisionArg::Fixed => Some(pgvol_format::Precision::Fixed),
-        },
-        ..Default::default()
-    };
-    // Bricks are kept around nodes within W − 1 spacings, dilated by the basis support: that
-    // covers every cell of a level set the band supports (`pgvol offset` keeps |d| + 2 spacings
-    // within W) without storing the clamped nodes at exactly W, which would keep every brick.
-    let options = match exact_band {
-        Some(w) => pgvol_format::EncodeOptions {
-            band: w - 1.0,
-            ..options
-        },
-        None => options,
-    };
-    Ok(Some(pgvol_format::write_pgv_with(path, file, &options)?))
+            PrecisionArg::F32 => Some(pgvol::Precision::F32),
+            PrecisionArg::F16 => Some(pgvol::Precision::F16),
+            PrecisionArg::Q16 => Some(pgvol::Precision::Q16),
+            PrecisionArg::Fixed => Some(pgvol::Precision::Fixed),
+        }
+    }
 }
 
-/// `encode --from`: a coefficient NRRD to .pgv. Dense by default, so the coefficients are
-/// copied bit for bit; sparse bricks would replace far coefficients with the background value.
+/// `encode --from`: a coefficient NRRD to .pgv, copied bit for bit unless a precision is given.
 fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
-    let file = pgvol_format::nrrd::read_coefficients_nrrd(from)?;
-    let dense = a.dense_file || a.precision.is_none();
-    let stored = write_file(&a.output, &file, dense, a.precision, None)?;
+    let file = pgvol::read_coefficients_nrrd(from)?;
+    let precision = a.precision.and_then(PrecisionArg::precision);
+    let storage = match (a.dense_file, a.precision) {
+        (true, _) => pgvol::StorageOptions {
+            precision: None,
+            dense: true,
+        },
+        (false, None) => pgvol::StorageOptions::for_copy(None),
+        (false, Some(_)) => pgvol::StorageOptions {
+            precision,
+            dense: false,
+        },
+    };
+    let stored = pgvol::write_pgv(&a.output, &file, &storage)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     let grid = file.volume.grid;
     if a.out.json {
-        let v = serde_json::json!({
+        return print_json(&serde_json::json!({
             "output": a.output, "from": from, "grid": grid, "basis": file.volume.basis,
             "bytes": bytes, "dense": stored.is_none(),
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.out.quiet {
+        }));
+    }
+    if !a.out.quiet {
         println!(
             "{}: {} x {} x {} {} coefficients from {}, {} bytes",
             a.output.display(),
@@ -191,33 +173,33 @@ fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
 }
 
 pub fn encode(a: EncodeArgs) -> Result<()> {
-    check_pgv_extension(&a.output)?;
+    pgvol::check_pgv_name(&a.output)?;
     if let Some(from) = &a.from {
         return encode_from(&a, from);
     }
     let Some(mesh_path) = &a.mesh else {
         bail!("give a mesh or --from NRRD");
     };
-    let quiet = a.out.silent();
-    let start = Instant::now();
-    let mesh = pipeline::load_mesh(mesh_path, quiet)?;
-    let grid = a.grid.spec(128).grid_for(&mesh)?;
-    let method = match a.fit {
-        FitArg::Interp => pgvol_field::FitMethod::Interp,
-        FitArg::Iso => pgvol_field::FitMethod::Iso { z_step: a.z_step },
-        FitArg::Wls => pgvol_field::FitMethod::Wls,
-    };
     if a.z_step.is_some() && !matches!(a.fit, FitArg::Iso) {
         bail!("--z-step applies to --fit iso only");
     }
-    if let Some(z) = a.z_step {
-        if !(z.is_finite() && z > 0.0) {
-            bail!("--z-step must be a positive number of grid spacings, got {z}");
-        }
-    }
-    let (volume, report, sdf_seconds) =
-        pipeline::encode_with(&mesh, grid, a.basis.basis()?, method, a.band, quiet)?;
-    let fit_seconds = report.seconds;
+    let quiet = a.out.silent();
+    let start = Instant::now();
+    let mesh = load_mesh(mesh_path, quiet)?;
+    let options = pgvol::EncodeOptions {
+        grid: a.grid.spec(),
+        basis: a.basis.basis()?,
+        fit: match a.fit {
+            FitArg::Interp => pgvol::FitMethod::Interp,
+            FitArg::Iso => pgvol::FitMethod::Iso { z_step: a.z_step },
+            FitArg::Wls => pgvol::FitMethod::Wls,
+        },
+        band: a.band,
+        sign: a.sign.into(),
+    };
+    let encoded =
+        pgvol::encode(&mesh, &options, &Bars::new(quiet)).map_err(|e| at_input(e, mesh_path))?;
+    let report = &encoded.fit;
     if a.verbose && !a.out.json {
         eprintln!(
             "fit {}: solver {}, {} iterations, relative residual {:.3e}, {}, {} spurious sign changes{}",
@@ -242,23 +224,14 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             report.spurious_sign_changes
         );
     }
-    let mut header = pgvol_format::pgv::header_for(&volume, report.method.as_str(), Some(&mesh));
-    header
-        .metadata
-        .insert("fit_residual".into(), format!("{:e}", report.residual));
-    header
-        .metadata
-        .insert("fit_solver".into(), report.solver.clone());
-    if matches!(a.fit, FitArg::Interp) {
-        // Beyond this distance the stored field is a clamp, not a distance (see `pgvol offset`).
-        header
-            .metadata
-            .insert(BAND_KEY.into(), format!("{}", a.band * grid.spacing));
-    }
-    let file = pgvol_format::PgvFile { header, volume };
-    let exact_band = matches!(a.fit, FitArg::Interp).then_some(a.band);
-    let stored = write_file(&a.output, &file, a.dense_file, a.precision, exact_band)?;
+    let storage = pgvol::StorageOptions {
+        precision: a.precision.and_then(PrecisionArg::precision),
+        dense: a.dense_file,
+    };
+    let file = &encoded.file;
+    let stored = pgvol::write_pgv(&a.output, file, &storage)?;
     let bytes = std::fs::metadata(&a.output)?.len();
+    let grid = file.volume.grid;
     if a.out.json {
         let storage = stored.as_ref().map(|r| {
             serde_json::json!({
@@ -267,13 +240,13 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
                 "precision": r.precision, "max_quantisation_error": r.max_quantisation_error,
             })
         });
-        let v = serde_json::json!({
+        return print_json(&serde_json::json!({
             "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
             "storage": storage, "fit": report,
-            "seconds": { "sdf": sdf_seconds, "fit": fit_seconds, "total": start.elapsed().as_secs_f64() },
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.out.quiet {
+            "seconds": { "sdf": encoded.timings.sdf, "fit": encoded.timings.fit, "total": start.elapsed().as_secs_f64() },
+        }));
+    }
+    if !a.out.quiet {
         let detail = match &stored {
             Some(r) => format!(
                 ", {} of {} bricks stored as {:?}",
@@ -293,30 +266,34 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
     Ok(())
 }
 
+/// A library error without a file, reported against the input that caused it.
+pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
+    match e.path() {
+        Some(_) => e,
+        None => e.at(input),
+    }
+}
+
 pub fn decode(a: DecodeArgs) -> Result<()> {
-    pgvol_mesh::MeshFormat::from_path(&a.output)?;
-    if !a.iso.is_finite() {
-        bail!("--iso must be a finite number");
-    }
-    let file = pgvol_format::read_pgv(&a.input)?;
+    pgvol::mesh_format(&a.output)?;
+    let file = pgvol::read_pgv(&a.input)?;
     let t = Instant::now();
-    let mesh = pipeline::decode(&file.volume, a.iso, a.method, a.res.map(|r| r as usize))?;
+    let options = pgvol::DecodeOptions {
+        iso: a.iso,
+        method: a.method.into(),
+        res: a.res.map(|r| r as usize),
+    };
+    let mesh = pgvol::decode(&file.volume, &options, &Bars::new(a.out.silent()))
+        .map_err(|e| at_input(e, &a.input))?;
     let seconds = t.elapsed().as_secs_f64();
-    if mesh.triangles.is_empty() {
-        bail!(
-            "{}: the level set {} is empty in this field",
-            a.input.display(),
-            a.iso
-        );
-    }
-    pgvol_mesh::write(&a.output, &mesh)?;
+    pgvol::write_mesh(&a.output, &mesh)?;
     if a.out.json {
-        let v = serde_json::json!({
+        return print_json(&serde_json::json!({
             "output": a.output, "triangles": mesh.triangles.len(), "vertices": mesh.positions.len(),
             "seconds": seconds,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.out.quiet {
+        }));
+    }
+    if !a.out.quiet {
         println!(
             "{}: {} triangles in {:.2} s",
             a.output.display(),
@@ -331,12 +308,12 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
 struct Info<'a> {
     file: &'a std::path::Path,
     bytes: u64,
-    header: &'a pgvol_format::PgvHeader,
+    header: &'a pgvol::PgvHeader,
     coefficients: usize,
     coefficient_range: [f32; 2],
     bricks_total: Option<usize>,
     bricks_stored: Option<usize>,
-    precision: pgvol_format::Precision,
+    precision: pgvol::Precision,
     bytes_header: usize,
     bytes_index: usize,
     bytes_payload: usize,
@@ -345,8 +322,8 @@ struct Info<'a> {
 pub fn info(a: InfoArgs) -> Result<()> {
     let raw = std::fs::read(&a.input)
         .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", a.input.display()))?;
-    let parts = pgvol_format::pgv_info(&raw, &a.input)?;
-    let file = pgvol_format::decode_pgv(&raw, &a.input)?;
+    let parts = pgvol::pgv_info(&raw, &a.input)?;
+    let file = pgvol::read_pgv_bytes(&raw, &a.input)?;
     let bytes = raw.len() as u64;
     let c = &file.volume.coeffs;
     let range = [
@@ -367,8 +344,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
         bytes_payload: parts.bytes_payload,
     };
     if a.out.json {
-        println!("{}", serde_json::to_string_pretty(&info)?);
-        return Ok(());
+        return print_json(&info);
     }
     let h = &file.header;
     let g = h.grid;

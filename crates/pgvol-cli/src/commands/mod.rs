@@ -12,7 +12,7 @@ use anyhow::Result;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
-use pgvol_field::Basis;
+use pgvol::Basis;
 
 #[derive(Subcommand)]
 pub enum Command {
@@ -76,7 +76,7 @@ pub fn run(command: Command) -> Result<()> {
 /// Grid size options shared by the commands that sample a mesh.
 #[derive(Args, Clone, Copy, Debug)]
 pub struct GridArgs {
-    /// Nodes per axis of the grid (a cube 1.1 × the mesh's longest extent).
+    /// Nodes per axis of the grid (a cube 1.1 × the mesh's longest extent) [default: 128].
     #[arg(long, value_parser = clap::value_parser!(u32).range(4..=2048))]
     pub res: Option<u32>,
     /// Grid spacing in mesh units, instead of --res.
@@ -85,8 +85,13 @@ pub struct GridArgs {
 }
 
 impl GridArgs {
-    pub fn spec(self, default_res: usize) -> crate::pipeline::GridSpec {
-        crate::pipeline::GridSpec::from_args(self.res.map(|r| r as usize), self.voxel, default_res)
+    /// The grid as the library takes it (its default resolution when neither is given).
+    pub fn spec(self) -> pgvol::GridSpec {
+        match (self.res, self.voxel) {
+            (_, Some(h)) => pgvol::GridSpec::Voxel(h),
+            (Some(n), None) => pgvol::GridSpec::Res(n as usize),
+            (None, None) => pgvol::GridSpec::default(),
+        }
     }
 }
 
@@ -134,6 +139,11 @@ impl BasisArgs {
             .map_err(|e| anyhow::anyhow!("--pg-r/--pg-n: {e}"))?;
         Ok(b)
     }
+
+    /// Whether any basis option differs from its default.
+    pub fn is_default(self) -> bool {
+        self.basis == BasisArg::default() && self.pg_n == 3 && self.pg_r == 1.5
+    }
 }
 
 /// How the mesh is extracted from the field.
@@ -162,13 +172,23 @@ pub enum SignArg {
     Parity,
 }
 
-impl From<SignArg> for pgvol_sdf::SignMode {
+impl From<SignArg> for pgvol::SignMode {
     fn from(s: SignArg) -> Self {
         match s {
-            SignArg::Auto => pgvol_sdf::SignMode::Auto,
-            SignArg::Winding => pgvol_sdf::SignMode::Winding,
-            SignArg::Pseudonormal => pgvol_sdf::SignMode::Pseudonormal,
-            SignArg::Parity => pgvol_sdf::SignMode::Parity,
+            SignArg::Auto => pgvol::SignMode::Auto,
+            SignArg::Winding => pgvol::SignMode::Winding,
+            SignArg::Pseudonormal => pgvol::SignMode::Pseudonormal,
+            SignArg::Parity => pgvol::SignMode::Parity,
+        }
+    }
+}
+
+impl From<MethodArg> for pgvol::Method {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::Mc => pgvol::Method::MarchingCubes,
+            MethodArg::Sn => pgvol::Method::SurfaceNets,
+            MethodArg::Dc => pgvol::Method::DualContouring,
         }
     }
 }
@@ -192,3 +212,24 @@ impl OutputArgs {
 }
 
 pub type PathArg = PathBuf;
+
+/// Reads a mesh through the library, saying on standard error what cleaning changed unless
+/// `quiet`.
+pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
+    let (mesh, report) = pgvol::read_mesh(path)?;
+    if !quiet && (report.vertices_merged > 0 || report.degenerate_dropped > 0) {
+        eprintln!(
+            "{}: merged {} duplicate vertices, dropped {} degenerate triangles",
+            path.display(),
+            report.vertices_merged,
+            report.degenerate_dropped
+        );
+    }
+    Ok(mesh)
+}
+
+/// Prints `value` as pretty JSON on standard output.
+pub fn print_json(value: &impl serde::Serialize) -> Result<()> {
+    println!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}

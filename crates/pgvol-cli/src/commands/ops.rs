@@ -3,127 +3,45 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use pgvol_field::{CoefficientVolume, Grid};
 
-use super::{MethodArg, OutputArgs, PathArg};
-use crate::pipeline;
+use super::files::at_input;
+use super::{print_json, MethodArg, OutputArgs, PathArg};
+use crate::progress::Bars;
 
-/// A field and the box of the shape it came from.
-struct Source {
-    volume: CoefficientVolume,
-    bounds: (Vec3, Vec3),
-    mesh: Option<pgvol_mesh::Mesh>,
-    /// Distance from the surface within which the field is exact, when the file records it.
-    band: Option<f32>,
-}
-
-fn is_pgv(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("pgv"))
-}
-
-/// Reads a .pgv file, or encodes a mesh on a grid of `res` nodes whose box is the mesh's box grown
-/// by `grow` on every side, with exact distances `band` spacings beyond `grow`.
-fn load(input: &Path, res: usize, grow: f32, extra_band: f32, quiet: bool) -> Result<Source> {
-    if is_pgv(input) {
-        let file = pgvol_format::read_pgv(input)?;
-        let bounds = match file.header.source_bounds {
-            Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
-            None => pgvol_ops::volume_bounds(&file.volume),
-        };
-        let band = file
-            .header
-            .metadata
-            .get(super::files::BAND_KEY)
-            .and_then(|b| b.parse::<f32>().ok())
-            .filter(|b| b.is_finite() && *b > 0.0);
-        return Ok(Source {
-            volume: file.volume,
-            bounds,
-            mesh: None,
-            band,
-        });
-    }
-    let mesh = pipeline::load_mesh(input, quiet)?;
-    let (lo, hi) = mesh.bounds().context("the mesh has no triangles")?;
-    let pad = Vec3::splat(grow.max(0.0));
-    let grid = Grid::cube_res(lo - pad, hi + pad, res).context("cannot make the sampling grid")?;
-    let band = pipeline::ENCODE_BAND + extra_band / grid.spacing;
-    let (volume, _, _) =
-        pipeline::encode_banded(&mesh, grid, pgvol_field::Basis::Bspline3, band, quiet)?;
-    Ok(Source {
-        volume,
-        bounds: (lo, hi),
-        mesh: Some(mesh),
-        band: None,
-    })
-}
-
-/// Writes a volume as .pgv, or contours it into a mesh file, by the output's extension.
+/// Writes a derived volume as .pgv, or contours it into a mesh file, by the output's extension;
+/// returns the triangles written (0 for a .pgv).
 fn write_result(
     output: &Path,
-    volume: &CoefficientVolume,
-    source: &Source,
-    op: &str,
+    volume: pgvol::CoefficientVolume,
+    shape: &pgvol::Shape,
+    operation: &str,
     method: MethodArg,
+    progress: &Bars,
 ) -> Result<usize> {
-    if is_pgv(output) {
-        let mut header = pgvol_format::pgv::header_for(volume, "interp", source.mesh.as_ref());
-        header.metadata.insert("operation".into(), op.to_string());
-        pgvol_format::write_pgv(
-            output,
-            &pgvol_format::PgvFile {
-                header,
-                volume: volume.clone(),
-            },
-        )?;
+    if pgvol::is_pgv(output) {
+        let file = shape.derived_file(volume, operation);
+        pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
         return Ok(0);
     }
-    pgvol_mesh::MeshFormat::from_path(output)?;
-    let mesh = pipeline::decode(volume, 0.0, method, None)?;
-    if mesh.triangles.is_empty() {
-        bail!("{op}: the result is empty (the operation removed the whole shape)");
-    }
-    pgvol_mesh::write(output, &mesh)?;
+    let options = pgvol::DecodeOptions {
+        method: method.into(),
+        ..Default::default()
+    };
+    let mesh = pgvol::decode(&volume, &options, progress).map_err(|e| {
+        anyhow::anyhow!(
+            "{operation}: the result is empty (the operation removed the whole shape): {e}"
+        )
+    })?;
+    pgvol::write_mesh(output, &mesh)?;
     Ok(mesh.triangles.len())
 }
 
 fn check_output_name(output: &Path) -> Result<()> {
-    if !is_pgv(output) {
-        pgvol_mesh::MeshFormat::from_path(output)?;
-    }
-    Ok(())
-}
-
-fn finite_nonzero(name: &str, v: f32) -> Result<()> {
-    if !v.is_finite() || v == 0.0 {
-        bail!("{name} must be a finite non-zero number, got {v}");
-    }
-    Ok(())
-}
-
-fn refuse_narrow_band(source: &Source, input: &Path, reach: f32) -> Result<()> {
-    if source.mesh.is_some() {
-        return Ok(());
-    }
-    // The band recorded at encoding is exact and free; older files are measured instead.
-    let (band, too_narrow) = match source.band {
-        Some(band) => (band, reach.abs() + 2.0 * source.volume.grid.spacing >= band),
-        None => (
-            pgvol_ops::stored_band(&source.volume),
-            pgvol_ops::needs_wider_band(&source.volume, reach),
-        ),
-    };
-    if too_narrow {
-        bail!(
-            "{}: the file stores distances only within {band:.4} of the surface, too narrow for {reach}; \
-             encode it again with a wider --band, or pass the mesh instead",
-            input.display(),
-        );
+    if !pgvol::is_pgv(output) {
+        pgvol::mesh_format(output)?;
     }
     Ok(())
 }
@@ -137,6 +55,7 @@ pub enum AxisArg {
 }
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol slice part.pgv -o part.cli --layer-height 0.05 --binary")]
 pub struct SliceArgs {
     /// A .pgv file, or a mesh (encoded on the fly at --res).
     pub input: PathArg,
@@ -166,65 +85,33 @@ pub struct SliceArgs {
     #[arg(long)]
     pub binary: bool,
     /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, default_value_t = pgvol::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(4..=2048))]
     pub res: u32,
     #[command(flatten)]
     pub out: OutputArgs,
 }
 
 pub fn slice(a: SliceArgs) -> Result<()> {
-    let ext = a
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    let ext = match ext.as_deref() {
-        Some(e @ ("svg" | "cli" | "json")) => e.to_string(),
-        _ => bail!(
-            "{}: unknown layer file extension (expected .svg, .cli or .json)",
-            a.output.display()
-        ),
-    };
-    if a.binary && ext != "cli" {
-        bail!(
-            "{}: --binary applies only to .cli outputs",
-            a.output.display()
-        );
-    }
-    if !(a.layer_height.is_finite() && a.layer_height > 0.0) {
-        bail!(
-            "--layer-height must be a positive number, got {}",
-            a.layer_height
-        );
-    }
+    let format = pgvol::LayerFormat::from_path(&a.output, a.binary)?;
     let quiet = a.out.silent();
+    let bars = Bars::new(quiet);
     let start = std::time::Instant::now();
-    let source = load(&a.input, a.res as usize, 0.0, 0.0, quiet)?;
-    let spacing = source.volume.grid.spacing;
-    let axis = match a.axis {
-        AxisArg::X => pgvol_ops::Axis::X,
-        AxisArg::Y => pgvol_ops::Axis::Y,
-        AxisArg::Z => pgvol_ops::Axis::Z,
+    let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, &bars)?;
+    let settings = pgvol::SliceSettings {
+        axis: match a.axis {
+            AxisArg::X => pgvol::Axis::X,
+            AxisArg::Y => pgvol::Axis::Y,
+            AxisArg::Z => pgvol::Axis::Z,
+        },
+        layer_height: a.layer_height,
+        first: a.first,
+        resolution: a.resolution,
+        tolerance: a.tolerance,
     };
-    let mut options =
-        pgvol_ops::SliceOptions::new(axis, a.layer_height, a.resolution.unwrap_or(spacing));
-    options.first = a.first;
-    options.tolerance = a.tolerance.unwrap_or(spacing / 10.0);
     let t = std::time::Instant::now();
-    let layers = pgvol_ops::slice_volume(&source.volume, source.bounds, &options)?;
+    let layers = pgvol::slice(&shape, &settings, &bars).map_err(|e| at_input(e, &a.input))?;
     let slice_seconds = t.elapsed().as_secs_f64();
-    match ext.as_str() {
-        "svg" => pgvol_ops::write_svg(&a.output, &layers)?,
-        "cli" => {
-            let encoding = if a.binary {
-                pgvol_ops::CliEncoding::Binary
-            } else {
-                pgvol_ops::CliEncoding::Ascii
-            };
-            pgvol_ops::write_cli_with(&a.output, &layers, a.units_mm, encoding)?
-        }
-        _ => pgvol_ops::write_slice_json(&a.output, &layers)?,
-    }
+    pgvol::write_layers(&a.output, &layers, format, a.units_mm)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
     let points: usize = layers
         .iter()
@@ -232,12 +119,12 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         .map(|l| l.points.len())
         .sum();
     if a.out.json {
-        let v = serde_json::json!({
+        return print_json(&serde_json::json!({
             "output": a.output, "layers": layers.len(), "loops": loops, "points": points,
             "seconds": { "slice": slice_seconds, "total": start.elapsed().as_secs_f64() },
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.out.quiet {
+        }));
+    }
+    if !a.out.quiet {
         println!(
             "{}: {} layers, {} loops, {} points; sliced in {:.2} s",
             a.output.display(),
@@ -254,7 +141,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
 #[derive(Args, Clone, Copy)]
 pub struct ShapeOutputArgs {
     /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, default_value_t = pgvol::SHAPE_RES as u32, value_parser = clap::value_parser!(u32).range(4..=2048))]
     pub res: u32,
     /// Contouring method for mesh outputs.
     #[arg(long, value_enum, default_value_t)]
@@ -262,6 +149,7 @@ pub struct ShapeOutputArgs {
 }
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol offset part.stl -o grown.glb --distance 0.5")]
 pub struct OffsetArgs {
     /// A .pgv file, or a mesh (distances are then computed as far out as the offset needs).
     pub input: PathArg,
@@ -278,25 +166,19 @@ pub struct OffsetArgs {
 }
 
 pub fn offset(a: OffsetArgs) -> Result<()> {
-    finite_nonzero("--distance", a.distance)?;
     check_output_name(&a.output)?;
-    let quiet = a.out.silent();
-    let source = load(
+    let bars = Bars::new(a.out.silent());
+    pgvol::check_offset(a.distance).map_err(|e| anyhow::anyhow!("--distance: {e}"))?;
+    let shape = pgvol::Shape::load(
         &a.input,
         a.shape.res as usize,
         a.distance.max(0.0),
         a.distance.abs(),
-        quiet,
+        &bars,
     )?;
-    refuse_narrow_band(&source, &a.input, a.distance.abs())?;
-    let volume = pgvol_ops::offset(&source.volume, a.distance)?;
-    let triangles = write_result(
-        &a.output,
-        &volume,
-        &source,
-        &format!("offset {}", a.distance),
-        a.shape.method,
-    )?;
+    let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
+    let operation = pgvol::operation_name(None, a.distance);
+    let triangles = write_result(&a.output, volume, &shape, &operation, a.shape.method, &bars)?;
     report(&a.out, &a.output, triangles)
 }
 
@@ -312,6 +194,9 @@ pub enum SideArg {
 }
 
 #[derive(Args)]
+#[command(
+    after_help = "Example: pgvol shell part.stl -o hollow.glb --thickness 1.2 --hollow --drain 0,0,-5,0,0,-1,2"
+)]
 pub struct ShellArgs {
     /// A .pgv file, or a mesh.
     pub input: PathArg,
@@ -331,14 +216,14 @@ pub struct ShellArgs {
     /// A drain hole through the wall, with --hollow: `x,y,z,dx,dy,dz,diameter` (a point inside the
     /// cavity, the direction out through the wall, the hole's diameter). Repeat for more holes.
     #[arg(long, value_parser = parse_drain, requires = "hollow")]
-    pub drain: Vec<pgvol_ops::Drain>,
+    pub drain: Vec<pgvol::Drain>,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
     #[command(flatten)]
     pub out: OutputArgs,
 }
 
-fn parse_drain(s: &str) -> Result<pgvol_ops::Drain, String> {
+fn parse_drain(s: &str) -> Result<pgvol::Drain, String> {
     let v: Vec<f32> = s
         .split(',')
         .map(|x| {
@@ -354,7 +239,7 @@ fn parse_drain(s: &str) -> Result<pgvol_ops::Drain, String> {
     if direction.length() == 0.0 || v[6] <= 0.0 {
         return Err("the direction must be non-zero and the diameter positive".into());
     }
-    Ok(pgvol_ops::Drain {
+    Ok(pgvol::Drain {
         point: Vec3::new(v[0], v[1], v[2]),
         direction: direction.normalize(),
         diameter: v[6],
@@ -362,46 +247,30 @@ fn parse_drain(s: &str) -> Result<pgvol_ops::Drain, String> {
 }
 
 pub fn shell(a: ShellArgs) -> Result<()> {
-    if !(a.thickness.is_finite() && a.thickness > 0.0) {
-        bail!("--thickness must be a positive number, got {}", a.thickness);
-    }
     check_output_name(&a.output)?;
-    let quiet = a.out.silent();
-    let grow = match (a.hollow, a.side) {
-        (false, SideArg::Outer) => a.thickness,
-        (false, SideArg::Centred) => a.thickness / 2.0,
-        _ => 0.0,
-    };
-    let source = load(&a.input, a.shape.res as usize, grow, a.thickness, quiet)?;
-    refuse_narrow_band(&source, &a.input, a.thickness)?;
-    let (volume, op) = if a.hollow {
-        (
-            pgvol_ops::hollow(&source.volume, a.thickness, &a.drain)?,
-            format!("hollow {}", a.thickness),
-        )
+    pgvol::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
+    let bars = Bars::new(a.out.silent());
+    let kind = if a.hollow {
+        pgvol::ShellKind::Hollow
     } else {
-        let side = match a.side {
-            SideArg::Inner => pgvol_ops::ShellSide::Inner,
-            SideArg::Outer => pgvol_ops::ShellSide::Outer,
-            SideArg::Centred => pgvol_ops::ShellSide::Centred,
-        };
-        (
-            pgvol_ops::shell(&source.volume, a.thickness, side)?,
-            format!("shell {}", a.thickness),
-        )
+        pgvol::ShellKind::Wall(match a.side {
+            SideArg::Inner => pgvol::ShellSide::Inner,
+            SideArg::Outer => pgvol::ShellSide::Outer,
+            SideArg::Centred => pgvol::ShellSide::Centred,
+        })
     };
-    let triangles = write_result(&a.output, &volume, &source, &op, a.shape.method)?;
+    let grow = pgvol::growth(kind, a.thickness);
+    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, grow, a.thickness, &bars)?;
+    let volume =
+        pgvol::shell(&shape, a.thickness, kind, &a.drain).map_err(|e| at_input(e, &a.input))?;
+    let operation = pgvol::operation_name(Some(kind), a.thickness);
+    let triangles = write_result(&a.output, volume, &shape, &operation, a.shape.method, &bars)?;
     report(&a.out, &a.output, triangles)
 }
 
 fn report(out: &OutputArgs, output: &Path, triangles: usize) -> Result<()> {
     if out.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(
-                &serde_json::json!({ "output": output, "triangles": triangles })
-            )?
-        );
+        print_json(&serde_json::json!({ "output": output, "triangles": triangles }))?;
     } else if !out.quiet {
         if triangles > 0 {
             println!("{}: {} triangles", output.display(), triangles);

@@ -6,9 +6,9 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::{BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
-use crate::exact_field;
-use crate::pipeline::{self, Timings};
+use super::files::at_input;
+use super::{load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
+use crate::progress::Bars;
 
 /// Which field the vertices are placed on.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -22,6 +22,7 @@ pub enum FieldArg {
 }
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol remesh scan.stl -o clean.glb --res 256 --method dc")]
 pub struct RemeshArgs {
     /// Input mesh (.obj, .gltf, .glb, .stl, .ply).
     pub input: PathArg,
@@ -46,72 +47,60 @@ pub struct RemeshArgs {
 struct Report<'a> {
     input: &'a std::path::Path,
     output: &'a std::path::Path,
-    grid: pgvol_field::Grid,
+    grid: pgvol::Grid,
     basis: &'static str,
     input_triangles: usize,
     triangles: usize,
     vertices: usize,
-    seconds: Timings,
+    seconds: pgvol::Timings,
     total_seconds: f64,
 }
 
 pub fn run(a: RemeshArgs) -> Result<()> {
     // Refuse an unwritable output format before doing the work.
-    pgvol_mesh::MeshFormat::from_path(&a.output)?;
-    let start = Instant::now();
-    let mut t = Timings::default();
-    let quiet = a.out.silent();
-    let mesh = pipeline::load_mesh(&a.input, quiet)?;
-    t.read = start.elapsed().as_secs_f64();
-    let grid = a.grid.spec(128).grid_for(&mesh)?;
-    if a.field == FieldArg::Exact && a.basis.basis()? != pgvol_field::Basis::Bspline3 {
+    pgvol::mesh_format(&a.output)?;
+    if a.field == FieldArg::Exact && !a.basis.is_default() {
         anyhow::bail!("--basis applies to --field decoded; the exact field has no basis");
     }
-    let (out, basis) = match a.field {
-        FieldArg::Exact => {
-            let method = match a.method {
-                MethodArg::Mc => pgvol_contour::Method::MarchingCubes,
-                MethodArg::Sn => pgvol_contour::Method::SurfaceNets,
-                MethodArg::Dc => pgvol_contour::Method::DualContouring,
-            };
-            let (out, sdf) = exact_field::contour_exact(&mesh, &grid, method, quiet)?;
-            t.sdf = sdf;
-            t.contour = start.elapsed().as_secs_f64() - t.read - sdf;
-            (out, "exact")
-        }
-        FieldArg::Decoded => {
-            let (volume, sdf, fit) = pipeline::encode(&mesh, grid, a.basis.basis()?, quiet)?;
-            t.sdf = sdf;
-            t.fit = fit;
-            let c = Instant::now();
-            let out = pipeline::decode(&volume, 0.0, a.method, None)?;
-            t.contour = c.elapsed().as_secs_f64();
-            (out, volume.basis.name())
-        }
+    let start = Instant::now();
+    let quiet = a.out.silent();
+    let mesh = load_mesh(&a.input, quiet)?;
+    let read = start.elapsed().as_secs_f64();
+    let options = pgvol::RemeshOptions {
+        grid: a.grid.spec(),
+        method: a.method.into(),
+        field: match a.field {
+            FieldArg::Exact => pgvol::RemeshField::Exact,
+            FieldArg::Decoded => pgvol::RemeshField::Decoded(a.basis.basis()?),
+        },
     };
-    if out.triangles.is_empty() {
-        anyhow::bail!(
-            "{}: the surface vanished at this resolution (no inside region found); try a larger --res",
-            a.input.display()
-        );
-    }
+    let remeshed =
+        pgvol::remesh(&mesh, &options, &Bars::new(quiet)).map_err(|e| at_input(e, &a.input))?;
     let w = Instant::now();
-    pgvol_mesh::write(&a.output, &out)?;
-    t.write = w.elapsed().as_secs_f64();
+    pgvol::write_mesh(&a.output, &remeshed.mesh)?;
+    let mut seconds = remeshed.timings;
+    seconds.read = read;
+    seconds.write = w.elapsed().as_secs_f64();
+    let basis = match options.field {
+        pgvol::RemeshField::Exact => "exact",
+        pgvol::RemeshField::Decoded(b) => b.name(),
+    };
+    let grid = remeshed.grid;
     let report = Report {
         input: &a.input,
         output: &a.output,
         grid,
         basis,
         input_triangles: mesh.triangles.len(),
-        triangles: out.triangles.len(),
-        vertices: out.positions.len(),
-        seconds: t,
+        triangles: remeshed.mesh.triangles.len(),
+        vertices: remeshed.mesh.positions.len(),
+        seconds,
         total_seconds: start.elapsed().as_secs_f64(),
     };
     if a.out.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !a.out.quiet {
+        return print_json(&report);
+    }
+    if !a.out.quiet {
         println!(
             "{} -> {}: {} triangles at {}^3 ({} field), {:.2} s",
             a.input.display(),

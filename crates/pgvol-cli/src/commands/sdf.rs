@@ -1,13 +1,12 @@
 //! `pgvol sdf`.
 
-use std::time::Instant;
-
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::{GridArgs, OutputArgs, PathArg, SignArg};
-use crate::pipeline;
+use super::files::at_input;
+use super::{load_mesh, print_json, GridArgs, OutputArgs, PathArg, SignArg};
+use crate::progress::Bars;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
 pub enum GridFormat {
@@ -18,6 +17,7 @@ pub enum GridFormat {
 }
 
 #[derive(Args)]
+#[command(after_help = "Example: pgvol sdf part.obj -o part.npy --res 256 --band 3")]
 pub struct SdfArgs {
     /// Input mesh.
     pub mesh: PathArg,
@@ -50,9 +50,55 @@ fn parse_band(s: &str) -> Result<f32, String> {
     }
 }
 
+pub fn run(a: SdfArgs) -> Result<()> {
+    let format = match a.format {
+        Some(GridFormat::Nrrd) => pgvol::GridFormat::Nrrd,
+        Some(GridFormat::Npy) => pgvol::GridFormat::Npy,
+        None => pgvol::GridFormat::from_path(&a.output)
+            .map_err(|e| anyhow::anyhow!("{e}, or give --format"))?,
+    };
+    let quiet = a.out.silent();
+    let mesh = load_mesh(&a.mesh, quiet)?;
+    let options = pgvol::SdfOptions {
+        grid: a.grid.spec(),
+        band: a.band,
+        sign: a.sign.into(),
+    };
+    let sampled = pgvol::signed_distance(&mesh, &options, &Bars::new(quiet))
+        .map_err(|e| at_input(e, &a.mesh))?;
+    pgvol::write_grid(&a.output, &sampled.grid, &sampled.values, format)?;
+    let values = &sampled.values;
+    let report = Report {
+        grid: sampled.grid,
+        sign: sampled.sign,
+        band: a.band,
+        exact_nodes: sampled.exact_nodes,
+        samples: values.len(),
+        seconds: sampled.seconds,
+        samples_per_second: values.len() as f64 / sampled.seconds.max(1e-9),
+        inside: values.iter().filter(|v| **v < 0.0).count(),
+    };
+    if a.out.json {
+        return print_json(&report);
+    }
+    if !a.out.quiet {
+        println!(
+            "{}: {}^3 signed distances ({} sign, {} exact) in {:.2} s ({:.0} samples/s), {} inside",
+            a.output.display(),
+            report.grid.dims[0],
+            report.sign,
+            report.exact_nodes,
+            report.seconds,
+            report.samples_per_second,
+            report.inside
+        );
+    }
+    Ok(())
+}
+
 #[derive(Serialize)]
 struct Report {
-    grid: pgvol_field::Grid,
+    grid: pgvol::Grid,
     sign: &'static str,
     band: Option<f32>,
     exact_nodes: usize,
@@ -60,64 +106,4 @@ struct Report {
     seconds: f64,
     samples_per_second: f64,
     inside: usize,
-}
-
-pub fn run(a: SdfArgs) -> Result<()> {
-    let format = match a.format {
-        Some(f) => f,
-        None => match a
-            .output
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-        {
-            Some(e) if e == "npy" => GridFormat::Npy,
-            Some(e) if e == "nrrd" => GridFormat::Nrrd,
-            _ => bail!(
-                "{}: unknown grid file extension (expected .nrrd or .npy, or give --format)",
-                a.output.display()
-            ),
-        },
-    };
-    let quiet = a.out.silent();
-    let mesh = pipeline::load_mesh(&a.mesh, quiet)?;
-    let grid = a.grid.spec(128).grid_for(&mesh)?;
-    let extent = match a.band {
-        Some(w) => pgvol_sdf::sampling::Extent::Band(w),
-        None => pgvol_sdf::sampling::Extent::Dense,
-    };
-    let t = Instant::now();
-    let (sampled, sign) =
-        pipeline::signed_distance_grid(&mesh, &grid, extent, a.sign.into(), quiet)?;
-    let seconds = t.elapsed().as_secs_f64();
-    let values = sampled.values;
-    match format {
-        GridFormat::Nrrd => pgvol_format::grid_files::write_nrrd(&a.output, &grid, &values, &[])?,
-        GridFormat::Npy => pgvol_format::grid_files::write_npy(&a.output, &grid, &values)?,
-    }
-    let report = Report {
-        grid,
-        sign: sign.name(),
-        band: a.band,
-        exact_nodes: sampled.exact_nodes,
-        samples: values.len(),
-        seconds,
-        samples_per_second: values.len() as f64 / seconds.max(1e-9),
-        inside: values.iter().filter(|v| **v < 0.0).count(),
-    };
-    if a.out.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !a.out.quiet {
-        println!(
-            "{}: {}^3 signed distances ({} sign, {} exact) in {:.2} s ({:.0} samples/s), {} inside",
-            a.output.display(),
-            grid.dims[0],
-            report.sign,
-            report.exact_nodes,
-            seconds,
-            report.samples_per_second,
-            report.inside
-        );
-    }
-    Ok(())
 }

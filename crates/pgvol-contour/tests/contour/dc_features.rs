@@ -2,7 +2,7 @@
 
 use glam::{Mat3, Vec3};
 use pgvol_contour::{marching_cubes_with, min_angle_histogram, DualContourOptions, Field};
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 
 use crate::fields::{cube_face_normal, rotated_cube, sphere, tilt, torus, trilinear};
 use crate::grids::{Rng, Samples};

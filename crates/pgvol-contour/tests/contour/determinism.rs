@@ -1,7 +1,7 @@
 //! Output must not depend on the number of threads.
 
 use glam::Vec3;
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 
 use crate::grids::{Rng, Samples};
 

@@ -2,7 +2,7 @@
 
 use glam::{Mat3, Vec3};
 use pgvol_contour::{dual_contour, surface_nets, DualContourOptions, Field};
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 
 use crate::grids::Samples;
 

@@ -50,7 +50,7 @@ impl Samples {
         }
     }
 
-    pub fn contour(&self, iso: f32) -> pgvol_mesh::Mesh {
+    pub fn contour(&self, iso: f32) -> pgvol_core::Mesh {
         pgvol_contour::marching_cubes(&self.values, self.dims, self.origin, self.spacing, iso)
     }
 }

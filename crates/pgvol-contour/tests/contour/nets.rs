@@ -7,7 +7,7 @@ use fast_surface_nets::ndshape::{RuntimeShape, Shape};
 use fast_surface_nets::{surface_nets as classic_nets, SurfaceNetsBuffer};
 use glam::Vec3;
 use pgvol_contour::Field;
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 use proptest::prelude::*;
 
 use crate::dc_features::sampled;

@@ -3,7 +3,7 @@
 use std::collections::{HashMap, HashSet};
 
 use glam::DVec3;
-use pgvol_mesh::Mesh;
+use pgvol_core::Mesh;
 
 /// Facts about a mesh that passed [`check_closed_manifold`].
 #[derive(Debug)]

@@ -1,18 +1,13 @@
 //! The exact signed distance of a mesh as a field for contouring, so `remesh` places vertices
 //! on the input surface itself rather than on a smoothed fit of it.
 
-use anyhow::{Context, Result};
 use glam::Vec3;
-use pgvol_contour::{DualContourOptions, Field, Method};
-use pgvol_field::Grid;
-use pgvol_mesh::Mesh;
-use pgvol_sdf::sampling::Extent;
-use pgvol_sdf::{MeshSdf, SignMode};
+use pgvol_contour::Field;
+use pgvol_core::Mesh;
+use pgvol_sdf::MeshSdf;
 
-use crate::progress;
-
-/// Exact node distances within this many grid spacings of the surface; farther nodes need only
-/// their sign, since contouring reads values only at crossed edges.
+/// Exact node distances within this many grid spacings of the surface when remeshing; farther
+/// nodes need only their sign, since contouring reads values only at crossed edges.
 pub const NODE_BAND: f32 = 2.5;
 
 /// Below this fraction of a grid spacing from the surface, `p − closest` is mostly rounding,
@@ -75,25 +70,4 @@ impl Field for MeshField<'_> {
         };
         (sign * d, gradient)
     }
-}
-
-/// The surface of `mesh` contoured on `grid` with `method`, node signs from the banded sampler
-/// and every vertex placed with the exact distance. Dual contouring keeps each crossing's own
-/// tangent plane: exact normals need no offset away from a feature.
-pub fn contour_exact(mesh: &Mesh, grid: &Grid, method: Method, quiet: bool) -> Result<(Mesh, f64)> {
-    let t = std::time::Instant::now();
-    let sdf = MeshSdf::new(mesh, SignMode::Auto).context("cannot build the distance field")?;
-    let pb = progress::bar(1000, "distance", quiet);
-    let sampled = sdf.sample(grid, Extent::Band(NODE_BAND), &|done| {
-        pb.set_position((done * 1000.0) as u64)
-    });
-    pb.finish_and_clear();
-    let sdf_seconds = t.elapsed().as_secs_f64();
-    let field = MeshField::new(mesh, &sdf, grid.spacing);
-    let options = DualContourOptions {
-        feature_offset: 0.0,
-        ..DualContourOptions::default()
-    };
-    let out = pgvol_contour::contour_field(&field, grid, &sampled.values, 0.0, method, &options);
-    Ok((out, sdf_seconds))
 }

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::Mesh;
+use super::Mesh;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MeshStats {

@@ -6,7 +6,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::MeshError;
+use crate::FileError;
 
 /// Writes `path` by letting `f` fill a temporary file in the same directory (so the final
 /// rename cannot cross file systems), flushing and syncing it, then renaming it over `path`.
@@ -14,12 +14,12 @@ use crate::MeshError;
 pub fn write_atomic(
     path: &Path,
     f: impl FnOnce(&mut dyn Write) -> io::Result<()>,
-) -> Result<(), MeshError> {
+) -> Result<(), FileError> {
     let Some(name) = path.file_name() else {
-        return Err(MeshError::new(path, "not a file path (no file name)"));
+        return Err(FileError::new(path, "not a file path (no file name)"));
     };
     if path.is_dir() {
-        return Err(MeshError::new(path, "is a directory, not a file"));
+        return Err(FileError::new(path, "is a directory, not a file"));
     }
     match fs::metadata(path) {
         // A device or a pipe (`-o /dev/null`, `-o /dev/stdout`) is written in place: renaming a
@@ -28,7 +28,7 @@ pub fn write_atomic(
         // Through a symbolic link, replace the file it points to and keep the link.
         Ok(_) if fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) => {
             let target = fs::canonicalize(path)
-                .map_err(|e| MeshError::new(path, format!("cannot resolve the link: {e}")))?;
+                .map_err(|e| FileError::new(path, format!("cannot resolve the link: {e}")))?;
             return write_atomic(&target, f);
         }
         _ => {}
@@ -51,16 +51,20 @@ pub fn write_atomic(
         .create_new(true)
         .open(&tmp)
         .map_err(|e| {
-            MeshError::new(
+            FileError::new(
                 path,
                 format!("cannot create temporary file '{}': {e}", tmp.display()),
             )
         })?;
+    // A replaced file keeps its permissions: an executable script or a shared group file stays so.
+    if let Ok(meta) = fs::metadata(path) {
+        let _ = file.set_permissions(meta.permissions());
+    }
     let result = fill_and_sync(file, f)
-        .map_err(|e| MeshError::new(path, format!("write failed: {e}")))
+        .map_err(|e| FileError::new(path, format!("write failed: {e}")))
         .and_then(|()| {
             fs::rename(&tmp, path).map_err(|e| {
-                MeshError::new(path, format!("cannot move finished file into place: {e}"))
+                FileError::new(path, format!("cannot move finished file into place: {e}"))
             })
         });
     match result {
@@ -78,15 +82,15 @@ pub fn write_atomic(
 fn write_in_place(
     path: &Path,
     f: impl FnOnce(&mut dyn Write) -> io::Result<()>,
-) -> Result<(), MeshError> {
+) -> Result<(), FileError> {
     let file = OpenOptions::new()
         .write(true)
         .open(path)
-        .map_err(|e| MeshError::new(path, format!("cannot open for writing: {e}")))?;
+        .map_err(|e| FileError::new(path, format!("cannot open for writing: {e}")))?;
     let mut w = BufWriter::new(file);
     f(&mut w)
         .and_then(|()| w.flush())
-        .map_err(|e| MeshError::new(path, format!("write failed: {e}")))
+        .map_err(|e| FileError::new(path, format!("write failed: {e}")))
 }
 
 fn fill_and_sync(file: File, f: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
@@ -105,4 +109,38 @@ fn sync_dir(dir: &Path) {
     }
     #[cfg(not(unix))]
     let _ = dir;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_write_keeps_the_old_file_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.bin");
+        fs::write(&path, b"old").unwrap();
+        let e = write_atomic(&path, |w| {
+            w.write_all(b"partial")?;
+            Err(io::Error::other("disk full"))
+        })
+        .unwrap_err();
+        assert!(e.problem.contains("disk full"), "{e}");
+        assert_eq!(fs::read(&path).unwrap(), b"old");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_replaced_file_keeps_its_mode() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.sh");
+        fs::write(&path, b"old").unwrap();
+        fs::set_permissions(&path, fs::Permissions::from_mode(0o751)).unwrap();
+        write_atomic(&path, |w| w.write_all(b"new")).unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"new");
+        let mode = fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o751);
+    }
 }

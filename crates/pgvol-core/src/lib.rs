@@ -1,0 +1,13 @@
+//! The types every pgvol stage shares, with no file formats, no BVH and no solver behind them:
+//! the sampling [`Grid`], the triangle [`Mesh`], atomic file replacement and the error that names
+//! a file and what is wrong with it. Reading a `.pgv` file needs nothing more than this.
+
+pub mod atomic;
+pub mod file_error;
+pub mod grid;
+pub mod mesh;
+
+pub use atomic::write_atomic;
+pub use file_error::FileError;
+pub use grid::{Grid, GridError, GRID_MARGIN, MAX_GRID_NODES};
+pub use mesh::{Mesh, MeshStats};

@@ -1,0 +1,61 @@
+//! Coefficient volume → mesh.
+
+use pgvol_contour::Method;
+use pgvol_core::Mesh;
+use pgvol_field::CoefficientVolume;
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::progress::{self, Progress};
+
+/// How a field is contoured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DecodeOptions {
+    /// The level set: 0 (the default) is the surface, positive values offset it outward.
+    pub iso: f32,
+    /// Contouring method (default marching cubes).
+    pub method: Method,
+    /// Resample on this many nodes along the longest side over the same box; `None` (the
+    /// default) contours on the stored grid.
+    pub res: Option<usize>,
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        Self {
+            iso: 0.0,
+            method: Method::MarchingCubes,
+            res: None,
+        }
+    }
+}
+
+/// Contours the `options.iso` level set of `volume`. An empty level set is an error: it is
+/// never a useful mesh.
+pub fn decode(
+    volume: &CoefficientVolume,
+    options: &DecodeOptions,
+    progress: &dyn Progress,
+) -> Result<Mesh> {
+    if !options.iso.is_finite() {
+        return Err(Error::parameter("the level must be a finite number"));
+    }
+    let grid = match options.res {
+        None => volume.grid,
+        Some(n) => pgvol_contour::resampled_grid(volume, n).ok_or_else(|| {
+            Error::new(
+                ErrorKind::ResourceLimit,
+                format!("a resampling at {n} nodes gives a grid larger than the limit"),
+            )
+        })?,
+    };
+    let mesh = progress::stage(progress, "contour", |_| {
+        pgvol_contour::contour_volume(volume, &grid, options.iso, options.method)
+    })?;
+    if mesh.triangles.is_empty() {
+        return Err(Error::new(
+            ErrorKind::BadParameter,
+            format!("the level set {} is empty in this field", options.iso),
+        ));
+    }
+    Ok(mesh)
+}

@@ -1,0 +1,260 @@
+//! Mesh → signed distance → coefficient volume → `.pgv` file, with the band it is exact in
+//! recorded in the file.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use glam::Vec3;
+use pgvol_core::Mesh;
+use pgvol_field::{Basis, ClosestFn, CoefficientVolume, FitMethod, FitOptions, FitReport};
+use pgvol_format::{PgvFile, Precision};
+use pgvol_sdf::sampling::Extent;
+use pgvol_sdf::SignMode;
+
+use crate::distance::{mesh_sdf, sample, MeshDistance};
+use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::grid::GridSpec;
+use crate::progress::{self, Progress};
+use crate::Timings;
+
+/// Exact distances within this many grid spacings of the surface when encoding: the cubic
+/// B-spline near the surface depends on samples up to 2 nodes away directly and on farther ones
+/// through the prefilter, whose influence falls by 0.268 per node.
+pub const ENCODE_BAND: f32 = 4.0;
+
+/// The narrowest band accepted: the cubic B-spline's support reaches two spacings.
+pub const MIN_BAND: f32 = 2.0;
+
+/// Header metadata key holding the distance from the surface, in mesh units, within which the
+/// stored field is an exact distance; beyond it the field is a clamp.
+pub const BAND_KEY: &str = "band";
+
+/// How a mesh becomes a coefficient volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EncodeOptions {
+    /// The grid (default 128 nodes per axis).
+    pub grid: GridSpec,
+    /// The basis (default the cubic B-spline, the most accurate per byte).
+    pub basis: Basis,
+    /// How the coefficients are found (default `Interp`, the exact prefilter).
+    pub fit: FitMethod,
+    /// Exact distances within this many grid spacings of the surface (default
+    /// [`ENCODE_BAND`]); wider bands let offsets and shells reach farther from the file.
+    pub band: f32,
+    /// How inside is told from outside (default automatic).
+    pub sign: SignMode,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        Self {
+            grid: GridSpec::default(),
+            basis: Basis::Bspline3,
+            fit: FitMethod::Interp,
+            band: ENCODE_BAND,
+            sign: SignMode::Auto,
+        }
+    }
+}
+
+impl EncodeOptions {
+    /// Refuses contradictory or out-of-range options.
+    pub fn validate(&self) -> Result<()> {
+        self.basis
+            .validate()
+            .map_err(|e| Error::parameter(format!("basis: {e}")))?;
+        if !(self.band.is_finite() && self.band >= MIN_BAND) {
+            return Err(Error::parameter(format!(
+                "the band must be at least {MIN_BAND} grid spacings, got {}",
+                self.band
+            )));
+        }
+        if let FitMethod::Iso { z_step: Some(z) } = self.fit {
+            if !(z.is_finite() && z > 0.0) {
+                return Err(Error::parameter(format!(
+                    "the isosurface step must be a positive number of grid spacings, got {z}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A fitted file ready to write, with how the fit went.
+#[derive(Clone, Debug)]
+pub struct Encoded {
+    /// Header and coefficients.
+    pub file: PgvFile,
+    /// The fit's solver report.
+    pub fit: FitReport,
+    /// Seconds per stage.
+    pub timings: Timings,
+}
+
+/// Encodes `mesh` by `options` into a `.pgv` file in memory.
+pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> Result<Encoded> {
+    options.validate()?;
+    let grid = options.grid.grid_for(mesh)?;
+    let mut timings = Timings::default();
+    let (volume, fit) = fit_volume(mesh, grid, options, &mut timings, progress)?;
+    let mut header = pgvol_format::header_for(&volume, fit.method.as_str(), Some(mesh));
+    header
+        .metadata
+        .insert("fit_residual".into(), format!("{:e}", fit.residual));
+    header
+        .metadata
+        .insert("fit_solver".into(), fit.solver.clone());
+    if options.fit == FitMethod::Interp {
+        header
+            .metadata
+            .insert(BAND_KEY.into(), format!("{}", options.band * grid.spacing));
+    }
+    Ok(Encoded {
+        file: PgvFile { header, volume },
+        fit,
+        timings,
+    })
+}
+
+/// The coefficient volume of `mesh` on `grid`. `Interp` interpolates band-limited node
+/// distances; `Wls` adds the mesh's closest points to the same samples; `Iso` queries the
+/// mesh's distance wherever its collocation points move.
+pub(crate) fn fit_volume(
+    mesh: &Mesh,
+    grid: pgvol_core::Grid,
+    options: &EncodeOptions,
+    timings: &mut Timings,
+    progress: &dyn Progress,
+) -> Result<(CoefficientVolume, FitReport)> {
+    let fit_options = FitOptions::default();
+    let start = Instant::now();
+    let sdf = mesh_sdf(mesh, options.sign)?;
+    let fitted = match options.fit {
+        FitMethod::Interp => {
+            let sampled = sample(&sdf, &grid, Extent::Band(options.band), progress)?;
+            timings.sdf = start.elapsed().as_secs_f64();
+            progress::stage(progress, "fit", |_| {
+                pgvol_field::fit::interp_samples(grid, options.basis, &sampled.values, &fit_options)
+            })?
+        }
+        FitMethod::Wls => {
+            let extent = Extent::Band(options.band.max(fit_options.band));
+            let sampled = sample(&sdf, &grid, extent, progress)?;
+            timings.sdf = start.elapsed().as_secs_f64();
+            // Closest points need no sign, so they skip the winding number.
+            let surface = ClosestFn(|p: Vec3, reach: f32| {
+                sdf.bvh().closest(p, reach * reach).map(|c| c.point)
+            });
+            progress::stage(progress, "fit", |_| {
+                pgvol_field::wls_band(grid, options.basis, &sampled.values, &surface, &fit_options)
+            })?
+        }
+        FitMethod::Iso { .. } => {
+            timings.sdf = start.elapsed().as_secs_f64();
+            progress::stage(progress, "fit", |_| {
+                pgvol_field::fit(
+                    grid,
+                    options.basis,
+                    options.fit,
+                    &MeshDistance(&sdf),
+                    &fit_options,
+                )
+            })?
+        }
+    };
+    let (volume, report) = fitted.map_err(|e| {
+        Error::new(
+            ErrorKind::Internal,
+            format!("cannot fit the coefficients: {e}"),
+        )
+        .caused_by(e)
+    })?;
+    timings.fit = report.seconds;
+    Ok((volume, report))
+}
+
+/// How a `.pgv` file stores its coefficients.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StorageOptions {
+    /// Coefficient precision; `None` (the default) picks the smallest that keeps the stored
+    /// coefficients within 1 % of the grid spacing, which is `Fixed` for distance fields.
+    pub precision: Option<Precision>,
+    /// Every coefficient as f32 instead of the sparse compressed bricks around the surface.
+    pub dense: bool,
+}
+
+/// What writing a file stored, `None` parts for dense files.
+pub type StorageReport = Option<pgvol_format::EncodeReport>;
+
+/// The bytes of `file` as `storage` asks. Sparse files keep the bricks around nodes within the
+/// recorded band less one spacing, dilated by the basis support: that covers every cell of a
+/// level set the band supports without storing the clamped nodes at the band's edge.
+pub fn pgv_bytes(file: &PgvFile, storage: &StorageOptions) -> Result<(Vec<u8>, StorageReport)> {
+    if storage.dense {
+        return Ok((pgvol_format::encode_pgv(file), None));
+    }
+    let mut options = pgvol_format::EncodeOptions {
+        precision: storage.precision,
+        ..Default::default()
+    };
+    if let Some(band) = crate::pgv_io::recorded_band(file) {
+        options.band = band / file.volume.grid.spacing - 1.0;
+    }
+    let (bytes, report) = pgvol_format::encode_pgv_with(file, &options).writing()?;
+    Ok((bytes, Some(report)))
+}
+
+/// Writes `file` to `path` atomically; see [`pgv_bytes`].
+pub fn write_pgv(path: &Path, file: &PgvFile, storage: &StorageOptions) -> Result<StorageReport> {
+    let (bytes, report) = pgv_bytes(file, storage).map_err(|e| e.at(path))?;
+    pgvol_core::write_atomic(path, |w| w.write_all(&bytes)).writing()?;
+    Ok(report)
+}
+
+/// Writes `file` to any writer; see [`pgv_bytes`].
+pub fn write_pgv_to(
+    w: &mut dyn Write,
+    file: &PgvFile,
+    storage: &StorageOptions,
+) -> Result<StorageReport> {
+    let (bytes, report) = pgv_bytes(file, storage)?;
+    w.write_all(&bytes).map_err(|e| {
+        Error::new(ErrorKind::OutputFile, format!("write failed: {e}")).caused_by(e)
+    })?;
+    Ok(report)
+}
+
+/// A coefficient NRRD written by [`export`](crate::export()) back as a file. Its storage
+/// should stay dense unless a precision is asked for, so the coefficients copy bit for bit:
+/// see [`StorageOptions::for_copy`].
+pub fn read_coefficients_nrrd(path: &Path) -> Result<PgvFile> {
+    pgvol_format::nrrd::read_coefficients_nrrd(path).reading()
+}
+
+impl StorageOptions {
+    /// Storage for coefficients copied from elsewhere: dense (bit-exact) unless `precision`
+    /// asks for quantised sparse bricks.
+    pub fn for_copy(precision: Option<Precision>) -> Self {
+        Self {
+            precision,
+            dense: precision.is_none(),
+        }
+    }
+}
+
+/// Whether `path` names a `.pgv` file.
+pub fn is_pgv(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("pgv"))
+}
+
+/// Refuses an output name that is not `.pgv`.
+pub fn check_pgv_name(path: &Path) -> Result<()> {
+    if is_pgv(path) {
+        Ok(())
+    } else {
+        Err(Error::new(ErrorKind::OutputFile, "expected a .pgv file name").at(path))
+    }
+}

@@ -1,0 +1,76 @@
+//! A field as NRRD (its coefficients, or the field sampled) or as a 3MF level set.
+
+use std::path::Path;
+
+use pgvol_core::Grid;
+use pgvol_format::PgvFile;
+
+use crate::error::{Error, ErrorKind, FileResult, Result};
+
+/// Export targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExportKind {
+    /// The coefficient grid with the basis in key/value fields; reads back bit-exactly.
+    CoefficientsNrrd,
+    /// The signed distance sampled on a grid, as NRRD.
+    SdfNrrd,
+    /// The sampled field as a 3MF Volumetric level set (16-bit PNG image stack).
+    ThreeMf,
+}
+
+impl ExportKind {
+    /// The target of `path`'s extension; `coefficients` asks for the coefficients (NRRD only).
+    pub fn from_path(path: &Path, coefficients: bool) -> Result<ExportKind> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match (ext.as_deref(), coefficients) {
+            (Some("nrrd"), true) => Ok(ExportKind::CoefficientsNrrd),
+            (Some("nrrd"), false) => Ok(ExportKind::SdfNrrd),
+            (Some("3mf"), false) => Ok(ExportKind::ThreeMf),
+            (Some("3mf"), true) => Err(Error::parameter(
+                "coefficients export to .nrrd only; a .3mf holds the sampled field",
+            )
+            .at(path)),
+            _ => Err(
+                Error::new(ErrorKind::OutputFile, "expected a .nrrd or .3mf file name").at(path),
+            ),
+        }
+    }
+}
+
+/// Units named in 3MF packages: pgvol's are the source mesh's, taken to be millimetres.
+pub const THREEMF_UNIT: &str = "millimeter";
+
+/// Writes `file` to `path` as `kind`, sampled on `res` nodes along the longest side (`None`:
+/// the stored grid; not for coefficients). Returns the grid written.
+pub fn export(path: &Path, file: &PgvFile, kind: ExportKind, res: Option<usize>) -> Result<Grid> {
+    let volume = &file.volume;
+    if kind == ExportKind::CoefficientsNrrd {
+        if res.is_some() {
+            return Err(Error::parameter(
+                "resampling applies to the sampled field, not to the coefficients",
+            ));
+        }
+        pgvol_format::nrrd::write_coefficients_nrrd(path, file).writing()?;
+        return Ok(volume.grid);
+    }
+    let grid = match res {
+        None => volume.grid,
+        Some(n) => pgvol_contour::resampled_grid(volume, n).ok_or_else(|| {
+            Error::new(
+                ErrorKind::ResourceLimit,
+                format!("a resampling at {n} nodes gives a grid larger than the limit"),
+            )
+        })?,
+    };
+    let values = volume.sample(&grid);
+    match kind {
+        ExportKind::SdfNrrd => {
+            pgvol_format::nrrd::write_field_nrrd(path, &grid, &values, volume.basis).writing()?
+        }
+        _ => pgvol_format::threemf::write_3mf(path, &grid, &values, THREEMF_UNIT).writing()?,
+    }
+    Ok(grid)
+}

@@ -1,0 +1,37 @@
+//! The grid convention: a cube of side 1.1 × the mesh's longest extent, centred on it.
+
+use pgvol_core::{Grid, Mesh};
+
+use crate::error::{Error, ErrorKind, Result};
+
+/// Nodes per axis when neither a resolution nor a spacing is given.
+pub const DEFAULT_RES: usize = 128;
+
+/// How the grid around a mesh is chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GridSpec {
+    /// This many nodes per axis.
+    Res(usize),
+    /// This spacing, in mesh units; the node count covers the cube.
+    Voxel(f32),
+}
+
+impl Default for GridSpec {
+    fn default() -> Self {
+        GridSpec::Res(DEFAULT_RES)
+    }
+}
+
+impl GridSpec {
+    /// The grid around `mesh`.
+    pub fn grid_for(self, mesh: &Mesh) -> Result<Grid> {
+        let (lo, hi) = mesh
+            .bounds()
+            .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
+        let grid = match self {
+            GridSpec::Res(n) => Grid::cube_res(lo, hi, n),
+            GridSpec::Voxel(h) => Grid::cube_voxel(lo, hi, h),
+        };
+        Ok(grid?)
+    }
+}

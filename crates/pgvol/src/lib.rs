@@ -1,0 +1,142 @@
+//! pgvol turns triangle meshes into compact, smooth implicit fields and back into meshes.
+//!
+//! A **coefficient volume** stores one coefficient per grid node of a compactly supported
+//! basis; the field is their weighted sum, smooth, O(1) per evaluation, with exact analytic
+//! gradients. This crate is the product's API: the command-line tool, the tests and the
+//! bindings all call it, and it re-exports the stage crates underneath.
+//!
+//! Conventions: signed distance is negative inside and positive outside, in the mesh's units;
+//! the grid is a cube of side 1.1 × the mesh's longest extent, centred on it, with N nodes per
+//! axis, x varying fastest in flat arrays.
+//!
+//! # A tour
+//!
+//! ```
+//! use pgvol::{DecodeOptions, EncodeOptions, GridSpec, Silent, StorageOptions};
+//!
+//! # fn main() -> pgvol::Result<()> {
+//! let dir = tempfile::tempdir().unwrap();
+//! // A mesh file: here a unit sphere written by pgvol itself.
+//! let sphere_path = dir.path().join("sphere.obj");
+//! pgvol::write_mesh(&sphere_path, &pgvol::mesh::shapes::octasphere(4))?;
+//!
+//! // Load it (bit-identical vertices welded, degenerate triangles dropped).
+//! let (mesh, _cleaned) = pgvol::read_mesh(&sphere_path)?;
+//!
+//! // Encode: signed distance on a 48³ grid, cubic B-spline coefficients.
+//! let options = EncodeOptions { grid: GridSpec::Res(48), ..EncodeOptions::default() };
+//! let encoded = pgvol::encode(&mesh, &options, &Silent)?;
+//!
+//! // Write it as a sparse, compressed .pgv file and read it back.
+//! let pgv_path = dir.path().join("sphere.pgv");
+//! pgvol::write_pgv(&pgv_path, &encoded.file, &StorageOptions::default())?;
+//! let file = pgvol::read_pgv(&pgv_path)?;
+//!
+//! // Near the surface the field is the signed distance: -0.1 just inside the unit sphere.
+//! // (Beyond the band of 4 grid spacings it holds a clamped value of the right sign.)
+//! let (value, gradient) = file.volume.eval(glam::Vec3::new(0.9, 0.0, 0.0));
+//! assert!((value + 0.1).abs() < 0.01);
+//! assert!(gradient.x > 0.95);
+//!
+//! // Decode: contour the zero level set into a watertight mesh.
+//! let surface = pgvol::decode(&file.volume, &DecodeOptions::default(), &Silent)?;
+//! assert!(surface.stats().watertight);
+//!
+//! // Slice into layers 0.1 apart along z.
+//! let shape = pgvol::Shape::from_file(file);
+//! let layers = pgvol::slice(&shape, &pgvol::SliceSettings::new(0.1), &Silent)?;
+//! assert!(layers.len() >= 19);
+//!
+//! // Grow the shape by 0.05: the field shifts, the surface moves out.
+//! let grown = pgvol::offset(&shape, 0.05)?;
+//! assert!((grown.eval(glam::Vec3::new(0.9, 0.0, 0.0)).0 + 0.15).abs() < 0.01);
+//! # Ok(())
+//! # }
+//! ```
+
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod decode;
+mod distance;
+mod encode;
+mod error;
+mod eval;
+mod exact_field;
+mod export;
+mod grid;
+mod mesh_io;
+mod pgv_io;
+mod progress;
+mod remesh;
+mod shape;
+mod slice;
+
+pub use decode::{decode, DecodeOptions};
+pub use distance::{
+    mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
+};
+pub use encode::{
+    check_pgv_name, encode, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv, write_pgv_to,
+    EncodeOptions, Encoded, StorageOptions, StorageReport, BAND_KEY, ENCODE_BAND, MIN_BAND,
+};
+pub use error::{Error, ErrorKind, Result};
+pub use eval::{eval, eval_csv, read_points, read_points_file};
+pub use exact_field::{MeshField, NODE_BAND};
+pub use export::{export, ExportKind, THREEMF_UNIT};
+pub use grid::{GridSpec, DEFAULT_RES};
+pub use mesh_io::{mesh_format, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to};
+pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
+pub use progress::{Progress, Silent};
+pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
+pub use shape::{
+    check_offset, check_thickness, growth, offset, operation_name, shell, Shape, ShellKind,
+    DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
+};
+pub use slice::{slice, write_layers, LayerFormat, SliceSettings};
+
+/// The stage crates, for what the facade does not wrap.
+pub use pgvol_contour as contour;
+pub use pgvol_core as core;
+pub use pgvol_field as field;
+pub use pgvol_format as format;
+pub use pgvol_mesh as mesh;
+pub use pgvol_metrics as metrics;
+pub use pgvol_ops as ops;
+pub use pgvol_sdf as sdf;
+
+pub use glam;
+pub use pgvol_contour::Method;
+pub use pgvol_core::{Grid, Mesh};
+pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
+pub use pgvol_format::{PgvFile, PgvHeader, Precision};
+pub use pgvol_metrics::Comparison;
+pub use pgvol_ops::{Axis, Drain, Layer, ShellSide};
+pub use pgvol_sdf::SignMode;
+
+/// Seconds spent per stage of a call.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Timings {
+    /// Reading the input.
+    pub read: f64,
+    /// Signed distances.
+    pub sdf: f64,
+    /// Fitting the coefficients.
+    pub fit: f64,
+    /// Contouring.
+    pub contour: f64,
+    /// Writing the output.
+    pub write: f64,
+}
+
+/// Area-uniform samples drawn on each mesh by [`compare`] unless told otherwise.
+pub const COMPARE_SAMPLES: usize = 200_000;
+
+/// Surface distances and statistics of mesh `a` against reference mesh `b`, from `samples`
+/// area-uniform samples on each, reproducible from `seed`.
+pub fn compare(a: &Mesh, b: &Mesh, samples: usize, seed: u64) -> Result<Comparison> {
+    if samples == 0 {
+        return Err(Error::parameter("the number of samples must be positive"));
+    }
+    Ok(pgvol_metrics::compare(a, b, samples, seed)?)
+}

@@ -1,0 +1,46 @@
+//! Meshes in and out: files by extension, or bytes and writers with the format given.
+
+use std::io::Write;
+use std::path::Path;
+
+use pgvol_core::Mesh;
+use pgvol_mesh::{CleanReport, MeshFormat};
+
+use crate::error::{FileResult, Result};
+
+/// Reads a mesh file (OBJ, glTF/GLB, STL, PLY by extension), welds bit-identical vertices and
+/// drops degenerate triangles; the report says how many of each.
+pub fn read_mesh(path: &Path) -> Result<(Mesh, CleanReport)> {
+    pgvol_mesh::read_clean(path).reading()
+}
+
+/// [`read_mesh`] on bytes already in memory; `name` labels errors.
+pub fn read_mesh_bytes(
+    bytes: &[u8],
+    format: MeshFormat,
+    name: &Path,
+) -> Result<(Mesh, CleanReport)> {
+    let mut mesh = pgvol_mesh::read_bytes(bytes, format, name).reading()?;
+    let report = pgvol_mesh::clean(&mut mesh, name).reading()?;
+    Ok((mesh, report))
+}
+
+/// The mesh format a file name asks for, refused (as an output error) when there is none.
+pub fn mesh_format(path: &Path) -> Result<MeshFormat> {
+    MeshFormat::from_path(path).writing()
+}
+
+/// Writes `mesh` to `path` atomically in the format of its extension.
+pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<()> {
+    pgvol_mesh::write(path, mesh).writing()
+}
+
+/// Writes `mesh` in `format` to `w`; `name` labels errors.
+pub fn write_mesh_to(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    format: MeshFormat,
+    name: &Path,
+) -> Result<()> {
+    pgvol_mesh::write_to(w, mesh, format, name).writing()
+}

@@ -1,0 +1,47 @@
+//! Reading `.pgv` files from paths, bytes or readers.
+
+use std::io::Read;
+use std::path::Path;
+
+use pgvol_format::{PgvFile, PgvInfo};
+
+use crate::encode::BAND_KEY;
+use crate::error::{Error, ErrorKind, FileResult, Result};
+
+/// Reads and checks a `.pgv` file.
+pub fn read_pgv(path: &Path) -> Result<PgvFile> {
+    pgvol_format::read_pgv(path).reading()
+}
+
+/// Decodes and checks the bytes of a `.pgv` file; `name` labels errors.
+pub fn read_pgv_bytes(bytes: &[u8], name: &Path) -> Result<PgvFile> {
+    pgvol_format::decode_pgv(bytes, name).reading()
+}
+
+/// Reads a `.pgv` file from any reader to its end; `name` labels errors.
+pub fn read_pgv_from(r: &mut dyn Read, name: &Path) -> Result<PgvFile> {
+    let mut bytes = Vec::new();
+    r.read_to_end(&mut bytes).map_err(|e| {
+        Error::new(ErrorKind::InputFile, format!("cannot read: {e}"))
+            .at(name)
+            .caused_by(e)
+    })?;
+    read_pgv_bytes(&bytes, name)
+}
+
+/// What a file holds and how its bytes divide, without decoding the coefficients.
+pub fn pgv_info(bytes: &[u8], name: &Path) -> Result<PgvInfo> {
+    pgvol_format::pgv_info(bytes, name).reading()
+}
+
+/// The distance from the surface within which `file`'s field is exact, when its header records
+/// one that makes sense (finite, positive, at most the grid's extent).
+pub fn recorded_band(file: &PgvFile) -> Option<f32> {
+    let g = file.volume.grid;
+    let extent = g.spacing * g.dims.iter().copied().max().unwrap_or(0) as f32;
+    file.header
+        .metadata
+        .get(BAND_KEY)
+        .and_then(|b| b.parse::<f32>().ok())
+        .filter(|b| b.is_finite() && *b > 0.0 && *b <= extent)
+}

@@ -1,0 +1,217 @@
+//! A shape as a field for the manufacturing operations: read from a `.pgv` file, or encoded from
+//! a mesh on the fly with distances as far out as the operation needs; and the operations
+//! themselves (offset, shell, hollow) with the checks that the field reaches far enough.
+
+use std::path::Path;
+
+use glam::Vec3;
+use pgvol_core::{Grid, Mesh};
+use pgvol_field::{Basis, CoefficientVolume, FitMethod};
+use pgvol_format::PgvFile;
+use pgvol_ops::{Drain, ShellSide};
+use pgvol_sdf::SignMode;
+
+use crate::encode::{fit_volume, is_pgv, EncodeOptions, StorageOptions, ENCODE_BAND};
+use crate::error::{Error, ErrorKind, Result};
+use crate::grid::GridSpec;
+use crate::pgv_io::{read_pgv, recorded_band};
+use crate::progress::Progress;
+use crate::{mesh_io, Timings};
+
+/// Grid nodes per axis when a mesh is encoded on the fly for an offset or a shell.
+pub const SHAPE_RES: usize = 128;
+
+/// Grid nodes per axis when a mesh is encoded on the fly for slicing.
+pub const SLICE_RES: usize = 256;
+
+/// A field and what is known of the shape it came from.
+#[derive(Clone, Debug)]
+pub struct Shape {
+    /// The field.
+    pub volume: CoefficientVolume,
+    /// The box of the source shape (the grid's box when the file does not record it).
+    pub bounds: (Vec3, Vec3),
+    /// The source mesh, when the shape was encoded from one.
+    pub mesh: Option<Mesh>,
+    /// Distance from the surface within which the field is exact, when known.
+    pub band: Option<f32>,
+}
+
+impl Shape {
+    /// The shape of a `.pgv` file.
+    pub fn from_file(file: PgvFile) -> Shape {
+        let band = recorded_band(&file);
+        let bounds = match file.header.source_bounds {
+            Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
+            None => pgvol_ops::volume_bounds(&file.volume),
+        };
+        Shape {
+            volume: file.volume,
+            bounds,
+            mesh: None,
+            band,
+        }
+    }
+
+    /// `mesh` encoded on `res` nodes per axis over its box grown by `grow` on every side, with
+    /// exact distances `reach` beyond the usual encoding band, so that an operation reaching
+    /// `reach` from the surface reads exact distances.
+    pub fn from_mesh(
+        mesh: Mesh,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        let (lo, hi) = mesh
+            .bounds()
+            .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
+        let pad = Vec3::splat(grow.max(0.0));
+        let grid = Grid::cube_res(lo - pad, hi + pad, res)?;
+        let options = EncodeOptions {
+            grid: GridSpec::Res(res),
+            basis: Basis::Bspline3,
+            fit: FitMethod::Interp,
+            band: ENCODE_BAND + reach.abs() / grid.spacing,
+            sign: SignMode::Auto,
+        };
+        let (volume, _) = fit_volume(&mesh, grid, &options, &mut Timings::default(), progress)?;
+        Ok(Shape {
+            volume,
+            bounds: (lo, hi),
+            band: Some(options.band * grid.spacing),
+            mesh: Some(mesh),
+        })
+    }
+
+    /// A `.pgv` file or a mesh file by extension; see [`Shape::from_mesh`] for `res`, `grow`
+    /// and `reach`.
+    pub fn load(
+        path: &Path,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        if is_pgv(path) {
+            return Ok(Shape::from_file(read_pgv(path)?));
+        }
+        let (mesh, _) = mesh_io::read_mesh(path)?;
+        Shape::from_mesh(mesh, res, grow, reach, progress).map_err(|e| match e.path() {
+            Some(_) => e,
+            None => e.at(path),
+        })
+    }
+
+    /// Refuses an operation reaching `reach` from the surface when the field is not an exact
+    /// distance that far out: the recorded band less the basis support, or, for files without
+    /// a record, the band measured from the coefficients.
+    pub fn check_reach(&self, reach: f32) -> Result<()> {
+        let support = pgvol_ops::support_reach(&self.volume);
+        let (band, too_narrow) = match self.band {
+            Some(band) => (band, reach.abs() + support >= band),
+            None => (
+                pgvol_ops::stored_band(&self.volume),
+                pgvol_ops::needs_wider_band(&self.volume, reach),
+            ),
+        };
+        if too_narrow {
+            return Err(Error::new(
+                ErrorKind::BadParameter,
+                format!(
+                    "the field stores distances only within {band:.4} of the surface, too \
+                     narrow for {reach}; encode it again with a wider band, or pass the mesh"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The `.pgv` file of a field derived from this shape by `operation`.
+    pub fn derived_file(&self, volume: CoefficientVolume, operation: &str) -> PgvFile {
+        let mut header = pgvol_format::header_for(&volume, "interp", self.mesh.as_ref());
+        header
+            .metadata
+            .insert("operation".into(), operation.to_string());
+        PgvFile { header, volume }
+    }
+}
+
+/// Where a shell's wall lies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShellKind {
+    /// A wall of the given side.
+    Wall(ShellSide),
+    /// Keep the outer surface and cut a cavity inside (hollowing for printing).
+    #[default]
+    Hollow,
+}
+
+/// How far outside the shape an operation's result reaches, so an encoded grid covers it.
+pub fn growth(kind: ShellKind, thickness: f32) -> f32 {
+    match kind {
+        ShellKind::Wall(ShellSide::Outer) => thickness,
+        ShellKind::Wall(ShellSide::Centred) => thickness / 2.0,
+        _ => 0.0,
+    }
+}
+
+/// Refuses an offset distance that is not finite and non-zero.
+pub fn check_offset(distance: f32) -> Result<()> {
+    if !distance.is_finite() || distance == 0.0 {
+        return Err(Error::parameter(format!(
+            "the offset distance must be a finite non-zero number, got {distance}"
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses a wall thickness that is not finite and positive.
+pub fn check_thickness(thickness: f32) -> Result<()> {
+    if !(thickness.is_finite() && thickness > 0.0) {
+        return Err(Error::parameter(format!(
+            "the thickness must be a positive number, got {thickness}"
+        )));
+    }
+    Ok(())
+}
+
+/// The shape grown (`distance` > 0) or shrunk by `distance`.
+pub fn offset(shape: &Shape, distance: f32) -> Result<CoefficientVolume> {
+    check_offset(distance)?;
+    shape.check_reach(distance)?;
+    Ok(pgvol_ops::offset(&shape.volume, distance)?)
+}
+
+/// A wall of `thickness` around the surface, or the shape hollowed with drain holes.
+pub fn shell(
+    shape: &Shape,
+    thickness: f32,
+    kind: ShellKind,
+    drains: &[Drain],
+) -> Result<CoefficientVolume> {
+    check_thickness(thickness)?;
+    if !drains.is_empty() && kind != ShellKind::Hollow {
+        return Err(Error::parameter("drain holes apply to hollowing only"));
+    }
+    shape.check_reach(thickness)?;
+    Ok(match kind {
+        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, drains)?,
+        ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,
+    })
+}
+
+/// The operation's name as recorded in a derived file.
+pub fn operation_name(kind: Option<ShellKind>, amount: f32) -> String {
+    match kind {
+        None => format!("offset {amount}"),
+        Some(ShellKind::Hollow) => format!("hollow {amount}"),
+        Some(ShellKind::Wall(_)) => format!("shell {amount}"),
+    }
+}
+
+/// Storage of derived files: the operations change the stored band, so they are written dense.
+pub const DERIVED_STORAGE: StorageOptions = StorageOptions {
+    precision: None,
+    dense: true,
+};
