@@ -1,12 +1,10 @@
 //! Helpers shared by the integration tests: locating the shared meshes, seeded random points
-//! and the encode/decode pipeline as the CLI wires it (the CLI crate itself is not a dependency).
+//! and the shipped encode/decode pipeline through the `pgvol` library.
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_mesh::Mesh;
-use pgvol_sdf::{MeshSdf, SignMode};
+use pgvol::{CoefficientVolume, Mesh};
 use rand::{Rng, SeedableRng};
 
 /// Every mesh of the shared folder, by file stem.
@@ -56,11 +54,11 @@ pub fn shared_mesh_path(name: &str) -> PathBuf {
     path
 }
 
-/// The shared mesh `name`, read and cleaned the way the CLI does (bit-exact weld, degenerate
+/// The shared mesh `name`, read and cleaned as the library does (bit-exact weld, degenerate
 /// triangles dropped).
 pub fn load_shared(name: &str) -> Mesh {
     let path = shared_mesh_path(name);
-    match pgvol_mesh::read_clean(&path) {
+    match pgvol::read_mesh(&path) {
         Ok((mesh, _)) => mesh,
         Err(e) => panic!("cannot read shared mesh {}: {e}", path.display()),
     }
@@ -70,7 +68,7 @@ pub fn load_shared(name: &str) -> Mesh {
 /// `(lo, hi)`.
 pub fn margin_cube(mesh: &Mesh) -> (Vec3, Vec3) {
     let (lo, hi) = mesh.bounds().expect("mesh has triangles");
-    let half = 0.5 * pgvol_sdf::grid::GRID_MARGIN * (hi - lo).max_element();
+    let half = 0.5 * pgvol::core::GRID_MARGIN * (hi - lo).max_element();
     let centre = 0.5 * (lo + hi);
     (centre - Vec3::splat(half), centre + Vec3::splat(half))
 }
@@ -83,24 +81,18 @@ pub fn random_points(lo: Vec3, hi: Vec3, n: usize, seed: u64) -> Vec<Vec3> {
         .collect()
 }
 
-/// Mesh -> signed distance on `Grid::cube_res(bounds, res)` -> fitted coefficient volume.
-pub fn encode(mesh: &Mesh, res: usize, basis: Basis) -> CoefficientVolume {
-    let (lo, hi) = mesh.bounds().expect("mesh has triangles");
-    let grid = Grid::cube_res(lo, hi, res).expect("grid");
-    let sdf = MeshSdf::new(mesh, SignMode::Winding).expect("distance field");
-    let samples = sdf.sample_grid(&grid, &|_| {});
-    CoefficientVolume::interpolate(grid, basis, samples).expect("fit")
+/// `mesh` encoded as `pgvol encode --res RES` does with every other option at its default.
+pub fn encode(mesh: &Mesh, res: usize) -> pgvol::Encoded {
+    let options = pgvol::EncodeOptions {
+        grid: pgvol::GridSpec::Res(res),
+        ..Default::default()
+    };
+    pgvol::encode(mesh, &options, &pgvol::Silent).expect("encode")
 }
 
-/// Contours the `iso` level set of `volume` on its own grid with marching cubes, as
-/// `pgvol decode` does.
-pub fn decode(volume: &CoefficientVolume, iso: f32) -> Mesh {
-    pgvol_contour::contour_volume(
-        volume,
-        &volume.grid,
-        iso,
-        pgvol_contour::Method::MarchingCubes,
-    )
+/// The zero level set of `volume`, contoured as `pgvol decode` does by default.
+pub fn decode(volume: &CoefficientVolume) -> Mesh {
+    pgvol::decode(volume, &pgvol::DecodeOptions::default(), &pgvol::Silent).expect("decode")
 }
 
 /// Runs `f` in a fresh rayon pool of `threads` threads.

@@ -1,7 +1,7 @@
 //! Results must not depend on the number of threads: the same input gives the same bits.
 
-use pgvol_field::{Basis, Grid};
-use pgvol_sdf::{MeshSdf, SignMode};
+use pgvol::sdf::{MeshSdf, SignMode};
+use pgvol::Grid;
 use pgvol_tests::{decode, encode, load_shared, with_threads};
 
 fn bits(v: &[f32]) -> Vec<u32> {
@@ -30,13 +30,21 @@ fn pipeline_output_is_identical_with_one_and_two_threads() {
     let mesh = load_shared("stanford-bunny");
     let run = |threads| {
         with_threads(threads, || {
-            let volume = encode(&mesh, 32, Basis::Bspline3);
-            (bits(&volume.coeffs), decode(&volume, 0.0))
+            let encoded = encode(&mesh, 32);
+            let bytes = pgvol::pgv_bytes(&encoded.file, &pgvol::StorageOptions::default())
+                .expect("file bytes")
+                .0;
+            (
+                bits(&encoded.file.volume.coeffs),
+                bytes,
+                decode(&encoded.file.volume),
+            )
         })
     };
-    let (c1, m1) = run(1);
-    let (c2, m2) = run(2);
+    let (c1, f1, m1) = run(1);
+    let (c2, f2, m2) = run(2);
     assert!(c1 == c2, "coefficients differ between 1 and 2 threads");
+    assert!(f1 == f2, "file bytes differ between 1 and 2 threads");
     assert!(
         m1.triangles.len() > 1000,
         "{} triangles",
@@ -46,7 +54,7 @@ fn pipeline_output_is_identical_with_one_and_two_threads() {
         m1.triangles, m2.triangles,
         "triangles differ between 1 and 2 threads"
     );
-    let pos = |m: &pgvol_mesh::Mesh| {
+    let pos = |m: &pgvol::Mesh| {
         m.positions
             .iter()
             .map(|p| p.to_array().map(f32::to_bits))

@@ -1,13 +1,13 @@
 //! The BVH closest-point search against an exhaustive search, on every shared mesh.
 
 use glam::{Vec3, Vec3A};
-use pgvol_sdf::{triangle::closest_point_and_distance, Bvh, MeshSdf, SignMode};
+use pgvol::sdf::{triangle::closest_point_and_distance, Bvh, MeshSdf, SignMode};
 use pgvol_tests::{load_shared, margin_cube, random_points, SHARED_MESHES};
 use rayon::prelude::*;
 
 /// Squared distance to the nearest triangle by trying all of them, computed exactly as the BVH
 /// computes it so that the two must agree to the bit.
-fn brute_force_d2(mesh: &pgvol_mesh::Mesh, p: Vec3) -> f32 {
+fn brute_force_d2(mesh: &pgvol::mesh::Mesh, p: Vec3) -> f32 {
     let q = Vec3A::from(p);
     (0..mesh.triangles.len())
         .map(|t| {
@@ -27,7 +27,7 @@ fn bvh_and_sdf_distances_equal_brute_force_on_every_shared_mesh() {
         let mut points = random_points(lo, hi, 300, 100 + m as u64);
         // Points just off the surface, where near-ties between triangles are common.
         let diag = (hi - lo).length();
-        let samples = pgvol_metrics::sample_surface(&mesh, 100, 200 + m as u64).unwrap();
+        let samples = pgvol::metrics::sample_surface(&mesh, 100, 200 + m as u64).unwrap();
         points.extend(
             samples
                 .iter()
@@ -40,7 +40,7 @@ fn bvh_and_sdf_distances_equal_brute_force_on_every_shared_mesh() {
             .filter_map(|&p| {
                 let c = bvh.closest(p, f32::INFINITY).expect("mesh has triangles");
                 let d2 = brute_force_d2(&mesh, p);
-                let d = pgvol_metrics::brute_force_distance(&mesh, p);
+                let d = pgvol::metrics::brute_force_distance(&mesh, p);
                 let s = sdf.signed_distance(p);
                 // The reported triangle and point must be consistent with the distance.
                 let [a, b, t] = mesh.triangle(c.triangle as usize);

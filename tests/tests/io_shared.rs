@@ -1,6 +1,6 @@
 //! Reading the shared meshes, and writing them to every format and reading them back.
 
-use pgvol_mesh::MeshStats;
+use pgvol::mesh::MeshStats;
 use pgvol_tests::{load_shared, shared_mesh_path, SHARED_MESHES};
 
 /// Boundary edges after read_clean, from the research notes and confirmed independently by
@@ -19,7 +19,7 @@ fn expected_boundary(name: &str) -> usize {
 #[test]
 fn shared_meshes_read_with_the_expected_topology() {
     for name in SHARED_MESHES {
-        let (mesh, report) = pgvol_mesh::read_clean(&shared_mesh_path(name)).unwrap();
+        let (mesh, report) = pgvol::mesh::read_clean(&shared_mesh_path(name)).unwrap();
         let st = mesh.stats();
         println!("{name}: {st:?} {report:?}");
         assert!(st.triangles >= 900, "{name}: {st:?}");
@@ -57,7 +57,7 @@ fn shared_meshes_read_with_the_expected_topology() {
 fn teapot_needs_welding_to_lose_its_seams() {
     // The raw teapot repeats positions along its patch seams; welding them is what closes the
     // seams down to the 160 edges of the real openings.
-    let raw = pgvol_mesh::read(&shared_mesh_path("teapot"))
+    let raw = pgvol::mesh::read(&shared_mesh_path("teapot"))
         .unwrap()
         .stats();
     assert_eq!(raw.boundary_edges, 1036, "{raw:?}");
@@ -76,10 +76,10 @@ fn every_shared_mesh_round_trips_through_every_format() {
         let want: MeshStats = mesh.stats();
         for ext in ["glb", "gltf", "stl", "ply", "obj"] {
             let path = dir.path().join(format!("{name}.{ext}"));
-            pgvol_mesh::write(&path, &mesh).unwrap_or_else(|e| panic!("{name}.{ext}: {e}"));
+            pgvol::mesh::write(&path, &mesh).unwrap_or_else(|e| panic!("{name}.{ext}: {e}"));
             // STL stores a soup: read_clean welds it back to an indexed mesh.
             let (back, _) =
-                pgvol_mesh::read_clean(&path).unwrap_or_else(|e| panic!("{name}.{ext}: {e}"));
+                pgvol::mesh::read_clean(&path).unwrap_or_else(|e| panic!("{name}.{ext}: {e}"));
             let got = back.stats();
             let what = format!("{name}.{ext}: {got:?} vs {want:?}");
             assert_eq!(got.triangles, want.triangles, "{what}");

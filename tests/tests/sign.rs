@@ -2,14 +2,14 @@
 //! triangle) at random points of the grid cube.
 
 use glam::Vec3;
-use pgvol_sdf::{winding::exact_winding, MeshSdf, SignMode};
+use pgvol::sdf::{winding::exact_winding, MeshSdf, SignMode};
 use pgvol_tests::{load_shared, margin_cube, random_points};
 use rayon::prelude::*;
 
 const POINTS: usize = 2000;
 
 /// Points where the fast sign disagrees with `exact_winding > 0.5`, with the exact value.
-fn disagreements(name: &str, seed: u64) -> (Vec<(Vec3, f64, f32)>, pgvol_mesh::MeshStats) {
+fn disagreements(name: &str, seed: u64) -> (Vec<(Vec3, f64, f32)>, pgvol::mesh::MeshStats) {
     let mesh = load_shared(name);
     let sdf = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
     let tris: Vec<[Vec3; 3]> = (0..mesh.triangles.len())
@@ -68,7 +68,7 @@ fn open_meshes_have_almost_no_sign_errors() {
 }
 
 /// Midpoints of the edges used by exactly one triangle.
-fn boundary_midpoints(mesh: &pgvol_mesh::Mesh) -> Vec<Vec3> {
+fn boundary_midpoints(mesh: &pgvol::mesh::Mesh) -> Vec<Vec3> {
     let mut count = std::collections::HashMap::new();
     for t in &mesh.triangles {
         for k in 0..3 {
