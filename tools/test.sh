@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The project's single test command: builds pgvol, sets up the Python and Node
-# helpers, runs the Rust tests and the end-to-end checks in tools/checks.
+# The project's single test command: checks formatting and lints, builds pgvol, sets up the
+# Python and Node helpers, runs the Rust tests (with the library's doctests) and the end-to-end
+# checks in tools/checks.
 # Usage: bash tools/test.sh   (from any directory; needs only the package registries)
 set -euo pipefail
 
@@ -10,6 +11,12 @@ cd "$ROOT"
 section() { printf '\n==> %s\n' "$*"; }
 
 hash_of() { sha256sum "$@" | sha256sum | cut -d' ' -f1; }
+
+section "cargo fmt --check"
+cargo fmt --all -- --check
+
+section "cargo clippy (warnings are errors)"
+cargo clippy --workspace --all-targets -- -D warnings
 
 section "cargo build --release"
 cargo build --release
