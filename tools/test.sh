@@ -18,6 +18,13 @@ cargo fmt --all -- --check
 section "cargo clippy (warnings are errors)"
 cargo clippy --workspace --all-targets -- -D warnings
 
+section "dependency boundaries"
+# Reading a .pgv file must not pull in the mesh file formats or the BVH.
+if cargo tree -p pgvol-format -e normal --prefix none | grep -E '^(gltf|tobj|obvhs) '; then
+    echo "pgvol-format depends on a mesh file format or the BVH (above)"; exit 1
+fi
+echo "pgvol-format is free of gltf, tobj and obvhs"
+
 section "cargo build --release"
 cargo build --release
 
