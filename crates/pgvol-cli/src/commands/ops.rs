@@ -92,7 +92,11 @@ pub struct SliceArgs {
 }
 
 pub fn slice(a: SliceArgs) -> Result<()> {
-    let format = pgvol::LayerFormat::from_path(&a.output, a.binary)?;
+    let format =
+        pgvol::LayerFormat::from_path(&a.output, a.binary).map_err(|e| match e.kind() {
+            pgvol::ErrorKind::BadParameter => anyhow::anyhow!("--binary: {e}"),
+            _ => e.into(),
+        })?;
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
     let start = std::time::Instant::now();
