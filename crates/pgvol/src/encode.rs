@@ -26,6 +26,12 @@ pub const ENCODE_BAND: f32 = 4.0;
 /// The narrowest band accepted: the cubic B-spline's support reaches two spacings.
 pub const MIN_BAND: f32 = 2.0;
 
+/// Pseudo-Gaussian continuity order when only the basis is chosen.
+pub const PG_ORDER: u8 = 3;
+
+/// Pseudo-Gaussian support radius, in grid spacings, when only the basis is chosen.
+pub const PG_RADIUS: f32 = 1.5;
+
 /// Header metadata key holding the distance from the surface, in mesh units, within which the
 /// stored field is an exact distance; beyond it the field is a clamp.
 pub const BAND_KEY: &str = "band";

@@ -7,6 +7,13 @@ use crate::error::{Error, ErrorKind, Result};
 /// Nodes per axis when neither a resolution nor a spacing is given.
 pub const DEFAULT_RES: usize = 128;
 
+/// The fewest nodes per axis accepted: fewer cannot hold a cubic B-spline's support inside.
+pub const MIN_RES: u32 = 4;
+
+/// The most nodes per axis accepted: 2048³ nodes are 32 GiB of f32, more than a dense grid may
+/// take on a workstation.
+pub const MAX_RES: u32 = 2048;
+
 /// How the grid around a mesh is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum GridSpec {

@@ -79,21 +79,22 @@ pub use distance::{
 pub use encode::{
     check_pgv_name, encode, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv, write_pgv_to,
     EncodeOptions, Encoded, StorageOptions, StorageReport, BAND_KEY, ENCODE_BAND, MIN_BAND,
+    PG_ORDER, PG_RADIUS,
 };
 pub use error::{Error, ErrorKind, Result};
 pub use eval::{eval, eval_csv, read_points, read_points_file};
 pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT};
-pub use grid::{GridSpec, DEFAULT_RES};
+pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
 pub use mesh_io::{mesh_format, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use shape::{
-    check_offset, check_thickness, growth, offset, operation_name, shell, Shape, ShellKind,
-    DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
+    check_offset, check_thickness, growth, offset, operation_name, parse_drain, shell, Shape,
+    ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
 };
-pub use slice::{slice, write_layers, LayerFormat, SliceSettings};
+pub use slice::{slice, write_layers, LayerFormat, SliceSettings, DEFAULT_UNITS_MM};
 
 /// The stage crates, for what the facade does not wrap.
 pub use pgvol_contour as contour;

@@ -137,6 +137,35 @@ impl Shape {
     }
 }
 
+/// A drain hole from `x,y,z,dx,dy,dz,diameter`: a point inside the cavity, the direction out
+/// through the wall (normalised here) and the hole's diameter.
+pub fn parse_drain(text: &str) -> Result<Drain> {
+    let numbers: Vec<f32> = text
+        .split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f32>()
+                .map_err(|_| Error::parameter(format!("drain: '{x}' is not a number")))
+        })
+        .collect::<Result<_>>()?;
+    if numbers.len() != 7 || numbers.iter().any(|x| !x.is_finite()) {
+        return Err(Error::parameter(
+            "drain: expected seven finite numbers x,y,z,dx,dy,dz,diameter",
+        ));
+    }
+    let direction = Vec3::new(numbers[3], numbers[4], numbers[5]);
+    if direction.length() == 0.0 || numbers[6] <= 0.0 {
+        return Err(Error::parameter(
+            "drain: the direction must be non-zero and the diameter positive",
+        ));
+    }
+    Ok(Drain {
+        point: Vec3::new(numbers[0], numbers[1], numbers[2]),
+        direction: direction.normalize(),
+        diameter: numbers[6],
+    })
+}
+
 /// Where a shell's wall lies.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ShellKind {

@@ -99,6 +99,9 @@ impl LayerFormat {
     }
 }
 
+/// Millimetres per model unit written to Common Layer Interface headers unless told otherwise.
+pub const DEFAULT_UNITS_MM: f32 = 1.0;
+
 /// Writes `layers` to `path` atomically; `units_mm` is millimetres per model unit (CLI header).
 pub fn write_layers(
     path: &Path,

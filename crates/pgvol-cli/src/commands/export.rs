@@ -18,7 +18,7 @@ pub struct ExportArgs {
     #[arg(long, value_enum, default_value_t)]
     pub what: WhatArg,
     /// Sample on N nodes along the longest side over the same box (default: the stored grid).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: Option<u32>,
     #[command(flatten)]
     pub out: OutputArgs,

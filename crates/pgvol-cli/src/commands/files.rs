@@ -96,7 +96,7 @@ pub struct DecodeArgs {
     pub method: MethodArg,
     /// Resample the field on a grid of N nodes per axis over the same box (default: the
     /// stored grid).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: Option<u32>,
     #[command(flatten)]
     pub out: OutputArgs,

@@ -77,7 +77,7 @@ pub fn run(command: Command) -> Result<()> {
 #[derive(Args, Clone, Copy, Debug)]
 pub struct GridArgs {
     /// Nodes per axis of the grid (a cube 1.1 × the mesh's longest extent) [default: 128].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: Option<u32>,
     /// Grid spacing in mesh units, instead of --res.
     #[arg(long, conflicts_with = "res")]
@@ -117,10 +117,10 @@ pub struct BasisArgs {
     #[arg(long, value_enum, default_value_t)]
     pub basis: BasisArg,
     /// Pseudo-Gaussian continuity order n (1 to 4); with --basis pg.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..=4))]
+    #[arg(long, default_value_t = pgvol::PG_ORDER)]
     pub pg_n: u8,
     /// Pseudo-Gaussian support radius r in grid spacings (0 < r ≤ 4); with --basis pg.
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = pgvol::PG_RADIUS)]
     pub pg_r: f32,
 }
 
@@ -142,7 +142,9 @@ impl BasisArgs {
 
     /// Whether any basis option differs from its default.
     pub fn is_default(self) -> bool {
-        self.basis == BasisArg::default() && self.pg_n == 3 && self.pg_r == 1.5
+        self.basis == BasisArg::default()
+            && self.pg_n == pgvol::PG_ORDER
+            && self.pg_r == pgvol::PG_RADIUS
     }
 }
 

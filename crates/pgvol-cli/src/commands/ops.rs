@@ -5,7 +5,6 @@ use std::path::Path;
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
-use glam::Vec3;
 
 use super::files::at_input;
 use super::{print_json, MethodArg, OutputArgs, PathArg};
@@ -79,13 +78,13 @@ pub struct SliceArgs {
     #[arg(long)]
     pub tolerance: Option<f32>,
     /// Millimetres per model unit, written to the CLI header.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = pgvol::DEFAULT_UNITS_MM)]
     pub units_mm: f32,
     /// Write the .cli file's geometry in the binary form (little-endian long commands).
     #[arg(long)]
     pub binary: bool,
     /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = pgvol::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, default_value_t = pgvol::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: u32,
     #[command(flatten)]
     pub out: OutputArgs,
@@ -145,7 +144,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
 #[derive(Args, Clone, Copy)]
 pub struct ShapeOutputArgs {
     /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = pgvol::SHAPE_RES as u32, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    #[arg(long, default_value_t = pgvol::SHAPE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: u32,
     /// Contouring method for mesh outputs.
     #[arg(long, value_enum, default_value_t)]
@@ -228,26 +227,7 @@ pub struct ShellArgs {
 }
 
 fn parse_drain(s: &str) -> Result<pgvol::Drain, String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<f32>()
-                .map_err(|_| format!("'{x}' is not a number"))
-        })
-        .collect::<Result<_, _>>()?;
-    if v.len() != 7 || v.iter().any(|x| !x.is_finite()) {
-        return Err("expected seven finite numbers x,y,z,dx,dy,dz,diameter".into());
-    }
-    let direction = Vec3::new(v[3], v[4], v[5]);
-    if direction.length() == 0.0 || v[6] <= 0.0 {
-        return Err("the direction must be non-zero and the diameter positive".into());
-    }
-    Ok(pgvol::Drain {
-        point: Vec3::new(v[0], v[1], v[2]),
-        direction: direction.normalize(),
-        diameter: v[6],
-    })
+    pgvol::parse_drain(s).map_err(|e| e.to_string())
 }
 
 pub fn shell(a: ShellArgs) -> Result<()> {

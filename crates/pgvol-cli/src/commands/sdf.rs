@@ -31,7 +31,7 @@ pub struct SdfArgs {
     pub dense: bool,
     /// Exact distances only within W grid spacings of the surface; elsewhere only the sign, with
     /// magnitude W × spacing.
-    #[arg(long, value_name = "W", value_parser = parse_band)]
+    #[arg(long, value_name = "W")]
     pub band: Option<f32>,
     /// How inside and outside are told apart.
     #[arg(long, value_enum, default_value_t)]
@@ -41,13 +41,6 @@ pub struct SdfArgs {
     pub format: Option<GridFormat>,
     #[command(flatten)]
     pub out: OutputArgs,
-}
-
-fn parse_band(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(w) if w.is_finite() && w > 0.0 => Ok(w),
-        _ => Err(format!("'{s}' is not a positive number of grid spacings")),
-    }
 }
 
 pub fn run(a: SdfArgs) -> Result<()> {
