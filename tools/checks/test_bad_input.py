@@ -4,6 +4,7 @@ the culprit, no panic, and nothing left behind in the output folder."""
 from __future__ import annotations
 
 import struct
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -121,3 +122,41 @@ def test_other_commands_name_missing_file(command, dirs, pgvol):
         args = [pgvol, "sdf", missing, "-o", out_dir / "grid.nrrd", "--res", 8, "--dense"]
     r = helpers.run(args, timeout=120)
     _assert_clean_failure(r, missing.name, out_dir)
+
+
+def test_unwritable_standard_output_is_an_error_not_a_panic(dirs, pgvol):
+    """A full disk behind standard output: an error and exit code 1, never a panic."""
+    in_dir, _ = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [str(pgvol), "compare", str(src), str(src), "--samples", "100"],
+            stdin=subprocess.DEVNULL,
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=120,
+        )
+    assert proc.returncode == 1, proc.stderr
+    assert "panicked" not in proc.stderr
+    assert "standard output" in proc.stderr
+
+
+def test_closed_pipe_is_an_error_not_a_panic(dirs, pgvol):
+    """A reader that goes away (`pgvol compare A B | true`): exit code 1 with a message."""
+    in_dir, _ = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    proc = subprocess.Popen(
+        [str(pgvol), "compare", str(src), str(src), "--samples", "100"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    proc.stdout.close()  # the reader is gone before pgvol writes anything
+    _, err = proc.communicate(timeout=120)
+    err = err.decode(errors="replace")
+    assert proc.returncode == 1, err
+    assert "panicked" not in err
+    assert "standard output" in err

@@ -4,6 +4,7 @@
 #![forbid(unsafe_code)]
 
 mod commands;
+mod output;
 mod progress;
 
 use clap::Parser;

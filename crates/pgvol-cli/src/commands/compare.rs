@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::Args;
 
 use super::{load_mesh, print_json, OutputArgs, PathArg};
+use crate::output::outln;
 
 #[derive(Args)]
 #[command(after_help = "Example: pgvol compare remeshed.glb original.obj --samples 500000")]
@@ -30,27 +31,31 @@ pub fn run(a: CompareArgs) -> Result<()> {
     if a.out.json {
         return print_json(&c);
     }
-    println!("A: {}\nB: {}", a.a.display(), a.b.display());
-    println!("samples per mesh      {}", c.samples);
-    println!("B diagonal            {:.6}", c.diagonal);
-    println!(
+    outln!("A: {}\nB: {}", a.a.display(), a.b.display());
+    outln!("samples per mesh      {}", c.samples);
+    outln!("B diagonal            {:.6}", c.diagonal);
+    outln!(
         "Hausdorff             {:.6} ({:.4} %)",
-        c.hausdorff, c.hausdorff_pct
+        c.hausdorff,
+        c.hausdorff_pct
     );
-    println!(
+    outln!(
         "Chamfer-L1            {:.6} ({:.4} %)",
-        c.chamfer_l1, c.chamfer_l1_pct
+        c.chamfer_l1,
+        c.chamfer_l1_pct
     );
-    println!(
+    outln!(
         "mean A->B, B->A       {:.6}, {:.6}",
-        c.mean_a_to_b, c.mean_b_to_a
+        c.mean_a_to_b,
+        c.mean_b_to_a
     );
-    println!(
+    outln!(
         "normal deviation      mean {:.3} deg, p95 {:.3} deg",
-        c.normal_deviation_mean_deg, c.normal_deviation_p95_deg
+        c.normal_deviation_mean_deg,
+        c.normal_deviation_p95_deg
     );
-    println!();
-    println!("{:<22}{:>16}{:>16}", "", "A", "B");
+    outln!("");
+    outln!("{:<22}{:>16}{:>16}", "", "A", "B");
     let rows: [(&str, String, String); 10] = [
         (
             "triangles",
@@ -104,7 +109,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
         ),
     ];
     for (name, x, y) in rows {
-        println!("{name:<22}{x:>16}{y:>16}");
+        outln!("{name:<22}{x:>16}{y:>16}");
     }
     Ok(())
 }

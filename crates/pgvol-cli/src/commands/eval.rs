@@ -6,6 +6,7 @@ use anyhow::Result;
 use clap::Args;
 
 use super::{OutputArgs, PathArg};
+use crate::output::outln;
 
 #[derive(Args)]
 #[command(after_help = "Example: pgvol eval part.pgv points.csv -o values.csv")]
@@ -32,7 +33,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
             .zip(&results)
             .map(|(p, (v, g))| serde_json::json!({ "point": p.to_array(), "value": v, "gradient": g.to_array() }))
             .collect();
-        println!("{}", serde_json::to_string(&rows)?);
+        outln!("{}", serde_json::to_string(&rows)?);
         return Ok(());
     }
     let text = pgvol::eval_csv(&points, &results);

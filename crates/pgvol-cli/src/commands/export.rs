@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::{print_json, OutputArgs, PathArg};
+use crate::output::outln;
 
 #[derive(Args)]
 #[command(after_help = "Example: pgvol export part.pgv -o part.3mf --res 256")]
@@ -50,7 +51,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
     }
     if !a.out.quiet {
         let [nx, ny, nz] = grid.dims;
-        println!(
+        outln!(
             "{}: {what} on {nx} x {ny} x {nz} nodes, {bytes} bytes",
             a.output.display()
         );

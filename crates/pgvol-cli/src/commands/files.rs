@@ -7,6 +7,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::{load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg};
+use crate::output::outln;
 use crate::progress::Bars;
 use clap::ValueEnum;
 
@@ -158,7 +159,7 @@ fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
         }));
     }
     if !a.out.quiet {
-        println!(
+        outln!(
             "{}: {} x {} x {} {} coefficients from {}, {} bytes",
             a.output.display(),
             grid.dims[0],
@@ -254,7 +255,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             ),
             None => ", dense f32".to_string(),
         };
-        println!(
+        outln!(
             "{}: {}^3 {} coefficients, {} bytes{}",
             a.output.display(),
             grid.dims[0],
@@ -294,7 +295,7 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
         }));
     }
     if !a.out.quiet {
-        println!(
+        outln!(
             "{}: {} triangles in {:.2} s",
             a.output.display(),
             mesh.triangles.len(),
@@ -348,29 +349,37 @@ pub fn info(a: InfoArgs) -> Result<()> {
     }
     let h = &file.header;
     let g = h.grid;
-    println!("file          {} ({} bytes)", a.input.display(), bytes);
-    println!("basis         {} (fit: {})", h.basis, h.fit);
-    println!(
+    outln!("file          {} ({} bytes)", a.input.display(), bytes);
+    outln!("basis         {} (fit: {})", h.basis, h.fit);
+    outln!(
         "grid          {} x {} x {}, spacing {}, origin ({}, {}, {})",
-        g.dims[0], g.dims[1], g.dims[2], g.spacing, g.origin.x, g.origin.y, g.origin.z
+        g.dims[0],
+        g.dims[1],
+        g.dims[2],
+        g.spacing,
+        g.origin.x,
+        g.origin.y,
+        g.origin.z
     );
-    println!("encoding      {} ({:?})", h.encoding, parts.precision);
+    outln!("encoding      {} ({:?})", h.encoding, parts.precision);
     if let (Some(stored), Some(total)) = (parts.bricks_stored, parts.bricks_total) {
-        println!("bricks        {stored} of {total} stored");
+        outln!("bricks        {stored} of {total} stored");
     }
-    println!(
+    outln!(
         "bytes         header {}, index {}, coefficients {}",
-        parts.bytes_header, parts.bytes_index, parts.bytes_payload
+        parts.bytes_header,
+        parts.bytes_index,
+        parts.bytes_payload
     );
-    println!("coefficients  {} in [{}, {}]", c.len(), range[0], range[1]);
+    outln!("coefficients  {} in [{}, {}]", c.len(), range[0], range[1]);
     if let Some([lo, hi]) = h.source_bounds {
-        println!("source box    {lo:?} .. {hi:?}");
+        outln!("source box    {lo:?} .. {hi:?}");
     }
     if let Some(hash) = &h.source_hash {
-        println!("source hash   {hash}");
+        outln!("source hash   {hash}");
     }
     for (k, v) in &h.metadata {
-        println!("{k:<13} {v}");
+        outln!("{k:<13} {v}");
     }
     Ok(())
 }

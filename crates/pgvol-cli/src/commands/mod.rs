@@ -12,6 +12,7 @@ use anyhow::Result;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
+use crate::output::outln;
 use pgvol::Basis;
 
 #[derive(Subcommand)]
@@ -232,6 +233,6 @@ pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
 
 /// Prints `value` as pretty JSON on standard output.
 pub fn print_json(value: &impl serde::Serialize) -> Result<()> {
-    println!("{}", serde_json::to_string_pretty(value)?);
+    outln!("{}", serde_json::to_string_pretty(value)?);
     Ok(())
 }

@@ -8,6 +8,7 @@ use clap::{Args, ValueEnum};
 
 use super::files::at_input;
 use super::{print_json, MethodArg, OutputArgs, PathArg};
+use crate::output::outln;
 use crate::progress::Bars;
 
 /// Writes a derived volume as .pgv, or contours it into a mesh file, by the output's extension;
@@ -128,7 +129,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         }));
     }
     if !a.out.quiet {
-        println!(
+        outln!(
             "{}: {} layers, {} loops, {} points; sliced in {:.2} s",
             a.output.display(),
             layers.len(),
@@ -257,9 +258,9 @@ fn report(out: &OutputArgs, output: &Path, triangles: usize) -> Result<()> {
         print_json(&serde_json::json!({ "output": output, "triangles": triangles }))?;
     } else if !out.quiet {
         if triangles > 0 {
-            println!("{}: {} triangles", output.display(), triangles);
+            outln!("{}: {} triangles", output.display(), triangles);
         } else {
-            println!("{}: written", output.display());
+            outln!("{}: written", output.display());
         }
     }
     Ok(())

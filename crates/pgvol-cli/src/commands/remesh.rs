@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::files::at_input;
 use super::{load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
+use crate::output::outln;
 use crate::progress::Bars;
 
 /// Which field the vertices are placed on.
@@ -101,7 +102,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         return print_json(&report);
     }
     if !a.out.quiet {
-        println!(
+        outln!(
             "{} -> {}: {} triangles at {}^3 ({} field), {:.2} s",
             a.input.display(),
             a.output.display(),

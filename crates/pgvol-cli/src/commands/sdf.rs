@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use super::files::at_input;
 use super::{load_mesh, print_json, GridArgs, OutputArgs, PathArg, SignArg};
+use crate::output::outln;
 use crate::progress::Bars;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -75,7 +76,7 @@ pub fn run(a: SdfArgs) -> Result<()> {
         return print_json(&report);
     }
     if !a.out.quiet {
-        println!(
+        outln!(
             "{}: {}^3 signed distances ({} sign, {} exact) in {:.2} s ({:.0} samples/s), {} inside",
             a.output.display(),
             report.grid.dims[0],
