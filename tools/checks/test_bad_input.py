@@ -3,10 +3,12 @@ the culprit, no panic, and nothing left behind in the output folder."""
 
 from __future__ import annotations
 
+import json
 import struct
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import helpers
@@ -160,3 +162,57 @@ def test_closed_pipe_is_an_error_not_a_panic(dirs, pgvol):
     assert proc.returncode == 1, err
     assert "panicked" not in err
     assert "standard output" in err
+
+
+@pytest.fixture
+def knot_pgv(tmp_path, pgvol):
+    """The bundled torus knot encoded at 48³ with the default band of 4 spacings."""
+    out = tmp_path / "knot.pgv"
+    helpers.run_ok([pgvol, "encode", helpers.REPO_ROOT / "fixtures" / "torus-knot.obj", "-o", out, "--res", 48])
+    return out
+
+
+def test_decode_refuses_a_level_beyond_the_stored_band(knot_pgv, tmp_path, pgvol):
+    info = helpers.run_json([pgvol, "info", knot_pgv, "--json"])
+    band = float(info["header"]["metadata"]["band"])
+    out = tmp_path / "level.glb"
+    r = helpers.run([pgvol, "decode", knot_pgv, "-o", out, "--iso", band], timeout=120)
+    assert r.returncode == 1, r.describe()
+    assert "--band" in r.stderr and knot_pgv.name in r.stderr, r.describe()
+    assert not out.exists()
+    # A level well inside the band still decodes.
+    helpers.run_ok([pgvol, "decode", knot_pgv, "-o", out, "--iso", band / 4])
+    assert out.is_file()
+
+
+def test_eval_reads_a_byte_order_mark_and_refuses_half_numbers(knot_pgv, tmp_path, pgvol):
+    points = tmp_path / "bom.csv"
+    points.write_bytes(b"\xef\xbb\xbf0,0,0\n1,0,0\n")
+    rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
+    assert len(rows) == 2, "the first row behind a byte-order mark was dropped"
+    for text in ["0,0,0\n1,2,3a\n", "x,y,z\n3e19,0,0\n", "x,y,z\nnan,0,0\n"]:
+        points.write_text(text)
+        r = helpers.run([pgvol, "eval", knot_pgv, points], timeout=120)
+        assert r.returncode == 1 and "line 2" in r.stderr, r.describe()
+
+
+def test_eval_flags_values_that_are_not_distances(knot_pgv, tmp_path, pgvol):
+    info = helpers.run_json([pgvol, "info", knot_pgv, "--json"])
+    g = info["header"]["grid"]
+    lo = np.asarray(g["origin"], float)
+    hi = lo + g["spacing"] * (np.asarray(g["dims"]) - 1)
+    corner = lo + 0.01 * (hi - lo)
+    outside_box = hi + 1.0
+    points = tmp_path / "points.csv"
+    points.write_text("".join(f"{x},{y},{z}\n" for x, y, z in [corner, outside_box]))
+    # A corner of the grid cube is far from the knot's tube: beyond the band, so the value is
+    # a clamp; beyond the box it is an extrapolation.
+    rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
+    assert [r["exact"] for r in rows] == [False, False], rows
+    # Points on the decoded surface are within the band.
+    surface = tmp_path / "k.glb"
+    helpers.run_ok([pgvol, "decode", knot_pgv, "-o", surface])
+    mesh = helpers.load_output(surface)
+    points.write_text("".join(f"{x},{y},{z}\n" for x, y, z in mesh.vertices[:50]))
+    rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
+    assert all(r["exact"] for r in rows)

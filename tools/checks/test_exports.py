@@ -46,7 +46,7 @@ def evaluate(pgvol, pgv, points, folder, name):
     np.savetxt(csv, points, delimiter=",", fmt="%.9g")
     helpers.run_ok([pgvol, "eval", pgv, csv, "-o", out])
     rows = np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
-    assert rows.shape == (len(points), 7), rows.shape
+    assert rows.shape == (len(points), 8), rows.shape
     return rows[:, 3]
 
 

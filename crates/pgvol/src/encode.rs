@@ -103,7 +103,8 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     options.validate()?;
     let grid = options.grid.grid_for(mesh)?;
     let mut timings = Timings::default();
-    let (volume, fit) = fit_volume(mesh, grid, options, &mut timings, progress)?;
+    let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
+    let (volume, fit) = (fitted.volume, fitted.report);
     let mut header = pgvol_format::header_for(&volume, fit.method.as_str(), Some(mesh));
     header
         .metadata
@@ -111,16 +112,25 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     header
         .metadata
         .insert("fit_solver".into(), fit.solver.clone());
-    if options.fit == FitMethod::Interp {
+    if let Some(band) = fitted.band {
         header
             .metadata
-            .insert(BAND_KEY.into(), format!("{}", options.band * grid.spacing));
+            .insert(BAND_KEY.into(), format!("{}", band * grid.spacing));
     }
     Ok(Encoded {
         file: PgvFile { header, volume },
         fit,
         timings,
     })
+}
+
+/// A fitted volume, its report and the band of exact node distances it was fitted to.
+pub(crate) struct Fitted {
+    pub volume: CoefficientVolume,
+    pub report: FitReport,
+    /// Grid spacings from the surface within which the node samples were exact distances;
+    /// `None` when the fit queried the mesh's distance wherever it needed it.
+    pub band: Option<f32>,
 }
 
 /// The coefficient volume of `mesh` on `grid`. `Interp` interpolates band-limited node
@@ -132,12 +142,14 @@ pub(crate) fn fit_volume(
     options: &EncodeOptions,
     timings: &mut Timings,
     progress: &dyn Progress,
-) -> Result<(CoefficientVolume, FitReport)> {
+) -> Result<Fitted> {
     let fit_options = FitOptions::default();
     let start = Instant::now();
     let sdf = mesh_sdf(mesh, options.sign)?;
+    let mut band = None;
     let fitted = match options.fit {
         FitMethod::Interp => {
+            band = Some(options.band);
             let sampled = sample(&sdf, &grid, Extent::Band(options.band), progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
             progress::stage(progress, "fit", |_| {
@@ -145,7 +157,9 @@ pub(crate) fn fit_volume(
             })?
         }
         FitMethod::Wls => {
-            let extent = Extent::Band(options.band.max(fit_options.band));
+            let width = options.band.max(fit_options.band);
+            band = Some(width);
+            let extent = Extent::Band(width);
             let sampled = sample(&sdf, &grid, extent, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
             // Closest points need no sign, so they skip the winding number.
@@ -177,7 +191,11 @@ pub(crate) fn fit_volume(
         .caused_by(e)
     })?;
     timings.fit = report.seconds;
-    Ok((volume, report))
+    Ok(Fitted {
+        volume,
+        report,
+        band,
+    })
 }
 
 /// How a `.pgv` file stores its coefficients.

@@ -6,18 +6,23 @@ use std::path::Path;
 use glam::Vec3;
 use pgvol_field::CoefficientVolume;
 
-use crate::error::{Error, ErrorKind, Result};
+use serde::Serialize;
 
-/// Parses points, one `x,y,z` per line (commas, semicolons, spaces or tabs between); blank lines
-/// and lines starting with `#` are skipped, and so is a first line without numbers (a header).
-/// Any other line that is not three finite numbers is an error naming the line; `name` labels
-/// errors.
+use crate::error::{Error, ErrorKind, Result};
+use crate::shape::Shape;
+
+/// Parses points, one `x,y,z` per line (commas, semicolons, spaces or tabs between). Blank lines
+/// and lines starting with `#` are skipped, and so is a first line in which no field is a number
+/// (a header such as `x,y,z`); a UTF-8 byte-order mark is ignored. Any other line that is not
+/// three finite numbers below [`MAX_COORDINATE`](pgvol_mesh::MAX_COORDINATE) in magnitude is an
+/// error naming the line; `name` labels errors.
 pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
     let fail = |message: String| Error::new(ErrorKind::InputFile, message).at(name);
     let mut points = Vec::new();
+    let mut seen_data = false;
     for (n, line) in BufReader::new(r).lines().enumerate() {
         let line = line.map_err(|e| fail(format!("line {} is not text: {e}", n + 1)))?;
-        let line = line.trim();
+        let line = line.trim_start_matches('\u{feff}').trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
@@ -25,19 +30,29 @@ pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
             .split([',', ';', ' ', '\t'])
             .filter(|f| !f.is_empty())
             .collect();
-        let numbers: Option<Vec<f32>> = fields.iter().map(|f| f.parse::<f32>().ok()).collect();
-        match numbers {
-            Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => {
-                points.push(Vec3::new(v[0], v[1], v[2]))
-            }
-            None if n == 0 => continue,
+        let numbers: Vec<Option<f32>> = fields.iter().map(|f| f.parse::<f32>().ok()).collect();
+        let first = !seen_data;
+        seen_data = true;
+        if first && numbers.iter().all(Option::is_none) {
+            continue;
+        }
+        let point = match numbers.as_slice() {
+            [Some(x), Some(y), Some(z)] => Vec3::new(*x, *y, *z),
             _ => {
                 return Err(fail(format!(
-                    "line {}: expected three finite numbers x,y,z, got '{line}'",
+                    "line {}: expected three numbers x,y,z, got '{line}'",
                     n + 1
                 )))
             }
+        };
+        if !point.is_finite() || point.abs().max_element() >= pgvol_mesh::MAX_COORDINATE {
+            return Err(fail(format!(
+                "line {}: coordinates must be finite and below {:e} in magnitude, got '{line}'",
+                n + 1,
+                pgvol_mesh::MAX_COORDINATE
+            )));
         }
+        points.push(point);
     }
     if points.is_empty() {
         return Err(fail("no points".into()));
@@ -55,18 +70,50 @@ pub fn read_points_file(path: &Path) -> Result<Vec<Vec3>> {
     read_points(file, path)
 }
 
-/// Value and gradient of `volume` at each point, in parallel.
-pub fn eval(volume: &CoefficientVolume, points: &[Vec3]) -> Vec<(f32, Vec3)> {
-    volume.eval_many(points)
+/// The field at one point.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Evaluation {
+    /// The field's value: the signed distance where `exact`.
+    pub value: f32,
+    /// Its analytic gradient.
+    pub gradient: [f32; 3],
+    /// Whether the value is a distance: the point lies inside the grid box and within the band
+    /// where the field is exact. Elsewhere the value has the right sign but is a clamp (beyond
+    /// the band) or an extrapolation (outside the box), and its magnitude is not a distance.
+    pub exact: bool,
 }
 
-/// The rows `x,y,z,value,gx,gy,gz` of [`eval`]'s results, with a header line.
-pub fn eval_csv(points: &[Vec3], results: &[(f32, Vec3)]) -> String {
-    let mut text = String::from("x,y,z,value,gx,gy,gz\n");
-    for (p, (v, g)) in points.iter().zip(results) {
+/// Value and gradient of `shape`'s field at each point, in parallel, each flagged by whether it
+/// is an exact distance.
+pub fn eval(shape: &Shape, points: &[Vec3]) -> Vec<Evaluation> {
+    let volume: &CoefficientVolume = &shape.volume;
+    let band = shape.exact_band();
+    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    volume
+        .eval_many(points)
+        .into_iter()
+        .zip(points)
+        .map(|((value, gradient), p)| Evaluation {
+            value,
+            gradient: gradient.to_array(),
+            exact: value.abs() < band && p.cmpge(lo).all() && p.cmple(hi).all(),
+        })
+        .collect()
+}
+
+/// The rows `x,y,z,value,gx,gy,gz,exact` of [`eval`]'s results (`exact` 1 or 0), with a header
+/// line.
+pub fn eval_csv(points: &[Vec3], results: &[Evaluation]) -> String {
+    let mut text = String::from("x,y,z,value,gx,gy,gz,exact\n");
+    for (p, e) in points.iter().zip(results) {
+        let [gx, gy, gz] = e.gradient;
         text.push_str(&format!(
-            "{},{},{},{},{},{},{}\n",
-            p.x, p.y, p.z, v, g.x, g.y, g.z
+            "{},{},{},{},{gx},{gy},{gz},{}\n",
+            p.x,
+            p.y,
+            p.z,
+            e.value,
+            u8::from(e.exact)
         ));
     }
     text

@@ -72,7 +72,7 @@ mod remesh;
 mod shape;
 mod slice;
 
-pub use decode::{decode, DecodeOptions};
+pub use decode::{decode, decode_shape, DecodeOptions};
 pub use distance::{
     mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
 };
@@ -82,7 +82,7 @@ pub use encode::{
     PG_ORDER, PG_RADIUS,
 };
 pub use error::{Error, ErrorKind, Result};
-pub use eval::{eval, eval_csv, read_points, read_points_file};
+pub use eval::{eval, eval_csv, read_points, read_points_file, Evaluation};
 pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};

@@ -74,7 +74,7 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
                 sign: SignMode::Auto,
             };
             encode.validate()?;
-            let (volume, _) = fit_volume(mesh, grid, &encode, &mut timings, progress)?;
+            let volume = fit_volume(mesh, grid, &encode, &mut timings, progress)?.volume;
             let start = Instant::now();
             let decode_options = DecodeOptions {
                 method: options.method,

@@ -75,7 +75,7 @@ impl Shape {
             band: ENCODE_BAND + reach.abs() / grid.spacing,
             sign: SignMode::Auto,
         };
-        let (volume, _) = fit_volume(&mesh, grid, &options, &mut Timings::default(), progress)?;
+        let volume = fit_volume(&mesh, grid, &options, &mut Timings::default(), progress)?.volume;
         Ok(Shape {
             volume,
             bounds: (lo, hi),
@@ -107,24 +107,31 @@ impl Shape {
     /// distance that far out: the recorded band less the basis support, or, for files without
     /// a record, the band measured from the coefficients.
     pub fn check_reach(&self, reach: f32) -> Result<()> {
-        let support = pgvol_ops::support_reach(&self.volume);
-        let (band, too_narrow) = match self.band {
-            Some(band) => (band, reach.abs() + support >= band),
-            None => (
-                pgvol_ops::stored_band(&self.volume),
-                pgvol_ops::needs_wider_band(&self.volume, reach),
-            ),
-        };
-        if too_narrow {
+        let band = self.exact_band();
+        if reach.abs() >= band {
+            let spacing = self.volume.grid.spacing;
+            let support = pgvol_ops::support_reach(&self.volume);
+            let needed = ((reach.abs() + support) / spacing).ceil() + 1.0;
             return Err(Error::new(
                 ErrorKind::BadParameter,
                 format!(
-                    "the field stores distances only within {band:.4} of the surface, too \
-                     narrow for {reach}; encode it again with a wider band, or pass the mesh"
+                    "the field is an exact distance only within {band:.4} of the surface, too \
+                     narrow for {reach}; encode it again with `--band {needed}` (grid \
+                     spacings) or wider, or pass the mesh"
                 ),
             ));
         }
         Ok(())
+    }
+
+    /// The distance from the surface within which level sets of the field are exact: the
+    /// recorded band (or, for files without a record, the largest node value) less the reach of
+    /// the basis support, which blends in the clamped values beyond it.
+    pub fn exact_band(&self) -> f32 {
+        let band = self
+            .band
+            .unwrap_or_else(|| pgvol_ops::stored_band(&self.volume));
+        band - pgvol_ops::support_reach(&self.volume)
     }
 
     /// The `.pgv` file of a field derived from this shape by `operation`.

@@ -13,10 +13,13 @@ use crate::output::outln;
 pub struct EvalArgs {
     /// A .pgv file.
     pub input: PathArg,
-    /// Points, one `x,y,z` per line (commas, semicolons or spaces; a header line and lines
-    /// starting with # are skipped).
+    /// Points, one `x,y,z` per line (commas, semicolons or spaces; a first line without numbers
+    /// and lines starting with # are skipped). Coordinates must be below 1e8 in magnitude.
     pub points: PathArg,
-    /// Write `x,y,z,value,gx,gy,gz` lines here instead of standard output.
+    /// Write `x,y,z,value,gx,gy,gz,exact` lines here instead of standard output. `exact` is 1
+    /// where the value is the signed distance: inside the grid box and within the band the file
+    /// stores. Elsewhere (0) the value has the right sign but its magnitude is a clamp (beyond
+    /// the band) or an extrapolation (outside the box).
     #[arg(short, long)]
     pub output: Option<PathArg>,
     #[command(flatten)]
@@ -24,14 +27,14 @@ pub struct EvalArgs {
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
-    let file = pgvol::read_pgv(&a.input)?;
+    let shape = pgvol::Shape::from_file(pgvol::read_pgv(&a.input)?);
     let points = pgvol::read_points_file(&a.points)?;
-    let results = pgvol::eval(&file.volume, &points);
+    let results = pgvol::eval(&shape, &points);
     if a.out.json {
         let rows: Vec<_> = points
             .iter()
             .zip(&results)
-            .map(|(p, (v, g))| serde_json::json!({ "point": p.to_array(), "value": v, "gradient": g.to_array() }))
+            .map(|(p, e)| serde_json::json!({ "point": p.to_array(), "value": e.value, "gradient": e.gradient, "exact": e.exact }))
             .collect();
         outln!("{}", serde_json::to_string(&rows)?);
         return Ok(());

@@ -89,7 +89,8 @@ pub struct DecodeArgs {
     /// Output mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
     pub output: PathArg,
-    /// The level set to extract: 0 is the surface, positive values offset it outward.
+    /// The level set to extract: 0 is the surface, positive values offset it outward; levels
+    /// beyond the band the file stores as exact distances are refused.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub iso: f32,
     /// Contouring method.
@@ -277,14 +278,14 @@ pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
 
 pub fn decode(a: DecodeArgs) -> Result<()> {
     pgvol::mesh_format(&a.output)?;
-    let file = pgvol::read_pgv(&a.input)?;
+    let shape = pgvol::Shape::from_file(pgvol::read_pgv(&a.input)?);
     let t = Instant::now();
     let options = pgvol::DecodeOptions {
         iso: a.iso,
         method: a.method.into(),
         res: a.res.map(|r| r as usize),
     };
-    let mesh = pgvol::decode(&file.volume, &options, &Bars::new(a.out.silent()))
+    let mesh = pgvol::decode_shape(&shape, &options, &Bars::new(a.out.silent()))
         .map_err(|e| at_input(e, &a.input))?;
     let seconds = t.elapsed().as_secs_f64();
     pgvol::write_mesh(&a.output, &mesh)?;
