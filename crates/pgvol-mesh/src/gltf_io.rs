@@ -3,7 +3,7 @@
 //! validated file and may panic on hostile ones.
 
 use std::borrow::Cow;
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
 use std::path::Path;
 use std::rc::Rc;
 
@@ -390,6 +390,9 @@ impl<'a> Reader<'a> {
         Ok(data)
     }
 
+    /// The bytes of an external buffer file. Only a regular file inside the glTF's own folder
+    /// is read (no absolute paths, no `..` out of it, no devices or pipes), and only the
+    /// `byteLength` bytes the buffer declares, after checking the file holds them.
     fn external(&self, index: usize, uri: &str) -> Result<Vec<u8>, String> {
         let Some(dir) = self.base_dir else {
             return Err(format!(
@@ -402,9 +405,47 @@ impl<'a> Reader<'a> {
         }
         let rel = percent_decode(uri)
             .ok_or_else(|| format!("buffer {index} uri '{uri}' is not valid"))?;
-        let path = dir.join(rel);
-        std::fs::read(&path)
-            .map_err(|e| format!("cannot read buffer {index} file '{}': {e}", path.display()))
+        let outside = || {
+            format!("buffer {index} uri '{uri}' is not a relative path inside the glTF's folder")
+        };
+        let rel_path = Path::new(&rel);
+        if rel_path.is_absolute()
+            || rel_path
+                .components()
+                .any(|c| !matches!(c, std::path::Component::Normal(_)))
+        {
+            return Err(outside());
+        }
+        let path = dir.join(rel_path);
+        let cannot = |e: std::io::Error| {
+            format!("cannot read buffer {index} file '{}': {e}", path.display())
+        };
+        // A symbolic link may still lead out of the folder: compare the resolved paths.
+        let resolved = path.canonicalize().map_err(cannot)?;
+        let folder = dir.canonicalize().map_err(cannot)?;
+        if !resolved.starts_with(&folder) {
+            return Err(outside());
+        }
+        let meta = std::fs::metadata(&resolved).map_err(cannot)?;
+        if !meta.is_file() {
+            return Err(format!(
+                "buffer {index} file '{}' is not a regular file",
+                path.display()
+            ));
+        }
+        let declared = self.root.buffers[index].byte_length.0;
+        if meta.len() < declared {
+            return Err(format!(
+                "buffer {index} declares {declared} bytes but its file '{}' holds {}",
+                path.display(),
+                meta.len()
+            ));
+        }
+        let mut data = Vec::new();
+        std::fs::File::open(&resolved)
+            .and_then(|f| f.take(declared).read_to_end(&mut data))
+            .map_err(cannot)?;
+        Ok(data)
     }
 }
 
