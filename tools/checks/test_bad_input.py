@@ -216,3 +216,18 @@ def test_eval_flags_values_that_are_not_distances(knot_pgv, tmp_path, pgvol):
     points.write_text("".join(f"{x},{y},{z}\n" for x, y, z in mesh.vertices[:50]))
     rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
     assert all(r["exact"] for r in rows)
+
+
+def test_repeated_faces_are_dropped_and_reported(dirs, pgvol):
+    """A cube whose faces repeat 4,000 times is the cube: the repeats are dropped on reading."""
+    in_dir, out_dir = dirs
+    corners = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+    faces = "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n"
+    src = in_dir / "repeated.obj"
+    src.write_text(corners + faces * 4000)
+    out = out_dir / "cube.glb"
+    r = helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 32], timeout=120)
+    assert "47988 repeated triangles" in r.stderr, r.describe()
+    mesh = helpers.load_output(out)
+    assert mesh.is_watertight
+    assert abs(mesh.volume - 1.0) < 0.01, mesh.volume

@@ -10,20 +10,23 @@ use crate::{read, Mesh, MeshError};
 pub struct CleanReport {
     pub vertices_merged: usize,
     pub degenerate_dropped: usize,
+    /// Triangles repeating an earlier one's vertices.
+    pub duplicates_dropped: usize,
 }
 
-/// Reads `path`, welds bit-identical vertices and drops degenerate triangles.
+/// Reads `path`, welds bit-identical vertices and drops degenerate and repeated triangles.
 pub fn read_clean(path: &Path) -> Result<(Mesh, CleanReport), MeshError> {
     let mut mesh = read(path)?;
     let report = clean(&mut mesh, path)?;
     Ok((mesh, report))
 }
 
-/// Welds bit-identical vertices of `mesh` and drops its degenerate triangles, refusing a mesh
-/// with none left; `name` labels the error.
+/// Welds bit-identical vertices of `mesh` and drops its degenerate and repeated triangles,
+/// refusing a mesh with none left; `name` labels the error.
 pub fn clean(mesh: &mut Mesh, name: &Path) -> Result<CleanReport, MeshError> {
     let vertices_merged = mesh.weld(0.0);
     let degenerate_dropped = mesh.drop_degenerate();
+    let duplicates_dropped = mesh.drop_duplicate_triangles();
     if mesh.triangles.is_empty() {
         return Err(MeshError::new(
             name,
@@ -33,5 +36,6 @@ pub fn clean(mesh: &mut Mesh, name: &Path) -> Result<CleanReport, MeshError> {
     Ok(CleanReport {
         vertices_merged,
         degenerate_dropped,
+        duplicates_dropped,
     })
 }

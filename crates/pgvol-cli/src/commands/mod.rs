@@ -216,16 +216,18 @@ impl OutputArgs {
 
 pub type PathArg = PathBuf;
 
-/// Reads a mesh through the library, saying on standard error what cleaning changed unless
-/// `quiet`.
+/// Reads a mesh through the library, saying on standard error what cleaning removed unless
+/// `quiet`. Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
 pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
     let (mesh, report) = pgvol::read_mesh(path)?;
-    if !quiet && (report.vertices_merged > 0 || report.degenerate_dropped > 0) {
+    let is_stl = matches!(pgvol::mesh_format(path), Ok(pgvol::mesh::MeshFormat::Stl));
+    let merged = if is_stl { 0 } else { report.vertices_merged };
+    if !quiet && (merged > 0 || report.degenerate_dropped > 0 || report.duplicates_dropped > 0) {
         eprintln!(
-            "{}: merged {} duplicate vertices, dropped {} degenerate triangles",
+            "{}: merged {merged} duplicate vertices, dropped {} degenerate and {} repeated triangles",
             path.display(),
-            report.vertices_merged,
-            report.degenerate_dropped
+            report.degenerate_dropped,
+            report.duplicates_dropped
         );
     }
     Ok(mesh)

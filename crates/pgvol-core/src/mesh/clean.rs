@@ -106,6 +106,21 @@ impl Mesh {
         before - self.triangles.len()
     }
 
+    /// Removes triangles with the same three vertices as an earlier one, in any order or
+    /// orientation (repeated faces only multiply the work of every distance query). Returns how
+    /// many were removed.
+    pub fn drop_duplicate_triangles(&mut self) -> usize {
+        let before = self.triangles.len();
+        let mut seen: HashMap<[u32; 3], (), BuildHasherDefault<KeyHasher>> =
+            HashMap::with_capacity_and_hasher(before, Default::default());
+        self.triangles.retain(|t| {
+            let mut key = *t;
+            key.sort_unstable();
+            seen.insert(key, ()).is_none()
+        });
+        before - self.triangles.len()
+    }
+
     /// Removes vertices no triangle refers to, keeping the order of the rest. Returns how many
     /// were removed.
     pub fn drop_unused_vertices(&mut self) -> usize {
@@ -169,3 +184,19 @@ impl Hasher for KeyHasher {
 }
 
 type FastHash = BuildHasherDefault<KeyHasher>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeated_faces_are_dropped_in_any_order_or_orientation() {
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+        let mut mesh = Mesh::new(
+            positions,
+            vec![[0, 1, 2], [1, 2, 0], [0, 2, 1], [0, 1, 3], [0, 1, 2]],
+        );
+        assert_eq!(mesh.drop_duplicate_triangles(), 3);
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 1, 3]]);
+    }
+}
