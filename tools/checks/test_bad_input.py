@@ -231,3 +231,30 @@ def test_repeated_faces_are_dropped_and_reported(dirs, pgvol):
     mesh = helpers.load_output(out)
     assert mesh.is_watertight
     assert abs(mesh.volume - 1.0) < 0.01, mesh.volume
+
+
+@pytest.mark.parametrize("reversed_share", ["all", "half"])
+def test_reversed_faces_give_the_same_solid(reversed_share, dirs, pgvol):
+    """Every face, or every other face, wound the wrong way: the remesh is still the shape."""
+    in_dir, out_dir = dirs
+    original = helpers.shared_meshes_dir() / "spot.obj"
+    lines = original.read_text().splitlines()
+    faces_seen = 0
+    flipped = []
+    for line in lines:
+        if line.startswith("f "):
+            parts = line.split()
+            if reversed_share == "all" or faces_seen % 2 == 0:
+                parts = [parts[0], parts[1], parts[3], parts[2], *parts[4:]]
+            faces_seen += 1
+            line = " ".join(parts)
+        flipped.append(line)
+    src = in_dir / f"spot-{reversed_share}.obj"
+    src.write_text("\n".join(flipped) + "\n")
+    out = out_dir / "spot.glb"
+    helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 64], timeout=120)
+    mesh = helpers.load_output(out)
+    reference = helpers.load_input(original)
+    assert mesh.is_watertight
+    assert len(mesh.split(only_watertight=False)) == 1
+    assert abs(mesh.volume / reference.volume - 1) < 0.01, (mesh.volume, reference.volume)

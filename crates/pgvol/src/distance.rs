@@ -1,5 +1,6 @@
 //! Signed distance of a mesh: the grids of `pgvol sdf` and the distance the fits query.
 
+use std::borrow::Cow;
 use std::path::Path;
 use std::time::Instant;
 
@@ -84,9 +85,24 @@ pub struct SdfGrid {
     pub seconds: f64,
 }
 
-/// The prepared distance query of `mesh`, refusing meshes it cannot measure.
+/// The prepared distance query of `mesh`, refusing meshes it cannot measure. With the
+/// automatic sign the faces are first oriented consistently and outward
+/// ([`Mesh::orient_outward`]), so reversed or partly reversed faces give the same inside.
 pub fn mesh_sdf(mesh: &Mesh, sign: SignMode) -> Result<MeshSdf> {
-    Ok(MeshSdf::new(mesh, sign)?)
+    Ok(MeshSdf::new(&oriented(mesh, sign), sign)?)
+}
+
+/// `mesh` as the distance stages see it: oriented outward under the automatic sign, as given
+/// under an explicit one.
+pub(crate) fn oriented(mesh: &Mesh, sign: SignMode) -> Cow<'_, Mesh> {
+    if sign != SignMode::Auto {
+        return Cow::Borrowed(mesh);
+    }
+    let mut turned = mesh.clone();
+    match turned.orient_outward() {
+        0 => Cow::Borrowed(mesh),
+        _ => Cow::Owned(turned),
+    }
 }
 
 /// Samples `sdf` on `grid` as the stage "distance" of `progress`.

@@ -9,7 +9,7 @@ use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 
 use crate::decode::{decode, DecodeOptions};
-use crate::distance::{mesh_sdf, sample};
+use crate::distance::{oriented, sample};
 use crate::encode::{fit_volume, EncodeOptions, ENCODE_BAND};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact_field::{MeshField, NODE_BAND};
@@ -113,7 +113,9 @@ fn contour_exact(
     progress: &dyn Progress,
 ) -> Result<Mesh> {
     let start = Instant::now();
-    let sdf = mesh_sdf(mesh, SignMode::Auto)?;
+    // The exact field's gradients on the surface come from the faces: orient them first.
+    let mesh = &*oriented(mesh, SignMode::Auto);
+    let sdf = pgvol_sdf::MeshSdf::new(mesh, SignMode::Auto)?;
     let sampled = sample(&sdf, grid, Extent::Band(NODE_BAND), progress)?;
     timings.sdf = start.elapsed().as_secs_f64();
     let start = Instant::now();

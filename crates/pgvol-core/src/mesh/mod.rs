@@ -2,6 +2,7 @@
 //! `pgvol-mesh`'s job.
 
 mod clean;
+mod orient;
 mod stats;
 
 use glam::Vec3;
