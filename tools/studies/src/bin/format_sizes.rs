@@ -1,6 +1,6 @@
 //! Bytes of a real field in each encoding.
 //!
-//! `cargo run --release -p pgvol-format --example format_sizes -- MESH N`
+//! `cargo run --release -p pgvol-studies --bin format_sizes -- MESH N`
 //! Builds the cubic B-spline field of MESH on an N³ grid (banded signed distance, 4 spacings,
 //! then interpolation, as `pgvol encode` does), and prints the file size of dense f32 and of the
 //! sparse encoding for each precision, predictor and compression, with bytes per stored

@@ -2,6 +2,8 @@
 //! The field is built as `pgvol encode` builds it: banded signed distance, cubic B-spline
 //! interpolation. Layers are cut along z over the mesh's bounding box, the 2D grid spacing being
 //! the field's.
+//!
+//! `cargo run --release -p pgvol-studies --bin slice_bench -- MESH [RES] [LAYERS]`
 
 use std::path::PathBuf;
 use std::time::Instant;
