@@ -9,7 +9,7 @@
    `--vdb-worker`): a level set with a +-3 voxel band holding the same distances (meshToVolume's
    flood-fill sign fails on open meshes), then volumeToMesh (adaptivity 0), which visits only the
    band.
-4. pgvol's `contour_grid` example on the same .npy: marching cubes with linear placement ("grid
+4. pgvol's `contour_grid` study on the same .npy: marching cubes with linear placement ("grid
    only"), marching cubes with root finding on the cubic B-spline interpolant of the grid (as
    `pgvol decode` places vertices), dual contouring and surface nets on that field.
 
@@ -94,16 +94,16 @@ def main() -> None:
     args = ap.parse_args()
 
     mesh = mesh_file(args.mesh)
-    example = REPO_ROOT / "target" / "release" / "examples" / "contour_grid"
-    if not example.is_file():
-        raise SystemExit(f"missing {example}: cargo build --release -p pgvol-contour --examples")
+    contour_grid = REPO_ROOT / "target" / "release" / "contour_grid"
+    if not contour_grid.is_file():
+        raise SystemExit(f"missing {contour_grid}: cargo build --release -p pgvol-studies --bin contour_grid")
     with tempfile.TemporaryDirectory() as tmp:
         grid_path = Path(tmp) / "grid.npy"
         proc, _ = run([pgvol_bin(), "sdf", mesh, "-o", grid_path, "--res", args.res, "--band", 4, "--format", "npy"])
         if proc.returncode != 0:
             raise SystemExit(proc.stderr)
         results = {}
-        results["pgvol"], _ = run_json([example, grid_path, "--reps", args.reps, "--json"])
+        results["pgvol"], _ = run_json([contour_grid, grid_path, "--reps", args.reps, "--json"])
         try:
             results["skimage"] = skimage_time(grid_path, args.reps)
         except Exception as exc:  # a peer that is not installed shows as n/a

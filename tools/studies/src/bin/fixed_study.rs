@@ -2,7 +2,7 @@
 //! and free tolerances, next to f16 and q16; optionally writes each file for decoding and
 //! comparison (`docs/format.md`, "Sizes measured").
 //!
-//! `cargo run --release -p pgvol-format --example fixed_study -- FILE.pgv STEPS PREDICTORS
+//! `cargo run --release -p pgvol-studies --bin fixed_study -- FILE.pgv STEPS PREDICTORS
 //! TOLERANCES [OUT_PREFIX [BRICK]]`: STEPS are denominators K of the step h/K (e.g. 256,1024),
 //! each optionally with a knee in grid spacings and a coarse/fine ratio (`512:1:8`; default
 //! one step throughout),

@@ -4,7 +4,7 @@
 //! and searched `z_step`). Prints markdown tables, writes every row to
 //! `target/basis-study-2d.csv` and PNG panels of representative fields to `docs/images/`.
 //!
-//! `cargo run --release -p pgvol-field --example basis_study_2d [-- [--figures-only] [IMAGE_DIR]]`
+//! `cargo run --release -p pgvol-studies --bin basis_study_2d [-- [--figures-only] [IMAGE_DIR]]`
 //! (from the repository root; IMAGE_DIR defaults to `docs/images`).
 
 mod basis2d;

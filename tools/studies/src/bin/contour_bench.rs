@@ -1,14 +1,14 @@
 //! Times marching cubes, dual contouring and surface nets on a 256³ grid and prints a markdown
-//! table. Run with `cargo run --release -p pgvol-contour --example contour_bench [N]`.
+//! table. Run with `cargo run --release -p pgvol-studies --bin contour_bench [-- N]`.
 
 use std::time::Instant;
 
 use glam::Vec3;
+use pgvol::Mesh;
 use pgvol_contour::{
     dual_contour, marching_cubes, marching_cubes_with, min_angle_histogram, surface_nets,
     DualContourOptions, Field,
 };
-use pgvol_mesh::Mesh;
 use rayon::prelude::*;
 
 type AnalyticField = dyn Fn(Vec3) -> (f32, Vec3) + Sync;

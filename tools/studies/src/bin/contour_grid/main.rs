@@ -7,19 +7,18 @@
 //!   finding on that continuous field (as `pgvol decode` does);
 //! * dual contouring and surface nets on the same field.
 //!
-//! `cargo run --release -p pgvol-contour --example contour_grid -- GRID.npy [--reps R] [--json]`
+//! `cargo run --release -p pgvol-studies --bin contour_grid -- GRID.npy [--reps R] [--json]`
 //! prints the best of R runs (default 5) of each, as a markdown table or one JSON object;
 //! `--only NAME` runs just one of them (names as printed).
 
-#[path = "contour_grid/npy.rs"]
 mod npy;
 
 use std::time::Instant;
 
 use glam::Vec3;
+use pgvol::Mesh;
 use pgvol_contour::{contour_sampled, marching_cubes, marching_cubes_on_field, Method};
 use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_mesh::Mesh;
 
 /// Best time in seconds of `reps` runs, and the last result.
 fn best_of(reps: usize, f: impl Fn() -> Mesh) -> (Mesh, f64) {

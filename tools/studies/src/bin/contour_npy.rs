@@ -2,7 +2,7 @@
 //! (as `pgvol sdf --format npy` writes) and writes the mesh, with the dual contouring settings
 //! exposed, for studying how they change sharp features:
 //!
-//! `cargo run --release -p pgvol-contour --example contour_npy -- GRID.npy OUT.obj
+//! `cargo run --release -p pgvol-studies --bin contour_npy -- GRID.npy OUT.obj
 //!  --origin X,Y,Z --spacing H [--method mc|dc] [--threshold T] [--offset CELLS]`
 //!
 //! `--origin` and `--spacing` place node (0, 0, 0) and the node spacing in mesh units, so the
@@ -84,5 +84,5 @@ fn main() {
         ),
         other => fail(format!("unknown --method {other}")),
     };
-    pgvol_mesh::write(std::path::Path::new(output), &mesh).unwrap_or_else(|e| fail(e.to_string()));
+    pgvol::write_mesh(std::path::Path::new(output), &mesh).unwrap_or_else(|e| fail(e.to_string()));
 }

@@ -1,4 +1,4 @@
-//! A reader for the `.npy` grids the contouring examples take.
+//! A reader for the `.npy` grids the contouring studies take.
 
 /// Reads a little-endian float32 `.npy` array in C order; returns its values and shape.
 pub fn read(path: &str) -> Result<(Vec<f32>, Vec<usize>), String> {

@@ -2,7 +2,7 @@
 //! at several resolutions. Errors are in grid spacings; prints markdown tables and writes the
 //! rows as CSV to `target/basis-study.csv`.
 //!
-//! `cargo run --release -p pgvol-field --example basis_study [-- 16,32,64]`
+//! `cargo run --release -p pgvol-studies --bin basis_study [-- 16,32,64]`
 
 use std::fmt::Write as _;
 

@@ -1,39 +1,47 @@
 //! Bytes of a real field in each encoding.
 //!
-//! `cargo run --release -p pgvol-format --example format_sizes -- MESH N`
-//! Builds the cubic B-spline field of MESH on an N³ grid (banded signed distance, 4 spacings,
-//! then interpolation, as `pgvol encode` does), and prints the file size of dense f32 and of the
-//! sparse encoding for each precision, predictor and compression, with bytes per stored
-//! coefficient and the largest coefficient error relative to the spacing.
+//! `cargo run --release -p pgvol-studies --bin format_sizes -- MESH N`
+//! Encodes MESH on an N³ grid as `pgvol encode --res N` does, and prints the file size of dense
+//! f32, of pgvol's own sparse file, and of the sparse encoding for each precision, predictor and
+//! compression, with bytes per stored coefficient and the largest coefficient error relative to
+//! the spacing.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_format::{
-    encode_pgv, encode_pgv_with, header_for, Compression, EncodeOptions, PgvFile, Precision,
-    Predictor,
-};
-use pgvol_sdf::{sampling::Extent, MeshSdf, SignMode};
+use pgvol::{EncodeOptions, Grid, GridSpec, Silent, StorageOptions};
+use pgvol_format::{encode_pgv_with, Compression, Precision, Predictor};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mesh_path = PathBuf::from(args.get(1).expect("usage: format_sizes MESH N"));
     let n: usize = args.get(2).map_or(64, |s| s.parse().expect("N"));
-    let (mesh, _) = pgvol_mesh::read_clean(&mesh_path).expect("mesh");
-    let (lo, hi) = mesh.bounds().expect("non-empty mesh");
-    let grid = Grid::cube_res(lo, hi, n).expect("grid");
-    let sdf = MeshSdf::new(&mesh, SignMode::Auto).expect("sdf");
-    let sampled = sdf.sample(&grid, Extent::Band(4.0), &|_| {});
-    let volume = CoefficientVolume::interpolate(grid, Basis::Bspline3, sampled.values).unwrap();
-    let header = header_for(&volume, "interp", Some(&mesh));
-    let file = PgvFile { header, volume };
+    let (mesh, _) = pgvol::read_mesh(&mesh_path).expect("mesh");
+    let options = EncodeOptions {
+        grid: GridSpec::Res(n),
+        ..EncodeOptions::default()
+    };
+    let file = pgvol::encode(&mesh, &options, &Silent)
+        .expect("encode")
+        .file;
+    let grid = file.volume.grid;
     let h = grid.spacing;
 
-    let dense = encode_pgv(&file).len();
+    let file_size = |storage: StorageOptions| {
+        pgvol::pgv_bytes(&file, &storage)
+            .expect("pgv bytes")
+            .0
+            .len()
+    };
+    let dense = file_size(StorageOptions {
+        dense: true,
+        ..StorageOptions::default()
+    });
+    let product = file_size(StorageOptions::default());
     println!(
-        "{} N={n}: dense-f32 {dense} bytes ({:.1} KB)",
+        "{} N={n}: dense-f32 {dense} bytes ({:.1} KB), pgvol encode {product} bytes ({:.1} KB)",
         mesh_path.display(),
-        dense as f64 / 1024.0
+        dense as f64 / 1024.0,
+        product as f64 / 1024.0
     );
     println!("precision  predictor  shuffle  compression  bytes  KB  stored/total  B/stored-coeff  max-err/h");
     let edge = 8usize;
@@ -52,16 +60,16 @@ fn main() {
             (Predictor::Lorenzo, true, Compression::Zstd),
             (Predictor::Lorenzo, false, Compression::Zstd),
         ] {
-            let opts = EncodeOptions {
+            let storage = pgvol_format::EncodeOptions {
                 precision,
                 predictor,
                 shuffle,
                 compression,
                 brick: edge,
-                ..EncodeOptions::default()
+                ..pgvol_format::EncodeOptions::default()
             };
-            let (bytes, r) = encode_pgv_with(&file, &opts).expect("encode");
-            let back = pgvol_format::decode_pgv(&bytes, std::path::Path::new("mem")).unwrap();
+            let (bytes, r) = encode_pgv_with(&file, &storage).expect("encode");
+            let back = pgvol::read_pgv_bytes(&bytes, Path::new("mem")).unwrap();
             assert_eq!(back.volume.coeffs.len(), file.volume.coeffs.len());
             // Stored coefficients: nodes of stored bricks (edge bricks are partial).
             let stored_coeffs = stored_coefficients(&grid, &bytes, edge);
@@ -89,8 +97,7 @@ fn stored_coefficients(grid: &Grid, bytes: &[u8], edge: usize) -> usize {
     for k in 0..count[2] {
         for j in 0..count[1] {
             for i in 0..count[0] {
-                let b = pgvol_format::read_brick(bytes, std::path::Path::new("mem"), [i, j, k])
-                    .unwrap();
+                let b = pgvol_format::read_brick(bytes, Path::new("mem"), [i, j, k]).unwrap();
                 if b.stored {
                     total += b.coeffs.len();
                 }

@@ -1,7 +1,7 @@
 //! Plots the 3D basis study's error against stored bytes from `target/basis-study.csv` (written
-//! by the `basis_study` example): one panel per shape and fit, one line per basis, log-log.
+//! by `basis_study`): one panel per shape and fit, one line per basis, log-log.
 //!
-//! `cargo run --release -p pgvol-field --example basis_plots [-- CSV PNG]` (from the repository
+//! `cargo run --release -p pgvol-studies --bin basis_plots [-- CSV PNG]` (from the repository
 //! root; defaults `target/basis-study.csv` and `docs/images/basis-error-vs-bytes.png`).
 
 #[path = "basis_study_2d/fonts.rs"]
