@@ -258,3 +258,35 @@ def test_reversed_faces_give_the_same_solid(reversed_share, dirs, pgvol):
     assert mesh.is_watertight
     assert len(mesh.split(only_watertight=False)) == 1
     assert abs(mesh.volume / reference.volume - 1) < 0.01, (mesh.volume, reference.volume)
+
+
+def test_a_missing_output_folder_is_named_before_any_work(dirs, pgvol):
+    in_dir, out_dir = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    target = out_dir / "no-such-folder" / "out.glb"
+    r = helpers.run([pgvol, "remesh", src, "-o", target, "--res", 16], timeout=120)
+    assert r.returncode == 1, r.describe()
+    assert f"{target}: the folder" in r.stderr and ".tmp" not in r.stderr, r.describe()
+
+
+def test_replaced_outputs_keep_their_mode_and_read_only_ones_need_force(dirs, pgvol):
+    import os
+    import stat
+
+    in_dir, out_dir = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    out = out_dir / "out.glb"
+    out.write_bytes(b"old")
+    os.chmod(out, 0o600)
+    helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 16])
+    assert stat.S_IMODE(out.stat().st_mode) == 0o600
+    os.chmod(out, 0o444)
+    before = out.read_bytes()
+    r = helpers.run([pgvol, "remesh", src, "-o", out, "--res", 24], timeout=120)
+    assert r.returncode == 1 and "--force" in r.stderr, r.describe()
+    assert out.read_bytes() == before
+    helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 24, "--force"])
+    assert out.read_bytes() != before
+    assert stat.S_IMODE(out.stat().st_mode) == 0o444

@@ -244,3 +244,22 @@ def test_offsets_from_a_wide_band_file_match_offsets_from_the_mesh(spacings, pgv
     helpers.run_ok([pgvol, "offset", mesh_path("spot"), "-o", from_mesh, "--distance", distance, "--res", 96, "-q"])
     report = helpers.run_json([pgvol, "compare", from_file, from_mesh, "--samples", 50000, "--json"])
     assert report["hausdorff_pct"] < 0.1, report["hausdorff_pct"]
+
+
+def test_a_drain_outside_the_cavity_is_refused(pgvol, tmp_path):
+    """A drain whose point is not in the cavity would open nothing: refused, naming the drain."""
+    spot = helpers.shared_meshes_dir() / "spot.obj"
+    reference = helpers.load_input(spot)
+    inside = reference.bounds.mean(axis=0)
+    outside = reference.bounds[1] + 0.5
+    out = tmp_path / "hollow.glb"
+    for point, ok in [(inside, True), (outside, False)]:
+        drain = ",".join(f"{c}" for c in [*point, 0, 0, 1, 0.1])
+        r = helpers.run(
+            [pgvol, "shell", spot, "-o", out, "--thickness", 0.05, "--hollow", "--drain", drain, "--res", 64],
+            timeout=300,
+        )
+        if ok:
+            assert r.returncode == 0, r.describe()
+        else:
+            assert r.returncode == 1 and "drain 1" in r.stderr and "outside the shape" in r.stderr, r.describe()

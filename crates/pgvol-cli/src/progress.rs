@@ -52,6 +52,15 @@ impl pgvol::Progress for Bars {
         });
     }
 
+    fn warn(&self, message: &str) {
+        if !self.quiet {
+            self.with_bar(|bar| match bar {
+                Some(pb) => pb.suspend(|| eprintln!("warning: {message}")),
+                None => eprintln!("warning: {message}"),
+            });
+        }
+    }
+
     fn finish(&self) {
         self.with_bar(|bar| {
             if let Some(pb) = bar.take() {

@@ -267,6 +267,29 @@ impl StorageOptions {
     }
 }
 
+/// Refuses an output path before any work is done: its folder must exist, it must not be a
+/// folder itself, and a read-only file is replaced only when `force` is set.
+pub fn check_output(path: &Path, force: bool) -> Result<()> {
+    let fail = |problem: String| Error::new(ErrorKind::OutputFile, problem).at(path);
+    let folder = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(fail(format!(
+            "the folder '{}' does not exist",
+            folder.display()
+        )));
+    }
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => Err(fail("is a folder, not a file".into())),
+        Ok(meta) if meta.is_file() && meta.permissions().readonly() && !force => Err(fail(
+            "is read-only; make it writable or pass --force to replace it".into(),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Whether `path` names a `.pgv` file.
 pub fn is_pgv(path: &Path) -> bool {
     path.extension()

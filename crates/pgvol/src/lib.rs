@@ -77,9 +77,9 @@ pub use distance::{
     mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
 };
 pub use encode::{
-    check_pgv_name, encode, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv, write_pgv_to,
-    EncodeOptions, Encoded, StorageOptions, StorageReport, BAND_KEY, ENCODE_BAND, MIN_BAND,
-    PG_ORDER, PG_RADIUS,
+    check_output, check_pgv_name, encode, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv,
+    write_pgv_to, EncodeOptions, Encoded, StorageOptions, StorageReport, BAND_KEY, ENCODE_BAND,
+    MIN_BAND, PG_ORDER, PG_RADIUS,
 };
 pub use error::{Error, ErrorKind, Result};
 pub use eval::{eval, eval_csv, read_points, read_points_file, Evaluation};

@@ -15,6 +15,8 @@ pub trait Progress: Sync {
     fn update(&self, _done: f64) {}
     /// The current stage has ended.
     fn finish(&self) {}
+    /// Something the caller should know about a result that is still produced.
+    fn warn(&self, _message: &str) {}
     /// Whether the caller wants the call to stop.
     fn cancelled(&self) -> bool {
         false

@@ -225,12 +225,43 @@ pub fn shell(
     thickness: f32,
     kind: ShellKind,
     drains: &[Drain],
+    progress: &dyn Progress,
 ) -> Result<CoefficientVolume> {
     check_thickness(thickness)?;
     if !drains.is_empty() && kind != ShellKind::Hollow {
         return Err(Error::parameter("drain holes apply to hollowing only"));
     }
     shape.check_reach(thickness)?;
+    if let (ShellKind::Hollow, Some(mesh)) = (kind, &shape.mesh) {
+        let stats = mesh.stats();
+        if stats.boundary_edges > 0 {
+            progress.warn(&format!(
+                "the mesh is open ({} boundary edges): its inside is a guess from the winding \
+                 number, and the cavity may not be sealed",
+                stats.boundary_edges
+            ));
+        }
+    }
+    for (n, drain) in drains.iter().enumerate() {
+        // The hole runs from its point outward: a point outside the cavity opens nothing.
+        let value = shape.volume.value(drain.point);
+        if value >= -thickness {
+            let p = drain.point;
+            let place = if value >= 0.0 {
+                "outside the shape".to_string()
+            } else {
+                format!("{:.4} inside the surface, in the wall", -value)
+            };
+            return Err(Error::parameter(format!(
+                "drain {} at ({}, {}, {}) lies {place}; its point must be in the cavity, more \
+                 than the thickness {thickness} inside the surface",
+                n + 1,
+                p.x,
+                p.y,
+                p.z
+            )));
+        }
+    }
     Ok(match kind {
         ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, drains)?,
         ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,

@@ -59,6 +59,9 @@ pub enum Command {
 }
 
 pub fn run(command: Command) -> Result<()> {
+    if let Some((output, out)) = command.output() {
+        out.check(output)?;
+    }
     match command {
         Command::Remesh(a) => remesh::run(a),
         Command::Compare(a) => compare::run(a),
@@ -71,6 +74,24 @@ pub fn run(command: Command) -> Result<()> {
         Command::Slice(a) => ops::slice(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
+    }
+}
+
+impl Command {
+    /// The file the command writes and its output options, when it writes one.
+    fn output(&self) -> Option<(&std::path::Path, OutputArgs)> {
+        match self {
+            Command::Remesh(a) => Some((&a.output, a.out)),
+            Command::Sdf(a) => Some((&a.output, a.out)),
+            Command::Encode(a) => Some((&a.output, a.out)),
+            Command::Decode(a) => Some((&a.output, a.out)),
+            Command::Export(a) => Some((&a.output, a.out)),
+            Command::Eval(a) => a.output.as_deref().map(|o| (o, a.out)),
+            Command::Slice(a) => Some((&a.output, a.out)),
+            Command::Offset(a) => Some((&a.output, a.out)),
+            Command::Shell(a) => Some((&a.output, a.out)),
+            Command::Compare(_) | Command::Info(_) => None,
+        }
     }
 }
 
@@ -205,9 +226,18 @@ pub struct OutputArgs {
     /// No progress bars or notes on standard error.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Replace an output file even when it is read-only.
+    #[arg(long)]
+    pub force: bool,
 }
 
 impl OutputArgs {
+    /// Refuses `output` before any work: a missing folder, a folder, a read-only file without
+    /// --force.
+    pub fn check(self, output: &std::path::Path) -> Result<()> {
+        Ok(pgvol::check_output(output, self.force)?)
+    }
+
     /// Progress and notes are off in JSON mode too, so standard error stays clean for scripts.
     pub fn silent(self) -> bool {
         self.quiet || self.json

@@ -246,8 +246,8 @@ pub fn shell(a: ShellArgs) -> Result<()> {
     };
     let grow = pgvol::growth(kind, a.thickness);
     let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, grow, a.thickness, &bars)?;
-    let volume =
-        pgvol::shell(&shape, a.thickness, kind, &a.drain).map_err(|e| at_input(e, &a.input))?;
+    let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
+        .map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
     let triangles = write_result(&a.output, volume, &shape, &operation, a.shape.method, &bars)?;
     report(&a.out, &a.output, triangles)
