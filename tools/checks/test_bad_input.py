@@ -150,13 +150,17 @@ def test_closed_pipe_is_an_error_not_a_panic(dirs, pgvol):
     in_dir, _ = dirs
     src = in_dir / "tetra.obj"
     src.write_text(GOOD_OBJ)
+    import os
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader is gone before pgvol writes anything
     proc = subprocess.Popen(
         [str(pgvol), "compare", str(src), str(src), "--samples", "100"],
         stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
+        stdout=write_end,
         stderr=subprocess.PIPE,
     )
-    proc.stdout.close()  # the reader is gone before pgvol writes anything
+    os.close(write_end)
     _, err = proc.communicate(timeout=120)
     err = err.decode(errors="replace")
     assert proc.returncode == 1, err
