@@ -62,6 +62,7 @@ pub fn decode(
             )
         })?,
     };
+    crate::encode::check_grid_memory("contouring", &grid)?;
     let mesh = progress::stage(progress, "contour", |_| {
         pgvol_contour::contour_volume(volume, &grid, options.iso, options.method)
     })?;

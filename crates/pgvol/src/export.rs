@@ -65,6 +65,12 @@ pub fn export(path: &Path, file: &PgvFile, kind: ExportKind, res: Option<usize>)
             )
         })?,
     };
+    let [nx, ny, nz] = grid.dims;
+    crate::memory::check_memory(
+        &format!("sampling a {nx} x {ny} x {nz} grid"),
+        crate::memory::grid_bytes(grid.len(), crate::memory::BYTES_PER_SDF_NODE),
+        "lower the resolution",
+    )?;
     let values = volume.sample(&grid);
     match kind {
         ExportKind::SdfNrrd => {

@@ -65,6 +65,7 @@ mod eval;
 mod exact_field;
 mod export;
 mod grid;
+mod memory;
 mod mesh_io;
 mod pgv_io;
 mod progress;
@@ -86,6 +87,7 @@ pub use eval::{eval, eval_csv, read_points, read_points_file, Evaluation};
 pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
+pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{mesh_format, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use progress::{Progress, Silent};
@@ -139,5 +141,10 @@ pub fn compare(a: &Mesh, b: &Mesh, samples: usize, seed: u64) -> Result<Comparis
     if samples == 0 {
         return Err(Error::parameter("the number of samples must be positive"));
     }
+    memory::check_memory(
+        &format!("comparing with {samples} samples per mesh"),
+        (samples as u64).saturating_mul(memory::BYTES_PER_SAMPLE),
+        "use fewer samples",
+    )?;
     Ok(pgvol_metrics::compare(a, b, samples, seed)?)
 }

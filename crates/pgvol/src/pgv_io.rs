@@ -10,11 +10,26 @@ use crate::error::{Error, ErrorKind, FileResult, Result};
 
 /// Reads and checks a `.pgv` file.
 pub fn read_pgv(path: &Path) -> Result<PgvFile> {
-    pgvol_format::read_pgv(path).reading()
+    let bytes = std::fs::read(path).map_err(|e| {
+        Error::new(ErrorKind::InputFile, format!("cannot read: {e}"))
+            .at(path)
+            .caused_by(e)
+    })?;
+    read_pgv_bytes(&bytes, path)
 }
 
-/// Decodes and checks the bytes of a `.pgv` file; `name` labels errors.
+/// Decodes and checks the bytes of a `.pgv` file; `name` labels errors. The grid the header
+/// declares is checked against the memory limit before any coefficient is allocated.
 pub fn read_pgv_bytes(bytes: &[u8], name: &Path) -> Result<PgvFile> {
+    let info = pgv_info(bytes, name)?;
+    let [nx, ny, nz] = info.header.grid.dims;
+    let nodes = nx.saturating_mul(ny).saturating_mul(nz);
+    crate::memory::check_memory(
+        &format!("reading its {nx} x {ny} x {nz} coefficients"),
+        crate::memory::grid_bytes(nodes, 4),
+        "the file declares a larger grid than this machine can hold",
+    )
+    .map_err(|e| e.at(name))?;
     pgvol_format::decode_pgv(bytes, name).reading()
 }
 

@@ -59,6 +59,7 @@ pub enum Command {
 }
 
 pub fn run(command: Command) -> Result<()> {
+    pgvol::set_memory_limit(command.out().max_memory);
     if let Some((output, out)) = command.output() {
         out.check(output)?;
     }
@@ -78,6 +79,23 @@ pub fn run(command: Command) -> Result<()> {
 }
 
 impl Command {
+    /// The output options every command has.
+    fn out(&self) -> OutputArgs {
+        match self {
+            Command::Remesh(a) => a.out,
+            Command::Compare(a) => a.out,
+            Command::Sdf(a) => a.out,
+            Command::Encode(a) => a.out,
+            Command::Decode(a) => a.out,
+            Command::Info(a) => a.out,
+            Command::Export(a) => a.out,
+            Command::Eval(a) => a.out,
+            Command::Slice(a) => a.out,
+            Command::Offset(a) => a.out,
+            Command::Shell(a) => a.out,
+        }
+    }
+
     /// The file the command writes and its output options, when it writes one.
     fn output(&self) -> Option<(&std::path::Path, OutputArgs)> {
         match self {
@@ -229,6 +247,14 @@ pub struct OutputArgs {
     /// Replace an output file even when it is read-only.
     #[arg(long)]
     pub force: bool,
+    /// Refuse jobs whose estimated peak memory exceeds SIZE (e.g. 8G, 512M) [default: the
+    /// memory available when the job starts].
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
+    pub max_memory: Option<u64>,
+}
+
+fn parse_memory(s: &str) -> Result<u64, String> {
+    pgvol::parse_size(s).map_err(|e| e.to_string())
 }
 
 impl OutputArgs {

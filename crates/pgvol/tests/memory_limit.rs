@@ -1,0 +1,43 @@
+//! Jobs are refused before they allocate when their estimate exceeds the memory limit. One test
+//! per process state: the limit is global, so this file holds a single test.
+
+use pgvol::{EncodeOptions, ErrorKind, GridSpec, Silent, StorageOptions};
+
+#[test]
+fn jobs_over_the_limit_are_refused_before_allocating() {
+    let mesh = pgvol::mesh::shapes::octasphere(2);
+    let options = EncodeOptions {
+        grid: GridSpec::Res(32),
+        ..Default::default()
+    };
+    let encoded = pgvol::encode(&mesh, &options, &Silent).unwrap();
+    let (bytes, _) = pgvol::pgv_bytes(&encoded.file, &StorageOptions::default()).unwrap();
+    let name = std::path::Path::new("sphere.pgv");
+
+    // 32³ coefficients are 131 kB: a 100 kB limit refuses reading, encoding and remeshing.
+    pgvol::set_memory_limit(Some(100_000));
+    let read = pgvol::read_pgv_bytes(&bytes, name).unwrap_err();
+    let encode = pgvol::encode(&mesh, &options, &Silent).unwrap_err();
+    let remesh = pgvol::remesh(
+        &mesh,
+        &pgvol::RemeshOptions {
+            grid: GridSpec::Res(32),
+            ..Default::default()
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    let compare = pgvol::compare(&mesh, &mesh, 10_000, 1).unwrap_err();
+    pgvol::set_memory_limit(None);
+
+    for e in [&read, &encode, &remesh, &compare] {
+        assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+        assert!(e.message().contains("100.0 kB allowed"), "{e}");
+    }
+    assert_eq!(read.path(), Some(name));
+    assert!(read.message().contains("32 x 32 x 32"), "{read}");
+
+    // Under the default limit (the memory available) the same jobs run.
+    let back = pgvol::read_pgv_bytes(&bytes, name).unwrap();
+    assert_eq!(back.volume.grid, encoded.file.volume.grid);
+}
