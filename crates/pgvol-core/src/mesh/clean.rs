@@ -106,16 +106,23 @@ impl Mesh {
         before - self.triangles.len()
     }
 
-    /// Removes triangles with the same three vertices as an earlier one, in any order or
-    /// orientation (repeated faces only multiply the work of every distance query). Returns how
-    /// many were removed.
+    /// Removes triangles repeating an earlier one: the same three vertices in the same cyclic
+    /// order (repeated faces only multiply the work of every distance query). A pair wound in
+    /// opposite directions is a two-sided fin, not a repeat, and stays. Returns how many were
+    /// removed.
     pub fn drop_duplicate_triangles(&mut self) -> usize {
         let before = self.triangles.len();
         let mut seen: HashMap<[u32; 3], (), BuildHasherDefault<KeyHasher>> =
             HashMap::with_capacity_and_hasher(before, Default::default());
-        self.triangles.retain(|t| {
-            let mut key = *t;
-            key.sort_unstable();
+        self.triangles.retain(|&[a, b, c]| {
+            // The rotation starting at the smallest index names the face and its winding.
+            let key = if a <= b && a <= c {
+                [a, b, c]
+            } else if b <= c {
+                [b, c, a]
+            } else {
+                [c, a, b]
+            };
             seen.insert(key, ()).is_none()
         });
         before - self.triangles.len()
@@ -190,13 +197,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn repeated_faces_are_dropped_in_any_order_or_orientation() {
+    fn repeated_faces_are_dropped_in_any_rotation_but_opposite_ones_stay() {
         let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
         let mut mesh = Mesh::new(
             positions,
-            vec![[0, 1, 2], [1, 2, 0], [0, 2, 1], [0, 1, 3], [0, 1, 2]],
+            vec![[0, 1, 2], [1, 2, 0], [0, 2, 1], [0, 1, 3], [2, 0, 1], [0, 1, 2]],
         );
         assert_eq!(mesh.drop_duplicate_triangles(), 3);
-        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 1, 3]]);
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 1], [0, 1, 3]]);
     }
 }
