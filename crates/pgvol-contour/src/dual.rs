@@ -22,6 +22,7 @@ use crate::components::{components, ring_slot};
 use crate::crossings::Crossings;
 use crate::cube::{edge_axis, plane_axes, EDGE_START};
 use crate::decider::joins_inside;
+use crate::dual_options::DualContourOptions;
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
 use crate::project::project;
@@ -29,7 +30,6 @@ use crate::qef::Qef;
 use crate::quads::split_quad;
 use crate::samples::Samples;
 use crate::table::case_table;
-use crate::DualContourOptions;
 
 /// Fraction of the cell kept clear at each face when clamping, so vertices of neighbouring cells
 /// never coincide and every quad projects along its edge onto four distinct open quadrants.

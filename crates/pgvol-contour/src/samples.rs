@@ -13,7 +13,41 @@ pub(crate) struct Samples<'a> {
     pub iso: f32,
 }
 
-impl Samples<'_> {
+impl<'a> Samples<'a> {
+    /// Checks the grid description; `None` when the grid has no cells.
+    ///
+    /// # Panics
+    ///
+    /// If `values.len()` does not match `dims`, or `spacing` is not positive and finite.
+    pub fn checked(
+        values: &'a [f32],
+        dims: [usize; 3],
+        origin: Vec3,
+        spacing: f32,
+        iso: f32,
+    ) -> Option<Samples<'a>> {
+        let nodes = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        assert_eq!(
+            nodes,
+            Some(values.len()),
+            "values do not match grid dims {dims:?}"
+        );
+        assert!(
+            spacing.is_finite() && spacing > 0.0,
+            "grid spacing must be positive, got {spacing}"
+        );
+        if dims.iter().any(|&d| d < 2) {
+            return None;
+        }
+        Some(Samples {
+            values,
+            dims,
+            origin,
+            spacing,
+            iso,
+        })
+    }
+
     #[inline]
     pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
         i + self.dims[0] * (j + self.dims[1] * k)

@@ -117,36 +117,13 @@ fn one_sided_bound(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
+    use crate::test_volumes::two_balls;
     use pgvol_field::Basis;
-
-    fn blob(basis: Basis) -> CoefficientVolume {
-        let grid = Grid {
-            origin: Vec3::splat(-1.0),
-            spacing: 2.0 / 39.0,
-            dims: [40, 40, 40],
-        };
-        let mut s = Vec::with_capacity(grid.len());
-        for k in 0..40 {
-            for j in 0..40 {
-                for i in 0..40 {
-                    let p = grid.point(i, j, k);
-                    s.push(
-                        (p - Vec3::new(0.2, 0.0, 0.1))
-                            .length()
-                            .min((p + Vec3::new(0.4, 0.3, 0.0)).length())
-                            - 0.35,
-                    );
-                }
-            }
-        }
-        CoefficientVolume::interpolate(grid, basis, s).unwrap()
-    }
 
     #[test]
     fn signs_match_full_sampling_and_values_match_near_the_surface() {
         for basis in [Basis::Trilinear, Basis::Bspline2, Basis::Bspline3] {
-            let v = blob(basis);
+            let v = two_balls(basis);
             for iso in [0.0, 0.1, -0.05] {
                 let full = v.sample(&v.grid);
                 let sparse = sample_near_level(&v, &v.grid, iso);
@@ -160,21 +137,5 @@ mod tests {
                 assert!(exact < full.len(), "{basis:?}: nothing was skipped");
             }
         }
-    }
-
-    #[test]
-    fn contours_are_the_same_shape() {
-        let v = blob(Basis::Bspline3);
-        let method = crate::Method::MarchingCubes;
-        let full = crate::volume::contour_samples(&v, &v.grid, v.sample(&v.grid), 0.0, method);
-        let sparse = crate::contour_volume(&v, &v.grid, 0.0, method);
-        assert_eq!(full.triangles, sparse.triangles);
-        let worst = full
-            .positions
-            .iter()
-            .zip(&sparse.positions)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f32::max);
-        assert!(worst < 1e-3 * v.grid.spacing, "{worst}");
     }
 }

@@ -5,10 +5,12 @@ use glam::Vec3;
 use pgvol_field::{CoefficientVolume, Grid};
 
 use crate::crossings::with_normal;
+use crate::dual_methods::{dual_contour_with, surface_nets_with};
+use crate::dual_options::DualContourOptions;
 use crate::edge_cubic::{crossing_on_grid_edge, thirds_on_grid_edge};
 use crate::field::Field;
+use crate::marching::marching_cubes_with;
 use crate::root::{cubic_edge_root, edge_root, root_from_thirds};
-use crate::DualContourOptions;
 
 /// How the mesh is extracted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -117,17 +119,15 @@ pub fn contour_field(
         }
     };
     match method {
-        Method::MarchingCubes => crate::marching_cubes_with(&values, dims, origin, h, iso, &refine),
+        Method::MarchingCubes => marching_cubes_with(&values, dims, origin, h, iso, &refine),
         Method::DualContouring => {
             let place = |a, va, b, vb, axis| {
                 let p = refine(a, va, b, vb);
                 with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
             };
-            crate::dual_contour_with(&values, dims, origin, h, iso, field, options, &place)
+            dual_contour_with(&values, dims, origin, h, iso, field, options, &place)
         }
-        Method::SurfaceNets => {
-            crate::surface_nets_with(&values, dims, origin, h, iso, field, &refine)
-        }
+        Method::SurfaceNets => surface_nets_with(&values, dims, origin, h, iso, field, &refine),
     }
 }
 
@@ -159,7 +159,7 @@ pub fn contour_sampled(
         }
     };
     match method {
-        Method::MarchingCubes => crate::marching_cubes_with(values, dims, origin, h, iso, &refine),
+        Method::MarchingCubes => marching_cubes_with(values, dims, origin, h, iso, &refine),
         Method::DualContouring => {
             let options = DualContourOptions::default();
             // On the volume's own grid, crossing and normal come from one read of the edge's
@@ -170,11 +170,9 @@ pub fn contour_sampled(
                     with_normal(a, b, axis, p, |p| volume.value_gradient(p).1)
                 })
             };
-            crate::dual_contour_with(values, dims, origin, h, iso, volume, &options, &place)
+            dual_contour_with(values, dims, origin, h, iso, volume, &options, &place)
         }
-        Method::SurfaceNets => {
-            crate::surface_nets_with(values, dims, origin, h, iso, volume, &refine)
-        }
+        Method::SurfaceNets => surface_nets_with(values, dims, origin, h, iso, volume, &refine),
     }
 }
 
@@ -199,6 +197,7 @@ fn volume_edge_root(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_volumes::two_balls;
     use pgvol_field::Basis;
 
     fn sphere_volume(radius: f32) -> CoefficientVolume {
@@ -216,6 +215,23 @@ mod tests {
             }
         }
         CoefficientVolume::interpolate(grid, Basis::Bspline3, samples).unwrap()
+    }
+
+    /// Sampling only near the level set gives the mesh of full sampling.
+    #[test]
+    fn sparse_sampling_contours_the_same_shape() {
+        let v = two_balls(Basis::Bspline3);
+        let method = Method::MarchingCubes;
+        let full = contour_samples(&v, &v.grid, v.sample(&v.grid), 0.0, method);
+        let sparse = contour_volume(&v, &v.grid, 0.0, method);
+        assert_eq!(full.triangles, sparse.triangles);
+        let worst = full
+            .positions
+            .iter()
+            .zip(&sparse.positions)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f32::max);
+        assert!(worst < 1e-3 * v.grid.spacing, "{worst}");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use glam::{Quat, Vec3};
 
-use crate::fit::SignedDistance;
+use crate::distance::SignedDistance;
 
 /// A ball.
 #[derive(Clone, Copy, Debug)]

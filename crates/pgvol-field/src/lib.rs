@@ -4,6 +4,7 @@
 
 pub mod analytic;
 pub mod basis;
+mod distance;
 pub mod fit;
 pub mod kernel;
 pub mod prefilter;

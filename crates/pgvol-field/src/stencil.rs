@@ -3,8 +3,8 @@
 
 use glam::{Mat3, Vec3};
 
+use crate::basis::Basis;
 use crate::kernel::{axis_window, separable_jet, Jet, Kernel, Profile, PseudoGaussian};
-use crate::Basis;
 
 /// How much of the jet a visit needs; higher orders cost more per node.
 pub const VALUE: u8 = 0;

@@ -5,7 +5,6 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::Basis;
-use crate::prefilter::{prefilter_volume_with, CUBIC_POLE, QUADRATIC_POLE};
 use crate::stencil::{self, GRADIENT, HESSIAN, VALUE};
 use pgvol_core::Grid;
 
@@ -60,27 +59,6 @@ impl CoefficientVolume {
             basis,
             coeffs,
         })
-    }
-
-    /// The field that interpolates `samples` (one per node, x fastest) in the given basis:
-    /// B-splines by their exact prefilter, pseudo-Gaussians by an iterative collocation solve
-    /// (see [`crate::fit::interp_samples`] for its report).
-    pub fn interpolate(
-        grid: Grid,
-        basis: Basis,
-        mut samples: Vec<f32>,
-    ) -> Result<Self, FieldError> {
-        check_inputs(&grid, basis, &samples)?;
-        match basis {
-            Basis::Trilinear => {}
-            Basis::Bspline2 => prefilter_volume_with(&mut samples, grid.dims, QUADRATIC_POLE),
-            Basis::Bspline3 => prefilter_volume_with(&mut samples, grid.dims, CUBIC_POLE),
-            Basis::Pg { .. } => {
-                let opts = crate::fit::FitOptions::default();
-                return crate::fit::interp_samples(grid, basis, &samples, &opts).map(|(v, _)| v);
-            }
-        }
-        CoefficientVolume::new(grid, basis, samples)
     }
 
     /// Value, gradient and Hessian (Hessian left zero below `ORDER`) at `p`. Points outside the

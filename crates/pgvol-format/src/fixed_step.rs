@@ -1,12 +1,8 @@
 //! The `fixed` precision: coefficients as integer words on a piecewise-linear scale, a fine step
 //! up to a knee and a coarser one beyond (the surface depends on the small coefficients near
-//! it; the far ones only need the band's accuracy). Also the encoder's choice of the values of
-//! coefficients the surface band does not need, moved towards their prediction so their
-//! residuals are zero.
+//! it; the far ones only need the band's accuracy); and the encoder's defaults for it.
 
 use serde::{Deserialize, Serialize};
-
-use crate::sparse::{predict, Predictor};
 
 /// Default fine step of `fixed`, in grid spacings (`docs/format.md`, "How the encoder chooses").
 pub const FIXED_STEP: f32 = 1.0 / 512.0;
@@ -118,32 +114,6 @@ impl FixedScale {
 /// Default bound on how far a coefficient the band does not need may move, in grid spacings.
 pub const FREE_TOLERANCE: f32 = 0.5;
 
-/// Replaces each free word (`free[at]`, in coding order) by the word closest to its prediction
-/// from the words before it (already settled) among those between it and `tolerance` words
-/// nearer to zero, so that its residual is usually zero. Only towards zero: magnitudes never
-/// grow, so the field's largest node value (which `pgvol offset` reads as the stored band) does
-/// not either, and the sign stays. Words are two's-complement integers.
-pub(crate) fn settle_free_words(
-    words: &mut [u32],
-    free: &[bool],
-    n: [usize; 3],
-    pred: Predictor,
-    tolerance: i32,
-) {
-    for at in 0..words.len() {
-        if free[at] {
-            let p = predict(words, n, at, pred, u32::MAX) as i32;
-            let q = words[at] as i32;
-            let (lo, hi) = if q >= 0 {
-                (q.saturating_sub(tolerance).max(0), q)
-            } else {
-                (q, q.saturating_add(tolerance).min(0))
-            };
-            words[at] = p.clamp(lo, hi) as u32;
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -214,35 +184,5 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn free_words_follow_the_prediction_within_the_tolerance() {
-        // A ramp along x with the middle words free: they become the ramp where it is within
-        // reach, and stop at the tolerance where it is not.
-        let mut words: Vec<u32> = [0i32, 10, 20, 999, 40, -999, 60]
-            .iter()
-            .map(|&v| v as u32)
-            .collect();
-        let free = [false, false, false, true, false, true, false];
-        settle_free_words(&mut words, &free, [7, 1, 1], Predictor::DeltaX, 5);
-        let got: Vec<i32> = words.iter().map(|&w| w as i32).collect();
-        // delta-x predicts the previous word.
-        assert_eq!(got, [0, 10, 20, 994, 40, -994, 60]);
-        let mut words: Vec<u32> = vec![3, 7, 12];
-        settle_free_words(
-            &mut words,
-            &[false, true, false],
-            [3, 1, 1],
-            Predictor::DeltaX,
-            5,
-        );
-        assert_eq!(words, [3, 3, 12]);
-        // Never away from zero, nor across it.
-        let mut words: Vec<u32> = [9i32, 5, -9, -5, 2, -3].iter().map(|&v| v as u32).collect();
-        let free = [false, true, false, true, false, true];
-        settle_free_words(&mut words, &free, [6, 1, 1], Predictor::DeltaX, 5);
-        let got: Vec<i32> = words.iter().map(|&w| w as i32).collect();
-        assert_eq!(got, [9, 5, -9, -5, 2, 0]);
     }
 }

@@ -9,7 +9,7 @@ use std::path::Path;
 use pgvol_field::Grid;
 use zip::write::SimpleFileOptions;
 
-use crate::pgv::{err, FormatError};
+use crate::error::{err, FormatError};
 
 pub const NS_CORE: &str = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02";
 pub const NS_VOLUMETRIC: &str = "http://schemas.3mf.io/3dmanufacturing/volumetric/2022/01";

@@ -1,12 +1,10 @@
 //! The reader decodes brick layers in parallel: the volume, and the error on a damaged file,
-//! must not depend on the number of threads, and must equal what the single-thread readers
-//! (stage by stage, and brick by brick) give.
+//! must not depend on the number of threads, and must equal what reading brick by brick gives.
 
 use std::path::Path;
 
 use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_format::read_profile::profile_sparse_read;
 use pgvol_format::{
     decode_pgv, encode_pgv, encode_pgv_with, header_for, pgv_info, read_brick, Compression,
     EncodeOptions, PgvFile, Precision, Predictor,
@@ -120,8 +118,6 @@ fn thread_count_does_not_change_the_volume() {
             assert_eq!(bits(&many.volume.coeffs), want, "{o:?}, {threads} threads");
             assert_eq!(many.header, one.header);
         }
-        let (_, staged) = profile_sparse_read(&bytes, p()).unwrap();
-        assert_eq!(bits(&staged), want, "{o:?}: stage by stage");
         let alone = brick_by_brick(&bytes, dims, o.brick);
         assert_eq!(bits(&alone), want, "{o:?}: brick by brick");
     }
@@ -214,6 +210,8 @@ fn damaged_bricks_give_the_same_error_on_any_thread_count() {
         let e = in_pool(threads, || decode_pgv(&bad, p()).unwrap_err().to_string());
         assert!(e.contains(&want), "{threads} threads: {e}");
     }
-    let e = profile_sparse_read(&bad, p()).unwrap_err().to_string();
-    assert!(e.contains(&want), "stage by stage: {e}");
+    let e = read_brick(&bad, p(), coords(stored_bricks[early]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(&want), "brick by brick: {e}");
 }

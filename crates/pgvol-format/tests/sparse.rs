@@ -5,7 +5,6 @@ use std::path::Path;
 use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_format::pgv::MAGIC;
-use pgvol_format::read_profile::profile_sparse_read;
 use pgvol_format::{
     decode_pgv, encode_pgv, encode_pgv_with, header_for, pgv_info, read_brick, read_pgv,
     write_pgv_with, Compression, EncodeOptions, PgvFile, Precision, Predictor,
@@ -536,15 +535,81 @@ fn damaged_sparse_files_give_clear_errors() {
 
 // ---- properties ----------------------------------------------------------------------------
 
-fn tiny_sparse(precision: Precision) -> Vec<u8> {
+/// A small sparse file in bricks of 4, every stored coefficient within the precision (free
+/// ones are tested apart), and the file it was written from.
+fn tiny_sparse(precision: Precision) -> (PgvFile, Vec<u8>) {
     let f = sphere_file(12, Basis::Bspline3);
     let o = EncodeOptions {
         precision: Some(precision),
         brick: 4,
         zstd_level: 3,
+        free_tolerance: 0.0,
         ..EncodeOptions::default()
     };
-    encode_pgv_with(&f, &o).unwrap().0
+    let bytes = encode_pgv_with(&f, &o).unwrap().0;
+    (f, bytes)
+}
+
+/// Checks that `bytes`, written from `f` in bricks of `edge` with no free tolerance, decode to
+/// the written coefficients: in stored bricks within half a quantisation step of the precision
+/// (exact for f32), elsewhere `±clamp`; and that each brick read alone matches the whole.
+/// Returns the largest error in stored bricks.
+fn assert_round_trip(f: &PgvFile, bytes: &[u8], edge: usize) -> f32 {
+    let decoded = decode_pgv(bytes, p()).unwrap();
+    let sp = decoded.header.sparse.clone().unwrap();
+    let (precision, fixed) = (sp.precision, sp.fixed);
+    assert_eq!(fixed.is_some(), precision == Precision::Fixed);
+    let back = decoded.volume.coeffs;
+    let mut worst = 0.0f32;
+    for (coords, idx) in bricks(f.volume.grid.dims, edge) {
+        let b = read_brick(bytes, p(), coords).unwrap();
+        for (&i, c) in idx.iter().zip(&b.coeffs) {
+            assert_eq!(back[i].to_bits(), c.to_bits(), "{coords:?}");
+        }
+        if !b.stored {
+            for &i in &idx {
+                assert_eq!(back[i].abs(), sp.clamp);
+            }
+            continue;
+        }
+        let lo = idx
+            .iter()
+            .map(|&i| f.volume.coeffs[i])
+            .fold(f32::INFINITY, f32::min);
+        let hi = idx
+            .iter()
+            .map(|&i| f.volume.coeffs[i])
+            .fold(f32::NEG_INFINITY, f32::max);
+        for &i in &idx {
+            let (a, d) = (f.volume.coeffs[i], back[i]);
+            let bound = match precision {
+                Precision::F32 => 0.0,
+                // Half an f16 ulp: relative 2^-11, absolute 2^-25 among subnormals.
+                Precision::F16 => a.abs() * 2f32.powi(-11) + 2f32.powi(-25),
+                // Half a step, plus f32 rounding of lo + q·step.
+                Precision::Q16 => {
+                    (hi - lo) / 65535.0 * 0.5 + 4.0 * f32::EPSILON * lo.abs().max(hi.abs())
+                }
+                // Half the step where |a| lies (fine up to the knee, coarse beyond), plus
+                // f32 rounding.
+                Precision::Fixed => {
+                    let s = fixed.unwrap();
+                    let step = if a.abs() <= s.knee as f32 * s.step {
+                        s.step
+                    } else {
+                        s.step * s.ratio as f32
+                    };
+                    step * 0.5 + 4.0 * f32::EPSILON * a.abs()
+                }
+            };
+            if precision == Precision::F32 {
+                assert_eq!(a.to_bits(), d.to_bits());
+            }
+            assert!((a - d).abs() <= bound, "{a} -> {d}, bound {bound}");
+            worst = worst.max((a - d).abs());
+        }
+    }
+    worst
 }
 
 proptest! {
@@ -556,16 +621,30 @@ proptest! {
         edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..4),
         cut in any::<usize>(),
     ) {
-        let mut bytes = tiny_sparse(Precision::ALL[which]);
+        let (f, good) = tiny_sparse(Precision::ALL[which]);
+        // The valid file reads back: a decoder that refuses everything fails here.
+        assert_round_trip(&f, &good, 4);
+        let coords = [cut % 3, 1, 2];
+        let clean = decode_pgv(&good, p()).unwrap();
+        let clean_info = pgv_info(&good, p()).unwrap();
+        let clean_brick = read_brick(&good, p(), coords).unwrap();
+        let mut bytes = good.clone();
         let n = bytes.len();
         for (pos, val) in edits {
             bytes[pos % n] = val;
         }
         bytes.truncate(cut % (n + 1));
-        let _ = decode_pgv(&bytes, p());
-        let _ = profile_sparse_read(&bytes, p());
-        let _ = pgv_info(&bytes, p());
-        let _ = read_brick(&bytes, p(), [cut % 3, 1, 2]);
+        // Every byte is checked or covered by a CRC (the header, the index, each brick, the
+        // payload), so whatever still reads is what the valid file gives.
+        if let Ok(back) = decode_pgv(&bytes, p()) {
+            prop_assert_eq!(back, clean);
+        }
+        if let Ok(info) = pgv_info(&bytes, p()) {
+            prop_assert_eq!(info, clean_info);
+        }
+        if let Ok(brick) = read_brick(&bytes, p(), coords) {
+            prop_assert_eq!(brick, clean_brick);
+        }
     }
 
     #[test]
@@ -602,50 +681,8 @@ proptest! {
             ..EncodeOptions::default()
         };
         let (bytes, r) = encode_pgv_with(&f, &o).unwrap();
-        let decoded = decode_pgv(&bytes, p()).unwrap();
-        let fixed = decoded.header.sparse.as_ref().unwrap().fixed;
-        prop_assert_eq!(fixed.is_some(), precision == Precision::Fixed);
-        let back = decoded.volume.coeffs;
-        let mut worst = 0.0f32;
-        for (coords, idx) in bricks(dims, brick) {
-            let b = read_brick(&bytes, p(), coords).unwrap();
-            if !b.stored {
-                for &i in &idx {
-                    prop_assert_eq!(back[i].abs(), r.clamp);
-                }
-                continue;
-            }
-            let lo = idx.iter().map(|&i| f.volume.coeffs[i]).fold(f32::INFINITY, f32::min);
-            let hi = idx.iter().map(|&i| f.volume.coeffs[i]).fold(f32::NEG_INFINITY, f32::max);
-            for &i in &idx {
-                let (a, d) = (f.volume.coeffs[i], back[i]);
-                let bound = match precision {
-                    Precision::F32 => 0.0,
-                    // Half an f16 ulp: relative 2^-11, absolute 2^-25 among subnormals.
-                    Precision::F16 => a.abs() * 2f32.powi(-11) + 2f32.powi(-25),
-                    // Half a step, plus f32 rounding of lo + q·step.
-                    Precision::Q16 => {
-                        (hi - lo) / 65535.0 * 0.5 + 4.0 * f32::EPSILON * lo.abs().max(hi.abs())
-                    }
-                    // Half the step where |a| lies (fine up to the knee, coarse beyond), plus
-                    // f32 rounding.
-                    Precision::Fixed => {
-                        let s = fixed.unwrap();
-                        let step = if a.abs() <= s.knee as f32 * s.step {
-                            s.step
-                        } else {
-                            s.step * s.ratio as f32
-                        };
-                        step * 0.5 + 4.0 * f32::EPSILON * a.abs()
-                    }
-                };
-                if precision == Precision::F32 {
-                    prop_assert_eq!(a.to_bits(), d.to_bits());
-                }
-                prop_assert!((a - d).abs() <= bound, "{a} -> {d}, bound {bound}");
-                worst = worst.max((a - d).abs());
-            }
-        }
+        prop_assert_eq!(pgv_info(&bytes, p()).unwrap().precision, precision);
+        let worst = assert_round_trip(&f, &bytes, brick);
         // The report counts the coefficients the band needs, a subset of the stored ones.
         prop_assert!(r.max_quantisation_error <= worst);
     }

@@ -14,7 +14,7 @@ use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use rayon::prelude::*;
 
-use crate::OpsError;
+use crate::error::OpsError;
 
 /// Where a shell's wall lies relative to the original surface.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

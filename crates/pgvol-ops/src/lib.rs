@@ -12,6 +12,8 @@
 
 mod cli_file;
 mod csg;
+mod error;
+mod polygon;
 mod simplify;
 mod slice;
 mod write;
@@ -20,18 +22,10 @@ pub use cli_file::{write_cli, write_cli_with, CliEncoding};
 pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
 };
+pub use error::OpsError;
 pub use simplify::simplify_loops;
 pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,
     MAX_LAYER_NODES,
 };
 pub use write::{read_slice_json, write_slice_json, write_svg};
-
-/// Why an operation could not run.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum OpsError {
-    #[error("invalid parameter: {0}")]
-    BadParameter(String),
-    #[error(transparent)]
-    Field(#[from] pgvol_field::FieldError),
-}

@@ -1,6 +1,8 @@
 //! Simplification of a layer's closed loops with a bounded error and without changing the
 //! layer's topology.
 
+use crate::polygon::signed_area;
+
 type P = [f32; 2];
 
 /// Simplifies closed loops (last point not repeated) to within `tolerance`.
@@ -28,14 +30,14 @@ pub fn simplify_loops(loops: &[Vec<P>], tolerance: f32) -> Vec<Vec<P>> {
     }
     let tol2 = tolerance as f64 * tolerance as f64;
     let mut kept: Vec<Vec<usize>> = loops.iter().map(|l| simplify_one(l, tol2)).collect();
-    let areas: Vec<f64> = loops.iter().map(|l| crate::slice::signed_area(l)).collect();
+    let areas: Vec<f64> = loops.iter().map(|l| signed_area(l)).collect();
     let boxes: Vec<[f32; 4]> = loops.iter().map(|l| bbox(l)).collect();
     loop {
         repair_crossings(loops, &mut kept, tol2);
         let mut restore = vec![false; loops.len()];
         for (l, pts) in loops.iter().enumerate() {
             let simple: Vec<P> = kept[l].iter().map(|&i| pts[i]).collect();
-            let a = crate::slice::signed_area(&simple);
+            let a = signed_area(&simple);
             if a == 0.0 || (a < 0.0) != (areas[l] < 0.0) {
                 restore[l] = true;
             }

@@ -7,8 +7,9 @@ use pgvol_field::{mirror, Basis, CoefficientVolume};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::error::OpsError;
+use crate::polygon::signed_area;
 use crate::simplify::simplify_loops;
-use crate::OpsError;
 
 /// Most layers one call produces: far beyond any printer, small enough to refuse typos.
 pub const MAX_LAYERS: usize = 1_000_000;
@@ -369,18 +370,6 @@ fn slice_layers<G: LayerField>(
             Layer { height: h, loops }
         })
         .collect())
-}
-
-/// The signed area, positive for counter-clockwise loops, in f64.
-pub(crate) fn signed_area(points: &[[f32; 2]]) -> f64 {
-    let n = points.len();
-    let mut s = 0.0f64;
-    for i in 0..n {
-        let [x0, y0] = points[i];
-        let [x1, y1] = points[(i + 1) % n];
-        s += x0 as f64 * y1 as f64 - x1 as f64 * y0 as f64;
-    }
-    s * 0.5
 }
 
 /// A layer's 2D grid: `n[0] × n[1]` nodes at `origin + spacing · (i − 1, j − 1)`, the outer ring

@@ -43,7 +43,7 @@ impl Node {
 #[derive(Clone, Debug)]
 pub struct Bvh {
     pub nodes: Vec<Node>,
-    /// Per node, the oriented box around a leaf's triangles ([`OrientedBox::EVERYWHERE`] for
+    /// Per node, the oriented box around a leaf's triangles (`OrientedBox::EVERYWHERE` for
     /// inner nodes).
     pub oriented: Vec<OrientedBox>,
     pub tris: Vec<[Vec3A; 3]>,

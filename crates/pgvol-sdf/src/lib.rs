@@ -4,20 +4,20 @@
 //! comes from the generalized winding number, which stays meaningful on open, flipped or
 //! self-intersecting meshes. Negative inside, positive outside, in the mesh's units.
 
-pub mod bvh;
-pub mod consistency;
-pub use pgvol_core::grid;
-pub mod lanes;
-pub mod leaf_bounds;
-pub mod pseudonormal;
-pub mod rims;
+mod bvh;
+mod consistency;
+mod lanes;
+mod leaf_bounds;
+mod pseudonormal;
+mod rims;
 pub mod sampling;
+mod sdf;
 pub mod triangle;
 mod wide;
 pub mod winding;
 
 pub use bvh::{Bvh, Closest};
 pub use grid::{Grid, GridError};
-pub use winding::WindingTree;
-pub mod sdf;
+pub use pgvol_core::grid;
 pub use sdf::{MeshSdf, SdfError, SignMode};
+pub use winding::WindingTree;

@@ -13,8 +13,8 @@ use super::layer_blocks::{LayerBlocks, LAYERS};
 use super::row_kernels;
 use super::row_window::{windows, Window};
 
+use crate::basis::Basis;
 use crate::stencil::{self, VALUE};
-use crate::Basis;
 
 /// Where the basis functions of each sample point lie: the point's window, for bases that have
 /// one on grids of at least 4 nodes per axis (other cases go through the generic stencil), and

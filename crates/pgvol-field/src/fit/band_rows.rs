@@ -3,10 +3,11 @@
 //! its exact signed distance; nodes on both sides give the `±k/2` offsets together.
 
 use glam::Vec3;
+use pgvol_core::Grid;
 use rayon::prelude::*;
 
-use super::{ClosestPoint, FitOptions};
-use crate::Grid;
+use super::options::FitOptions;
+use crate::distance::ClosestPoint;
 
 /// Sample points in grid coordinates, their target values and weights.
 #[derive(Default)]

@@ -3,12 +3,16 @@
 //! from its lattice Fourier symbol — so CG where that holds, CGLS otherwise.
 
 use glam::Vec3;
+use pgvol_core::Grid;
 
 use super::operator::{node_points, Operator};
-use super::{report, solve, to_f32, FitOptions, FitReport};
+use super::options::FitOptions;
+use super::report::{report, FitReport};
+use super::solve;
+use super::weighted::{to_f32, weighted_solve, Rows};
+use crate::basis::Basis;
 use crate::kernel::PseudoGaussian;
 use crate::prefilter::{prefilter_volume_with, CUBIC_POLE, QUADRATIC_POLE};
-use crate::{Basis, Grid};
 
 /// Smallest value of `Σ_m pg(|m|) cos(ω·m)` over `ω ∈ [0, π]³` (sampled on a 17³ lattice, which
 /// includes the corners and edge midpoints where the minimum sits for these kernels). On a
@@ -86,10 +90,10 @@ pub(crate) fn fit_nodes(
                 );
                 return (to_f32(x), report("cg", Some(out)));
             }
-            let (x, out) = super::weighted_solve(
+            let (x, out) = weighted_solve(
                 grid,
                 basis,
-                super::Rows {
+                Rows {
                     points: &points,
                     targets: samples,
                     weights: None,

@@ -3,13 +3,17 @@
 //! exactly; a square, non-symmetric system solved by CGLS. `z_step` may be searched for.
 
 use glam::Vec3;
+use pgvol_core::Grid;
 
 use super::golden::golden_section;
+use super::node_sdf::{project, NodeSdf};
 use super::operator::Operator;
-use super::{
-    project, report, to_f32, weighted_solve, FitOptions, FitReport, NodeSdf, SignedDistance,
-};
-use crate::{Basis, FieldError, Grid};
+use super::options::FitOptions;
+use super::report::{report, FitReport};
+use super::weighted::{to_f32, weighted_solve, Rows};
+use crate::basis::Basis;
+use crate::distance::SignedDistance;
+use crate::volume::FieldError;
 
 pub(crate) fn fit(
     grid: &Grid,
@@ -78,7 +82,7 @@ fn solve_step(
     weighted_solve(
         grid,
         basis,
-        super::Rows {
+        Rows {
             points: &pts,
             targets: &tgt,
             weights: None,

@@ -4,8 +4,9 @@
 
 use rayon::prelude::*;
 
+use crate::basis::Basis;
 use crate::stencil::mirror;
-use crate::{Basis, CoefficientVolume};
+use crate::volume::CoefficientVolume;
 
 /// Z-planes per task: the x and y passes of the two planes either side are redone per task.
 const PLANES: usize = 8;
@@ -175,8 +176,8 @@ fn blur_row(here: &[f32], out: &mut [f32], side: f32, centre: f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Grid;
     use glam::Vec3;
+    use pgvol_core::Grid;
 
     /// Short axes (2 nodes) take the mirrored neighbours on both sides.
     #[test]

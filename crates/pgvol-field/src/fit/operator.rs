@@ -4,8 +4,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::basis::Basis;
 use crate::stencil::{self, VALUE};
-use crate::Basis;
 
 /// Points per chunk of the transposed product; fixed so results do not depend on thread count.
 const CHUNK: usize = 16_384;

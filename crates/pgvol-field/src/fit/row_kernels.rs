@@ -70,8 +70,8 @@ unsafe fn accumulate_avx2<const SQUARED: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::basis::Basis;
     use crate::fit::row_window::windows;
-    use crate::Basis;
     use glam::Vec3;
 
     /// The run-time choice gives the bits of the baseline loop, plain and squared, whole

@@ -6,9 +6,9 @@ use std::ops::Range;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::basis::Basis;
 use crate::kernel::{axis_window, Profile};
 use crate::stencil::mirror;
-use crate::Basis;
 
 /// 4 nodes per axis from flat index `first`, with their weights (unused ones zero).
 pub(crate) struct Window {

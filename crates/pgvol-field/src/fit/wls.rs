@@ -10,11 +10,17 @@
 use std::cell::RefCell;
 use std::time::Instant;
 
+use pgvol_core::Grid;
+
 use super::band_operator::{BandOperator, RowStencils};
 use super::band_rows::projection_rows;
-use super::{report, solve, ClosestPoint, FitOptions, FitReport};
-use crate::volume::check_inputs;
-use crate::{Basis, CoefficientVolume, FieldError, FitMethod, Grid};
+use super::options::{FitMethod, FitOptions};
+use super::report::{report, FitReport};
+use super::sign_check::spurious_sign_changes;
+use super::solve;
+use crate::basis::Basis;
+use crate::distance::ClosestPoint;
+use crate::volume::{check_inputs, CoefficientVolume, FieldError};
 
 /// The `Wls` fit from node samples that are exact within `options.band` spacings of the surface
 /// (farther ones may be clamped, as a narrow-band sampler gives them) and the surface's closest
@@ -31,7 +37,7 @@ pub fn wls_band(
     let (coeffs, mut report) = fit(&grid, basis, samples, surface, options);
     let volume = CoefficientVolume::new(grid, basis, coeffs)?;
     let t = Instant::now();
-    report.spurious_sign_changes = super::spurious_sign_changes(&volume, samples);
+    report.spurious_sign_changes = spurious_sign_changes(&volume, samples);
     report.stages.check = t.elapsed().as_secs_f64();
     report.method = FitMethod::Wls.name().to_string();
     report.seconds = start.elapsed().as_secs_f64();
@@ -143,7 +149,7 @@ pub(crate) fn fit(
 mod tests {
     use super::*;
     use crate::analytic::{Sphere, Torus};
-    use crate::fit::{SignedDistance, SurfaceOf};
+    use crate::distance::{SignedDistance, SurfaceOf};
     use glam::Vec3;
 
     fn grid(n: usize) -> Grid {

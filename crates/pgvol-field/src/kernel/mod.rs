@@ -1,41 +1,17 @@
 //! One basis function centred on a node, with value, gradient and Hessian, behind one trait so
 //! every basis can be held to the same checks. Offsets and derivatives are in grid units.
 
+mod jet;
 mod radial;
 mod separable;
 
+pub use jet::{Jet, Kernel};
 pub use radial::PseudoGaussian;
 pub use separable::{axis_window, AxisWindow, Profile};
 
 use glam::{Mat3, Vec3};
 
-use crate::Basis;
-
-/// A function value with its gradient and Hessian.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Jet {
-    pub value: f32,
-    pub gradient: Vec3,
-    pub hessian: Mat3,
-}
-
-impl Jet {
-    pub const ZERO: Jet = Jet {
-        value: 0.0,
-        gradient: Vec3::ZERO,
-        hessian: Mat3::ZERO,
-    };
-}
-
-/// A basis function `B(d)` of the offset `d` from its node, in grid units.
-pub trait Kernel: Sync {
-    /// `B` is zero when any `|d_i|` (separable) or `|d|` (radial) reaches this radius.
-    fn support(&self) -> f32;
-    /// Value, gradient and Hessian at offset `d`.
-    fn jet(&self, d: Vec3) -> Jet;
-    /// Whether the shifted copies on the integer lattice sum to one everywhere.
-    fn partition_of_unity(&self) -> bool;
-}
+use crate::basis::Basis;
 
 /// The kernel behind a basis. Separable bases are products of 1D profiles.
 pub fn kernel(basis: Basis) -> Box<dyn Kernel> {

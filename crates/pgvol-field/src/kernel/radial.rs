@@ -3,7 +3,7 @@
 
 use glam::{Mat3, Vec3};
 
-use super::{Jet, Kernel};
+use super::jet::{Jet, Kernel};
 
 /// `n` is the continuity order, `r` the support radius in grid spacings.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -79,7 +79,7 @@ impl MeshSdf {
 
     /// Signed distance on `grid`, exact where `extent` asks. `progress` gets the fraction done.
     /// When `Auto` chose the pseudonormal and the grid contradicts itself (see
-    /// [`sign_contradictions`]), the mesh does not bound a solid: the sign falls back to the
+    /// `sign_contradictions`), the mesh does not bound a solid: the sign falls back to the
     /// winding number for good and the grid is sampled again.
     pub fn sample(&self, grid: &Grid, extent: Extent, progress: &(dyn Fn(f64) + Sync)) -> Sampled {
         let sampled = self.sample_once(grid, extent, progress);

@@ -1,15 +1,12 @@
 //! Time to read a `.pgv` file into an evaluable `CoefficientVolume`.
 //!
 //! `cargo run --release -p pgvol-format --example read_bench -- FILE.pgv [RUNS]`
-//! Prints the minimum over RUNS (default 9) of: reading the file's bytes; `decode_pgv` on one
-//! thread and on every thread of the global pool (`RAYON_NUM_THREADS` sets it); and, for
-//! `sparse-bricks` files, the stages of the read run one at a time on one thread
-//! (`read_profile`). The machine is rarely idle, so the minimum is the figure to quote.
+//! Prints the minimum over RUNS (default 9) of: reading the file's bytes; and `decode_pgv` on one
+//! thread and on every thread of the global pool (`RAYON_NUM_THREADS` sets it). The machine is
+//! rarely idle, so the minimum is the figure to quote.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-
-use pgvol_format::read_profile::{profile_sparse_read, ReadStages};
 
 fn ms(d: Duration) -> String {
     format!("{:8.2} ms", d.as_secs_f64() * 1e3)
@@ -74,28 +71,6 @@ fn run() -> Result<(), String> {
     );
     println!("file to volume (read + decode) {}", ms(t_read + t_all));
 
-    if info.bricks_total.is_some() {
-        let mut best = ReadStages::default();
-        for i in 0..runs {
-            let (s, coeffs) = profile_sparse_read(&bytes, &path).map_err(|e| e.to_string())?;
-            if coeffs != file.volume.coeffs {
-                return Err("the staged read and decode_pgv differ".into());
-            }
-            let keep = |a: &mut Duration, b: Duration| *a = if i == 0 { b } else { (*a).min(b) };
-            keep(&mut best.parse, s.parse);
-            keep(&mut best.checksums, s.checksums);
-            keep(&mut best.decompress, s.decompress);
-            keep(&mut best.decode, s.decode);
-            keep(&mut best.fill, s.fill);
-        }
-        println!("stages, one at a time on 1 thread (each the min over the runs):");
-        println!("  header, maps, index, icrc    {}", ms(best.parse));
-        println!("  payload + brick CRCs         {}", ms(best.checksums));
-        println!("  zstd decompression           {}", ms(best.decompress));
-        println!("  unshuffle/undelta/dequant    {}", ms(best.decode));
-        println!("  dense array: alloc + fill    {}", ms(best.fill));
-        println!("  sum                          {}", ms(best.total()));
-    }
     Ok(())
 }
 

@@ -1,6 +1,6 @@
 //! Which coefficients the surface band needs: those a point within `band` spacings of the zero
 //! set can reach through the basis. The encoder stores every brick holding one, and may code
-//! the others in a stored brick more loosely (`fixed_step::settle_free_words`).
+//! the others in a stored brick more loosely (`free_words`).
 
 use pgvol_field::{Basis, CoefficientVolume};
 

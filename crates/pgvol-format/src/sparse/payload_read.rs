@@ -9,136 +9,24 @@
 //! Rows are cut one layer at a time, so their bookkeeping stays small next to the array even for
 //! thin grids in small bricks.
 
-use std::cell::RefCell;
 use std::path::Path;
 
 use rayon::prelude::*;
-use zstd::bulk::Decompressor;
 
-use crate::brick_codec::{decode_values, raw_len, WordScratch};
-use crate::pgv::{err, FormatError};
-use crate::sparse::{bit, Compression, Layout};
+use super::brick_read::{background, BrickReader};
+use super::index::{bit, layout, Layout};
+use crate::dense_alloc::zeroed;
+use crate::error::FormatError;
+use crate::header::PgvHeader;
 
-thread_local! {
-    /// One zstd context per thread, created on first use and kept from brick to brick and file
-    /// to file: creating one costs more than decompressing a brick.
-    static DCTX: RefCell<Option<Decompressor<'static>>> = const { RefCell::new(None) };
-}
-
-/// Buffers for decoding bricks, reused from brick to brick.
-#[derive(Default)]
-pub(crate) struct BrickReader {
-    raw: Vec<u8>,
-    scratch: WordScratch,
-}
-
-impl BrickReader {
-    /// Verifies and decodes stored brick `b` (index entry `e`) into `out`, one value per node.
-    pub(crate) fn decode(
-        &mut self,
-        l: &Layout,
-        b: usize,
-        e: usize,
-        path: &Path,
-        out: &mut [f32],
-    ) -> Result<(), FormatError> {
-        let blob = checked_blob(l, b, e, path)?;
-        let BrickReader { raw, scratch } = self;
-        // Nothing in here runs other rayon tasks, so the borrow cannot be taken twice.
-        DCTX.with_borrow_mut(|dctx| {
-            let raw = inflate(l, b, blob, dctx, raw, path)?;
-            let (_, n) = l.bricks.extent(b);
-            decode_values(raw, n, &l.sp, scratch, out).map_err(|_| non_finite(l, b, path))
-        })
-    }
-}
-
-/// The error for a brick holding an infinite or NaN coefficient.
-pub(crate) fn non_finite(l: &Layout, b: usize, path: &Path) -> FormatError {
-    err(
-        path,
-        format!(
-            "brick {:?} decodes to a non-finite coefficient",
-            l.bricks.coords(b)
-        ),
-    )
-}
-
-/// The blob of stored brick `b` (index entry `e`), after checking its CRC.
-pub(crate) fn checked_blob<'a>(
-    l: &Layout<'a>,
-    b: usize,
-    e: usize,
+/// Every coefficient of a sparse payload, x fastest.
+pub(crate) fn decode_payload(
+    header: &PgvHeader,
+    payload: &[u8],
     path: &Path,
-) -> Result<&'a [u8], FormatError> {
-    let (offset, len, crc) = l.entries[e];
-    // The layout check put every entry inside the data.
-    let blob = &l.data[offset as usize..offset as usize + len as usize];
-    if crc32fast::hash(blob) != crc {
-        return Err(err(
-            path,
-            format!(
-                "brick {:?} checksum mismatch: the file is corrupt",
-                l.bricks.coords(b)
-            ),
-        ));
-    }
-    Ok(blob)
-}
-
-/// The brick's bytes before compression: the blob itself, or its zstd frame decompressed into
-/// `buf` sized from the brick's node count (never from a number read in the file).
-pub(crate) fn inflate<'a>(
-    l: &Layout,
-    b: usize,
-    blob: &'a [u8],
-    dctx: &mut Option<Decompressor<'static>>,
-    buf: &'a mut Vec<u8>,
-    path: &Path,
-) -> Result<&'a [u8], FormatError> {
-    let coords = l.bricks.coords(b);
-    let (_, n) = l.bricks.extent(b);
-    let want = raw_len(n, &l.sp);
-    let raw = match l.sp.compression {
-        Compression::None => blob,
-        Compression::Zstd => {
-            if dctx.is_none() {
-                *dctx = Some(
-                    Decompressor::new()
-                        .map_err(|e| err(path, format!("cannot start zstd decompression: {e}")))?,
-                );
-            }
-            let dctx = dctx.as_mut().expect("created above");
-            buf.resize(want, 0);
-            // Fails if the output would be larger than the brick.
-            let got = dctx.decompress_to_buffer(blob, &mut buf[..]).map_err(|e| {
-                err(
-                    path,
-                    format!("brick {coords:?} does not decompress to {want} bytes: {e}"),
-                )
-            })?;
-            &buf[..got]
-        }
-    };
-    if raw.len() != want {
-        return Err(err(
-            path,
-            format!(
-                "brick {coords:?} holds {} bytes, a brick of {n:?} nodes needs {want}",
-                raw.len()
-            ),
-        ));
-    }
-    Ok(raw)
-}
-
-/// The value of every node of background brick `b`.
-pub(crate) fn background(l: &Layout, b: usize) -> f32 {
-    if bit(l.inside, b) {
-        -l.sp.clamp
-    } else {
-        l.sp.clamp
-    }
+) -> Result<Vec<f32>, FormatError> {
+    let l = layout(header, payload, path)?;
+    decode_all(&l, path)
 }
 
 /// The part of the dense array that brick row `(bj, bk)` covers: in each z-slice of the brick
@@ -277,7 +165,7 @@ pub(crate) fn fill_brick_row(
 pub(crate) fn decode_all(l: &Layout, path: &Path) -> Result<Vec<f32>, FormatError> {
     let [nx, ny, nz] = l.bricks.dims;
     // Node count is bounded by the container check (MAX_GRID_NODES).
-    let mut coeffs = crate::dense_alloc::zeroed(nx * ny * nz);
+    let mut coeffs = zeroed(nx * ny * nz);
     let firsts = layer_first_entries(l);
     let layers: Vec<Result<(), FormatError>> = coeffs
         .par_chunks_mut(nx * ny * l.bricks.edge)

@@ -1,13 +1,14 @@
 //! Decoding one stored brick's bytes, once decompressed, back to coefficients: gather the
 //! residual words (undoing the byte shuffle), undo zig-zag and prediction, dequantise
 //! (`docs/format.md`, "The sparse-bricks encoding"). Each step is one tight loop over the brick,
-//! with buffers reused across bricks; the encoder's side is `sparse::brick_raw`.
+//! with buffers reused across bricks; the encoder's side is `brick_encoder::brick_raw`.
 
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
+use super::quantise::{unorder16, unorder32, Q16_PARAMS};
 use crate::fixed_step::FixedScale;
-use crate::sparse::{unorder16, unorder32, Precision, Predictor, SparseParams, Q16_PARAMS};
+use crate::sparse_params::{Precision, Predictor, SparseParams};
 
 /// Buffers reused from brick to brick, so that decoding a brick allocates nothing.
 #[derive(Default)]
@@ -261,7 +262,10 @@ fn unpredict(words: &mut [u32], n: [usize; 3], pred: Predictor, mask: u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sparse::{brick_raw, dequantise, predict, quantise, Compression};
+    use crate::sparse::brick_encoder::brick_raw;
+    use crate::sparse::predict::predict;
+    use crate::sparse::quantise::{dequantise, quantise};
+    use crate::sparse_params::Compression;
     use proptest::prelude::*;
 
     fn unzigzag(z: u32, bits: u32) -> u32 {
@@ -314,7 +318,7 @@ mod tests {
             compression: Compression::None,
             clamp: 1.0,
             band: 3.0,
-            fixed: (precision == Precision::Fixed).then_some(crate::fixed_step::FixedScale {
+            fixed: (precision == Precision::Fixed).then_some(FixedScale {
                 step: 1.0 / 1024.0,
                 knee: 700,
                 ratio: 8,

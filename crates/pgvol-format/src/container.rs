@@ -1,0 +1,211 @@
+//! The `.pgv` container: the framing of a header and a payload, each with its CRC, written and
+//! checked.
+//!
+//! Layout (all integers little-endian):
+//! ```text
+//! magic    8 bytes  "PGVOL\0\r\n" (the CR/LF catch text-mode mangling)
+//! version  u32      1
+//! hlen     u32      length of the header, at most 1 MiB
+//! header   hlen     UTF-8 JSON (PgvHeader)
+//! hcrc     u32      CRC-32 of the header bytes
+//! plen     u64      payload length
+//! payload  plen     the coefficients as described by header.encoding
+//! pcrc     u32      CRC-32 of the payload
+//! ```
+//! Every size is checked against the file and the grid before anything is allocated from it.
+
+use std::path::Path;
+
+use crate::error::{err, FormatError};
+use crate::header::{PgvHeader, ENCODING_DENSE_F32};
+use crate::sparse_params::ENCODING_SPARSE;
+
+pub const MAGIC: &[u8; 8] = b"PGVOL\0\r\n";
+pub const VERSION: u32 = 1;
+const MAX_HEADER: usize = 1 << 20;
+
+/// Frames a header and a payload: magic, version, header with its CRC, payload with its CRC.
+pub(crate) fn container(header: &PgvHeader, payload: &[u8]) -> Vec<u8> {
+    let header = serde_json::to_vec(header).expect("header serialises");
+    let mut out = Vec::with_capacity(32 + header.len() + payload.len());
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(&header);
+    out.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(payload);
+    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    out
+}
+
+/// A cursor that refuses to read past the end.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize, what: &str, path: &Path) -> Result<&'a [u8], FormatError> {
+        let left = self.bytes.len() - self.at;
+        if n > left {
+            return Err(err(
+                path,
+                format!("truncated file: {what} needs {n} bytes, {left} left"),
+            ));
+        }
+        let s = &self.bytes[self.at..self.at + n];
+        self.at += n;
+        Ok(s)
+    }
+
+    fn u32(&mut self, what: &str, path: &Path) -> Result<u32, FormatError> {
+        Ok(u32::from_le_bytes(
+            self.take(4, what, path)?.try_into().expect("4 bytes"),
+        ))
+    }
+
+    fn u64(&mut self, what: &str, path: &Path) -> Result<u64, FormatError> {
+        Ok(u64::from_le_bytes(
+            self.take(8, what, path)?.try_into().expect("8 bytes"),
+        ))
+    }
+}
+
+/// A checked container: the header and the payload.
+pub(crate) struct Container<'a> {
+    pub header: PgvHeader,
+    pub payload: &'a [u8],
+    /// The stored CRC-32 of the payload.
+    pub payload_crc: u32,
+}
+
+impl Container<'_> {
+    /// Hashes the payload and compares it with its stored CRC.
+    pub(crate) fn check_payload(&self, path: &Path) -> Result<(), FormatError> {
+        if crc32fast::hash(self.payload) != self.payload_crc {
+            return Err(err(
+                path,
+                "coefficient checksum mismatch: the file is corrupt",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Parses and checks everything but the payload's contents. The payload CRC is verified only
+/// when `check_payload` is set, so single bricks can be read without hashing the whole payload.
+pub(crate) fn parse_container<'a>(
+    bytes: &'a [u8],
+    path: &Path,
+    check_payload: bool,
+) -> Result<Container<'a>, FormatError> {
+    let mut r = Reader { bytes, at: 0 };
+    if bytes.is_empty() {
+        return Err(err(path, "empty file"));
+    }
+    let magic = r.take(MAGIC.len(), "the magic number", path)?;
+    if magic != MAGIC {
+        return Err(err(path, "not a .pgv file (wrong magic number)"));
+    }
+    let version = r.u32("the version", path)?;
+    if version != VERSION {
+        return Err(err(
+            path,
+            format!(
+                "format version {version} is not supported (this reader knows version {VERSION})"
+            ),
+        ));
+    }
+    let hlen = r.u32("the header length", path)? as usize;
+    if hlen > MAX_HEADER {
+        return Err(err(
+            path,
+            format!("header length {hlen} exceeds the limit of {MAX_HEADER} bytes"),
+        ));
+    }
+    let header_bytes = r.take(hlen, "the header", path)?;
+    let hcrc = r.u32("the header checksum", path)?;
+    if crc32fast::hash(header_bytes) != hcrc {
+        return Err(err(path, "header checksum mismatch: the file is corrupt"));
+    }
+    let header: PgvHeader = serde_json::from_slice(header_bytes)
+        .map_err(|e| err(path, format!("header is not valid: {e}")))?;
+    if header.encoding != ENCODING_DENSE_F32 && header.encoding != ENCODING_SPARSE {
+        return Err(err(
+            path,
+            format!("unknown coefficient encoding '{}'", header.encoding),
+        ));
+    }
+    header
+        .basis
+        .validate()
+        .map_err(|e| err(path, format!("invalid basis: {e}")))?;
+    let g = header.grid;
+    if !(g.origin.is_finite() && g.spacing.is_finite() && g.spacing > 0.0) {
+        return Err(err(
+            path,
+            "grid origin or spacing is not a finite positive number",
+        ));
+    }
+    if g.dims.iter().any(|&n| n < 2) {
+        return Err(err(
+            path,
+            format!(
+                "grid dimensions {:?}: every axis needs at least 2 nodes",
+                g.dims
+            ),
+        ));
+    }
+    let nodes = g
+        .dims
+        .iter()
+        .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
+    let nodes = match nodes {
+        Some(n) if n as u128 <= pgvol_field::MAX_GRID_NODES => n,
+        _ => {
+            return Err(err(
+                path,
+                format!("grid dimensions {:?} are too large", g.dims),
+            ))
+        }
+    };
+    let plen = r.u64("the payload length", path)?;
+    if header.encoding == ENCODING_DENSE_F32 && plen != nodes * 4 {
+        return Err(err(
+            path,
+            format!(
+                "payload holds {plen} bytes but a {:?} grid of f32 needs {}",
+                g.dims,
+                nodes * 4
+            ),
+        ));
+    }
+    let left = (bytes.len() - r.at) as u64;
+    if plen > left {
+        return Err(err(
+            path,
+            format!("truncated file: the payload needs {plen} bytes, {left} left"),
+        ));
+    }
+    let payload = r.take(plen as usize, "the payload", path)?;
+    let payload_crc = r.u32("the payload checksum", path)?;
+    let c = Container {
+        header,
+        payload,
+        payload_crc,
+    };
+    if check_payload {
+        c.check_payload(path)?;
+    }
+    if r.at != bytes.len() {
+        return Err(err(
+            path,
+            format!(
+                "{} unexpected bytes after the end of the data",
+                bytes.len() - r.at
+            ),
+        ));
+    }
+    Ok(c)
+}

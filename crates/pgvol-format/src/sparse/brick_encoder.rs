@@ -1,0 +1,125 @@
+//! Encoding the stored bricks: quantise, settle the free words, predict, zig-zag, shuffle the
+//! bytes into planes and compress, each brick on its own. The decoder's side is
+//! `brick_decoder`.
+
+use pgvol_field::CoefficientVolume;
+use rayon::prelude::*;
+
+use super::bricks::Bricks;
+use super::free_words::{settle_free_words, FreeNodes};
+use super::predict::predict;
+use super::quantise::{dequantise, quantise};
+use crate::sparse_params::{Compression, Precision, SparseParams};
+
+fn zigzag(r: u32, bits: u32) -> u32 {
+    let half = 1u64 << (bits - 1);
+    let s = if (r as u64) >= half {
+        r as i64 - (1i64 << bits)
+    } else {
+        r as i64
+    };
+    (if s >= 0 { 2 * s } else { -2 * s - 1 }) as u32
+}
+
+/// Encodes one brick's values to its blob (before compression: q16 parameters, then residual
+/// bytes, byte planes if shuffled).
+pub(crate) fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &SparseParams) -> Vec<u8> {
+    let w = sp.precision.width();
+    let bits = 8 * w as u32;
+    let mask = if w == 4 { u32::MAX } else { 0xffff };
+    let residuals: Vec<u32> = (0..words.len())
+        .map(|at| {
+            let r = words[at].wrapping_sub(predict(words, n, at, sp.predictor, mask)) & mask;
+            zigzag(r, bits)
+        })
+        .collect();
+    let mut raw = params.to_vec();
+    if sp.shuffle {
+        for b in 0..w {
+            raw.extend(residuals.iter().map(|r| (r >> (8 * b)) as u8));
+        }
+    } else {
+        for r in &residuals {
+            raw.extend_from_slice(&r.to_le_bytes()[..w]);
+        }
+    }
+    raw
+}
+
+/// What the encoder stores: the bricks of `volume` marked in `keep`, with the coefficients the
+/// band needs in `free`.
+pub(crate) struct StoredBricks<'a> {
+    pub(crate) volume: &'a CoefficientVolume,
+    pub(crate) bricks: &'a Bricks,
+    pub(crate) keep: &'a [bool],
+    pub(crate) free: &'a FreeNodes<'a>,
+}
+
+/// The blobs of the stored bricks and their largest coefficient error.
+pub(crate) type Encoded = (Vec<Vec<u8>>, f32);
+
+/// Stored bricks under one precision: blobs and the largest error of a coefficient the band
+/// needs, or `None` if the precision cannot hold the values.
+pub(crate) fn encode_bricks(
+    s: &StoredBricks,
+    sp: &SparseParams,
+    level: i32,
+) -> Result<Option<Encoded>, String> {
+    // Bricks are independent: encode them in parallel, collected in brick order so the file
+    // does not depend on the thread count.
+    let stored: Vec<usize> = (0..s.bricks.total()).filter(|&b| s.keep[b]).collect();
+    let encoded: Vec<Option<(Vec<u8>, f32)>> = stored
+        .par_iter()
+        .map(|&b| encode_brick(s, sp, level, b))
+        .collect::<Result<_, String>>()?;
+    let mut blobs = Vec::with_capacity(encoded.len());
+    let mut worst = 0.0f32;
+    for brick in encoded {
+        let Some((blob, brick_worst)) = brick else {
+            return Ok(None);
+        };
+        blobs.push(blob);
+        worst = worst.max(brick_worst);
+    }
+    Ok(Some((blobs, worst)))
+}
+
+/// One stored brick's compressed bytes and its largest error over needed coefficients; `None`
+/// when `sp.precision` cannot represent its coefficients.
+fn encode_brick(
+    s: &StoredBricks,
+    sp: &SparseParams,
+    level: i32,
+    b: usize,
+) -> Result<Option<(Vec<u8>, f32)>, String> {
+    let StoredBricks {
+        volume,
+        bricks,
+        free,
+        ..
+    } = s;
+    let nodes: Vec<usize> = bricks.nodes(b).collect();
+    let values: Vec<f32> = nodes.iter().map(|&i| volume.coeffs[i]).collect();
+    let Some((params, mut words)) = quantise(&values, sp.precision, sp.fixed) else {
+        return Ok(None);
+    };
+    let (_, n) = bricks.extent(b);
+    let loose: Vec<bool> = nodes.iter().map(|&i| !free.needed[i]).collect();
+    if sp.precision == Precision::Fixed && free.tolerance_steps > 0 {
+        settle_free_words(&mut words, &loose, n, sp.predictor, free.tolerance_steps);
+    }
+    let decoded = dequantise(&params, &words, sp.precision, sp.fixed);
+    let mut worst = 0.0f32;
+    for ((a, d), l) in values.iter().zip(decoded).zip(&loose) {
+        if !l {
+            worst = worst.max((a - d).abs());
+        }
+    }
+    let raw = brick_raw(&params, &words, n, sp);
+    let blob = match sp.compression {
+        Compression::None => raw,
+        Compression::Zstd => zstd::bulk::compress(&raw, level)
+            .map_err(|e| format!("zstd compression failed: {e}"))?,
+    };
+    Ok(Some((blob, worst)))
+}

@@ -1,0 +1,88 @@
+//! The encoder's choice of the values of stored coefficients the surface band does not need
+//! (`fixed` only): moved towards their prediction, so that their residuals are zero.
+
+use super::options::EncodeOptions;
+use super::predict::predict;
+use crate::sparse_params::Predictor;
+
+/// Which stored coefficients the band needs (per grid node), and how many `fixed` steps the
+/// others may move.
+pub(crate) struct FreeNodes<'a> {
+    pub(crate) needed: &'a [bool],
+    pub(crate) tolerance_steps: i32,
+}
+
+impl<'a> FreeNodes<'a> {
+    /// The nodes the band needs, and the tolerance of `opts` in coarse `fixed` words for a
+    /// basis whose weights sum to at most `weight`.
+    pub(crate) fn new(needed: &'a [bool], opts: &EncodeOptions, weight: f32) -> FreeNodes<'a> {
+        FreeNodes {
+            needed,
+            // In coarse words, so that no value moves further than the tolerance.
+            tolerance_steps: (opts.free_tolerance
+                / (opts.fixed_step / weight * opts.fixed_ratio as f32))
+                .clamp(0.0, 1e9) as i32,
+        }
+    }
+}
+
+/// Replaces each free word (`free[at]`, in coding order) by the word closest to its prediction
+/// from the words before it (already settled) among those between it and `tolerance` words
+/// nearer to zero, so that its residual is usually zero. Only towards zero: magnitudes never
+/// grow, so the field's largest node value (which `pgvol offset` reads as the stored band) does
+/// not either, and the sign stays. Words are two's-complement integers.
+pub(crate) fn settle_free_words(
+    words: &mut [u32],
+    free: &[bool],
+    n: [usize; 3],
+    pred: Predictor,
+    tolerance: i32,
+) {
+    for at in 0..words.len() {
+        if free[at] {
+            let p = predict(words, n, at, pred, u32::MAX) as i32;
+            let q = words[at] as i32;
+            let (lo, hi) = if q >= 0 {
+                (q.saturating_sub(tolerance).max(0), q)
+            } else {
+                (q, q.saturating_add(tolerance).min(0))
+            };
+            words[at] = p.clamp(lo, hi) as u32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn free_words_follow_the_prediction_within_the_tolerance() {
+        // A ramp along x with the middle words free: they become the ramp where it is within
+        // reach, and stop at the tolerance where it is not.
+        let mut words: Vec<u32> = [0i32, 10, 20, 999, 40, -999, 60]
+            .iter()
+            .map(|&v| v as u32)
+            .collect();
+        let free = [false, false, false, true, false, true, false];
+        settle_free_words(&mut words, &free, [7, 1, 1], Predictor::DeltaX, 5);
+        let got: Vec<i32> = words.iter().map(|&w| w as i32).collect();
+        // delta-x predicts the previous word.
+        assert_eq!(got, [0, 10, 20, 994, 40, -994, 60]);
+        let mut words: Vec<u32> = vec![3, 7, 12];
+        settle_free_words(
+            &mut words,
+            &[false, true, false],
+            [3, 1, 1],
+            Predictor::DeltaX,
+            5,
+        );
+        assert_eq!(words, [3, 3, 12]);
+        // Never away from zero, nor across it.
+        let mut words: Vec<u32> = [9i32, 5, -9, -5, 2, -3].iter().map(|&v| v as u32).collect();
+        let free = [false, true, false, true, false, true];
+        settle_free_words(&mut words, &free, [6, 1, 1], Predictor::DeltaX, 5);
+        let got: Vec<i32> = words.iter().map(|&w| w as i32).collect();
+        assert_eq!(got, [9, 5, -9, -5, 2, 0]);
+    }
+}

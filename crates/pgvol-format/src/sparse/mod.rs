@@ -1,0 +1,46 @@
+//! The `sparse-bricks` payload encoding: the coefficient grid cut into cubic bricks, only the
+//! bricks near the surface stored (quantised, predicted, byte-shuffled, zstd-compressed, each
+//! with its own CRC), every other brick reconstructed as a constant `±clamp`.
+//!
+//! Payload layout (all integers little-endian; see `docs/format.md`):
+//! ```text
+//! stored bitmap  ceil(B/8) bytes   bit b (byte b/8, LSB first) set: brick b is stored
+//! inside bitmap  ceil(B/8) bytes   bit b set: unstored brick b is inside (value −clamp)
+//! index          S × 16 bytes      per stored brick, in brick order: offset u64, length u32, crc u32
+//! icrc           u32               CRC-32 of the bitmaps and the index
+//! data           the brick blobs, back to back in brick order
+//! ```
+//!
+//! Writing: `writer` stores the bricks `kept_bricks` picks (those holding a coefficient
+//! `stored_band` needs), encoded by `brick_encoder` at the precision `precision_choice` picks,
+//! behind the maps and index of `index`. Reading: `index` checks the layout, `brick_read` and
+//! `brick_decoder` decode one stored brick, `payload_read` a whole payload in parallel,
+//! `read_brick` a single brick and `info` the header and index alone.
+
+mod brick_decoder;
+mod brick_encoder;
+mod brick_read;
+mod bricks;
+mod free_words;
+mod index;
+mod info;
+mod kept_bricks;
+mod options;
+pub(crate) mod payload_read;
+mod precision_choice;
+mod predict;
+mod quantise;
+mod read_brick;
+#[cfg(test)]
+mod read_profile;
+mod stored_band;
+mod writer;
+
+pub use crate::sparse_params::{
+    Compression, Precision, Predictor, SparseParams, BRICK_RANGE, ENCODING_SPARSE,
+};
+pub use info::{pgv_info, PgvInfo};
+pub use options::{EncodeOptions, EncodeReport};
+pub use precision_choice::{basis_weight_bound, AUTO_TOLERANCE};
+pub use read_brick::{brick_grid, read_brick, Brick};
+pub use writer::{encode_pgv_with, write_pgv_with};
