@@ -3,8 +3,8 @@
 //! and closures (on an analytic rotated box).
 //!
 //! Bounds of the encoded volumes are the largest seen over 20 000 points within two spacings of
-//! the surface at 32³, with a margin of about 20 %: accuracy in spacings, then the Lipschitz
-//! bound (the largest gradient norm). Exact fields are held to the distance up to rounding and
+//! the surface at 32³, with a margin of 20 % or more: accuracy in spacings, then the Lipschitz
+//! bound (over the largest gradient norm). Exact fields are held to the distance up to rounding and
 //! to a Lipschitz bound of 1.
 
 use pgvol::contour::Field;
