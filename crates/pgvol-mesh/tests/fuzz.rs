@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 use std::sync::OnceLock;
 
-use pgvol_mesh::{read_bytes, write, MeshFormat};
+use pgvol_mesh::{read_bytes, write, Mesh, MeshFormat, MAX_COORDINATE};
 use proptest::prelude::*;
 
 const FORMATS: [MeshFormat; 5] = [
@@ -18,44 +18,100 @@ const FORMATS: [MeshFormat; 5] = [
     MeshFormat::Ply,
 ];
 
+/// A valid file and the number of triangles reading it must give.
+struct Sample {
+    format: MeshFormat,
+    bytes: Vec<u8>,
+    triangles: usize,
+}
+
 /// A valid file of every format, plus a few hand-written variants that reach other code paths.
-fn samples() -> &'static Vec<(MeshFormat, Vec<u8>)> {
-    static SAMPLES: OnceLock<Vec<(MeshFormat, Vec<u8>)>> = OnceLock::new();
+fn samples() -> &'static Vec<Sample> {
+    static SAMPLES: OnceLock<Vec<Sample>> = OnceLock::new();
     SAMPLES.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
+        let cube = common::odd_cube();
         let mut out = Vec::new();
-        for f in FORMATS {
-            let path = dir.path().join(format!("s.{}", f.extension()));
-            write(&path, &common::odd_cube()).unwrap();
-            out.push((f, std::fs::read(&path).unwrap()));
+        for format in FORMATS {
+            let path = dir.path().join(format!("s.{}", format.extension()));
+            write(&path, &cube).unwrap();
+            out.push(Sample {
+                format,
+                bytes: std::fs::read(&path).unwrap(),
+                triangles: cube.triangles.len(),
+            });
         }
-        out.push((
-            MeshFormat::Stl,
-            b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+        out.push(Sample {
+            format: MeshFormat::Stl,
+            bytes: b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
               vertex 0 1 0\nendloop\nendfacet\nendsolid x\n"
                 .to_vec(),
-        ));
-        out.push((
-            MeshFormat::Ply,
-            b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+            triangles: 1,
+        });
+        // One quad: two triangles.
+        out.push(Sample {
+            format: MeshFormat::Ply,
+            bytes: b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
               property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
               end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"
                 .to_vec(),
-        ));
-        out.push((
-            MeshFormat::Obj,
-            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4/1/1 -3 -2 -1\nf 1 2 3\n".to_vec(),
-        ));
+            triangles: 2,
+        });
+        // A quad with negative indices and a triangle: three triangles.
+        out.push(Sample {
+            format: MeshFormat::Obj,
+            bytes: b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4/1/1 -3 -2 -1\nf 1 2 3\n".to_vec(),
+            triangles: 3,
+        });
         out
     })
 }
 
-fn check(bytes: &[u8], format: MeshFormat) {
+/// Reads `bytes` and holds the result to the readers' contract: an error names the file and a
+/// problem; a mesh has triangles, only indices of its own vertices and only finite coordinates
+/// within the accepted range. Returns the mesh read, if any.
+fn check(bytes: &[u8], format: MeshFormat) -> Option<Mesh> {
     let name = Path::new("fuzz.bin");
-    if let Err(e) = read_bytes(bytes, format, name) {
-        assert!(e.to_string().starts_with("fuzz.bin: "), "{e}");
-        assert!(!e.problem.is_empty());
+    match read_bytes(bytes, format, name) {
+        Err(e) => {
+            assert!(e.to_string().starts_with("fuzz.bin: "), "{e}");
+            assert!(!e.problem.is_empty());
+            None
+        }
+        Ok(mesh) => {
+            assert!(
+                !mesh.triangles.is_empty(),
+                "{format:?}: a mesh without triangles"
+            );
+            let n = mesh.positions.len();
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                assert!(
+                    tri.iter().all(|&i| (i as usize) < n),
+                    "{format:?}: triangle {t} {tri:?} indexes past {n} vertices"
+                );
+            }
+            for (i, p) in mesh.positions.iter().enumerate() {
+                assert!(
+                    p.is_finite() && p.abs().max_element() < MAX_COORDINATE,
+                    "{format:?}: vertex {i} at {p}"
+                );
+            }
+            Some(mesh)
+        }
     }
+}
+
+/// A sample read whole: it must succeed with its own triangle count.
+fn check_valid(sample: &Sample) -> Mesh {
+    let mesh = check(&sample.bytes, sample.format)
+        .unwrap_or_else(|| panic!("{:?}: a valid file was refused", sample.format));
+    assert_eq!(
+        mesh.triangles.len(),
+        sample.triangles,
+        "{:?}",
+        sample.format
+    );
+    mesh
 }
 
 fn format_strategy() -> impl Strategy<Value = MeshFormat> {
@@ -88,9 +144,13 @@ proptest! {
 
     #[test]
     fn truncated_valid_files(which in any::<prop::sample::Index>(), cut in any::<prop::sample::Index>()) {
-        let (format, bytes) = which.get(samples());
-        let cut = cut.index(bytes.len() + 1);
-        check(&bytes[..cut], *format);
+        let sample = which.get(samples());
+        let cut = cut.index(sample.bytes.len() + 1);
+        if cut == sample.bytes.len() {
+            check_valid(sample);
+        } else {
+            check(&sample.bytes[..cut], sample.format);
+        }
     }
 
     #[test]
@@ -98,13 +158,17 @@ proptest! {
         which in any::<prop::sample::Index>(),
         edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8),
     ) {
-        let (format, bytes) = which.get(samples());
-        let mut bytes = bytes.clone();
+        let sample = which.get(samples());
+        let mut bytes = sample.bytes.clone();
         for (at, value) in edits {
             let i = at.index(bytes.len());
             bytes[i] = value;
         }
-        check(&bytes, *format);
+        if bytes == sample.bytes {
+            check_valid(sample);
+        } else {
+            check(&bytes, sample.format);
+        }
     }
 
     #[test]
@@ -113,31 +177,47 @@ proptest! {
         edits in prop::collection::vec((any::<prop::sample::Index>(), prop::sample::select(b"-0123456789.e+ /\n".to_vec())), 1..6),
     ) {
         // Textual edits keep text formats parseable far enough to reach index and number checks.
-        let (format, bytes) = which.get(samples());
-        let mut bytes = bytes.clone();
+        let sample = which.get(samples());
+        let mut bytes = sample.bytes.clone();
         for (at, value) in edits {
             let i = at.index(bytes.len());
             bytes[i] = value;
         }
-        check(&bytes, *format);
+        if bytes == sample.bytes {
+            check_valid(sample);
+        } else {
+            check(&bytes, sample.format);
+        }
     }
 }
 
 #[test]
 fn every_truncation_of_small_samples() {
-    for (format, bytes) in samples() {
-        if bytes.len() <= 4096 {
-            for cut in 0..bytes.len() {
-                check(&bytes[..cut], *format);
+    for sample in samples() {
+        if sample.bytes.len() <= 4096 {
+            for cut in 0..sample.bytes.len() {
+                check(&sample.bytes[..cut], sample.format);
             }
         }
     }
 }
 
+/// Every sample reads with its triangle count, and the cube samples give back the cube's box,
+/// so a reader that refuses everything, or returns a placeholder, fails here.
 #[test]
-fn samples_are_valid() {
-    for (format, bytes) in samples() {
-        let m = read_bytes(bytes, *format, Path::new("sample")).unwrap();
-        assert!(!m.triangles.is_empty());
+fn samples_read_back_whole() {
+    let (lo, hi) = common::odd_cube().bounds().unwrap();
+    for sample in samples() {
+        let mesh = check_valid(sample);
+        if sample.triangles == 12 {
+            let (got_lo, got_hi) = mesh.bounds().unwrap();
+            let tol = 1e-6 * hi.abs().max(lo.abs()).max_element();
+            assert!(
+                (got_lo - lo).abs().max_element() <= tol
+                    && (got_hi - hi).abs().max_element() <= tol,
+                "{:?}: box {got_lo}..{got_hi}, want {lo}..{hi}",
+                sample.format
+            );
+        }
     }
 }

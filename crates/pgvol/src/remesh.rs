@@ -83,7 +83,11 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
             };
             let out = decode(&volume, &decode_options, progress);
             timings.contour = start.elapsed().as_secs_f64();
-            out.map_err(|_| vanished())?
+            // An empty level set means the surface vanished; a cancellation stays one.
+            out.map_err(|e| match e.kind() {
+                ErrorKind::Cancelled => e,
+                _ => vanished(),
+            })?
         }
     };
     if out.triangles.is_empty() {

@@ -201,7 +201,14 @@ mod tests {
         let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
         let mut mesh = Mesh::new(
             positions,
-            vec![[0, 1, 2], [1, 2, 0], [0, 2, 1], [0, 1, 3], [2, 0, 1], [0, 1, 2]],
+            vec![
+                [0, 1, 2],
+                [1, 2, 0],
+                [0, 2, 1],
+                [0, 1, 3],
+                [2, 0, 1],
+                [0, 1, 2],
+            ],
         );
         assert_eq!(mesh.drop_duplicate_triangles(), 3);
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 1], [0, 1, 3]]);

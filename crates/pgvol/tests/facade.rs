@@ -1,0 +1,607 @@
+//! The library's entry points: in-memory and path I/O agree, the encoding band is recorded and
+//! enforced, errors carry their kind and file, and progress reports stages and can cancel.
+
+use std::io::{self, Read};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use pgvol::glam::Vec3;
+use pgvol::mesh::{shapes, MeshFormat};
+use pgvol::{
+    Basis, DecodeOptions, EncodeOptions, ErrorKind, FitMethod, GridSpec, Mesh, Progress,
+    RemeshField, RemeshOptions, SdfOptions, Shape, ShellKind, ShellSide, Silent, StorageOptions,
+};
+
+fn sphere() -> Mesh {
+    shapes::octasphere(2)
+}
+
+fn encode_options(res: usize) -> EncodeOptions {
+    EncodeOptions {
+        grid: GridSpec::Res(res),
+        ..EncodeOptions::default()
+    }
+}
+
+fn encoded(res: usize) -> pgvol::Encoded {
+    pgvol::encode(&sphere(), &encode_options(res), &Silent).unwrap()
+}
+
+/// The error's kind and, when given, the file it names.
+#[track_caller]
+fn assert_error<T: std::fmt::Debug>(
+    result: pgvol::Result<T>,
+    kind: ErrorKind,
+    path: Option<&Path>,
+) -> pgvol::Error {
+    let e = result.expect_err("expected an error");
+    assert_eq!(e.kind(), kind, "{e}");
+    if let Some(path) = path {
+        assert_eq!(e.path(), Some(path), "{e}");
+    }
+    e
+}
+
+// ---------------------------------------------------------------------------------------------
+// I/O: bytes, readers and writers against paths.
+
+#[test]
+fn pgv_bytes_writers_and_paths_give_the_same_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = encoded(24).file;
+    for storage in [
+        StorageOptions::default(),
+        StorageOptions {
+            dense: true,
+            ..StorageOptions::default()
+        },
+    ] {
+        let (bytes, report) = pgvol::pgv_bytes(&file, &storage).unwrap();
+        assert_eq!(report.is_none(), storage.dense);
+
+        let path = dir.path().join("s.pgv");
+        let written = pgvol::write_pgv(&path, &file, &storage).unwrap();
+        assert_eq!(written, report);
+        assert_eq!(std::fs::read(&path).unwrap(), bytes);
+
+        let mut sink = Vec::new();
+        let streamed = pgvol::write_pgv_to(&mut sink, &file, &storage).unwrap();
+        assert_eq!(streamed, report);
+        assert_eq!(sink, bytes);
+
+        let from_path = pgvol::read_pgv(&path).unwrap();
+        let name = Path::new("memory.pgv");
+        assert_eq!(pgvol::read_pgv_bytes(&bytes, name).unwrap(), from_path);
+        assert_eq!(
+            pgvol::read_pgv_from(&mut bytes.as_slice(), name).unwrap(),
+            from_path
+        );
+        if storage.dense {
+            // Dense storage is f32 throughout: the file comes back as it was.
+            assert_eq!(from_path, file);
+        }
+    }
+}
+
+#[test]
+fn mesh_bytes_writers_and_paths_agree_in_every_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = sphere();
+    for format in [
+        MeshFormat::Obj,
+        MeshFormat::Gltf,
+        MeshFormat::Glb,
+        MeshFormat::Stl,
+        MeshFormat::Ply,
+    ] {
+        let path = dir.path().join(format!("m.{}", format.extension()));
+        pgvol::write_mesh(&path, &mesh).unwrap();
+        assert_eq!(pgvol::mesh_format(&path).unwrap(), format);
+        let on_disk = std::fs::read(&path).unwrap();
+        let mut sink = Vec::new();
+        pgvol::write_mesh_to(&mut sink, &mesh, format, &path).unwrap();
+        assert_eq!(sink, on_disk, "{format:?}");
+
+        let (from_path, report) = pgvol::read_mesh(&path).unwrap();
+        let (from_bytes, report_bytes) =
+            pgvol::read_mesh_bytes(&on_disk, format, Path::new("memory")).unwrap();
+        assert_eq!(from_bytes, from_path, "{format:?}");
+        assert_eq!(report_bytes, report, "{format:?}");
+        assert_eq!(
+            from_path.triangles.len(),
+            mesh.triangles.len(),
+            "{format:?}"
+        );
+    }
+}
+
+#[test]
+fn in_memory_readers_name_the_given_file_in_errors() {
+    let name = Path::new("in/memory.pgv");
+    assert_error(
+        pgvol::read_pgv_bytes(b"not a pgv file", name),
+        ErrorKind::InputFile,
+        Some(name),
+    );
+
+    struct Failing;
+    impl Read for Failing {
+        fn read(&mut self, _: &mut [u8]) -> io::Result<usize> {
+            Err(io::Error::other("the disk went away"))
+        }
+    }
+    let e = assert_error(
+        pgvol::read_pgv_from(&mut Failing, name),
+        ErrorKind::InputFile,
+        Some(name),
+    );
+    assert!(e.to_string().contains("the disk went away"), "{e}");
+
+    let mesh_name = Path::new("in/memory.stl");
+    assert_error(
+        pgvol::read_mesh_bytes(b"solid nothing\n", MeshFormat::Stl, mesh_name),
+        ErrorKind::InputFile,
+        Some(mesh_name),
+    );
+
+    struct Full;
+    impl io::Write for Full {
+        fn write(&mut self, _: &[u8]) -> io::Result<usize> {
+            Err(io::Error::other("no space left"))
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+    let file = encoded(16).file;
+    assert_error(
+        pgvol::write_pgv_to(&mut Full, &file, &StorageOptions::default()),
+        ErrorKind::OutputFile,
+        None,
+    );
+    let out = Path::new("out/memory.obj");
+    assert_error(
+        pgvol::write_mesh_to(&mut Full, &sphere(), MeshFormat::Obj, out),
+        ErrorKind::OutputFile,
+        Some(out),
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The band: recorded by encode, kept by the file, enforced by offsets and shells.
+
+#[test]
+fn encode_records_its_band_and_the_file_keeps_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for band in [pgvol::ENCODE_BAND, 6.5] {
+        let options = EncodeOptions {
+            band,
+            ..encode_options(24)
+        };
+        let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
+        let h = file.volume.grid.spacing;
+        let recorded = pgvol::recorded_band(&file).expect("a recorded band");
+        assert!((recorded - band * h).abs() <= 1e-6 * recorded, "{recorded}");
+
+        let path = dir.path().join("b.pgv");
+        pgvol::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
+        let back = pgvol::read_pgv(&path).unwrap();
+        assert_eq!(pgvol::recorded_band(&back), Some(recorded));
+        let stored = Shape::from_file(back);
+        assert_eq!(stored.band, Some(recorded));
+
+        // The sparse file keeps what an offset to the edge of the band reads: it moves the
+        // surface as the in-memory field does, up to the storage's quantisation.
+        let amount = 0.9 * (band - 2.0) * h;
+        let from_file = pgvol::offset(&stored, amount).unwrap();
+        let in_memory = pgvol::offset(&Shape::from_file(file), amount).unwrap();
+        for p in [
+            Vec3::X,
+            -Vec3::Y,
+            Vec3::new(0.6, 0.6, 0.5),
+            Vec3::splat(-0.57),
+        ] {
+            for q in [p * 0.9, p, p * 1.1] {
+                let (a, b) = (from_file.eval(q).0, in_memory.eval(q).0);
+                assert!((a - b).abs() <= 0.02 * h, "{a} against {b} at {q}");
+            }
+        }
+    }
+}
+
+#[test]
+fn offsets_and_shells_within_the_band_succeed_and_beyond_it_are_refused() {
+    for band in [pgvol::ENCODE_BAND, 8.0] {
+        let options = EncodeOptions {
+            band,
+            ..encode_options(24)
+        };
+        let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
+        let h = file.volume.grid.spacing;
+        let shape = Shape::from_file(file);
+        // The cubic B-spline reaches two spacings past the level set it shapes.
+        let reach = (band - 2.0) * h;
+        for amount in [0.5 * reach, -0.5 * reach, 0.95 * reach] {
+            let grown = pgvol::offset(&shape, amount).unwrap();
+            // The surface moved: the old surface point is now `amount` inside.
+            let value = grown.eval(Vec3::new(0.0, 0.0, 1.0)).0;
+            assert!((value + amount).abs() < 0.25 * h, "{value} after {amount}");
+        }
+        for amount in [1.05 * reach, -1.05 * reach, 3.0 * reach] {
+            assert_error(pgvol::offset(&shape, amount), ErrorKind::BadParameter, None);
+        }
+        for kind in [
+            ShellKind::Hollow,
+            ShellKind::Wall(ShellSide::Outer),
+            ShellKind::Wall(ShellSide::Centred),
+        ] {
+            pgvol::shell(&shape, 0.5 * reach, kind, &[], &Silent).unwrap();
+            assert_error(
+                pgvol::shell(&shape, 1.05 * reach, kind, &[], &Silent),
+                ErrorKind::BadParameter,
+                None,
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Errors: kind and file.
+
+#[test]
+fn missing_inputs_are_input_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["missing.obj", "missing.pgv"] {
+        let path = dir.path().join(name);
+        if name.ends_with(".pgv") {
+            assert_error(pgvol::read_pgv(&path), ErrorKind::InputFile, Some(&path));
+        } else {
+            assert_error(pgvol::read_mesh(&path), ErrorKind::InputFile, Some(&path));
+        }
+        let e = Shape::load(&path, 16, 0.0, 0.0, &Silent).unwrap_err();
+        assert_eq!((e.kind(), e.path()), (ErrorKind::InputFile, Some(&*path)));
+    }
+}
+
+#[test]
+fn unknown_or_unwritable_outputs_are_output_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = sphere();
+    let unknown = dir.path().join("m.xyz");
+    assert_error(
+        pgvol::write_mesh(&unknown, &mesh),
+        ErrorKind::OutputFile,
+        Some(&unknown),
+    );
+    assert_error(
+        pgvol::mesh_format(&unknown),
+        ErrorKind::OutputFile,
+        Some(&unknown),
+    );
+    assert!(!unknown.exists());
+
+    let not_pgv = dir.path().join("v.obj");
+    assert_error(
+        pgvol::check_pgv_name(&not_pgv),
+        ErrorKind::OutputFile,
+        Some(&not_pgv),
+    );
+    let grid_name = dir.path().join("g.txt");
+    assert_error(
+        pgvol::GridFormat::from_path(&grid_name),
+        ErrorKind::OutputFile,
+        Some(&grid_name),
+    );
+
+    let no_dir = dir.path().join("no/such/dir/v.pgv");
+    let file = encoded(16).file;
+    assert_error(
+        pgvol::write_pgv(&no_dir, &file, &StorageOptions::default()),
+        ErrorKind::OutputFile,
+        Some(&no_dir),
+    );
+}
+
+#[test]
+fn bad_options_are_parameter_errors() {
+    let mesh = sphere();
+    for band in [1.5, 0.0, -4.0, f32::NAN, f32::INFINITY] {
+        let options = EncodeOptions {
+            band,
+            ..encode_options(16)
+        };
+        assert_error(
+            pgvol::encode(&mesh, &options, &Silent),
+            ErrorKind::BadParameter,
+            None,
+        );
+    }
+    let bad_basis = EncodeOptions {
+        basis: Basis::Pg { n: 9, r: 1.5 },
+        ..encode_options(16)
+    };
+    assert_error(
+        pgvol::encode(&mesh, &bad_basis, &Silent),
+        ErrorKind::BadParameter,
+        None,
+    );
+    let bad_step = EncodeOptions {
+        fit: FitMethod::Iso { z_step: Some(0.0) },
+        ..encode_options(16)
+    };
+    assert_error(
+        pgvol::encode(&mesh, &bad_step, &Silent),
+        ErrorKind::BadParameter,
+        None,
+    );
+    assert_error(
+        pgvol::encode(&mesh, &encode_options(1), &Silent),
+        ErrorKind::BadParameter,
+        None,
+    );
+
+    let volume = encoded(16).file.volume;
+    for iso in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        let options = DecodeOptions {
+            iso,
+            ..DecodeOptions::default()
+        };
+        assert_error(
+            pgvol::decode(&volume, &options, &Silent),
+            ErrorKind::BadParameter,
+            None,
+        );
+    }
+    // A level set the field never reaches is empty.
+    let far = DecodeOptions {
+        iso: -10.0,
+        ..DecodeOptions::default()
+    };
+    assert_error(
+        pgvol::decode(&volume, &far, &Silent),
+        ErrorKind::BadParameter,
+        None,
+    );
+
+    let shape = Shape::from_file(encoded(16).file);
+    for distance in [0.0, -0.0, f32::NAN, f32::INFINITY] {
+        assert_error(
+            pgvol::offset(&shape, distance),
+            ErrorKind::BadParameter,
+            None,
+        );
+    }
+    for thickness in [0.0, -0.01, f32::NAN] {
+        assert_error(
+            pgvol::shell(&shape, thickness, ShellKind::Hollow, &[], &Silent),
+            ErrorKind::BadParameter,
+            None,
+        );
+    }
+    for band in [0.0, -1.0, f32::NAN] {
+        let options = SdfOptions {
+            grid: GridSpec::Res(8),
+            band: Some(band),
+            ..SdfOptions::default()
+        };
+        assert_error(
+            pgvol::signed_distance(&mesh, &options, &Silent),
+            ErrorKind::BadParameter,
+            None,
+        );
+    }
+    assert_error(
+        pgvol::compare(&mesh, &mesh, 0, 1),
+        ErrorKind::BadParameter,
+        None,
+    );
+}
+
+#[test]
+fn grids_beyond_the_node_limit_are_resource_errors() {
+    let mesh = sphere();
+    // 3000³ and a spacing of 1e-4 over a side of 2.2 both exceed 2³³ nodes.
+    for grid in [GridSpec::Res(3000), GridSpec::Voxel(1e-4)] {
+        let options = EncodeOptions {
+            grid,
+            ..EncodeOptions::default()
+        };
+        assert_error(
+            pgvol::encode(&mesh, &options, &Silent),
+            ErrorKind::ResourceLimit,
+            None,
+        );
+        let options = RemeshOptions {
+            grid,
+            ..RemeshOptions::default()
+        };
+        assert_error(
+            pgvol::remesh(&mesh, &options, &Silent),
+            ErrorKind::ResourceLimit,
+            None,
+        );
+    }
+    let volume = encoded(16).file.volume;
+    let options = DecodeOptions {
+        res: Some(3000),
+        ..DecodeOptions::default()
+    };
+    assert_error(
+        pgvol::decode(&volume, &options, &Silent),
+        ErrorKind::ResourceLimit,
+        None,
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Progress: stages and cancellation.
+
+/// Records what a call reports, and cancels once the stage `cancel_in` has begun (from the
+/// start when it is `Some("")`).
+#[derive(Default)]
+struct Recorder {
+    stages: Mutex<Vec<String>>,
+    updates: Mutex<Vec<f64>>,
+    finished: Mutex<usize>,
+    cancel_in: Option<&'static str>,
+}
+
+impl Recorder {
+    fn cancelling_in(stage: &'static str) -> Self {
+        Self {
+            cancel_in: Some(stage),
+            ..Self::default()
+        }
+    }
+
+    fn stages(&self) -> Vec<String> {
+        self.stages.lock().unwrap().clone()
+    }
+}
+
+impl Progress for Recorder {
+    fn stage(&self, name: &str) {
+        self.stages.lock().unwrap().push(name.to_string());
+    }
+    fn update(&self, done: f64) {
+        self.updates.lock().unwrap().push(done);
+    }
+    fn finish(&self) {
+        *self.finished.lock().unwrap() += 1;
+    }
+    fn cancelled(&self) -> bool {
+        match self.cancel_in {
+            Some("") => true,
+            Some(stage) => self.stages.lock().unwrap().iter().any(|s| s == stage),
+            None => false,
+        }
+    }
+}
+
+/// The stages each fit reports: `Iso` queries distances as its points move, inside the fit.
+const FITS: [(FitMethod, &[&str]); 3] = [
+    (FitMethod::Interp, &["distance", "fit"]),
+    (FitMethod::Wls, &["distance", "fit"]),
+    (FitMethod::Iso { z_step: Some(0.5) }, &["fit"]),
+];
+
+#[test]
+fn encode_reports_its_stages_and_fractions() {
+    for (fit, stages) in FITS {
+        let recorder = Recorder::default();
+        let options = EncodeOptions {
+            fit,
+            ..encode_options(16)
+        };
+        pgvol::encode(&sphere(), &options, &recorder).unwrap();
+        assert_eq!(recorder.stages(), stages, "{fit:?}");
+        assert_eq!(*recorder.finished.lock().unwrap(), stages.len(), "{fit:?}");
+        let updates = recorder.updates.lock().unwrap();
+        assert!(
+            updates.iter().all(|u| (0.0..=1.0).contains(u)),
+            "{updates:?}"
+        );
+        if stages.contains(&"distance") {
+            assert!(!updates.is_empty(), "{fit:?}: no fractions reported");
+        }
+    }
+}
+
+#[test]
+fn remesh_and_decode_report_their_stages() {
+    let recorder = Recorder::default();
+    let options = RemeshOptions {
+        grid: GridSpec::Res(24),
+        ..RemeshOptions::default()
+    };
+    pgvol::remesh(&sphere(), &options, &recorder).unwrap();
+    assert_eq!(recorder.stages(), ["distance", "contour"]);
+
+    let recorder = Recorder::default();
+    let options = RemeshOptions {
+        field: RemeshField::Decoded(Basis::Bspline3),
+        ..options
+    };
+    pgvol::remesh(&sphere(), &options, &recorder).unwrap();
+    assert_eq!(recorder.stages(), ["distance", "fit", "contour"]);
+
+    let recorder = Recorder::default();
+    pgvol::decode(
+        &encoded(16).file.volume,
+        &DecodeOptions::default(),
+        &recorder,
+    )
+    .unwrap();
+    assert_eq!(recorder.stages(), ["contour"]);
+}
+
+#[test]
+fn a_cancelled_encode_stops_with_cancelled() {
+    let mesh = sphere();
+    for (fit, stages) in FITS {
+        let options = EncodeOptions {
+            fit,
+            ..encode_options(16)
+        };
+        let from_start = Recorder::cancelling_in("");
+        assert_error(
+            pgvol::encode(&mesh, &options, &from_start),
+            ErrorKind::Cancelled,
+            None,
+        );
+        assert!(from_start.stages().is_empty(), "{fit:?}: a stage began");
+        for &stage in stages {
+            let midway = Recorder::cancelling_in(stage);
+            assert_error(
+                pgvol::encode(&mesh, &options, &midway),
+                ErrorKind::Cancelled,
+                None,
+            );
+            // No stage begins once the caller has asked to stop.
+            assert_eq!(
+                midway.stages().last().map(String::as_str),
+                Some(stage),
+                "{fit:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_cancelled_remesh_stops_with_cancelled() {
+    let mesh = sphere();
+    let cases = [
+        (RemeshField::Exact, &["", "distance", "contour"][..]),
+        (
+            RemeshField::Decoded(Basis::Bspline3),
+            &["", "distance", "fit", "contour"][..],
+        ),
+    ];
+    for (field, stages) in cases {
+        let options = RemeshOptions {
+            grid: GridSpec::Res(16),
+            field,
+            ..RemeshOptions::default()
+        };
+        for &stage in stages {
+            let progress = Recorder::cancelling_in(stage);
+            assert_error(
+                pgvol::remesh(&mesh, &options, &progress),
+                ErrorKind::Cancelled,
+                None,
+            );
+        }
+    }
+}
+
+#[test]
+fn load_names_the_mesh_when_encoding_it_fails() {
+    // A cancelled on-the-fly encode keeps its kind and gains the mesh's name.
+    let dir = tempfile::tempdir().unwrap();
+    let path: PathBuf = dir.path().join("s.obj");
+    pgvol::write_mesh(&path, &sphere()).unwrap();
+    let e = Shape::load(&path, 16, 0.0, 0.0, &Recorder::cancelling_in("")).unwrap_err();
+    assert_eq!((e.kind(), e.path()), (ErrorKind::Cancelled, Some(&*path)));
+    let shape = Shape::load(&path, 16, 0.0, 0.1, &Silent).unwrap();
+    assert!(shape.band.is_some() && shape.mesh.is_some());
+}
