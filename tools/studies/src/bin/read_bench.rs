@@ -1,6 +1,6 @@
 //! Time to read a `.pgv` file into an evaluable `CoefficientVolume`.
 //!
-//! `cargo run --release -p pgvol-format --example read_bench -- FILE.pgv [RUNS]`
+//! `cargo run --release -p pgvol-studies --bin read_bench -- FILE.pgv [RUNS]`
 //! Prints the minimum over RUNS (default 9) of: reading the file's bytes; and `decode_pgv` on one
 //! thread and on every thread of the global pool (`RAYON_NUM_THREADS` sets it). The machine is
 //! rarely idle, so the minimum is the figure to quote.

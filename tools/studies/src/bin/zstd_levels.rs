@@ -1,6 +1,6 @@
 //! File size and read time of one volume re-encoded at several zstd levels.
 //!
-//! `cargo run --release -p pgvol-format --example zstd_levels -- FILE.pgv [RUNS] [LEVELS]`
+//! `cargo run --release -p pgvol-studies --bin zstd_levels -- FILE.pgv [RUNS] [LEVELS]`
 //! Decodes FILE, re-encodes it with the file's precision and brick settings at each level
 //! (default 1,3,6,9,15,19,22), and prints the size and the minimum over RUNS (default 5) of
 //! `decode_pgv`. Re-encoding requantises, so sizes can differ
