@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: locating the shared meshes, seeded random points
 //! and the shipped encode/decode pipeline through the `pgvol` library.
 
+#![forbid(unsafe_code)]
+
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;

@@ -29,6 +29,8 @@
 //! Where inside nodes lie on the grid border the surface is left open there; callers wanting a
 //! closed mesh pad the grid with outside values.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+
 mod blocks;
 mod cells;
 mod components;

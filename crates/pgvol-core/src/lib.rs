@@ -2,6 +2,9 @@
 //! the sampling [`Grid`], the triangle [`Mesh`], atomic file replacement and the error that names
 //! a file and what is wrong with it. Reading a `.pgv` file needs nothing more than this.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+#![forbid(unsafe_code)]
+
 pub mod atomic;
 pub mod file_error;
 pub mod grid;

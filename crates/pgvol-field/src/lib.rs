@@ -2,6 +2,8 @@
 //! being their weighted sum. Smooth, O(1) to evaluate, with exact analytic gradients and
 //! Hessians; coefficients from node samples or fitted to a signed distance function.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+
 pub mod analytic;
 pub mod basis;
 mod distance;

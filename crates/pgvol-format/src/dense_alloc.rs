@@ -17,7 +17,7 @@ pub(crate) fn zeroed(len: usize) -> Vec<f32> {
 fn advise_huge_pages(v: &mut [f32]) {
     const HUGE_PAGE: usize = 2 << 20;
     let start = v.as_mut_ptr() as usize;
-    let end = start + std::mem::size_of_val(v);
+    let end = start + size_of_val(v);
     let (lo, hi) = (
         start.next_multiple_of(HUGE_PAGE),
         end / HUGE_PAGE * HUGE_PAGE,

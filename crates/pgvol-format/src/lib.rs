@@ -1,6 +1,8 @@
 //! File formats for fields: pgvol's own `.pgv` coefficient files, NRRD and NPY grids for
 //! exchange with other tools, and 3MF level-set packages.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+
 mod container;
 mod dense_alloc;
 mod error;

@@ -417,9 +417,8 @@ impl<'a> Reader<'a> {
             return Err(outside());
         }
         let path = dir.join(rel_path);
-        let cannot = |e: std::io::Error| {
-            format!("cannot read buffer {index} file '{}': {e}", path.display())
-        };
+        let cannot =
+            |e: io::Error| format!("cannot read buffer {index} file '{}': {e}", path.display());
         // A symbolic link may still lead out of the folder: compare the resolved paths.
         let resolved = path.canonicalize().map_err(cannot)?;
         let folder = dir.canonicalize().map_err(cannot)?;

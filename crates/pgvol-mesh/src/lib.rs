@@ -1,6 +1,9 @@
 //! Triangle meshes for pgvol: the [`Mesh`] type, readers and writers for OBJ, glTF/GLB, STL and
 //! PLY, cleaning (welding, degenerate removal) and topology statistics.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+#![forbid(unsafe_code)]
+
 mod base64;
 mod clean;
 mod format;

@@ -2,6 +2,9 @@
 //! Hausdorff, Chamfer-L1 and normal deviation from area-uniform samples and exact
 //! point-to-triangle distances, plus the topology statistics of both meshes.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+#![forbid(unsafe_code)]
+
 pub mod sampling;
 
 use glam::{Vec3, Vec3A};

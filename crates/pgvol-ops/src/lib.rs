@@ -10,6 +10,9 @@
 //!
 //! Conventions are the workspace's: fields are negative inside, units are those of the mesh.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+#![forbid(unsafe_code)]
+
 mod cli_file;
 mod csg;
 mod error;

@@ -4,6 +4,8 @@
 //! comes from the generalized winding number, which stays meaningful on open, flipped or
 //! self-intersecting meshes. Negative inside, positive outside, in the mesh's units.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+
 mod bvh;
 mod consistency;
 mod lanes;

@@ -165,7 +165,7 @@ pub struct BasisArgs {
 }
 
 impl BasisArgs {
-    pub fn basis(self) -> anyhow::Result<Basis> {
+    pub fn basis(self) -> Result<Basis> {
         let b = match self.basis {
             BasisArg::Bspline3 => Basis::Bspline3,
             BasisArg::Bspline2 => Basis::Bspline2,
