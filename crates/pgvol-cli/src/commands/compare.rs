@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 
-use super::{load_mesh, print_json, OutputArgs, PathArg};
+use super::args::{load_mesh, print_json, OutputArgs, PathArg};
 use crate::output::outln;
 
 #[derive(Args)]

@@ -5,7 +5,7 @@ use std::io::Write;
 use anyhow::Result;
 use clap::Args;
 
-use super::{OutputArgs, PathArg};
+use super::args::{OutputArgs, PathArg};
 use crate::output::outln;
 
 #[derive(Args)]

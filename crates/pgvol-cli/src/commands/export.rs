@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::{print_json, OutputArgs, PathArg};
+use super::args::{print_json, OutputArgs, PathArg};
 use crate::output::outln;
 
 #[derive(Args)]

@@ -6,7 +6,9 @@ use anyhow::{bail, Result};
 use clap::Args;
 use serde::Serialize;
 
-use super::{load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg};
+use super::args::{
+    at_input, load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg,
+};
 use crate::output::outln;
 use crate::progress::Bars;
 use clap::ValueEnum;
@@ -266,14 +268,6 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// A library error without a file, reported against the input that caused it.
-pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
-    match e.path() {
-        Some(_) => e,
-        None => e.at(input),
-    }
 }
 
 pub fn decode(a: DecodeArgs) -> Result<()> {

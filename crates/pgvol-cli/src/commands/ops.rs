@@ -6,8 +6,7 @@ use std::path::Path;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::files::at_input;
-use super::{print_json, MethodArg, OutputArgs, PathArg};
+use super::args::{at_input, print_json, MethodArg, OutputArgs, PathArg};
 use crate::output::outln;
 use crate::progress::Bars;
 

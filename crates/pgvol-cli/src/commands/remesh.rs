@@ -6,8 +6,9 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::files::at_input;
-use super::{load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg};
+use super::args::{
+    at_input, load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg,
+};
 use crate::output::outln;
 use crate::progress::Bars;
 

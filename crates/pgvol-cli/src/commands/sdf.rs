@@ -4,8 +4,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::files::at_input;
-use super::{load_mesh, print_json, GridArgs, OutputArgs, PathArg, SignArg};
+use super::args::{at_input, load_mesh, print_json, GridArgs, OutputArgs, PathArg, SignArg};
 use crate::output::outln;
 use crate::progress::Bars;
 

@@ -1,0 +1,198 @@
+//! Arguments and helpers the subcommands share.
+
+use anyhow::Result;
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+
+use crate::output::outln;
+use pgvol::Basis;
+
+/// Grid size options shared by the commands that sample a mesh.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct GridArgs {
+    /// Nodes per axis of the grid (a cube 1.1 × the mesh's longest extent) [default: 128].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    pub res: Option<u32>,
+    /// Grid spacing in mesh units, instead of --res.
+    #[arg(long, conflicts_with = "res")]
+    pub voxel: Option<f32>,
+}
+
+impl GridArgs {
+    /// The grid as the library takes it (its default resolution when neither is given).
+    pub fn spec(self) -> pgvol::GridSpec {
+        match (self.res, self.voxel) {
+            (_, Some(h)) => pgvol::GridSpec::Voxel(h),
+            (Some(n), None) => pgvol::GridSpec::Res(n as usize),
+            (None, None) => pgvol::GridSpec::default(),
+        }
+    }
+}
+
+/// The basis of the coefficient volume.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BasisArg {
+    /// Tensor-product cubic B-spline: C², 64 nodes per evaluation; the most accurate per byte
+    /// in docs/basis-study.md.
+    #[default]
+    Bspline3,
+    /// Tensor-product quadratic B-spline: C¹, 27 nodes per evaluation.
+    Bspline2,
+    /// The paper's pseudo-Gaussian (1 − d²/r²)^(n+1), radial; see --pg-n and --pg-r.
+    Pg,
+    /// The sampled values themselves, interpolated trilinearly (the baseline).
+    Trilinear,
+}
+
+/// Basis choice with its parameters.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct BasisArgs {
+    /// Basis of the coefficient volume.
+    #[arg(long, value_enum, default_value_t)]
+    pub basis: BasisArg,
+    /// Pseudo-Gaussian continuity order n (1 to 4); with --basis pg.
+    #[arg(long, default_value_t = pgvol::PG_ORDER)]
+    pub pg_n: u8,
+    /// Pseudo-Gaussian support radius r in grid spacings (0 < r ≤ 4); with --basis pg.
+    #[arg(long, default_value_t = pgvol::PG_RADIUS)]
+    pub pg_r: f32,
+}
+
+impl BasisArgs {
+    pub fn basis(self) -> Result<Basis> {
+        let b = match self.basis {
+            BasisArg::Bspline3 => Basis::Bspline3,
+            BasisArg::Bspline2 => Basis::Bspline2,
+            BasisArg::Trilinear => Basis::Trilinear,
+            BasisArg::Pg => Basis::Pg {
+                n: self.pg_n,
+                r: self.pg_r,
+            },
+        };
+        b.validate()
+            .map_err(|e| anyhow::anyhow!("--pg-r/--pg-n: {e}"))?;
+        Ok(b)
+    }
+
+    /// Whether any basis option differs from its default.
+    pub fn is_default(self) -> bool {
+        self.basis == BasisArg::default()
+            && self.pg_n == pgvol::PG_ORDER
+            && self.pg_r == pgvol::PG_RADIUS
+    }
+}
+
+/// How the mesh is extracted from the field.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MethodArg {
+    /// Marching cubes, vertices on the continuous field: watertight and manifold.
+    #[default]
+    Mc,
+    /// Surface nets, vertices projected onto the field: watertight, manifold, smooth.
+    Sn,
+    /// Dual contouring with the analytic gradients: keeps sharp edges, manifold.
+    Dc,
+}
+
+/// How inside and outside are told apart.
+#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+pub enum SignArg {
+    /// Pseudonormal for closed, consistently oriented meshes; winding number otherwise.
+    #[default]
+    Auto,
+    /// Generalized winding number > 1/2: survives holes, flipped faces, self-intersections.
+    Winding,
+    /// Angle-weighted pseudonormal: for closed, consistently oriented meshes only.
+    Pseudonormal,
+    /// Ray parity, majority of three rays: for closed meshes, blind to orientation.
+    Parity,
+}
+
+impl From<SignArg> for pgvol::SignMode {
+    fn from(s: SignArg) -> Self {
+        match s {
+            SignArg::Auto => pgvol::SignMode::Auto,
+            SignArg::Winding => pgvol::SignMode::Winding,
+            SignArg::Pseudonormal => pgvol::SignMode::Pseudonormal,
+            SignArg::Parity => pgvol::SignMode::Parity,
+        }
+    }
+}
+
+impl From<MethodArg> for pgvol::Method {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::Mc => pgvol::Method::MarchingCubes,
+            MethodArg::Sn => pgvol::Method::SurfaceNets,
+            MethodArg::Dc => pgvol::Method::DualContouring,
+        }
+    }
+}
+
+/// Output options shared by every command.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct OutputArgs {
+    /// Print the results as one JSON object on standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bars or notes on standard error.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Replace an output file even when it is read-only.
+    #[arg(long)]
+    pub force: bool,
+    /// Refuse jobs whose estimated peak memory exceeds SIZE (e.g. 8G, 512M) [default: the
+    /// memory available when the job starts].
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
+    pub max_memory: Option<u64>,
+}
+
+fn parse_memory(s: &str) -> Result<u64, String> {
+    pgvol::parse_size(s).map_err(|e| e.to_string())
+}
+
+impl OutputArgs {
+    /// Refuses `output` before any work: a missing folder, a folder, a read-only file without
+    /// --force.
+    pub fn check(self, output: &std::path::Path) -> Result<()> {
+        Ok(pgvol::check_output(output, self.force)?)
+    }
+
+    /// Progress and notes are off in JSON mode too, so standard error stays clean for scripts.
+    pub fn silent(self) -> bool {
+        self.quiet || self.json
+    }
+}
+
+pub type PathArg = PathBuf;
+
+/// Reads a mesh through the library, saying on standard error what cleaning removed unless
+/// `quiet`. Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
+pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
+    let (mesh, report) = pgvol::read_mesh(path)?;
+    let is_stl = matches!(pgvol::mesh_format(path), Ok(pgvol::mesh::MeshFormat::Stl));
+    let merged = if is_stl { 0 } else { report.vertices_merged };
+    if !quiet && (merged > 0 || report.degenerate_dropped > 0 || report.duplicates_dropped > 0) {
+        eprintln!(
+            "{}: merged {merged} duplicate vertices, dropped {} degenerate and {} repeated triangles",
+            path.display(),
+            report.degenerate_dropped,
+            report.duplicates_dropped
+        );
+    }
+    Ok(mesh)
+}
+
+/// Prints `value` as pretty JSON on standard output.
+pub fn print_json(value: &impl serde::Serialize) -> Result<()> {
+    outln!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}
+
+/// A library error without a file, reported against the input that caused it.
+pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
+    match e.path() {
+        Some(_) => e,
+        None => e.at(input),
+    }
+}
