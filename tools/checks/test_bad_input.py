@@ -52,6 +52,13 @@ def _nonexistent(folder: Path) -> Path:
     return folder / "does-not-exist.obj"
 
 
+def _device(folder: Path) -> Path:
+    """An endless input: reading it whole would exhaust memory."""
+    p = folder / "zero.obj"
+    p.symlink_to("/dev/zero")
+    return p
+
+
 INPUT_CASES = {
     "empty-file": _empty,
     "truncated-binary-stl": _truncated_stl,
@@ -59,6 +66,7 @@ INPUT_CASES = {
     "obj-nan-coordinate": _nan_coordinate,
     "unknown-input-extension": _unknown_extension,
     "nonexistent-file": _nonexistent,
+    "device-file": _device,
 }
 
 
@@ -294,3 +302,10 @@ def test_replaced_outputs_keep_their_mode_and_read_only_ones_need_force(dirs, pg
     helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 24, "--force"])
     assert out.read_bytes() != before
     assert stat.S_IMODE(out.stat().st_mode) == 0o444
+
+
+def test_eval_refuses_an_endless_points_file(knot_pgv, tmp_path, pgvol):
+    points = tmp_path / "points.csv"
+    points.symlink_to("/dev/zero")
+    r = helpers.run([pgvol, "eval", knot_pgv, points], timeout=60)
+    assert r.returncode == 1 and "not a regular file" in r.stderr, r.describe()

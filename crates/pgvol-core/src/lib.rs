@@ -8,9 +8,11 @@
 pub mod atomic;
 pub mod file_error;
 pub mod grid;
+pub mod input;
 pub mod mesh;
 
 pub use atomic::write_atomic;
 pub use file_error::FileError;
 pub use grid::{Grid, GridError, GRID_MARGIN, MAX_GRID_NODES};
+pub use input::read_input;
 pub use mesh::{Mesh, MeshStats};

@@ -121,7 +121,7 @@ pub type NrrdGrid = (Grid, Vec<f32>, BTreeMap<String, String>);
 /// values (x fastest) and key/value fields. Anything this reader does not support is refused
 /// with the file and the field named.
 pub fn read_nrrd(path: &Path) -> Result<NrrdGrid, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let bytes = pgvol_core::read_input(path).map_err(|e| err(path, e.problem))?;
     decode_nrrd(&bytes, path)
 }
 

@@ -37,7 +37,7 @@ pub fn write_pgv(path: &Path, file: &PgvFile) -> Result<(), FormatError> {
 
 /// Reads and verifies a `.pgv` file.
 pub fn read_pgv(path: &Path) -> Result<PgvFile, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let bytes = pgvol_core::read_input(path).map_err(|e| err(path, e.problem))?;
     decode_pgv(&bytes, path)
 }
 

@@ -9,8 +9,7 @@ use pgvol_core::write_atomic;
 /// Reads the mesh in `path`, choosing the format by extension, and validates it.
 pub fn read(path: &Path) -> Result<Mesh, MeshError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes =
-        std::fs::read(path).map_err(|e| MeshError::new(path, format!("cannot read file: {e}")))?;
+    let bytes = pgvol_core::read_input(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),

@@ -8,7 +8,7 @@ use pgvol_field::CoefficientVolume;
 
 use serde::Serialize;
 
-use crate::error::{Error, ErrorKind, Result};
+use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::shape::Shape;
 
 /// Parses points, one `x,y,z` per line (commas, semicolons, spaces or tabs between). Blank lines
@@ -62,12 +62,8 @@ pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
 
 /// Reads the points of a file; see [`read_points`].
 pub fn read_points_file(path: &Path) -> Result<Vec<Vec3>> {
-    let file = std::fs::File::open(path).map_err(|e| {
-        Error::new(ErrorKind::InputFile, format!("cannot open: {e}"))
-            .at(path)
-            .caused_by(e)
-    })?;
-    read_points(file, path)
+    let bytes = pgvol_core::read_input(path).reading()?;
+    read_points(bytes.as_slice(), path)
 }
 
 /// The field at one point.

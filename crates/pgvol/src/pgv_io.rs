@@ -10,11 +10,7 @@ use crate::error::{Error, ErrorKind, FileResult, Result};
 
 /// Reads and checks a `.pgv` file.
 pub fn read_pgv(path: &Path) -> Result<PgvFile> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        Error::new(ErrorKind::InputFile, format!("cannot read: {e}"))
-            .at(path)
-            .caused_by(e)
-    })?;
+    let bytes = pgvol_core::read_input(path).reading()?;
     read_pgv_bytes(&bytes, path)
 }
 

@@ -316,8 +316,7 @@ struct Info<'a> {
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
-    let raw = std::fs::read(&a.input)
-        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", a.input.display()))?;
+    let raw = pgvol::core::read_input(&a.input)?;
     let parts = pgvol::pgv_info(&raw, &a.input)?;
     let file = pgvol::read_pgv_bytes(&raw, &a.input)?;
     let bytes = raw.len() as u64;
