@@ -311,3 +311,31 @@ def test_3mf_levelset_reads_in_lib3mf(pgvol, spot):
     err = np.abs(np.array(values) - expected)
     # lib3mf keeps the transform in single precision, which moves points by ~1e-7 of the box.
     assert err.max() <= scale / 65535 + 1e-4 * h, f"values off by {err.max():.3g}"
+
+
+def test_sdf_npy_matches_the_nrrd(pgvol, spot):
+    """The .npy export holds the same samples as the NRRD, in NumPy's (nz, ny, nx) order."""
+    import nrrd
+
+    folder, pgv, info = spot
+    npy, nrd = folder / "spot-sdf.npy", folder / "spot-sdf-for-npy.nrrd"
+    helpers.run_ok([pgvol, "export", pgv, "-o", npy])
+    helpers.run_ok([pgvol, "export", pgv, "-o", nrd])
+    grid = np.load(npy)
+    data, _ = nrrd.read(str(nrd))  # data[i, j, k]
+    assert grid.dtype == np.float32
+    assert grid.shape == data.shape[::-1]
+    assert np.array_equal(grid, data.transpose(2, 1, 0))
+
+
+def test_3mf_names_the_unit_asked_for(pgvol, spot):
+    import zipfile
+
+    folder, pgv, _ = spot
+    out = folder / "spot-inch.3mf"
+    helpers.run_ok([pgvol, "export", pgv, "-o", out, "--unit", "inch"])
+    with zipfile.ZipFile(out) as z:
+        model = z.read("3D/3dmodel.model").decode()
+    assert 'unit="inch"' in model
+    r = helpers.run([pgvol, "export", pgv, "-o", folder / "bad.3mf", "--unit", "furlong"])
+    assert r.returncode == 1 and "furlong" in r.stderr, r.describe()

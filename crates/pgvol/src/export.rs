@@ -14,6 +14,8 @@ pub enum ExportKind {
     CoefficientsNrrd,
     /// The signed distance sampled on a grid, as NRRD.
     SdfNrrd,
+    /// The signed distance sampled on a grid, as NumPy `.npy` (float32, shape (nz, ny, nx)).
+    SdfNpy,
     /// The sampled field as a 3MF Volumetric level set (16-bit PNG image stack).
     ThreeMf,
 }
@@ -28,24 +30,51 @@ impl ExportKind {
         match (ext.as_deref(), coefficients) {
             (Some("nrrd"), true) => Ok(ExportKind::CoefficientsNrrd),
             (Some("nrrd"), false) => Ok(ExportKind::SdfNrrd),
+            (Some("npy"), false) => Ok(ExportKind::SdfNpy),
             (Some("3mf"), false) => Ok(ExportKind::ThreeMf),
-            (Some("3mf"), true) => Err(Error::parameter(
-                "coefficients export to .nrrd only; a .3mf holds the sampled field",
+            (Some("3mf" | "npy"), true) => Err(Error::parameter(
+                "coefficients export to .nrrd only; .3mf and .npy hold the sampled field",
             )
             .at(path)),
-            _ => Err(
-                Error::new(ErrorKind::OutputFile, "expected a .nrrd or .3mf file name").at(path),
-            ),
+            _ => Err(Error::new(
+                ErrorKind::OutputFile,
+                "expected a .nrrd, .npy or .3mf file name",
+            )
+            .at(path)),
         }
     }
 }
 
-/// Units named in 3MF packages: pgvol's are the source mesh's, taken to be millimetres.
+/// The units a 3MF package may name (3MF core specification, `model@unit`).
+pub const THREEMF_UNITS: [&str; 6] = [
+    "micron",
+    "millimeter",
+    "centimeter",
+    "inch",
+    "foot",
+    "meter",
+];
+
+/// The unit named in 3MF packages unless told otherwise: pgvol keeps the mesh's units, which
+/// for printing are most often millimetres.
 pub const THREEMF_UNIT: &str = "millimeter";
 
 /// Writes `file` to `path` as `kind`, sampled on `res` nodes along the longest side (`None`:
-/// the stored grid; not for coefficients). Returns the grid written.
-pub fn export(path: &Path, file: &PgvFile, kind: ExportKind, res: Option<usize>) -> Result<Grid> {
+/// the stored grid; not for coefficients); a 3MF package names `unit` (one of
+/// [`THREEMF_UNITS`]). Returns the grid written.
+pub fn export(
+    path: &Path,
+    file: &PgvFile,
+    kind: ExportKind,
+    res: Option<usize>,
+    unit: &str,
+) -> Result<Grid> {
+    if kind == ExportKind::ThreeMf && !THREEMF_UNITS.contains(&unit) {
+        return Err(Error::parameter(format!(
+            "3MF has no unit '{unit}' (it knows {})",
+            THREEMF_UNITS.join(", ")
+        )));
+    }
     let volume = &file.volume;
     if kind == ExportKind::CoefficientsNrrd {
         if res.is_some() {
@@ -76,7 +105,10 @@ pub fn export(path: &Path, file: &PgvFile, kind: ExportKind, res: Option<usize>)
         ExportKind::SdfNrrd => {
             pgvol_format::nrrd::write_field_nrrd(path, &grid, &values, volume.basis).writing()?
         }
-        _ => pgvol_format::threemf::write_3mf(path, &grid, &values, THREEMF_UNIT).writing()?,
+        ExportKind::SdfNpy => {
+            pgvol_format::grid_files::write_npy(path, &grid, &values).writing()?
+        }
+        _ => pgvol_format::threemf::write_3mf(path, &grid, &values, unit).writing()?,
     }
     Ok(grid)
 }

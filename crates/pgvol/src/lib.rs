@@ -86,7 +86,7 @@ pub use encode::{
 pub use error::{Error, ErrorKind, Result};
 pub use eval::{eval, eval_csv, read_points, read_points_file, Evaluation};
 pub use exact_field::{MeshField, NODE_BAND};
-pub use export::{export, ExportKind, THREEMF_UNIT};
+pub use export::{export, ExportKind, THREEMF_UNIT, THREEMF_UNITS};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
 pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{mesh_format, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to};

@@ -11,16 +11,20 @@ use crate::output::outln;
 pub struct ExportArgs {
     /// Input .pgv file.
     pub input: PathArg,
-    /// Output file: .nrrd or .3mf.
+    /// Output file: .nrrd, .npy (the sampled field, float32 of shape (nz, ny, nx)) or .3mf.
     #[arg(short, long)]
     pub output: PathArg,
     /// What a NRRD holds: the coefficient grid itself (readable by `pgvol encode --from`) or
-    /// the field sampled on a grid. A .3mf always holds the sampled field.
+    /// the field sampled on a grid. A .3mf or .npy always holds the sampled field.
     #[arg(long, value_enum, default_value_t)]
     pub what: WhatArg,
     /// Sample on N nodes along the longest side over the same box (default: the stored grid).
     #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: Option<u32>,
+    /// The unit a .3mf names for the model's coordinates: micron, millimeter, centimeter,
+    /// inch, foot or meter.
+    #[arg(long, default_value = pgvol::THREEMF_UNIT)]
+    pub unit: String,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -38,21 +42,23 @@ pub enum WhatArg {
 pub fn run(a: ExportArgs) -> Result<()> {
     let kind = pgvol::ExportKind::from_path(&a.output, a.what == WhatArg::Coefficients)?;
     let file = pgvol::read_pgv(&a.input)?;
-    let grid = pgvol::export(&a.output, &file, kind, a.res.map(|r| r as usize))?;
+    let grid = pgvol::export(&a.output, &file, kind, a.res.map(|r| r as usize), &a.unit)?;
     let what = match kind {
         pgvol::ExportKind::CoefficientsNrrd => "coefficients",
         _ => "sdf",
     };
     let bytes = std::fs::metadata(&a.output)?.len();
+    let unit = (kind == pgvol::ExportKind::ThreeMf).then_some(a.unit.as_str());
     if a.out.json {
         return print_json(&serde_json::json!({
-            "output": a.output, "what": what, "grid": grid, "bytes": bytes,
+            "output": a.output, "what": what, "grid": grid, "bytes": bytes, "unit": unit,
         }));
     }
     if !a.out.quiet {
         let [nx, ny, nz] = grid.dims;
+        let unit = unit.map(|u| format!(", unit {u}")).unwrap_or_default();
         outln!(
-            "{}: {what} on {nx} x {ny} x {nz} nodes, {bytes} bytes",
+            "{}: {what} on {nx} x {ny} x {nz} nodes, {bytes} bytes{unit}",
             a.output.display()
         );
     }

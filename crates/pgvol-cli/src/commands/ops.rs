@@ -83,7 +83,9 @@ pub struct SliceArgs {
     /// Write the .cli file's geometry in the binary form (little-endian long commands).
     #[arg(long)]
     pub binary: bool,
-    /// Grid nodes per axis when the input is a mesh.
+    /// Grid nodes per axis when the input is a mesh: finer than the 128 of the other commands,
+    /// since layers are traced at the field's spacing and walls thinner than about one spacing
+    /// drop out of them.
     #[arg(long, default_value_t = pgvol::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: u32,
     #[command(flatten)]
