@@ -1,7 +1,7 @@
 //! Coefficient volume → mesh.
 
 use pgvol_contour::Method;
-use pgvol_core::Mesh;
+use pgvol_core::{Grid, Mesh};
 use pgvol_field::CoefficientVolume;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -30,6 +30,19 @@ impl Default for DecodeOptions {
     }
 }
 
+/// `volume`'s own grid, or one of `res` nodes along its longest side over the same box.
+pub(crate) fn target_grid(volume: &CoefficientVolume, res: Option<usize>) -> Result<Grid> {
+    match res {
+        None => Ok(volume.grid),
+        Some(n) => pgvol_contour::resampled_grid(volume, n).ok_or_else(|| {
+            Error::new(
+                ErrorKind::ResourceLimit,
+                format!("a resampling at {n} nodes gives a grid larger than the limit"),
+            )
+        }),
+    }
+}
+
 /// Contours the `options.iso` level set of `shape`, refusing a level beyond the band where its
 /// field is an exact distance (there the level set would follow the clamp, not the shape).
 pub fn decode_shape(
@@ -53,16 +66,8 @@ pub fn decode(
     if !options.iso.is_finite() {
         return Err(Error::parameter("the level must be a finite number"));
     }
-    let grid = match options.res {
-        None => volume.grid,
-        Some(n) => pgvol_contour::resampled_grid(volume, n).ok_or_else(|| {
-            Error::new(
-                ErrorKind::ResourceLimit,
-                format!("a resampling at {n} nodes gives a grid larger than the limit"),
-            )
-        })?,
-    };
-    crate::encode::check_grid_memory("contouring", &grid)?;
+    let grid = target_grid(volume, options.res)?;
+    crate::memory::check_grid("contouring", &grid, crate::memory::BYTES_PER_NODE)?;
     let mesh = progress::stage(progress, "contour", |_| {
         pgvol_contour::contour_volume(volume, &grid, options.iso, options.method)
     })?;

@@ -131,12 +131,7 @@ pub fn signed_distance(
         }
     }
     let grid = options.grid.grid_for(mesh)?;
-    let [nx, ny, nz] = grid.dims;
-    crate::memory::check_memory(
-        &format!("sampling a {nx} x {ny} x {nz} grid"),
-        crate::memory::grid_bytes(grid.len(), crate::memory::BYTES_PER_SDF_NODE),
-        "lower the resolution",
-    )?;
+    crate::memory::check_grid("sampling", &grid, crate::memory::BYTES_PER_SDF_NODE)?;
     let start = Instant::now();
     let sdf = mesh_sdf(mesh, options.sign)?;
     let extent = options.band.map_or(Extent::Dense, Extent::Band);

@@ -15,7 +15,7 @@ use pgvol_sdf::SignMode;
 use crate::distance::{mesh_sdf, sample, MeshDistance};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
-use crate::memory::{check_memory, grid_bytes, BYTES_PER_NODE};
+use crate::memory::{check_grid, BYTES_PER_NODE};
 use crate::progress::{self, Progress};
 use crate::Timings;
 
@@ -103,7 +103,7 @@ pub struct Encoded {
 pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> Result<Encoded> {
     options.validate()?;
     let grid = options.grid.grid_for(mesh)?;
-    check_grid_memory("encoding", &grid)?;
+    check_grid("encoding", &grid, BYTES_PER_NODE)?;
     let mut timings = Timings::default();
     let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
     let (volume, fit) = (fitted.volume, fitted.report);
@@ -124,16 +124,6 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
         fit,
         timings,
     })
-}
-
-/// Refuses a dense job on `grid` that would not fit in memory.
-pub(crate) fn check_grid_memory(job: &str, grid: &pgvol_core::Grid) -> Result<()> {
-    let [nx, ny, nz] = grid.dims;
-    check_memory(
-        &format!("{job} on a {nx} x {ny} x {nz} grid"),
-        grid_bytes(grid.len(), BYTES_PER_NODE),
-        "lower the resolution",
-    )
 }
 
 /// A fitted volume, its report and the band of exact node distances it was fitted to.

@@ -85,21 +85,8 @@ pub fn export(
         pgvol_format::nrrd::write_coefficients_nrrd(path, file).writing()?;
         return Ok(volume.grid);
     }
-    let grid = match res {
-        None => volume.grid,
-        Some(n) => pgvol_contour::resampled_grid(volume, n).ok_or_else(|| {
-            Error::new(
-                ErrorKind::ResourceLimit,
-                format!("a resampling at {n} nodes gives a grid larger than the limit"),
-            )
-        })?,
-    };
-    let [nx, ny, nz] = grid.dims;
-    crate::memory::check_memory(
-        &format!("sampling a {nx} x {ny} x {nz} grid"),
-        crate::memory::grid_bytes(grid.len(), crate::memory::BYTES_PER_SDF_NODE),
-        "lower the resolution",
-    )?;
+    let grid = crate::decode::target_grid(volume, res)?;
+    crate::memory::check_grid("sampling", &grid, crate::memory::BYTES_PER_SDF_NODE)?;
     let values = volume.sample(&grid);
     match kind {
         ExportKind::SdfNrrd => {

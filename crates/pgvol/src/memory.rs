@@ -65,6 +65,16 @@ pub(crate) fn check_memory(job: &str, bytes: u64, advice: &str) -> Result<()> {
     }
 }
 
+/// Refuses `job` on `grid` at `per_node` bytes per node when it would not fit in memory.
+pub(crate) fn check_grid(job: &str, grid: &pgvol_core::Grid, per_node: u64) -> Result<()> {
+    let [nx, ny, nz] = grid.dims;
+    check_memory(
+        &format!("{job} on a {nx} x {ny} x {nz} grid"),
+        grid_bytes(grid.len(), per_node),
+        "lower the resolution",
+    )
+}
+
 /// Bytes for a grid of `nodes` at `per_node` bytes, saturating.
 pub(crate) fn grid_bytes(nodes: usize, per_node: u64) -> u64 {
     (nodes as u64).saturating_mul(per_node)

@@ -62,7 +62,7 @@ pub struct Remeshed {
 /// Remeshes `mesh` by `options`.
 pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> Result<Remeshed> {
     let grid = options.grid.grid_for(mesh)?;
-    crate::encode::check_grid_memory("remeshing", &grid)?;
+    crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
     let mut timings = Timings::default();
     let out = match options.field {
         RemeshField::Exact => contour_exact(mesh, &grid, options.method, &mut timings, progress)?,

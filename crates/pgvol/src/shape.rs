@@ -68,7 +68,7 @@ impl Shape {
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
         let pad = Vec3::splat(grow.max(0.0));
         let grid = Grid::cube_res(lo - pad, hi + pad, res)?;
-        crate::encode::check_grid_memory("encoding the mesh", &grid)?;
+        crate::memory::check_grid("encoding the mesh", &grid, crate::memory::BYTES_PER_NODE)?;
         let options = EncodeOptions {
             grid: GridSpec::Res(res),
             basis: Basis::Bspline3,
