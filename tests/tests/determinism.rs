@@ -35,7 +35,7 @@ fn pipeline_output_is_identical_with_one_and_two_threads() {
                 .expect("file bytes")
                 .0;
             (
-                bits(&encoded.file.volume.coeffs),
+                bits(&encoded.file.volume.dense_coeffs()),
                 bytes,
                 decode(&encoded.file.volume),
             )

@@ -110,7 +110,7 @@ fn every_shared_mesh_survives_the_pipeline() {
             "{name}: basis changed"
         );
         assert!(
-            bits(&back.volume.coeffs) == bits(&file.volume.coeffs),
+            bits(&back.volume.dense_coeffs()) == bits(&file.volume.dense_coeffs()),
             "{name}: coefficients are not bit-identical after the dense round trip"
         );
         assert!(
@@ -134,9 +134,9 @@ fn every_shared_mesh_survives_the_pipeline() {
         );
         let near = file
             .volume
-            .coeffs
+            .dense_coeffs()
             .iter()
-            .zip(&back.volume.coeffs)
+            .zip(&back.volume.dense_coeffs())
             .filter(|(a, _)| a.abs() < 2.0 * spacing)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0f32, f32::max);

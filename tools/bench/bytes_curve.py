@@ -23,10 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-import meshcap  # noqa: E402
-from common import REPO_ROOT, mesh_file, pgvol_bin  # noqa: E402
-from objfile import read_obj  # noqa: E402
+from common import REPO_ROOT, pgvol_bin, source_mesh  # noqa: E402
 
 PGV_RES = [40, 48, 64, 80, 96, 128, 160, 192, 256]
 DENSE_RES = [32, 40, 48, 64, 80, 96, 128]
@@ -44,15 +41,6 @@ def run(args) -> str:
 def chamfer(pgvol, mesh, reference) -> float:
     report = json.loads(run([pgvol, "compare", mesh, reference, "--samples", SAMPLES, "--json"]))
     return float(report["chamfer_l1_pct"])
-
-
-def source(name: str, work: Path) -> Path:
-    if name != "bunny-capped":
-        return mesh_file(name)
-    path = work / "bunny-capped.obj"
-    vertices, faces = read_obj(mesh_file("stanford-bunny"))
-    meshcap.write_obj(path, *meshcap.cap_holes(vertices, faces))
-    return path
 
 
 def sweep(pgvol, mesh: Path, work: Path, extra) -> dict:
@@ -147,7 +135,7 @@ def main():
         work = Path(tmp)
         for name in a.meshes.split(","):
             print(f"{name} ...", file=sys.stderr)
-            results[name] = sweep(pgvol, source(name, work), work, a.extra)
+            results[name] = sweep(pgvol, source_mesh(name, work), work, a.extra)
     print("| mesh | file | res | bytes | Chamfer-L1 % |\n|---|---|---|---|---|")
     for name, points in results.items():
         for kind, rows in points.items():

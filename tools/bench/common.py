@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
+# The Python with Debian's python3-openvdb module, which the benchmark venvs do not have.
+SYSTEM_PYTHON = os.environ.get("PGVOL_BENCH_SYSTEM_PYTHON", "/usr/bin/python3")
 
 
 def pgvol_bin() -> Path:
@@ -26,6 +28,22 @@ def mesh_file(name: str) -> Path:
     path = meshes_dir() / f"{name}.obj"
     if not path.is_file():
         raise SystemExit(f"missing mesh {name!r}: expected {path} (set PGVOL_SHARED_MESHES)")
+    return path
+
+
+def source_mesh(name: str, work: Path) -> Path:
+    """A shared mesh by name; "bunny-capped" is the Stanford bunny with its holes closed
+    (tools/meshcap.py), written into work, since OpenVDB's flood-fill sign needs a closed surface."""
+    if name != "bunny-capped":
+        return mesh_file(name)
+    import sys
+
+    sys.path.insert(0, str(REPO_ROOT / "tools"))
+    import meshcap
+    from objfile import read_obj
+
+    path = Path(work) / "bunny-capped.obj"
+    meshcap.write_obj(path, *meshcap.cap_holes(*read_obj(mesh_file("stanford-bunny"))))
     return path
 
 

@@ -35,10 +35,10 @@ pub(crate) fn bspline3_value_gradient(volume: &CoefficientVolume, p: Vec3) -> Op
     let (wx, dx) = weights(t.x);
     let (wy, dy) = weights(t.y);
     let (wz, dz) = weights(t.z);
-    let [ci, cj, ck] = cell.to_array().map(|c| c as usize - 1);
-    let first = ci + nx * (cj + ny * ck);
-    let plane = nx * ny;
-    let stencil = volume.coeffs.get(first..=first + 3 + 3 * nx + 3 * plane)?;
+    let first = cell.to_array().map(|c| c as usize - 1);
+    let mut stencil = [0.0f32; 64];
+    volume.coeffs.gather(first, [4; 3], &mut stencil);
+    let (nx, plane) = (4, 16);
     // Rows of four coefficients along x are weighted in y and z as whole vectors; the x
     // weights are applied once at the end.
     let (mut value, mut slope_y, mut slope_z) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);

@@ -18,13 +18,13 @@ const NODE_WEIGHTS: [f32; 3] = [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0];
 
 /// The 4 × 3 × 3 coefficients around a grid edge: `coeffs` starts at the lowest, and
 /// `strides` step along the edge's axis and its two plane axes.
-struct EdgeStencil<'v> {
-    coeffs: &'v [f32],
+struct EdgeStencil {
+    coeffs: [f32; 36],
     strides: [usize; 3],
     axis: usize,
 }
 
-impl EdgeStencil<'_> {
+impl EdgeStencil {
     /// The coefficients at plane offsets `(du, dv)` and offsets -1..=2 along the edge.
     #[inline]
     fn line(&self, du: usize, dv: usize) -> Vec4 {
@@ -64,7 +64,7 @@ impl EdgeStencil<'_> {
 
 /// The stencil of the grid edge from `a` to `b` when `volume` is a cubic B-spline, `a` and `b`
 /// are adjacent nodes of its grid and the stencil lies inside the grid.
-fn edge_stencil(volume: &CoefficientVolume, a: Vec3, b: Vec3) -> Option<EdgeStencil<'_>> {
+fn edge_stencil(volume: &CoefficientVolume, a: Vec3, b: Vec3) -> Option<EdgeStencil> {
     if volume.basis != Basis::Bspline3 {
         return None;
     }
@@ -92,15 +92,13 @@ fn edge_stencil(volume: &CoefficientVolume, a: Vec3, b: Vec3) -> Option<EdgeSten
     }
     let n = n.map(|x| x as usize);
     let (u, v) = plane_axes(axis);
-    let [nx, ny, _] = g.dims;
-    let all = [1, nx, nx * ny];
+    // The 4 x 3 x 3 block from the lowest coefficient of the stencil, x fastest.
+    let mut size = [3; 3];
+    size[axis] = 4;
+    let all = [1, size[0], size[0] * size[1]];
     let strides = [all[axis], all[u], all[v]];
-    let [sa, su, sv] = strides;
-    // The lowest coefficient of the stencil, and the 4 x 3 x 3 block above it.
-    let first = (n[0] + nx * (n[1] + ny * n[2])) - sa - su - sv;
-    let coeffs = volume
-        .coeffs
-        .get(first..=first + 3 * sa + 2 * su + 2 * sv)?;
+    let mut coeffs = [0.0f32; 36];
+    volume.coeffs.gather(n.map(|c| c - 1), size, &mut coeffs);
     Some(EdgeStencil {
         coeffs,
         strides,

@@ -91,10 +91,13 @@ fn one_sided_bound(
     let (j0, j1) = range(ulo.y, uhi.y, g.dims[1]);
     let (k0, k1) = range(ulo.z, uhi.z, g.dims[2]);
     let (mut min, mut max) = (f32::INFINITY, f32::NEG_INFINITY);
+    let mut row = vec![0.0f32; i1 - i0 + 1];
     for k in k0..=k1 {
         for j in j0..=j1 {
-            let row = g.index(i0, j, k);
-            for &c in &volume.coeffs[row..=row + (i1 - i0)] {
+            volume
+                .coeffs
+                .gather([i0, j, k], [row.len(), 1, 1], &mut row);
+            for &c in &row {
                 min = min.min(c);
                 max = max.max(c);
             }

@@ -10,9 +10,11 @@ pub mod file_error;
 pub mod grid;
 pub mod input;
 pub mod mesh;
+pub mod sparse;
 
 pub use atomic::write_atomic;
 pub use file_error::FileError;
 pub use grid::{Grid, GridError, GRID_MARGIN, MAX_GRID_NODES};
 pub use input::read_input;
 pub use mesh::{Mesh, MeshStats};
+pub use sparse::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};

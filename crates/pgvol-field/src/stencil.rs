@@ -22,6 +22,20 @@ pub fn visit<const ORDER: u8>(
     u: Vec3,
     mut f: impl FnMut(usize, Jet),
 ) {
+    let [nx, ny, _] = dims;
+    visit_nodes::<ORDER>(basis, dims, u, |[i, j, k], jet| {
+        f(i + nx * (j + ny * k), jet)
+    });
+}
+
+/// As [`visit`], with each node given by its indices.
+#[inline]
+pub fn visit_nodes<const ORDER: u8>(
+    basis: Basis,
+    dims: [usize; 3],
+    u: Vec3,
+    mut f: impl FnMut([usize; 3], Jet),
+) {
     let [nx, ny, nz] = dims;
     match basis {
         Basis::Pg { n, r } => {
@@ -46,7 +60,7 @@ pub fn visit<const ORDER: u8>(
                         if d2 >= r2 {
                             continue;
                         }
-                        let idx = i as usize + nx * (j as usize + ny * k as usize);
+                        let idx = [i as usize, j as usize, k as usize];
                         let jet = if ORDER == VALUE {
                             Jet {
                                 value: pg.value_sq(d2),
@@ -75,10 +89,9 @@ pub fn visit<const ORDER: u8>(
                 for b in 0..wy.len {
                     let jj = mirror(wy.first + b as i64, ny);
                     let y = wy.w[b];
-                    let row = nx * (jj + ny * kk);
                     for a in 0..wx.len {
                         let x = wx.w[a];
-                        let idx = mirror(wx.first + a as i64, nx) + row;
+                        let idx = [mirror(wx.first + a as i64, nx), jj, kk];
                         let jet = match ORDER {
                             VALUE => Jet {
                                 value: x[0] * y[0] * z[0],

@@ -2,11 +2,10 @@
 
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
 use crate::basis::Basis;
 use crate::stencil::{self, GRADIENT, HESSIAN, VALUE};
-use pgvol_core::Grid;
+use pgvol_core::{Background, Grid, SparseGrid};
 
 /// Why a coefficient volume could not be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -21,14 +20,17 @@ pub enum FieldError {
     BadBasis(String),
     #[error("invalid fit: {0}")]
     BadFit(String),
+    #[error("coefficients for {got:?} nodes given for a grid of {want:?}")]
+    DimsMismatch { got: [usize; 3], want: [usize; 3] },
 }
 
-/// A smooth field `f(x) = Σ_j c_j B((x − g_j) / h)` over a grid.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// A smooth field `f(x) = Σ_j c_j B((x − g_j) / h)` over a grid. The coefficients are sparse:
+/// bricks near the surface are stored, the others hold their side's clamp value.
+#[derive(Clone, Debug, PartialEq)]
 pub struct CoefficientVolume {
     pub grid: Grid,
     pub basis: Basis,
-    pub coeffs: Vec<f32>,
+    pub coeffs: SparseGrid,
 }
 
 /// Checks what every constructor needs: a valid basis, at least 2 nodes per axis, one finite
@@ -51,14 +53,47 @@ pub(crate) fn check_inputs(grid: &Grid, basis: Basis, values: &[f32]) -> Result<
 }
 
 impl CoefficientVolume {
-    /// Wraps existing coefficients, checking the basis, their count and finiteness.
+    /// Wraps existing coefficients (one per node, x fastest), checking the basis, their count
+    /// and finiteness; every brick is stored.
     pub fn new(grid: Grid, basis: Basis, coeffs: Vec<f32>) -> Result<Self, FieldError> {
         check_inputs(&grid, basis, &coeffs)?;
+        let coeffs = SparseGrid::from_dense(grid.dims, &coeffs, Background::clamp(0.0));
         Ok(CoefficientVolume {
             grid,
             basis,
             coeffs,
         })
+    }
+
+    /// Wraps sparse coefficients, checking the basis, their grid and finiteness.
+    pub fn from_sparse(grid: Grid, basis: Basis, coeffs: SparseGrid) -> Result<Self, FieldError> {
+        basis.validate().map_err(FieldError::BadBasis)?;
+        if grid.dims.iter().any(|&n| n < 2) {
+            return Err(FieldError::GridTooSmall(grid.dims));
+        }
+        if coeffs.dims() != grid.dims {
+            return Err(FieldError::DimsMismatch {
+                got: coeffs.dims(),
+                want: grid.dims,
+            });
+        }
+        let bg = coeffs.background();
+        let stored_finite = coeffs
+            .stored()
+            .all(|(_, v)| v.iter().all(|c| c.is_finite()));
+        if !(stored_finite && bg.inside.is_finite() && bg.outside.is_finite()) {
+            return Err(FieldError::NonFinite { index: 0 });
+        }
+        Ok(CoefficientVolume {
+            grid,
+            basis,
+            coeffs,
+        })
+    }
+
+    /// Every coefficient, x fastest: the dense export.
+    pub fn dense_coeffs(&self) -> Vec<f32> {
+        self.coeffs.to_dense()
     }
 
     /// Value, gradient and Hessian (Hessian left zero below `ORDER`) at `p`. Points outside the
@@ -73,8 +108,8 @@ impl CoefficientVolume {
         let mut value = 0.0f32;
         let mut grad = Vec3::ZERO;
         let mut hess = Mat3::ZERO;
-        stencil::visit::<ORDER>(self.basis, g.dims, u, |i, jet| {
-            let c = self.coeffs[i];
+        stencil::visit_nodes::<ORDER>(self.basis, g.dims, u, |n, jet| {
+            let c = self.coeffs.get(n);
             value += c * jet.value;
             if ORDER >= GRADIENT {
                 grad += c * jet.gradient;

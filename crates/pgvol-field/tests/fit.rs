@@ -184,7 +184,9 @@ fn spurious_sign_changes_are_counted_far_from_the_surface() {
         .map(|i| b.distance(g.point(i % 12, (i / 12) % 12, i / 144)))
         .collect();
     // Flip two far-outside corner nodes: trilinear coefficients are node values.
-    vol.coeffs[0] = -1.0;
-    vol.coeffs[g.len() - 1] = -1.0;
+    let mut dense = vol.dense_coeffs();
+    dense[0] = -1.0;
+    dense[g.len() - 1] = -1.0;
+    vol = CoefficientVolume::new(g, vol.basis, dense).unwrap();
     assert_eq!(spurious_sign_changes(&vol, &sdf), 2);
 }

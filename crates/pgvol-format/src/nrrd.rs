@@ -86,7 +86,7 @@ pub fn write_coefficients_nrrd(path: &Path, file: &PgvFile) -> Result<(), Format
     write(
         path,
         &file.volume.grid,
-        &file.volume.coeffs,
+        &file.volume.dense_coeffs(),
         "pgvol coefficient volume: these are basis coefficients, not field values;\n\
          the field is sum_j c_j B((x - g_j) / h) with B given by pgvol_basis_params",
         &fields,
@@ -457,7 +457,10 @@ mod tests {
             let back = read_coefficients_nrrd(&p).unwrap();
             assert_eq!(back, f);
             let bits = |v: &[f32]| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&back.volume.coeffs), bits(&f.volume.coeffs));
+            assert_eq!(
+                bits(&back.volume.dense_coeffs()),
+                bits(&f.volume.dense_coeffs())
+            );
             // And through .pgv bytes.
             assert_eq!(crate::pgv::encode_pgv(&back), crate::pgv::encode_pgv(&f));
         }
@@ -468,10 +471,16 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let f = sample_file(Basis::Bspline3);
         let p = dir.path().join("s.nrrd");
-        write_field_nrrd(&p, &f.volume.grid, &f.volume.coeffs, Basis::Bspline3).unwrap();
+        write_field_nrrd(
+            &p,
+            &f.volume.grid,
+            &f.volume.dense_coeffs(),
+            Basis::Bspline3,
+        )
+        .unwrap();
         let (grid, values, kv) = read_nrrd(&p).unwrap();
         assert_eq!(grid, f.volume.grid);
-        assert_eq!(values, f.volume.coeffs);
+        assert_eq!(values, f.volume.dense_coeffs());
         assert_eq!(kv["pgvol_content"], "sdf");
         let e = read_coefficients_nrrd(&p).unwrap_err().to_string();
         assert!(e.contains("not coefficients"), "{e}");
@@ -525,7 +534,7 @@ mod tests {
         let (grid, values, _) = decode_nrrd(good, Path::new("g.nrrd")).unwrap();
         assert_eq!(grid, f.volume.grid);
         let bits = |v: &[f32]| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&values), bits(&f.volume.coeffs));
+        assert_eq!(bits(&values), bits(&f.volume.dense_coeffs()));
     }
 
     proptest! {

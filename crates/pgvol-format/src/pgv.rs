@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use pgvol_core::{Background, SparseGrid};
 use pgvol_field::CoefficientVolume;
 use rayon::prelude::*;
 
@@ -22,7 +23,7 @@ pub fn encode_pgv(file: &PgvFile) -> Vec<u8> {
     header.sparse = None;
     let payload: Vec<u8> = file
         .volume
-        .coeffs
+        .dense_coeffs()
         .iter()
         .flat_map(|v| v.to_le_bytes())
         .collect();
@@ -45,14 +46,15 @@ pub fn read_pgv(path: &Path) -> Result<PgvFile, FormatError> {
 pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
     let c = parse_container(bytes, path, true)?;
     let coeffs = if c.header.encoding == ENCODING_DENSE_F32 {
-        dense_coeffs(c.payload, path)?
+        let dense = dense_coeffs(c.payload, path)?;
+        SparseGrid::from_dense(c.header.grid.dims, &dense, Background::clamp(0.0))
     } else {
         decode_payload(&c.header, c.payload, path)?
     };
-    // Built directly rather than by `CoefficientVolume::new`, whose checks would cost one more
-    // pass over every coefficient: the container check validated the basis and the grid (at
-    // least 2 nodes per axis), and decoding gave one finite coefficient per node.
-    debug_assert!(coeffs.len() == c.header.grid.len() && coeffs.iter().all(|v| v.is_finite()));
+    // Built directly rather than by `CoefficientVolume::from_sparse`, whose checks would cost
+    // one more pass over every coefficient: the container check validated the basis and the
+    // grid (at least 2 nodes per axis), and decoding gave finite coefficients.
+    debug_assert_eq!(coeffs.dims(), c.header.grid.dims);
     let volume = CoefficientVolume {
         grid: c.header.grid,
         basis: c.header.basis,

@@ -91,13 +91,13 @@ fn f32_round_trip_is_exact_on_stored_bricks_and_constant_elsewhere() {
         let b = read_brick(&bytes, p(), coords).unwrap();
         assert_eq!(b.coeffs.len(), idx.len());
         for (&i, &c) in idx.iter().zip(&b.coeffs) {
-            assert_eq!(back.volume.coeffs[i].to_bits(), c.to_bits());
+            assert_eq!(back.volume.coeffs.get_index(i).to_bits(), c.to_bits());
             if b.stored {
-                assert_eq!(c.to_bits(), f.volume.coeffs[i].to_bits());
+                assert_eq!(c.to_bits(), f.volume.coeffs.get_index(i).to_bits());
             } else {
                 assert_eq!(c.abs(), r.clamp);
                 // Background keeps the side of the surface.
-                assert_eq!(c < 0.0, f.volume.coeffs[i] < 0.0);
+                assert_eq!(c < 0.0, f.volume.coeffs.get_index(i) < 0.0);
             }
         }
         stored += b.stored as usize;
@@ -170,9 +170,7 @@ fn auto_precision_stays_within_one_percent_of_the_spacing() {
     assert!(auto.len() < b32.len());
     // A field too large for f16 cannot be written as f16, and auto avoids it.
     let mut big = f.clone();
-    for c in &mut big.volume.coeffs {
-        *c *= 1e6;
-    }
+    big.volume.coeffs.map_values(|c| c * 1e6);
     let wide = |precision| EncodeOptions {
         precision,
         band: 1e12,
@@ -216,7 +214,13 @@ fn fixed_moves_only_coefficients_the_band_does_not_need() {
     assert!(rl.max_quantisation_error <= coarse / 2.0 * 1.001, "{rl:?}");
     let [nx, ny, nz] = f.volume.grid.dims;
     let (mut moved, mut checked) = (0, 0);
-    for (idx, (&a, &d)) in f.volume.coeffs.iter().zip(&file.volume.coeffs).enumerate() {
+    for (idx, (&a, &d)) in f
+        .volume
+        .dense_coeffs()
+        .iter()
+        .zip(&file.volume.dense_coeffs())
+        .enumerate()
+    {
         let at = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
         // Needed: within 2 nodes (the cubic reach) of a node within the band.
         let mut needed = false;
@@ -303,7 +307,7 @@ fn info_reads_header_and_index_and_files_round_trip_on_disk() {
     let dense = encode_pgv(&f);
     let di = pgv_info(&dense, &path).unwrap();
     assert_eq!((di.bricks_total, di.precision), (None, Precision::F32));
-    assert_eq!(di.bytes_payload, 4 * f.volume.coeffs.len());
+    assert_eq!(di.bytes_payload, 4 * f.volume.grid.len());
     let e = read_brick(&dense, &path, [0, 0, 0])
         .unwrap_err()
         .to_string();
@@ -559,7 +563,7 @@ fn assert_round_trip(f: &PgvFile, bytes: &[u8], edge: usize) -> f32 {
     let sp = decoded.header.sparse.clone().unwrap();
     let (precision, fixed) = (sp.precision, sp.fixed);
     assert_eq!(fixed.is_some(), precision == Precision::Fixed);
-    let back = decoded.volume.coeffs;
+    let back = decoded.volume.dense_coeffs();
     let mut worst = 0.0f32;
     for (coords, idx) in bricks(f.volume.grid.dims, edge) {
         let b = read_brick(bytes, p(), coords).unwrap();
@@ -574,14 +578,14 @@ fn assert_round_trip(f: &PgvFile, bytes: &[u8], edge: usize) -> f32 {
         }
         let lo = idx
             .iter()
-            .map(|&i| f.volume.coeffs[i])
+            .map(|&i| f.volume.coeffs.get_index(i))
             .fold(f32::INFINITY, f32::min);
         let hi = idx
             .iter()
-            .map(|&i| f.volume.coeffs[i])
+            .map(|&i| f.volume.coeffs.get_index(i))
             .fold(f32::NEG_INFINITY, f32::max);
         for &i in &idx {
-            let (a, d) = (f.volume.coeffs[i], back[i]);
+            let (a, d) = (f.volume.coeffs.get_index(i), back[i]);
             let bound = match precision {
                 Precision::F32 => 0.0,
                 // Half an f16 ulp: relative 2^-11, absolute 2^-25 among subnormals.

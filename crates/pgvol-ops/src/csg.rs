@@ -95,7 +95,7 @@ pub fn support_reach(volume: &CoefficientVolume) -> f32 {
 /// The field at every node of its grid (x fastest).
 fn node_values(volume: &CoefficientVolume) -> Vec<f32> {
     match volume.basis {
-        Basis::Trilinear => volume.coeffs.clone(),
+        Basis::Trilinear => volume.dense_coeffs(),
         _ => volume.sample(&volume.grid),
     }
 }
@@ -131,8 +131,13 @@ pub fn offset(volume: &CoefficientVolume, distance: f32) -> Result<CoefficientVo
     check("offset distance", distance, false)?;
     match volume.basis {
         Basis::Trilinear | Basis::Bspline2 | Basis::Bspline3 => {
-            let coeffs = volume.coeffs.iter().map(|c| c - distance).collect();
-            Ok(CoefficientVolume::new(volume.grid, volume.basis, coeffs)?)
+            let mut coeffs = volume.coeffs.clone();
+            coeffs.map_values(|c| c - distance);
+            Ok(CoefficientVolume::from_sparse(
+                volume.grid,
+                volume.basis,
+                coeffs,
+            )?)
         }
         Basis::Pg { .. } => remap(volume, |_, v| v - distance),
     }

@@ -191,17 +191,17 @@ impl CollapsedPlane {
         let window = axis_window(profile, (q - lo) / g.spacing, g.dims[a]);
         let dims = [g.dims[b], g.dims[c]];
         let mut coeffs = vec![0.0f32; dims[0] * dims[1]];
-        let stride = [1, g.dims[0], g.dims[0] * g.dims[1]];
         for t in 0..window.len {
             let w = window.w[t][0];
-            let base = mirror(window.first + t as i64, g.dims[a]) * stride[a];
+            let layer = mirror(window.first + t as i64, g.dims[a]);
             for iv in 0..dims[1] {
-                let row = base + iv * stride[c];
                 for (iu, out) in coeffs[iv * dims[0]..(iv + 1) * dims[0]]
                     .iter_mut()
                     .enumerate()
                 {
-                    *out += w * volume.coeffs[row + iu * stride[b]];
+                    let mut n = [0; 3];
+                    (n[a], n[b], n[c]) = (layer, iu, iv);
+                    *out += w * volume.coeffs.get(n);
                 }
             }
         }

@@ -320,16 +320,13 @@ pub fn info(a: InfoArgs) -> Result<()> {
     let parts = pgvol::pgv_info(&raw, &a.input)?;
     let file = pgvol::read_pgv_bytes(&raw, &a.input)?;
     let bytes = raw.len() as u64;
-    let c = &file.volume.coeffs;
-    let range = [
-        c.iter().cloned().fold(f32::INFINITY, f32::min),
-        c.iter().cloned().fold(f32::NEG_INFINITY, f32::max),
-    ];
+    let range = file.volume.coeffs.value_range();
+    let count = file.volume.grid.len();
     let info = Info {
         file: &a.input,
         bytes,
         header: &file.header,
-        coefficients: c.len(),
+        coefficients: count,
         coefficient_range: range,
         bricks_total: parts.bricks_total,
         bricks_stored: parts.bricks_stored,
@@ -365,7 +362,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
         parts.bytes_index,
         parts.bytes_payload
     );
-    outln!("coefficients  {} in [{}, {}]", c.len(), range[0], range[1]);
+    outln!("coefficients  {} in [{}, {}]", count, range[0], range[1]);
     if let Some([lo, hi]) = h.source_bounds {
         outln!("source box    {lo:?} .. {hi:?}");
     }

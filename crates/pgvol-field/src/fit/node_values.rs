@@ -18,7 +18,7 @@ pub fn node_values(volume: &CoefficientVolume) -> Vec<f32> {
     };
     let [nx, ny, _] = volume.grid.dims;
     let plane = nx * ny;
-    let mut out = vec![0.0f32; volume.coeffs.len()];
+    let mut out = vec![0.0f32; volume.grid.len()];
     out.par_chunks_mut(PLANES * plane)
         .enumerate()
         .for_each(|(t, chunk)| {
@@ -90,12 +90,15 @@ fn node_planes(
     let plane = nx * ny;
     if side == 0.0 {
         // Trilinear: the coefficients are the node values.
+        let mut coeffs = vec![0.0f32; plane];
         for k in planes {
-            sink(k, &volume.coeffs[k * plane..][..plane]);
+            volume.coeffs.gather([0, 0, k], [nx, ny, 1], &mut coeffs);
+            sink(k, &coeffs);
         }
         return;
     }
     let mut row_pass = vec![0.0f32; plane];
+    let mut coeffs = vec![0.0f32; plane];
     // The xy-filtered planes k − 1, k, k + 1 (mirrored), by plane index.
     let mut window: [(usize, Vec<f32>); 3] =
         std::array::from_fn(|_| (usize::MAX, vec![0.0; plane]));
@@ -109,7 +112,7 @@ fn node_planes(
             let slot = (0..3)
                 .find(|&s| !wanted.contains(&window[s].0))
                 .expect("three planes fit");
-            let coeffs = &volume.coeffs[m * plane..][..plane];
+            volume.coeffs.gather([0, 0, m], [nx, ny, 1], &mut coeffs);
             for (row, input) in row_pass.chunks_mut(nx).zip(coeffs.chunks(nx)) {
                 blur_row(input, row, side, centre);
             }

@@ -99,7 +99,10 @@ fn encode_brick(
         ..
     } = s;
     let nodes: Vec<usize> = bricks.nodes(b).collect();
-    let values: Vec<f32> = nodes.iter().map(|&i| volume.coeffs[i]).collect();
+    let values: Vec<f32> = nodes
+        .iter()
+        .map(|&i| volume.coeffs.get(bricks.unflat(i)))
+        .collect();
     let Some((params, mut words)) = quantise(&values, sp.precision, sp.fixed) else {
         return Ok(None);
     };

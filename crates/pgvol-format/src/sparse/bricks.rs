@@ -37,6 +37,13 @@ impl Bricks {
         (lo, n)
     }
 
+    /// Node indices of flat grid index `i`.
+    #[inline]
+    pub(crate) fn unflat(&self, i: usize) -> [usize; 3] {
+        let [nx, ny, _] = self.dims;
+        [i % nx, (i / nx) % ny, i / (nx * ny)]
+    }
+
     /// Flat grid indices of brick `b`'s nodes, x fastest.
     pub(crate) fn nodes(&self, b: usize) -> impl Iterator<Item = usize> {
         let (lo, n) = self.extent(b);

@@ -33,7 +33,7 @@ pub(crate) fn background(
     for b in (0..bricks.total()).filter(|&b| !keep[b]) {
         let mut sum = 0.0f64;
         for i in bricks.nodes(b) {
-            let c = volume.coeffs[i];
+            let c = volume.coeffs.get(bricks.unflat(i));
             sum += c as f64;
             clamp = clamp.max(c.abs());
         }

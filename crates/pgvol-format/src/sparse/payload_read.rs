@@ -11,6 +11,8 @@
 
 use std::path::Path;
 
+use pgvol_core::sparse::BrickValues;
+use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use rayon::prelude::*;
 
 use super::brick_read::{background, BrickReader};
@@ -19,14 +21,93 @@ use crate::dense_alloc::zeroed;
 use crate::error::FormatError;
 use crate::header::PgvHeader;
 
-/// Every coefficient of a sparse payload, x fastest.
+/// The coefficients of a sparse payload as a sparse grid: each stored file brick decoded once
+/// (in parallel) and cut into the grid's bricks, each unstored one a background of its side.
+/// Files whose brick edge is not a multiple of the grid's go through a dense array.
 pub(crate) fn decode_payload(
     header: &PgvHeader,
     payload: &[u8],
     path: &Path,
-) -> Result<Vec<f32>, FormatError> {
+) -> Result<SparseGrid, FormatError> {
     let l = layout(header, payload, path)?;
-    decode_all(&l, path)
+    let dims = l.bricks.dims;
+    let background = Background::clamp(l.sp.clamp);
+    if l.bricks.edge % BRICK_EDGE != 0 {
+        let dense = decode_all(&l, path)?;
+        return Ok(SparseGrid::from_dense(dims, &dense, background));
+    }
+    let total = l.bricks.total();
+    let stored: Vec<(usize, usize)> = (0..total)
+        .filter(|&b| bit(l.stored, b))
+        .enumerate()
+        .map(|(e, b)| (b, e))
+        .collect();
+    let mut grid = SparseGrid::new(dims, background);
+    for b in (0..total).filter(|&b| !bit(l.stored, b) && bit(l.inside, b)) {
+        for (m, _) in grid_bricks_of(&l, b) {
+            grid.set_inside(m, true);
+        }
+    }
+    let decoded: Vec<Result<Vec<GridBrick>, FormatError>> = stored
+        .par_iter()
+        .map_init(
+            || (BrickReader::default(), Vec::new()),
+            |(reader, values), &(b, e)| {
+                let (_, n) = l.bricks.extent(b);
+                values.resize(n[0] * n[1] * n[2], 0.0);
+                reader.decode(&l, b, e, path, values)?;
+                Ok(cut_into_grid_bricks(&l, b, n, values))
+            },
+        )
+        .collect();
+    for pieces in decoded {
+        for (m, values) in pieces? {
+            grid.insert(m, values);
+        }
+    }
+    grid.compact_tiles();
+    Ok(grid)
+}
+
+/// A grid brick's coordinates and values.
+type GridBrick = ([usize; 3], Box<BrickValues>);
+
+/// The grid bricks inside file brick `b`, with their first node relative to the file brick's.
+fn grid_bricks_of(l: &Layout, b: usize) -> impl Iterator<Item = ([usize; 3], [usize; 3])> {
+    let (lo, n) = l.bricks.extent(b);
+    let per = n.map(|c| c.div_ceil(BRICK_EDGE));
+    (0..per[2]).flat_map(move |k| {
+        (0..per[1]).flat_map(move |j| {
+            (0..per[0]).map(move |i| {
+                let rel = [i, j, k].map(|c| c * BRICK_EDGE);
+                ([0, 1, 2].map(|a| (lo[a] + rel[a]) / BRICK_EDGE), rel)
+            })
+        })
+    })
+}
+
+/// File brick `b`'s decoded `values` (`n` nodes, x fastest) as grid bricks; nodes past the
+/// grid hold the clamp.
+fn cut_into_grid_bricks(
+    l: &Layout,
+    b: usize,
+    n: [usize; 3],
+    values: &[f32],
+) -> Vec<GridBrick> {
+    grid_bricks_of(l, b)
+        .map(|(m, rel)| {
+            let mut out = Box::new([l.sp.clamp; BRICK_NODES]);
+            let len = [0, 1, 2].map(|a| BRICK_EDGE.min(n[a] - rel[a]));
+            for k in 0..len[2] {
+                for j in 0..len[1] {
+                    let src = rel[0] + n[0] * (rel[1] + j + n[1] * (rel[2] + k));
+                    let dst = BRICK_EDGE * (j + BRICK_EDGE * k);
+                    out[dst..dst + len[0]].copy_from_slice(&values[src..src + len[0]]);
+                }
+            }
+            (m, out)
+        })
+        .collect()
 }
 
 /// The part of the dense array that brick row `(bj, bk)` covers: in each z-slice of the brick

@@ -199,7 +199,7 @@ mod tests {
         ] {
             let bytes = encoded(&f, brick, precision, predictor, compression);
             let (stages, staged) = profile_sparse_read(&bytes, p()).unwrap();
-            let decoded = decode_pgv(&bytes, p()).unwrap().volume.coeffs;
+            let decoded = decode_pgv(&bytes, p()).unwrap().volume.dense_coeffs();
             assert_eq!(bits(&staged), bits(&decoded), "{brick} {precision:?}");
             assert!(stages.total() >= stages.decompress + stages.decode);
         }
@@ -245,7 +245,7 @@ mod tests {
             );
             // The valid file reads, the same both ways.
             let (_, clean) = profile_sparse_read(&bytes, p()).unwrap();
-            prop_assert_eq!(bits(&clean), bits(&decode_pgv(&bytes, p()).unwrap().volume.coeffs));
+            prop_assert_eq!(bits(&clean), bits(&decode_pgv(&bytes, p()).unwrap().volume.dense_coeffs()));
             let n = bytes.len();
             for (pos, val) in edits {
                 bytes[pos % n] = val;
@@ -255,7 +255,7 @@ mod tests {
             let decoded = decode_pgv(&bytes, p());
             prop_assert_eq!(staged.is_ok(), decoded.is_ok());
             if let (Ok((_, staged)), Ok(decoded)) = (staged, decoded) {
-                prop_assert_eq!(bits(&staged), bits(&decoded.volume.coeffs));
+                prop_assert_eq!(bits(&staged), bits(&decoded.volume.dense_coeffs()));
             }
         }
     }

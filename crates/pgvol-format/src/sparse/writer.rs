@@ -35,7 +35,7 @@ pub fn encode_pgv_with(
     if !(opts.band.is_finite() && opts.band >= 0.0) {
         return Err(fail(format!("band {} must be finite and >= 0", opts.band)));
     }
-    CoefficientVolume::new(g, volume.basis, volume.coeffs.clone())
+    CoefficientVolume::from_sparse(g, volume.basis, volume.coeffs.clone())
         .map_err(|e| fail(format!("invalid volume: {e}")))?;
     // Steps in units of field error: a coefficient error δ moves the field by at most W·δ.
     let weight = basis_weight_bound(volume.basis);

@@ -81,7 +81,7 @@ pub fn is_the_sum_of_its_node_kernels<K: Kernel>(case: &VolumeCase<K>) {
             for jj in 0..GRID.dims[1] {
                 for ii in 0..GRID.dims[0] {
                     let jet = k.jet(u - Vec3::new(ii as f32, jj as f32, kk as f32));
-                    let c = vol.coeffs[GRID.index(ii, jj, kk)];
+                    let c = vol.coeffs.get([ii, jj, kk]);
                     v += c * jet.value;
                     g += c * jet.gradient;
                     h += jet.hessian * c;

@@ -70,7 +70,7 @@ fn main() {
             };
             let (bytes, r) = encode_pgv_with(&file, &storage).expect("encode");
             let back = pgvol::read_pgv_bytes(&bytes, Path::new("mem")).unwrap();
-            assert_eq!(back.volume.coeffs.len(), file.volume.coeffs.len());
+            assert_eq!(back.volume.coeffs.dims(), file.volume.coeffs.dims());
             // Stored coefficients: nodes of stored bricks (edge bricks are partial).
             let stored_coeffs = stored_coefficients(&grid, &bytes, edge);
             println!(
