@@ -9,6 +9,8 @@
 
 use rayon::prelude::*;
 
+use pgvol_core::SparseGrid;
+
 use crate::grid::Grid;
 
 /// Relative slack on the bound for float rounding of exact distances.
@@ -35,6 +37,60 @@ pub fn sign_contradictions(grid: &Grid, values: &[f32]) -> usize {
                     count += usize::from(i + 1 < nx && broken(v, values[at + 1]));
                     count += usize::from(j + 1 < ny && broken(v, values[at + nx]));
                     count += usize::from(k + 1 < nz && broken(v, values[at + plane]));
+                }
+            }
+            count
+        })
+        .sum()
+}
+
+/// As [`sign_contradictions`] on a sparse grid, without visiting the nodes of absent bricks:
+/// inside such a brick all values are equal, so only its faces can hold a contradiction.
+pub fn sparse_sign_contradictions(grid: &Grid, values: &SparseGrid) -> usize {
+    let dims = grid.dims;
+    if values.dims() != dims {
+        return 0;
+    }
+    let limit = grid.spacing * (1.0 + SLACK);
+    let broken = |a: f32, b: f32| (a < 0.0) != (b < 0.0) && a.abs() + b.abs() > limit;
+    let bricks: Vec<[usize; 3]> = values.all_bricks().collect();
+    bricks
+        .par_iter()
+        .map(|&b| {
+            let (lo, n) = values.brick_extent(b);
+            let stored = values.is_stored(b);
+            let mut count = 0;
+            for axis in 0..3 {
+                let mut next = b;
+                next[axis] += 1;
+                let neighbour_in_grid = lo[axis] + n[axis] < dims[axis];
+                if !stored && !(neighbour_in_grid && values.is_stored(next)) {
+                    // Absent against absent (or the border): one comparison for the face.
+                    if neighbour_in_grid
+                        && broken(values.background_of(b), values.background_of(next))
+                    {
+                        count += 1;
+                    }
+                    continue;
+                }
+                // Pairs (node, node + 1 along `axis`) with the first node in this brick; an
+                // absent brick only pairs across its face.
+                let first = if stored { 0 } else { n[axis] - 1 };
+                for k in 0..n[2] {
+                    for j in 0..n[1] {
+                        for i in 0..n[0] {
+                            let local = [i, j, k];
+                            if local[axis] < first {
+                                continue;
+                            }
+                            let mut p = [lo[0] + i, lo[1] + j, lo[2] + k];
+                            let v = values.get(p);
+                            p[axis] += 1;
+                            if p[axis] < dims[axis] {
+                                count += usize::from(broken(v, values.get(p)));
+                            }
+                        }
+                    }
                 }
             }
             count

@@ -17,6 +17,7 @@ mod row_kernels;
 mod row_window;
 mod sign_check;
 pub mod solve;
+mod sparse_node_values;
 mod vector;
 mod weighted;
 mod wls;
@@ -28,6 +29,7 @@ pub use node_values::node_values;
 pub use options::{FitMethod, FitOptions};
 pub use report::{FitReport, FitStages};
 pub use sign_check::spurious_sign_changes;
+pub use sparse_node_values::node_values_sparse;
 pub use wls::wls_band;
 
 use std::time::Instant;
