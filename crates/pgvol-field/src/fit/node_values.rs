@@ -64,7 +64,7 @@ pub(crate) fn count_nodes(
 
 /// The 3-tap node kernel `(side, centre)` of a separable basis, `None` for bases evaluated
 /// directly.
-fn taps(basis: Basis) -> Option<(f32, f32)> {
+pub(crate) fn taps(basis: Basis) -> Option<(f32, f32)> {
     match basis {
         Basis::Trilinear => Some((0.0, 1.0)),
         Basis::Bspline2 => Some((1.0 / 8.0, 6.0 / 8.0)),
