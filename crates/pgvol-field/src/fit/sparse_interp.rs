@@ -288,8 +288,18 @@ mod tests {
         let clamp = band * grid.spacing;
         let mut out = SparseGrid::new(grid.dims, Background::clamp(clamp));
         let bricks: Vec<[usize; 3]> = out.all_bricks().collect();
+        // Half the diagonal of a brick: bricks whose centre is farther than this past the
+        // band hold no node within it.
+        let reach = clamp + 0.5 * 3f32.sqrt() * (BRICK_EDGE - 1) as f32 * grid.spacing;
         for b in bricks {
             let (lo, m) = out.brick_extent(b);
+            let centre = grid.point(lo[0], lo[1], lo[2])
+                + 0.5 * (BRICK_EDGE - 1) as f32 * Vec3::splat(grid.spacing);
+            let d = ball.distance(centre);
+            if d.abs() > reach {
+                out.set_inside(b, d < 0.0);
+                continue;
+            }
             let mut values = Box::new([clamp; BRICK_NODES]);
             let (mut near, mut inside) = (false, false);
             for k in 0..m[2] {
@@ -399,6 +409,18 @@ mod tests {
     fn timing() {
         use crate::fit::{interp_samples, interp_sparse, FitOptions};
         use crate::Basis;
+        // Beyond the dense fit's reach here: the sparse fit alone.
+        for n in [512usize, 1024] {
+            let (grid, samples) = banded_sphere(n, 4.0);
+            let t = Instant::now();
+            let (fit, _) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
+            eprintln!(
+                "{n}³: {} stored bricks, {} coefficient bricks; sparse fit {:.3} s",
+                samples.stored_count(),
+                fit.coeffs.stored_count(),
+                t.elapsed().as_secs_f64()
+            );
+        }
         for n in [128usize, 192, 256] {
             let (grid, samples) = banded_sphere(n, 4.0);
             let clamp = samples.background().outside;
