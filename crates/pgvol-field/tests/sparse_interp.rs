@@ -219,6 +219,18 @@ fn a_constant_brick_gives_constant_coefficients() {
     }
 }
 
+/// No stored brick: nothing to compute, every brick keeps its side.
+#[test]
+fn samples_without_bricks_give_the_background() {
+    let grid = box_grid([30, 20, 70]);
+    let mut samples = SparseGrid::new(grid.dims, Background::clamp(0.5));
+    samples.set_inside([1, 2, 8], true);
+    let (vol, report) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
+    assert_eq!(vol.coeffs.stored_count(), 0);
+    assert_eq!(vol.coeffs, samples);
+    assert_eq!(report.spurious_sign_changes, 0);
+}
+
 #[test]
 fn bits_do_not_depend_on_the_thread_count() {
     let grid = box_grid([70, 61, 53]);
