@@ -121,7 +121,7 @@ pub fn prefilter_volume_with(values: &mut [f32], dims: [usize; 3], z: f64) {
 
 /// [`prefilter_line_with`] on `lanes` interleaved lines of length `n` (`data[lane + lanes · k]`
 /// is sample k of line `lane`), with the same operations in the same order per line.
-fn prefilter_lanes(data: &mut [f64], lanes: usize, n: usize, z: f64) {
+pub(crate) fn prefilter_lanes(data: &mut [f64], lanes: usize, n: usize, z: f64) {
     if n < 2 {
         return;
     }
