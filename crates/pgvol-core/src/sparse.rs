@@ -512,6 +512,11 @@ impl SparseGrid {
         range
     }
 
+    /// Replaces the value of absent bricks.
+    pub fn set_background(&mut self, background: Background) {
+        self.background = background;
+    }
+
     /// Applies `f` to every stored value and to the background.
     pub fn map_values(&mut self, f: impl Fn(f32) -> f32 + Sync) {
         for b in self.bricks.iter_mut() {

@@ -11,6 +11,9 @@
 //! the crease are unaffected.
 
 use glam::Vec3;
+use pgvol_core::sparse::BrickValues;
+use pgvol_core::{Background, BRICK_EDGE};
+use pgvol_field::fit::node_values_sparse;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use rayon::prelude::*;
 
@@ -67,9 +70,8 @@ fn check(name: &str, x: f32, positive: bool) -> Result<(), OpsError> {
 /// The largest magnitude of the field's node values. For a narrow-band encoding this is the
 /// clamp `W`: beyond it the field is not a distance.
 pub fn stored_band(volume: &CoefficientVolume) -> f32 {
-    node_values(volume)
-        .into_iter()
-        .fold(0.0f32, |m, v| m.max(v.abs()))
+    let [lo, hi] = node_values_sparse(volume).value_range();
+    lo.abs().max(hi.abs())
 }
 
 /// Whether moving the surface by `distance` (an offset, shell thickness or wall) leaves the band
@@ -92,34 +94,58 @@ pub fn support_reach(volume: &CoefficientVolume) -> f32 {
     spacings * volume.grid.spacing
 }
 
-/// The field at every node of its grid (x fastest).
-fn node_values(volume: &CoefficientVolume) -> Vec<f32> {
-    match volume.basis {
-        Basis::Trilinear => volume.dense_coeffs(),
-        _ => volume.sample(&volume.grid),
-    }
-}
-
-/// A map of node positions and values, in parallel, then interpolated in the same basis.
+/// A map of node values, then interpolated again in the same basis, brick by brick: the
+/// bricks whose node values vary are mapped node by node, every other brick is its side's
+/// background mapped once. `varies(lo, hi, v)` says whether `f` could change with position
+/// over the box `[lo, hi]` for the node value `v` (drains crossing far space).
 fn remap(
     volume: &CoefficientVolume,
     f: impl Fn(Vec3, f32) -> f32 + Sync,
+    varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
 ) -> Result<CoefficientVolume, OpsError> {
     let grid: Grid = volume.grid;
-    let mut values = node_values(volume);
-    let [nx, ny, _] = grid.dims;
-    values
-        .par_chunks_mut(nx * ny)
-        .enumerate()
-        .for_each(|(k, plane)| {
-            for j in 0..ny {
-                for i in 0..nx {
-                    let v = &mut plane[i + nx * j];
-                    *v = f(grid.point(i, j, k), *v);
-                }
-            }
-        });
-    Ok(CoefficientVolume::interpolate(grid, volume.basis, values)?)
+    let mut values = node_values_sparse(volume);
+    let background = values.background();
+    // Absent bricks where `f` depends on position become stored bricks of their background.
+    let absent: Vec<[usize; 3]> = values
+        .all_bricks()
+        .filter(|&b| !values.is_stored(b))
+        .collect();
+    let moving: Vec<[usize; 3]> = absent
+        .into_par_iter()
+        .filter(|&b| {
+            let (lo, n) = values.brick_extent(b);
+            let hi = [0, 1, 2].map(|a| lo[a] + n[a] - 1);
+            varies(
+                grid.point(lo[0], lo[1], lo[2]),
+                grid.point(hi[0], hi[1], hi[2]),
+                values.background_of(b),
+            )
+        })
+        .collect();
+    for b in moving {
+        values.brick_or_background(b);
+    }
+    let mut bricks: Vec<([usize; 3], &mut BrickValues)> = values.stored_mut().collect();
+    bricks.par_iter_mut().for_each(|(b, v)| {
+        let lo = b.map(|c| c * BRICK_EDGE);
+        for (at, x) in v.iter_mut().enumerate() {
+            let n = [
+                at % BRICK_EDGE,
+                (at / BRICK_EDGE) % BRICK_EDGE,
+                at / (BRICK_EDGE * BRICK_EDGE),
+            ];
+            let p = grid.point(lo[0] + n[0], lo[1] + n[1], lo[2] + n[2]);
+            *x = f(p, *x);
+        }
+    });
+    drop(bricks);
+    values.set_background(Background {
+        outside: f(grid.origin, background.outside),
+        inside: f(grid.origin, background.inside),
+    });
+    let (result, _) = pgvol_field::fit::interp_sparse(grid, volume.basis, &values)?;
+    Ok(result)
 }
 
 /// The surface moved by `distance` along its normals (outward when positive): the field minus
@@ -139,7 +165,7 @@ pub fn offset(volume: &CoefficientVolume, distance: f32) -> Result<CoefficientVo
                 coeffs,
             )?)
         }
-        Basis::Pg { .. } => remap(volume, |_, v| v - distance),
+        Basis::Pg { .. } => remap(volume, |_, v| v - distance, |_, _, _| false),
     }
 }
 
@@ -157,7 +183,7 @@ pub fn shell(
         ShellSide::Outer => half,
         ShellSide::Centred => 0.0,
     };
-    remap(volume, |_, v| (v - centre).abs() - half)
+    remap(volume, |_, v| (v - centre).abs() - half, |_, _, _| false)
 }
 
 /// The part with a cavity leaving walls of `wall` thickness, `max(f, −(f + wall))`, and the
@@ -179,13 +205,27 @@ pub fn hollow(
         }
         units.push(u);
     }
-    remap(volume, |p, v| {
-        let mut g = v.max(-(v + wall));
-        for (d, &u) in drains.iter().zip(&units) {
-            g = g.max(-d.distance(u, p));
-        }
-        g
-    })
+    let wall_only = |v: f32| v.max(-(v + wall));
+    // Over a box, a drain's distance varies by at most the box's half diagonal from its
+    // value at the centre; it matters where `−distance` can exceed the wall-only value.
+    let drain_reaches = |lo: Vec3, hi: Vec3, v: f32| {
+        let (centre, reach) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+        drains
+            .iter()
+            .zip(&units)
+            .any(|(d, &u)| -(d.distance(u, centre) - reach) >= wall_only(v))
+    };
+    remap(
+        volume,
+        |p, v| {
+            let mut g = wall_only(v);
+            for (d, &u) in drains.iter().zip(&units) {
+                g = g.max(-d.distance(u, p));
+            }
+            g
+        },
+        drain_reaches,
+    )
 }
 
 #[cfg(test)]

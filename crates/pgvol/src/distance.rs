@@ -117,6 +117,19 @@ pub(crate) fn sample(
     })
 }
 
+/// Samples `sdf` within `width` spacings of the surface on `grid`, sparse, as the stage
+/// "distance" of `progress`.
+pub(crate) fn sample_sparse(
+    sdf: &MeshSdf,
+    grid: &Grid,
+    width: f32,
+    progress: &dyn Progress,
+) -> Result<pgvol_sdf::sampling::SparseSampled> {
+    progress::stage(progress, "distance", |update| {
+        sdf.sample_sparse(grid, width, update)
+    })
+}
+
 /// The signed distance of `mesh` on the grid of `options`.
 pub fn signed_distance(
     mesh: &Mesh,

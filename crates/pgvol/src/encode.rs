@@ -12,7 +12,7 @@ use pgvol_format::{PgvFile, Precision};
 use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 
-use crate::distance::{mesh_sdf, sample, MeshDistance};
+use crate::distance::{mesh_sdf, sample, sample_sparse, MeshDistance};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::memory::{check_grid, BYTES_PER_NODE};
@@ -151,11 +151,12 @@ pub(crate) fn fit_volume(
     let mut band = None;
     let fitted = match options.fit {
         FitMethod::Interp => {
+            // Sparse from end to end: band bricks sampled, fitted locally, far bricks a side.
             band = Some(options.band);
-            let sampled = sample(&sdf, &grid, Extent::Band(options.band), progress)?;
+            let sampled = sample_sparse(&sdf, &grid, options.band, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
             progress::stage(progress, "fit", |_| {
-                pgvol_field::fit::interp_samples(grid, options.basis, &sampled.values, &fit_options)
+                pgvol_field::fit::interp_sparse(grid, options.basis, &sampled.values)
             })?
         }
         FitMethod::Wls => {
