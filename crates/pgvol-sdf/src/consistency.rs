@@ -64,7 +64,8 @@ pub fn sparse_sign_contradictions(grid: &Grid, values: &SparseGrid) -> usize {
                 let mut next = b;
                 next[axis] += 1;
                 let neighbour_in_grid = lo[axis] + n[axis] < dims[axis];
-                if !stored && !(neighbour_in_grid && values.is_stored(next)) {
+                let pairs_nodes = stored || (neighbour_in_grid && values.is_stored(next));
+                if !pairs_nodes {
                     // Absent against absent (or the border): one comparison for the face.
                     if neighbour_in_grid
                         && broken(values.background_of(b), values.background_of(next))
