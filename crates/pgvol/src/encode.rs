@@ -103,7 +103,12 @@ pub struct Encoded {
 pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> Result<Encoded> {
     options.validate()?;
     let grid = options.grid.grid_for(mesh)?;
-    check_grid("encoding", &grid, BYTES_PER_NODE)?;
+    match options.fit {
+        FitMethod::Interp => {
+            crate::memory::check_sparse_encode("encoding", mesh, &grid, options.band)?
+        }
+        _ => check_grid("encoding", &grid, BYTES_PER_NODE)?,
+    }
     let mut timings = Timings::default();
     let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
     let (volume, fit) = (fitted.volume, fitted.report);

@@ -10,6 +10,18 @@ use crate::error::{Error, ErrorKind, Result};
 /// whole process: 11.4 bytes per node encoding the bunny at 512³, 12.7 decoding it).
 pub const BYTES_PER_NODE: u64 = 13;
 
+/// Bytes per stored brick of 8³ nodes while encoding sparse: the band's samples (2 KiB), the
+/// coefficients of the brick and of the neighbours the local fit adds, and the compressed
+/// blobs.
+pub const BYTES_PER_BAND_BRICK: u64 = 8 * 1024;
+
+/// Bytes per grid node, whatever the band: the sampler's flags per brick of 4³ nodes (near a
+/// triangle, and the sign of a far region), 3 bytes per 64 nodes.
+pub const BYTES_PER_PLAN_NODE: f64 = 3.0 / 64.0;
+
+/// Bytes per triangle of the input mesh with its distance queries (BVH, winding tree).
+pub const BYTES_PER_TRIANGLE: u64 = 400;
+
 /// Bytes per node of a sampled distance grid: the values and the writer's copy.
 pub const BYTES_PER_SDF_NODE: u64 = 8;
 
@@ -73,6 +85,50 @@ pub(crate) fn check_grid(job: &str, grid: &pgvol_core::Grid, per_node: u64) -> R
         grid_bytes(grid.len(), per_node),
         "lower the resolution",
     )
+}
+
+/// Bricks of 8³ nodes within `band` spacings of a surface of `area` on a grid of `spacing`: a
+/// surface crosses about 1.5 bricks per brick face of area, and the band adds its thickness
+/// (2 · band spacings of 8).
+pub fn band_bricks(area: f64, spacing: f32, band: f32) -> u64 {
+    let side = 8.0 * spacing as f64;
+    (area / (side * side) * (1.5 + band as f64 / 4.0)).ceil() as u64
+}
+
+/// Estimated peak bytes of a sparse encode of a mesh of `area` and `triangles` on `grid`.
+pub fn sparse_encode_bytes(area: f64, triangles: usize, grid: &pgvol_core::Grid, band: f32) -> u64 {
+    let bricks = band_bricks(area, grid.spacing, band);
+    let plan = (grid.len() as f64 * BYTES_PER_PLAN_NODE) as u64;
+    bricks
+        .saturating_mul(BYTES_PER_BAND_BRICK)
+        .saturating_add(plan)
+        .saturating_add((triangles as u64).saturating_mul(BYTES_PER_TRIANGLE))
+}
+
+/// Refuses a sparse encode of `mesh` on `grid` that would not fit in memory.
+pub(crate) fn check_sparse_encode(
+    job: &str,
+    mesh: &pgvol_core::Mesh,
+    grid: &pgvol_core::Grid,
+    band: f32,
+) -> Result<()> {
+    let [nx, ny, nz] = grid.dims;
+    check_memory(
+        &format!("{job} on a {nx} x {ny} x {nz} grid"),
+        sparse_encode_bytes(mesh_area(mesh), mesh.triangles.len(), grid, band),
+        "lower the resolution",
+    )
+}
+
+/// The surface area of `mesh`.
+fn mesh_area(mesh: &pgvol_core::Mesh) -> f64 {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum()
 }
 
 /// Bytes for a grid of `nodes` at `per_node` bytes, saturating.

@@ -62,10 +62,12 @@ pub struct Remeshed {
 /// Remeshes `mesh` by `options`.
 pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> Result<Remeshed> {
     let grid = options.grid.grid_for(mesh)?;
-    crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
     let mut timings = Timings::default();
     let out = match options.field {
-        RemeshField::Exact => contour_exact(mesh, &grid, options.method, &mut timings, progress)?,
+        RemeshField::Exact => {
+            crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
+            contour_exact(mesh, &grid, options.method, &mut timings, progress)?
+        }
         RemeshField::Decoded(basis) => {
             let encode = EncodeOptions {
                 grid: options.grid,
@@ -75,6 +77,7 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
                 sign: SignMode::Auto,
             };
             encode.validate()?;
+            crate::memory::check_sparse_encode("remeshing", mesh, &grid, ENCODE_BAND)?;
             let volume = fit_volume(mesh, grid, &encode, &mut timings, progress)?.volume;
             let start = Instant::now();
             let decode_options = DecodeOptions {

@@ -68,7 +68,6 @@ impl Shape {
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
         let pad = Vec3::splat(grow.max(0.0));
         let grid = Grid::cube_res(lo - pad, hi + pad, res)?;
-        crate::memory::check_grid("encoding the mesh", &grid, crate::memory::BYTES_PER_NODE)?;
         let options = EncodeOptions {
             grid: GridSpec::Res(res),
             basis: Basis::Bspline3,
@@ -76,6 +75,7 @@ impl Shape {
             band: ENCODE_BAND + reach.abs() / grid.spacing,
             sign: SignMode::Auto,
         };
+        crate::memory::check_sparse_encode("encoding the mesh", &mesh, &grid, options.band)?;
         let volume = fit_volume(&mesh, grid, &options, &mut Timings::default(), progress)?.volume;
         Ok(Shape {
             volume,
