@@ -88,12 +88,7 @@ fn grid_bricks_of(l: &Layout, b: usize) -> impl Iterator<Item = ([usize; 3], [us
 
 /// File brick `b`'s decoded `values` (`n` nodes, x fastest) as grid bricks; nodes past the
 /// grid hold the clamp.
-fn cut_into_grid_bricks(
-    l: &Layout,
-    b: usize,
-    n: [usize; 3],
-    values: &[f32],
-) -> Vec<GridBrick> {
+fn cut_into_grid_bricks(l: &Layout, b: usize, n: [usize; 3], values: &[f32]) -> Vec<GridBrick> {
     grid_bricks_of(l, b)
         .map(|(m, rel)| {
             let mut out = Box::new([l.sp.clamp; BRICK_NODES]);
