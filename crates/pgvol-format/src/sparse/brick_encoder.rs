@@ -6,9 +6,10 @@ use pgvol_field::CoefficientVolume;
 use rayon::prelude::*;
 
 use super::bricks::Bricks;
-use super::free_words::{settle_free_words, FreeNodes};
+use super::free_words::settle_free_words;
 use super::predict::predict;
 use super::quantise::{dequantise, quantise};
+use super::stored_band::KeptBrick;
 use crate::sparse_params::{Compression, Precision, SparseParams};
 
 fn zigzag(r: u32, bits: u32) -> u32 {
@@ -46,13 +47,13 @@ pub(crate) fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &Sparse
     raw
 }
 
-/// What the encoder stores: the bricks of `volume` marked in `keep`, with the coefficients the
-/// band needs in `free`.
+/// What the encoder stores: the `kept` bricks of `volume`, with the nodes the band needs, and
+/// how many coarse `fixed` words the others may move.
 pub(crate) struct StoredBricks<'a> {
     pub(crate) volume: &'a CoefficientVolume,
     pub(crate) bricks: &'a Bricks,
-    pub(crate) keep: &'a [bool],
-    pub(crate) free: &'a FreeNodes<'a>,
+    pub(crate) kept: &'a [KeptBrick],
+    pub(crate) tolerance_steps: i32,
 }
 
 /// The blobs of the stored bricks and their largest coefficient error.
@@ -67,10 +68,10 @@ pub(crate) fn encode_bricks(
 ) -> Result<Option<Encoded>, String> {
     // Bricks are independent: encode them in parallel, collected in brick order so the file
     // does not depend on the thread count.
-    let stored: Vec<usize> = (0..s.bricks.total()).filter(|&b| s.keep[b]).collect();
-    let encoded: Vec<Option<(Vec<u8>, f32)>> = stored
+    let encoded: Vec<Option<(Vec<u8>, f32)>> = s
+        .kept
         .par_iter()
-        .map(|&b| encode_brick(s, sp, level, b))
+        .map(|k| encode_brick(s, sp, level, k))
         .collect::<Result<_, String>>()?;
     let mut blobs = Vec::with_capacity(encoded.len());
     let mut worst = 0.0f32;
@@ -90,26 +91,17 @@ fn encode_brick(
     s: &StoredBricks,
     sp: &SparseParams,
     level: i32,
-    b: usize,
+    kept: &KeptBrick,
 ) -> Result<Option<(Vec<u8>, f32)>, String> {
-    let StoredBricks {
-        volume,
-        bricks,
-        free,
-        ..
-    } = s;
-    let nodes: Vec<usize> = bricks.nodes(b).collect();
-    let values: Vec<f32> = nodes
-        .iter()
-        .map(|&i| volume.coeffs.get(bricks.unflat(i)))
-        .collect();
+    let (lo, n) = s.bricks.extent(kept.index);
+    let mut values = vec![0.0f32; n[0] * n[1] * n[2]];
+    s.volume.coeffs.gather(lo, n, &mut values);
     let Some((params, mut words)) = quantise(&values, sp.precision, sp.fixed) else {
         return Ok(None);
     };
-    let (_, n) = bricks.extent(b);
-    let loose: Vec<bool> = nodes.iter().map(|&i| !free.needed[i]).collect();
-    if sp.precision == Precision::Fixed && free.tolerance_steps > 0 {
-        settle_free_words(&mut words, &loose, n, sp.predictor, free.tolerance_steps);
+    let loose: Vec<bool> = kept.needed.iter().map(|&x| !x).collect();
+    if sp.precision == Precision::Fixed && s.tolerance_steps > 0 {
+        settle_free_words(&mut words, &loose, n, sp.predictor, s.tolerance_steps);
     }
     let decoded = dequantise(&params, &words, sp.precision, sp.fixed);
     let mut worst = 0.0f32;

@@ -36,22 +36,4 @@ impl Bricks {
         let n = [0, 1, 2].map(|a| (lo[a] + self.edge).min(self.dims[a]) - lo[a]);
         (lo, n)
     }
-
-    /// Node indices of flat grid index `i`.
-    #[inline]
-    pub(crate) fn unflat(&self, i: usize) -> [usize; 3] {
-        let [nx, ny, _] = self.dims;
-        [i % nx, (i / nx) % ny, i / (nx * ny)]
-    }
-
-    /// Flat grid indices of brick `b`'s nodes, x fastest.
-    pub(crate) fn nodes(&self, b: usize) -> impl Iterator<Item = usize> {
-        let (lo, n) = self.extent(b);
-        let [nx, ny, _] = self.dims;
-        (0..n[2]).flat_map(move |k| {
-            (0..n[1]).flat_map(move |j| {
-                (0..n[0]).map(move |i| lo[0] + i + nx * (lo[1] + j + ny * (lo[2] + k)))
-            })
-        })
-    }
 }

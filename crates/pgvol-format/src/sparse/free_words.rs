@@ -5,25 +5,12 @@ use super::options::EncodeOptions;
 use super::predict::predict;
 use crate::sparse_params::Predictor;
 
-/// Which stored coefficients the band needs (per grid node), and how many `fixed` steps the
-/// others may move.
-pub(crate) struct FreeNodes<'a> {
-    pub(crate) needed: &'a [bool],
-    pub(crate) tolerance_steps: i32,
-}
-
-impl<'a> FreeNodes<'a> {
-    /// The nodes the band needs, and the tolerance of `opts` in coarse `fixed` words for a
-    /// basis whose weights sum to at most `weight`.
-    pub(crate) fn new(needed: &'a [bool], opts: &EncodeOptions, weight: f32) -> FreeNodes<'a> {
-        FreeNodes {
-            needed,
-            // In coarse words, so that no value moves further than the tolerance.
-            tolerance_steps: (opts.free_tolerance
-                / (opts.fixed_step / weight * opts.fixed_ratio as f32))
-                .clamp(0.0, 1e9) as i32,
-        }
-    }
+/// How many coarse `fixed` words a coefficient the band does not need may move: the tolerance
+/// of `opts` in coarse words for a basis whose weights sum to at most `weight`, so that no value
+/// moves further than the tolerance.
+pub(crate) fn tolerance_steps(opts: &EncodeOptions, weight: f32) -> i32 {
+    (opts.free_tolerance / (opts.fixed_step / weight * opts.fixed_ratio as f32)).clamp(0.0, 1e9)
+        as i32
 }
 
 /// Replaces each free word (`free[at]`, in coding order) by the word closest to its prediction

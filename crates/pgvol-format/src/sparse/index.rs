@@ -158,19 +158,12 @@ pub(crate) fn layout<'a>(
     })
 }
 
-/// The brick maps (`keep` as stored, `inside` for the others), the index of `blobs` (the stored
-/// bricks in brick order) and its CRC: the payload before the brick data.
-pub(crate) fn brick_index(keep: &[bool], inside: &[bool], blobs: &[Vec<u8>]) -> Vec<u8> {
-    let nb = keep.len();
-    let mut meta = vec![0u8; 2 * nb.div_ceil(8)];
-    let half = nb.div_ceil(8);
-    for b in 0..nb {
-        if keep[b] {
-            meta[b / 8] |= 1 << (b % 8);
-        } else if inside[b] {
-            meta[half + b / 8] |= 1 << (b % 8);
-        }
-    }
+/// The brick maps (`stored`, and `inside` for the others, as the payload holds them), the index
+/// of `blobs` (the stored bricks in brick order) and its CRC: the payload before the brick data.
+pub(crate) fn brick_index(stored: &[u8], inside: &[u8], blobs: &[Vec<u8>]) -> Vec<u8> {
+    let mut meta = Vec::with_capacity(stored.len() + inside.len() + ENTRY * blobs.len() + 4);
+    meta.extend_from_slice(stored);
+    meta.extend_from_slice(inside);
     let mut offset = 0u64;
     for blob in blobs {
         meta.extend_from_slice(&offset.to_le_bytes());

@@ -1,46 +1,187 @@
-//! Which bricks are stored (those holding a coefficient the band needs), and the constant that
-//! stands for every coefficient of each of the others.
+//! The payload's two brick maps: which file bricks are stored (those holding a coefficient the
+//! band needs), and the side of each of the others, with the constant that stands for every
+//! coefficient of an unstored brick.
 
 use pgvol_field::CoefficientVolume;
+use rayon::prelude::*;
 
 use super::bricks::Bricks;
+use super::coverage::{Coverage, INSIDE, MORE_INSIDE, MORE_OUTSIDE, OUTSIDE, STORED};
+use super::stored_band::KeptBrick;
 
-/// Per brick: whether it holds a node the band needs (`needed`, per grid node).
-pub(crate) fn kept_bricks(bricks: &Bricks, needed: &[bool]) -> Vec<bool> {
-    (0..bricks.total())
-        .map(|b| bricks.nodes(b).any(|i| needed[i]))
-        .collect()
+/// Bit `b` (byte `b/8`, LSB first) set for each kept brick `b`, as the payload stores it.
+pub(crate) fn stored_map(total: usize, kept: &[KeptBrick]) -> Vec<u8> {
+    let mut map = vec![0u8; total.div_ceil(8)];
+    for k in kept {
+        map[k.index / 8] |= 1 << (k.index % 8);
+    }
+    map
 }
 
 /// The value of the unstored bricks: `-clamp` inside, `clamp` outside.
 pub(crate) struct Background {
-    /// Per brick; false for stored bricks.
-    pub(crate) inside: Vec<bool>,
+    /// Bit `b` set for each unstored brick `b` that is inside; clear for stored bricks.
+    pub(crate) inside: Vec<u8>,
     pub(crate) clamp: f32,
 }
 
-/// Sign by the brick's mean coefficient, magnitude the largest background one, so a banded
-/// distance field keeps its clamp value exactly; with no background coefficient other than 0,
+/// The side of each unstored file brick is the sign of its mean coefficient. The clamp is the
+/// volume's background when its two sides are `±` one value, so a sparse volume keeps its
+/// background exactly (its stored bricks may exceed it where no longer needed); otherwise (a
+/// dense volume, or sides of different magnitudes) the largest magnitude of an unstored brick's
+/// coefficient, so a banded distance field keeps its clamp value; with none other than 0,
 /// `band` grid spacings (at least one).
+///
+/// Bricks holding no stored grid brick take their side from the grid's background sides
+/// (`coverage`) without reading a node; the others are read.
 pub(crate) fn background(
     volume: &CoefficientVolume,
     bricks: &Bricks,
-    keep: &[bool],
+    coverage: &Coverage,
+    stored: &[u8],
     band: f32,
 ) -> Background {
-    let mut inside = vec![false; bricks.total()];
-    let mut clamp = 0.0f32;
-    for b in (0..bricks.total()).filter(|&b| !keep[b]) {
-        let mut sum = 0.0f64;
-        for i in bricks.nodes(b) {
-            let c = volume.coeffs.get(bricks.unflat(i));
-            sum += c as f64;
-            clamp = clamp.max(c.abs());
+    let coeffs = &volume.coeffs;
+    let bg = coeffs.background();
+    let symmetric = bg.outside.abs() == bg.inside.abs();
+    let total = bricks.total();
+    let (inside, largest): (Vec<u8>, Vec<f32>) = (0..stored.len())
+        .into_par_iter()
+        .map_init(Vec::new, |values, byte| {
+            let mut bits = 0u8;
+            let mut largest = 0.0f32;
+            for b in 8 * byte..(8 * byte + 8).min(total) {
+                if stored[byte] >> (b % 8) & 1 == 1 {
+                    continue;
+                }
+                let flags = coverage.flags(b);
+                let (inside, big) = if flags & STORED != 0
+                    || !symmetric && flags & OUTSIDE != 0 && flags & INSIDE != 0
+                {
+                    mean_sign(volume, bricks, b, values)
+                } else {
+                    background_side(bg.outside, bg.inside, flags)
+                };
+                bits |= (inside as u8) << (b % 8);
+                largest = largest.max(big);
+            }
+            (bits, largest)
+        })
+        .unzip();
+    let clamp = if !coeffs.is_full() && symmetric && bg.outside != 0.0 {
+        bg.outside.abs()
+    } else {
+        let clamp = largest.into_iter().fold(0.0f32, f32::max);
+        if clamp == 0.0 {
+            band.max(1.0) * volume.grid.spacing
+        } else {
+            clamp
         }
-        inside[b] = sum < 0.0;
-    }
-    if clamp == 0.0 {
-        clamp = band.max(1.0) * volume.grid.spacing;
-    }
+    };
     Background { inside, clamp }
+}
+
+/// Whether the mean of unstored file brick `b`'s coefficients is negative, and their largest
+/// magnitude, reading them.
+fn mean_sign(
+    volume: &CoefficientVolume,
+    bricks: &Bricks,
+    b: usize,
+    values: &mut Vec<f32>,
+) -> (bool, f32) {
+    let (lo, n) = bricks.extent(b);
+    values.resize(n[0] * n[1] * n[2], 0.0);
+    volume.coeffs.gather(lo, n, values);
+    let mut sum = 0.0f64;
+    let mut largest = 0.0f32;
+    for &c in values.iter() {
+        sum += c as f64;
+        largest = largest.max(c.abs());
+    }
+    (sum < 0.0, largest)
+}
+
+/// As [`mean_sign`] for a file brick of background only (`flags` from [`Coverage`]), whose
+/// values are `outside` and `inside`, equal in magnitude if both occur: the sum is exact in
+/// f64 either way, so its sign is that of the majority side's value.
+fn background_side(outside: f32, inside: f32, flags: u8) -> (bool, f32) {
+    match (flags & OUTSIDE != 0, flags & INSIDE != 0) {
+        (true, false) => (outside < 0.0, outside.abs()),
+        (false, true) => (inside < 0.0, inside.abs()),
+        _ => {
+            let negative = if flags & MORE_INSIDE != 0 {
+                inside < 0.0
+            } else if flags & MORE_OUTSIDE != 0 {
+                outside < 0.0
+            } else {
+                // As many nodes each side: the two values cancel.
+                outside < 0.0 && inside < 0.0
+            };
+            (negative, outside.abs().max(inside.abs()))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sparse::stored_band::stored_band;
+    use crate::sparse::test_volumes::{dense, sparse, BASES};
+    use pgvol_core::Background as Sides;
+
+    /// The sign of each unstored brick's mean coefficient and their largest magnitude, node by
+    /// node.
+    fn by_every_node(volume: &CoefficientVolume, bricks: &Bricks, stored: &[u8]) -> (Vec<u8>, f32) {
+        let mut inside = vec![0u8; stored.len()];
+        let mut largest = 0.0f32;
+        for b in (0..bricks.total()).filter(|b| stored[b / 8] >> (b % 8) & 1 == 0) {
+            let (lo, n) = bricks.extent(b);
+            let mut sum = 0.0f64;
+            for k in lo[2]..lo[2] + n[2] {
+                for j in lo[1]..lo[1] + n[1] {
+                    for i in lo[0]..lo[0] + n[0] {
+                        let c = volume.coeffs.get([i, j, k]);
+                        sum += c as f64;
+                        largest = largest.max(c.abs());
+                    }
+                }
+            }
+            inside[b / 8] |= ((sum < 0.0) as u8) << (b % 8);
+        }
+        (inside, largest)
+    }
+
+    #[test]
+    fn sides_are_the_mean_signs_and_the_clamp_the_sparse_background() {
+        let asymmetric = Sides {
+            outside: 0.25,
+            inside: -0.5,
+        };
+        for basis in BASES {
+            for (volume, clamp) in [
+                (dense([13, 7, 9], basis, 3, 0.5), None),
+                (sparse(basis, Sides::clamp(0.3), 7), Some(0.3)),
+                (sparse(basis, asymmetric, 9), None),
+            ] {
+                for edge in [2, 5, 8, 16] {
+                    for band in [0.0, 1.0, 2.0] {
+                        let bricks = Bricks::new(volume.grid.dims, edge);
+                        let coverage = Coverage::new(&volume.coeffs, &bricks);
+                        let kept = stored_band(&volume, &bricks, &coverage, band);
+                        let stored = stored_map(bricks.total(), &kept);
+                        let got = background(&volume, &bricks, &coverage, &stored, band);
+                        let (inside, largest) = by_every_node(&volume, &bricks, &stored);
+                        let what = format!("{basis} edge {edge} band {band}");
+                        assert_eq!(got.inside, inside, "{what}");
+                        let want = clamp.unwrap_or(if largest == 0.0 {
+                            band.max(1.0) * volume.grid.spacing
+                        } else {
+                            largest
+                        });
+                        assert_eq!(got.clamp, want, "{what}");
+                    }
+                }
+            }
+        }
+    }
 }

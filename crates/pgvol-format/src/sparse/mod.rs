@@ -11,16 +11,21 @@
 //! data           the brick blobs, back to back in brick order
 //! ```
 //!
-//! Writing: `writer` stores the bricks `kept_bricks` picks (those holding a coefficient
-//! `stored_band` needs), encoded by `brick_encoder` at the precision `precision_choice` picks,
-//! behind the maps and index of `index`. Reading: `index` checks the layout, `brick_read` and
-//! `brick_decoder` decode one stored brick, `payload_read` a whole payload in parallel,
-//! `read_brick` a single brick and `info` the header and index alone.
+//! Writing: `writer` stores the file bricks holding a coefficient the band needs, which
+//! `stored_band` finds from windows of the sparse grid near its stored bricks (`coverage` says
+//! per file brick which grid bricks are stored and the sides of the others); `kept_bricks` makes
+//! the brick maps, the unstored bricks' sides and clamp; `brick_encoder` encodes the stored
+//! bricks at the precision `precision_choice` picks, behind the index of `index`. Memory follows
+//! the stored bricks plus a byte per file brick, and so does time, plus a table look-up per grid
+//! brick. Reading: `index` checks the layout, `brick_read` and `brick_decoder` decode one stored
+//! brick, `payload_read` a whole payload in parallel, `read_brick` a single brick and `info` the
+//! header and index alone.
 
 mod brick_decoder;
 mod brick_encoder;
 mod brick_read;
 mod bricks;
+mod coverage;
 mod free_words;
 mod index;
 mod info;
@@ -34,6 +39,8 @@ mod read_brick;
 #[cfg(test)]
 mod read_profile;
 mod stored_band;
+#[cfg(test)]
+mod test_volumes;
 mod writer;
 
 pub use crate::sparse_params::{

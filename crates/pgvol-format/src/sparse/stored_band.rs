@@ -1,8 +1,26 @@
-//! Which coefficients the surface band needs: those a point within `band` spacings of the zero
-//! set can reach through the basis. The encoder stores every brick holding one, and may code
-//! the others in a stored brick more loosely (`free_words`).
+//! Which coefficients the surface band needs: those within the basis reach (per axis) of a node
+//! where the field is within `band` spacings of zero. The encoder stores every file brick
+//! holding one, and may code the others in a stored brick more loosely (`free_words`).
+//!
+//! Judged on the field's node values, not the coefficients: a B-spline coefficient is not the
+//! field value and can differ in sign from it near thin features. The search works file brick
+//! by file brick on small windows of the grid, so it costs in proportion to the bricks near
+//! stored coefficients, not to the grid: first the nodes near zero of every file brick whose
+//! neighbourhood is not one background value far from zero, then the needed nodes of the file
+//! bricks within reach of those.
 
-use pgvol_field::{Basis, CoefficientVolume};
+use pgvol_core::SparseGrid;
+use pgvol_field::{mirror, Basis, CoefficientVolume};
+use rayon::prelude::*;
+
+use super::bricks::Bricks;
+use super::coverage::{Coverage, INSIDE, OUTSIDE, STORED};
+
+/// A file brick to store, with the nodes the band needs (x fastest within the brick).
+pub(crate) struct KeptBrick {
+    pub(crate) index: usize,
+    pub(crate) needed: Box<[bool]>,
+}
 
 /// Nodes a coefficient reaches, in grid spacings (per axis; Euclidean for pg, bounded by the
 /// same number per axis).
@@ -14,41 +32,305 @@ pub(crate) fn dilation(basis: Basis) -> usize {
     }
 }
 
-/// Per node (x fastest): whether it lies within the basis reach (per axis) of a node where the
-/// field is within `band` spacings of zero. Judged on the field's node values, not the
-/// coefficients: a B-spline coefficient is not the field value and can differ in sign from it
-/// near thin features.
-pub(crate) fn needed_nodes(volume: &CoefficientVolume, band: f32) -> Vec<bool> {
-    let g = &volume.grid;
-    // Three 3-tap passes for the B-splines instead of a full evaluation per node.
-    let values = pgvol_field::fit::node_values(volume);
-    let limit = band * g.spacing;
-    let mut mask: Vec<bool> = values.iter().map(|v| v.abs() <= limit).collect();
-    let d = dilation(volume.basis);
-    for axis in 0..3 {
-        mask = dilate_along(&mask, g.dims, axis, d);
+/// Nodes per axis between a node and the farthest coefficient its field value reads.
+fn value_reach(basis: Basis) -> usize {
+    match basis {
+        Basis::Trilinear => 0,
+        Basis::Bspline2 | Basis::Bspline3 => 1,
+        // A point a rounding error off its node reaches offsets up to ⌈r⌉.
+        Basis::Pg { r, .. } => r.ceil() as usize,
     }
-    mask
 }
 
-/// `mask` grown by `d` nodes both ways along one axis (a box dilation is three of these).
-fn dilate_along(mask: &[bool], dims: [usize; 3], axis: usize, d: usize) -> Vec<bool> {
-    let stride = [1, dims[0], dims[0] * dims[1]][axis];
-    let n = dims[axis];
-    let mut out = vec![false; mask.len()];
-    for (idx, _) in mask.iter().enumerate().filter(|(_, &m)| m) {
-        let at = idx / stride % n;
-        let line_start = idx - at * stride;
-        for t in at.saturating_sub(d)..=(at + d).min(n - 1) {
-            out[line_start + t * stride] = true;
+/// The file bricks holding a node the band needs, in brick order.
+pub(crate) fn stored_band(
+    volume: &CoefficientVolume,
+    bricks: &Bricks,
+    coverage: &Coverage,
+    band: f32,
+) -> Vec<KeptBrick> {
+    let limit = band * volume.grid.spacing;
+    let far = FarBackground::new(volume, limit);
+    let reach = value_reach(volume.basis);
+    let candidates: Vec<usize> = (0..bricks.total())
+        .into_par_iter()
+        .filter(|&b| !far.covers(coverage, bricks, b, reach))
+        .collect();
+    let near_zero: Vec<(usize, Box<[bool]>)> = candidates
+        .par_iter()
+        .map_init(Vec::new, |scratch, &b| {
+            near_zero_nodes(volume, bricks, b, limit, scratch).map(|m| (b, m))
+        })
+        .flatten()
+        .collect();
+    let d = dilation(volume.basis);
+    let mut reached: Vec<usize> = Vec::new();
+    for &(b, _) in &near_zero {
+        let (lo, n) = bricks.extent(b);
+        for_each_brick_in(bricks, grow(bricks, lo, n, d), |f| reached.push(f));
+    }
+    reached.sort_unstable();
+    reached.dedup();
+    reached
+        .par_iter()
+        .map_init(Vec::new, |scratch, &b| {
+            needed_nodes(bricks, &near_zero, b, d, scratch)
+                .map(|needed| KeptBrick { index: b, needed })
+        })
+        .flatten()
+        .collect()
+}
+
+/// Whether a window of coefficients all equal to one background value `c` is sure to have no
+/// node value near zero. Separable bases sum to one, so such a window's node values are `c` up
+/// to rounding; pg weights are positive and a node's own is 1 up to where rounding puts the
+/// node, so the value is at least `|c|` times that much.
+struct FarBackground {
+    /// `[outside, inside]`: whether a window of only that value is far from zero.
+    far: [bool; 2],
+    /// Whether the two sides have the same value.
+    same: bool,
+}
+
+impl FarBackground {
+    fn new(volume: &CoefficientVolume, limit: f32) -> FarBackground {
+        let bg = volume.coeffs.background();
+        let floor = own_weight_floor(volume);
+        // Margin for the rounding of the sums (a few ulps).
+        let far = |c: f32| c.abs() as f64 * floor * (1.0 - 1e-5) > limit as f64;
+        FarBackground {
+            far: [far(bg.outside), far(bg.inside)],
+            same: bg.outside == bg.inside,
         }
     }
-    out
+
+    /// Whether every coefficient within `reach` nodes of file brick `b` is one background value
+    /// far from zero, so that none of its node values is near zero.
+    fn covers(&self, coverage: &Coverage, bricks: &Bricks, b: usize, reach: usize) -> bool {
+        let (lo, n) = bricks.extent(b);
+        let mut flags = 0;
+        for_each_brick_in(bricks, grow(bricks, lo, n, reach), |f| {
+            flags |= coverage.flags(f)
+        });
+        if flags & STORED != 0 {
+            return false;
+        }
+        match (flags & OUTSIDE != 0, flags & INSIDE != 0) {
+            (true, false) => self.far[0],
+            (false, true) => self.far[1],
+            (true, true) => self.same && self.far[0],
+            (false, false) => false,
+        }
+    }
+}
+
+/// A lower bound of the weight a pg node gives itself where `value` evaluates it: the node's
+/// grid coordinates come back off by rounding, at most a few ulps of the largest coordinate
+/// magnitude in grid units. 1 for separable bases, whose weights sum to one.
+fn own_weight_floor(volume: &CoefficientVolume) -> f64 {
+    let Basis::Pg { n, r } = volume.basis else {
+        return 1.0;
+    };
+    let g = &volume.grid;
+    let span = (0..3)
+        .map(|a| {
+            let far = g.origin[a].abs() as f64 + g.spacing as f64 * g.dims[a] as f64;
+            far / g.spacing as f64 + g.dims[a] as f64
+        })
+        .fold(0.0, f64::max);
+    let off = 16.0 * f32::EPSILON as f64 * span * 3f64.sqrt();
+    let q = (off * off) / (r as f64 * r as f64);
+    if q >= 1.0 {
+        0.0
+    } else {
+        (1.0 - q).powi(n as i32 + 1)
+    }
+}
+
+/// First node and node counts of the box `lo`, `n` grown by `d` nodes each way, clipped to the
+/// grid.
+fn grow(bricks: &Bricks, lo: [usize; 3], n: [usize; 3], d: usize) -> ([usize; 3], [usize; 3]) {
+    let glo = lo.map(|c| c.saturating_sub(d));
+    let ghi = [0, 1, 2].map(|a| (lo[a] + n[a] + d).min(bricks.dims[a]));
+    (glo, [0, 1, 2].map(|a| ghi[a] - glo[a]))
+}
+
+/// Calls `f` with the index of every file brick the box `(lo, n)` overlaps, in brick order.
+fn for_each_brick_in(bricks: &Bricks, (lo, n): ([usize; 3], [usize; 3]), mut f: impl FnMut(usize)) {
+    let first = lo.map(|c| c / bricks.edge);
+    let last = [0, 1, 2].map(|a| (lo[a] + n[a] - 1) / bricks.edge);
+    let [cx, cy, _] = bricks.count;
+    for k in first[2]..=last[2] {
+        for j in first[1]..=last[1] {
+            for i in first[0]..=last[0] {
+                f(i + cx * (j + cy * k));
+            }
+        }
+    }
+}
+
+/// Per node of file brick `b` (x fastest): whether the field there is within `limit` of zero;
+/// `None` when no node is.
+fn near_zero_nodes(
+    volume: &CoefficientVolume,
+    bricks: &Bricks,
+    b: usize,
+    limit: f32,
+    scratch: &mut Vec<f32>,
+) -> Option<Box<[bool]>> {
+    let (lo, n) = bricks.extent(b);
+    let len = n[0] * n[1] * n[2];
+    // The B-spline kernels as `pgvol_field::fit::node_values` applies them: the same bits.
+    let values = match volume.basis {
+        Basis::Bspline2 => blurred(&volume.coeffs, lo, n, (1.0 / 8.0, 6.0 / 8.0), scratch),
+        Basis::Bspline3 => blurred(&volume.coeffs, lo, n, (1.0 / 6.0, 4.0 / 6.0), scratch),
+        Basis::Pg { .. } => {
+            let g = &volume.grid;
+            let mut v = Vec::with_capacity(len);
+            for k in lo[2]..lo[2] + n[2] {
+                for j in lo[1]..lo[1] + n[1] {
+                    for i in lo[0]..lo[0] + n[0] {
+                        v.push(volume.value(g.point(i, j, k)));
+                    }
+                }
+            }
+            v
+        }
+        // The coefficients are the node values.
+        Basis::Trilinear => {
+            let mut v = vec![0.0; len];
+            volume.coeffs.gather(lo, n, &mut v);
+            v
+        }
+    };
+    let near: Box<[bool]> = values.iter().map(|v| v.abs() <= limit).collect();
+    near.iter().any(|&x| x).then_some(near)
+}
+
+/// The B-spline field at the box of `n` nodes from `lo` (x fastest): the 3-tap kernel along x,
+/// then y, then z over the coefficients around it, mirrored at the grid's ends, each node by
+/// the same operations as `pgvol_field::fit::node_values`.
+fn blurred(
+    coeffs: &SparseGrid,
+    lo: [usize; 3],
+    n: [usize; 3],
+    (side, centre): (f32, f32),
+    scratch: &mut Vec<f32>,
+) -> Vec<f32> {
+    let dims = coeffs.dims();
+    let clo = lo.map(|c| c.saturating_sub(1));
+    let cn = [0, 1, 2].map(|a| (lo[a] + n[a] + 1).min(dims[a]) - clo[a]);
+    scratch.resize(cn[0] * cn[1] * cn[2], 0.0);
+    coeffs.gather(clo, cn, scratch);
+    // Window positions of node `g`'s neighbours and itself along axis `a`.
+    let taps_at = |a: usize, g: usize| {
+        let at = |i: i64| mirror(i, dims[a]) - clo[a];
+        (at(g as i64 - 1), at(g as i64 + 1), g - clo[a])
+    };
+    let tap = |p: f32, h: f32, q: f32| side * (p + q) + centre * h;
+    // Along x: n[0] × cn[1] × cn[2].
+    let mut x = Vec::with_capacity(n[0] * cn[1] * cn[2]);
+    for row in scratch.chunks_exact(cn[0]) {
+        for i in 0..n[0] {
+            let (p, q, h) = taps_at(0, lo[0] + i);
+            x.push(tap(row[p], row[h], row[q]));
+        }
+    }
+    // Along y: n[0] × n[1] × cn[2].
+    let mut y = Vec::with_capacity(n[0] * n[1] * cn[2]);
+    for plane in x.chunks_exact(n[0] * cn[1]) {
+        for j in 0..n[1] {
+            let (p, q, h) = taps_at(1, lo[1] + j);
+            for i in 0..n[0] {
+                let at = |r: usize| plane[i + n[0] * r];
+                y.push(tap(at(p), at(h), at(q)));
+            }
+        }
+    }
+    // Along z: n[0] × n[1] × n[2].
+    let plane = n[0] * n[1];
+    let mut z = Vec::with_capacity(plane * n[2]);
+    for k in 0..n[2] {
+        let (p, q, h) = taps_at(2, lo[2] + k);
+        for s in 0..plane {
+            z.push(tap(y[s + plane * p], y[s + plane * h], y[s + plane * q]));
+        }
+    }
+    z
+}
+
+/// Per node of file brick `b` (x fastest): whether a node near zero (`near_zero`, sorted by
+/// file brick) lies within `d` nodes per axis; `None` when none does.
+fn needed_nodes(
+    bricks: &Bricks,
+    near_zero: &[(usize, Box<[bool]>)],
+    b: usize,
+    d: usize,
+    window: &mut Vec<bool>,
+) -> Option<Box<[bool]>> {
+    let (lo, n) = bricks.extent(b);
+    let (wlo, wn) = grow(bricks, lo, n, d);
+    window.clear();
+    window.resize(wn[0] * wn[1] * wn[2], false);
+    for_each_brick_in(bricks, (wlo, wn), |f| {
+        let Ok(at) = near_zero.binary_search_by_key(&f, |(b, _)| *b) else {
+            return;
+        };
+        let near = &near_zero[at].1;
+        let (flo, fnn) = bricks.extent(f);
+        // The part of file brick `f` inside the window.
+        let from = [0, 1, 2].map(|a| flo[a].max(wlo[a]));
+        let to = [0, 1, 2].map(|a| (flo[a] + fnn[a]).min(wlo[a] + wn[a]));
+        for k in from[2]..to[2] {
+            for j in from[1]..to[1] {
+                let src = fnn[0] * (j - flo[1] + fnn[1] * (k - flo[2]));
+                let dst = wn[0] * (j - wlo[1] + wn[1] * (k - wlo[2]));
+                for i in from[0]..to[0] {
+                    window[dst + i - wlo[0]] |= near[src + i - flo[0]];
+                }
+            }
+        }
+    });
+    for axis in 0..3 {
+        dilate_along(window, wn, axis, d);
+    }
+    let off = [0, 1, 2].map(|a| lo[a] - wlo[a]);
+    let mut needed = Vec::with_capacity(n[0] * n[1] * n[2]);
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            let row = wn[0] * (j + off[1] + wn[1] * (k + off[2])) + off[0];
+            needed.extend_from_slice(&window[row..row + n[0]]);
+        }
+    }
+    needed.iter().any(|&x| x).then(|| needed.into_boxed_slice())
+}
+
+/// `mask` (a box of `dims` nodes, x fastest) grown by `d` nodes both ways along one axis,
+/// clipped to the box (a box dilation is three of these).
+fn dilate_along(mask: &mut [bool], dims: [usize; 3], axis: usize, d: usize) {
+    let stride = [1, dims[0], dims[0] * dims[1]][axis];
+    let n = dims[axis];
+    let mut line = vec![false; n];
+    // Node (inner, t, block) along the axis is at inner + stride · (t + n · block).
+    for block in 0..mask.len() / (n * stride) {
+        for inner in 0..stride {
+            let start = inner + stride * n * block;
+            for (t, l) in line.iter_mut().enumerate() {
+                *l = mask[start + t * stride];
+            }
+            for t in 0..n {
+                let (a, z) = (t.saturating_sub(d), (t + d).min(n - 1));
+                mask[start + t * stride] = line[a..=z].contains(&true);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sparse::test_volumes::{dense, sparse, BASES};
+    use pgvol_core::Background;
 
     #[test]
     fn dilation_grows_a_single_node_into_a_box_clipped_at_the_border() {
@@ -56,7 +338,7 @@ mod tests {
         let mut mask = vec![false; 120];
         mask[1 + 6 * (2 + 5 * 3)] = true;
         for axis in 0..3 {
-            mask = dilate_along(&mask, dims, axis, 2);
+            dilate_along(&mut mask, dims, axis, 2);
         }
         for k in 0..4 {
             for j in 0..5 {
@@ -66,5 +348,91 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The rule on the whole grid at once: every node's field value, dilated.
+    fn needed_everywhere(volume: &CoefficientVolume, band: f32) -> Vec<bool> {
+        let limit = band * volume.grid.spacing;
+        let values = pgvol_field::fit::node_values(volume);
+        let mut mask: Vec<bool> = values.iter().map(|v| v.abs() <= limit).collect();
+        for axis in 0..3 {
+            dilate_along(&mut mask, volume.grid.dims, axis, dilation(volume.basis));
+        }
+        mask
+    }
+
+    fn assert_same_band(volume: &CoefficientVolume, edge: usize, band: f32) {
+        let bricks = Bricks::new(volume.grid.dims, edge);
+        let coverage = Coverage::new(&volume.coeffs, &bricks);
+        let kept = stored_band(volume, &bricks, &coverage, band);
+        let want = needed_everywhere(volume, band);
+        let [nx, ny, _] = volume.grid.dims;
+        let mut next = kept.iter().peekable();
+        for b in 0..bricks.total() {
+            let (lo, n) = bricks.extent(b);
+            let mut nodes = Vec::new();
+            for k in lo[2]..lo[2] + n[2] {
+                for j in lo[1]..lo[1] + n[1] {
+                    nodes.extend((lo[0]..lo[0] + n[0]).map(|i| want[i + nx * (j + ny * k)]));
+                }
+            }
+            let what = format!("{} brick {b} of edge {edge}, band {band}", volume.basis);
+            if nodes.contains(&true) {
+                let k = next.next().unwrap_or_else(|| panic!("{what} missing"));
+                assert_eq!(k.index, b, "{what}");
+                assert_eq!(&*k.needed, &nodes[..], "{what}");
+            } else {
+                assert!(next.peek().is_none_or(|k| k.index != b), "{what} kept");
+            }
+        }
+        assert!(next.next().is_none());
+    }
+
+    #[test]
+    fn brick_by_brick_finds_what_the_whole_grid_rule_finds() {
+        for basis in BASES {
+            let volumes = [
+                dense([13, 7, 9], basis, 3, 0.5),
+                dense([2, 11, 3], basis, 5, 2.0),
+                sparse(basis, Background::clamp(0.3), 7),
+                // Both sides negative, of different magnitudes.
+                sparse(
+                    basis,
+                    Background {
+                        outside: -0.25,
+                        inside: -0.5,
+                    },
+                    9,
+                ),
+            ];
+            for volume in &volumes {
+                for edge in [2, 5, 8, 16] {
+                    // The clamp 0.3 is within the band at 3 spacings, beyond it at 2.
+                    for band in [0.0, 1.0, 2.0, 3.0] {
+                        assert_same_band(volume, edge, band);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn uniform_background_is_skipped_but_a_change_of_side_is_not() {
+        let volume = sparse(Basis::Bspline3, Background::clamp(0.3), 7);
+        let bricks = Bricks::new(volume.grid.dims, 8);
+        let coverage = Coverage::new(&volume.coeffs, &bricks);
+        let far = FarBackground::new(&volume, 0.2);
+        let index = |b: [usize; 3]| b[0] + 5 * (b[1] + 4 * b[2]);
+        // Outside bricks all round.
+        assert!(far.covers(&coverage, &bricks, index([2, 3, 0]), 1));
+        // Next to a stored brick, and next to an inside one.
+        assert!(!far.covers(&coverage, &bricks, index([1, 2, 1]), 1));
+        assert!(!far.covers(&coverage, &bricks, index([1, 3, 0]), 1));
+        // Within the band the background is near zero everywhere.
+        let near = FarBackground::new(&volume, 0.3);
+        assert!(!near.covers(&coverage, &bricks, index([2, 3, 0]), 1));
+        // The lone inside corner brick, away from any stored one, has the surface at its corner.
+        let kept = stored_band(&volume, &bricks, &coverage, 1.0);
+        assert!(kept.iter().any(|k| k.index == index([0, 3, 0])));
     }
 }

@@ -3,16 +3,17 @@
 
 use std::path::Path;
 
-use pgvol_field::CoefficientVolume;
+use pgvol_field::{CoefficientVolume, FieldError};
 
 use super::brick_encoder::StoredBricks;
 use super::bricks::Bricks;
-use super::free_words::FreeNodes;
+use super::coverage::Coverage;
+use super::free_words::tolerance_steps;
 use super::index::brick_index;
-use super::kept_bricks::{background, kept_bricks, Background};
+use super::kept_bricks::{background, stored_map, Background};
 use super::options::{EncodeOptions, EncodeReport};
 use super::precision_choice::{basis_weight_bound, encode_smallest, fixed_scale};
-use super::stored_band::needed_nodes;
+use super::stored_band::stored_band;
 use crate::container::container;
 use crate::error::{err, FormatError};
 use crate::header::PgvFile;
@@ -35,21 +36,21 @@ pub fn encode_pgv_with(
     if !(opts.band.is_finite() && opts.band >= 0.0) {
         return Err(fail(format!("band {} must be finite and >= 0", opts.band)));
     }
-    CoefficientVolume::from_sparse(g, volume.basis, volume.coeffs.clone())
-        .map_err(|e| fail(format!("invalid volume: {e}")))?;
+    check_volume(volume).map_err(|e| fail(format!("invalid volume: {e}")))?;
     // Steps in units of field error: a coefficient error δ moves the field by at most W·δ.
     let weight = basis_weight_bound(volume.basis);
     let scale = fixed_scale(opts, g.spacing, weight).map_err(fail)?;
     let bricks = Bricks::new(g.dims, opts.brick);
-    let needed = needed_nodes(volume, opts.band);
-    let keep = kept_bricks(&bricks, &needed);
-    let free = FreeNodes::new(&needed, opts, weight);
-    let Background { inside, clamp } = background(volume, &bricks, &keep, opts.band);
+    let coverage = Coverage::new(&volume.coeffs, &bricks);
+    let kept = stored_band(volume, &bricks, &coverage, opts.band);
+    let stored_bits = stored_map(bricks.total(), &kept);
+    let Background { inside, clamp } =
+        background(volume, &bricks, &coverage, &stored_bits, opts.band);
 
     let mut sp = SparseParams {
         brick: opts.brick,
         bricks: bricks.count,
-        stored: keep.iter().filter(|&&k| k).count(),
+        stored: kept.len(),
         precision: Precision::F32,
         predictor: opts.predictor,
         shuffle: opts.shuffle,
@@ -61,12 +62,12 @@ pub fn encode_pgv_with(
     let stored = StoredBricks {
         volume,
         bricks: &bricks,
-        keep: &keep,
-        free: &free,
+        kept: &kept,
+        tolerance_steps: tolerance_steps(opts, weight),
     };
     let (blobs, worst) = encode_smallest(&stored, &mut sp, scale, opts, weight).map_err(fail)?;
 
-    let meta = brick_index(&keep, &inside, &blobs);
+    let meta = brick_index(&stored_bits, &inside, &blobs);
     let bytes_index = meta.len();
     let mut payload = meta;
     for blob in &blobs {
@@ -89,6 +90,30 @@ pub fn encode_pgv_with(
         clamp,
     };
     Ok((bytes, report))
+}
+
+/// The checks of [`CoefficientVolume::from_sparse`], without taking (or copying) the
+/// coefficients.
+fn check_volume(volume: &CoefficientVolume) -> Result<(), FieldError> {
+    let (g, coeffs) = (&volume.grid, &volume.coeffs);
+    volume.basis.validate().map_err(FieldError::BadBasis)?;
+    if g.dims.iter().any(|&n| n < 2) {
+        return Err(FieldError::GridTooSmall(g.dims));
+    }
+    if coeffs.dims() != g.dims {
+        return Err(FieldError::DimsMismatch {
+            got: coeffs.dims(),
+            want: g.dims,
+        });
+    }
+    let bg = coeffs.background();
+    let stored_finite = coeffs
+        .stored()
+        .all(|(_, v)| v.iter().all(|c| c.is_finite()));
+    if !(stored_finite && bg.inside.is_finite() && bg.outside.is_finite()) {
+        return Err(FieldError::NonFinite { index: 0 });
+    }
+    Ok(())
 }
 
 /// Writes `file` to `path` atomically in the `sparse-bricks` encoding.
