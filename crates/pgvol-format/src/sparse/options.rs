@@ -39,7 +39,7 @@ impl Default for EncodeOptions {
             predictor: Predictor::DeltaX,
             shuffle: true,
             compression: Compression::Zstd,
-            zstd_level: 15,
+            zstd_level: 6,
             fixed_step: FIXED_STEP,
             fixed_knee: FIXED_KNEE,
             fixed_ratio: FIXED_RATIO,

@@ -1,9 +1,9 @@
-//! File size and read time of one volume re-encoded at several zstd levels.
+//! File size, write time and read time of one volume re-encoded at several zstd levels.
 //!
 //! `cargo run --release -p pgvol-studies --bin zstd_levels -- FILE.pgv [RUNS] [LEVELS]`
 //! Decodes FILE, re-encodes it with the file's precision and brick settings at each level
 //! (default 1,3,6,9,15,19,22), and prints the size and the minimum over RUNS (default 5) of
-//! `decode_pgv`. Re-encoding requantises, so sizes can differ
+//! `encode_pgv_with` and of `decode_pgv`. Re-encoding requantises, so sizes can differ
 //! slightly from the original file at its own level.
 
 use std::path::PathBuf;
@@ -35,7 +35,7 @@ fn run() -> Result<(), String> {
         .sparse
         .clone()
         .ok_or("the file is not in the sparse-bricks encoding")?;
-    println!("level  bytes  decode_pgv");
+    println!("level  bytes  encode_pgv  decode_pgv");
     for level in levels {
         let opts = EncodeOptions {
             precision: Some(sp.precision),
@@ -47,7 +47,13 @@ fn run() -> Result<(), String> {
             zstd_level: level,
             ..fixed_options(&file)
         };
-        let (encoded, _) = encode_pgv_with(&file, &opts).map_err(|e| e.to_string())?;
+        let mut write = Duration::MAX;
+        let mut encoded = Vec::new();
+        for _ in 0..runs {
+            let t = Instant::now();
+            encoded = encode_pgv_with(&file, &opts).map_err(|e| e.to_string())?.0;
+            write = write.min(t.elapsed());
+        }
         let mut whole = Duration::MAX;
         for _ in 0..runs {
             let t = Instant::now();
@@ -55,8 +61,9 @@ fn run() -> Result<(), String> {
             whole = whole.min(t.elapsed());
         }
         println!(
-            "{level:5}  {:8}  {:8.2} ms",
+            "{level:5}  {:8}  {:8.1} ms  {:8.2} ms",
             encoded.len(),
+            write.as_secs_f64() * 1e3,
             whole.as_secs_f64() * 1e3
         );
     }
