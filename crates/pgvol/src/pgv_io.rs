@@ -19,14 +19,26 @@ pub fn read_pgv(path: &Path) -> Result<PgvFile> {
 pub fn read_pgv_bytes(bytes: &[u8], name: &Path) -> Result<PgvFile> {
     let info = pgv_info(bytes, name)?;
     let [nx, ny, nz] = info.header.grid.dims;
-    let nodes = nx.saturating_mul(ny).saturating_mul(nz);
     crate::memory::check_memory(
         &format!("reading its {nx} x {ny} x {nz} coefficients"),
-        crate::memory::grid_bytes(nodes, 4),
+        read_bytes(&info),
         "the file declares a larger grid than this machine can hold",
     )
     .map_err(|e| e.at(name))?;
     pgvol_format::decode_pgv(bytes, name).reading()
+}
+
+/// Memory to hold a file's coefficients: its stored bricks (a sparse file in bricks the grid's
+/// bricks tile) or every node twice (read whole, then cut into bricks).
+fn read_bytes(info: &PgvInfo) -> u64 {
+    let [nx, ny, nz] = info.header.grid.dims;
+    let nodes = nx.saturating_mul(ny).saturating_mul(nz);
+    match (&info.header.sparse, info.bricks_stored) {
+        (Some(sp), Some(stored)) if sp.brick % pgvol_core::BRICK_EDGE == 0 => {
+            (stored as u64).saturating_mul((sp.brick as u64).pow(3) * 4)
+        }
+        _ => crate::memory::grid_bytes(nodes, 8),
+    }
 }
 
 /// Reads a `.pgv` file from any reader to its end; `name` labels errors.
