@@ -45,17 +45,21 @@ pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
 /// layer of outside values (`iso + spacing`) so the surface is closed even where it reaches the
 /// grid's border; edges into the padding place their vertex by linear interpolation, since the
 /// padding values are artificial, and all other vertices lie on the continuous field.
+///
+/// The field is evaluated only in the bricks of nodes the level set may cross (see
+/// `sparse_sample`), so time and memory follow the surface rather than the grid.
 pub fn contour_volume(
     volume: &CoefficientVolume,
     grid: &Grid,
     iso: f32,
     method: Method,
 ) -> pgvol_core::Mesh {
-    let inner = crate::sparse_sample::sample_near_level(volume, grid, iso);
-    contour_samples(volume, grid, &inner, iso, method)
+    let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso);
+    contour_nodes(volume, &padded(grid), &nodes, iso, method)
 }
 
 /// [`contour_volume`] from given samples of `volume` on `grid`.
+#[cfg(test)]
 pub(crate) fn contour_samples(
     volume: &CoefficientVolume,
     grid: &Grid,
