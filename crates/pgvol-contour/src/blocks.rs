@@ -8,7 +8,7 @@
 
 use rayon::prelude::*;
 
-use crate::samples::Samples;
+use crate::samples::{box_index, BoxValues, BOX};
 
 /// Nodes per block edge. A power of two, so a node's block and offset are a shift and a mask.
 pub(crate) const BLOCK: usize = 8;
@@ -19,31 +19,97 @@ pub(crate) const BLOCK_NODES: usize = BLOCK * BLOCK * BLOCK;
 /// Marks a block that the surface does not pass through.
 pub(crate) const INACTIVE: u32 = u32::MAX;
 
+/// Blocks per tile edge of [`SlotMap`].
+const TILE: usize = 8;
+const TILE_SHIFT: u32 = TILE.trailing_zeros();
+
+/// Position in the active list of each active block, by block coordinates. A table of slots per
+/// tile of 8³ blocks that holds an active one, found through a table of tiles: a lookup is two
+/// reads, and memory is 4 bytes per 64³ nodes of grid plus 2 KiB per tile the surface
+/// crosses, where one slot per block would take 4 bytes per 8³ nodes.
+struct SlotMap {
+    tile_counts: [usize; 3],
+    /// Per tile (x fastest), its index in `tables`, or [`INACTIVE`].
+    tiles: Vec<u32>,
+    tables: Vec<[u32; TILE * TILE * TILE]>,
+}
+
+impl SlotMap {
+    fn new(counts: [usize; 3]) -> Self {
+        let tile_counts = counts.map(|n| n.div_ceil(TILE));
+        Self {
+            tile_counts,
+            tiles: vec![INACTIVE; tile_counts.iter().product()],
+            tables: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn locate(&self, b: [usize; 3]) -> (usize, usize) {
+        let t = b.map(|c| c >> TILE_SHIFT);
+        let m = TILE - 1;
+        (
+            t[0] + self.tile_counts[0] * (t[1] + self.tile_counts[1] * t[2]),
+            (b[0] & m) | (b[1] & m) << TILE_SHIFT | (b[2] & m) << (2 * TILE_SHIFT),
+        )
+    }
+
+    #[inline]
+    fn get(&self, b: [usize; 3]) -> u32 {
+        let (t, at) = self.locate(b);
+        match self.tiles[t] {
+            INACTIVE => INACTIVE,
+            table => self.tables[table as usize][at],
+        }
+    }
+
+    fn set(&mut self, b: [usize; 3], slot: u32) {
+        let (t, at) = self.locate(b);
+        if self.tiles[t] == INACTIVE {
+            self.tiles[t] = self.tables.len() as u32;
+            self.tables.push([INACTIVE; TILE * TILE * TILE]);
+        }
+        self.tables[self.tiles[t] as usize][at] = slot;
+    }
+}
+
 /// The blocks of a grid and the active ones among them.
 pub(crate) struct Blocks {
-    /// Blocks along each axis: `ceil(nodes / BLOCK)`.
-    pub counts: [usize; 3],
-    /// Per block (x fastest), its position in `active`, or [`INACTIVE`].
-    pub slot: Vec<u32>,
-    /// Ids of the active blocks, ascending.
+    /// Ids (x fastest) of the active blocks, ascending.
     pub active: Vec<u32>,
+    slots: SlotMap,
 }
 
 impl Blocks {
-    /// Lowest owned node of block `id`.
-    #[inline]
-    pub fn origin(&self, id: u32) -> [usize; 3] {
-        let id = id as usize;
-        let [bx, by, _] = self.counts;
-        [id % bx, (id / bx) % by, id / (bx * by)].map(|b| b << BLOCK_SHIFT)
+    /// The blocks of a grid of `dims` nodes with the given active ones (ascending ids).
+    pub fn new(dims: [usize; 3], active: Vec<u32>) -> Self {
+        let counts = dims.map(|n| n.div_ceil(BLOCK));
+        let mut slots = SlotMap::new(counts);
+        for (slot, &id) in active.iter().enumerate() {
+            slots.set(coords(counts, id), slot as u32);
+        }
+        Self { active, slots }
     }
 
-    /// Id of the block owning node `n`.
+    /// Position in [`Self::active`] of the block owning node `n`, or [`INACTIVE`].
     #[inline]
-    pub fn id_of(&self, n: [usize; 3]) -> usize {
-        let [bx, by, _] = self.counts;
-        (n[0] >> BLOCK_SHIFT) + bx * ((n[1] >> BLOCK_SHIFT) + by * (n[2] >> BLOCK_SHIFT))
+    pub fn slot_of(&self, n: [usize; 3]) -> u32 {
+        self.slots.get(n.map(|c| c >> BLOCK_SHIFT))
     }
+}
+
+/// Block coordinates of block `id` among `counts` blocks.
+#[inline]
+pub(crate) fn coords(counts: [usize; 3], id: u32) -> [usize; 3] {
+    let id = id as usize;
+    let [bx, by, _] = counts;
+    [id % bx, (id / bx) % by, id / (bx * by)]
+}
+
+/// Lowest owned node of block `id` among `counts` blocks.
+#[inline]
+pub(crate) fn origin(counts: [usize; 3], id: u32) -> [usize; 3] {
+    coords(counts, id).map(|b| b << BLOCK_SHIFT)
 }
 
 /// Position of node `n` within its block, x fastest.
@@ -53,31 +119,29 @@ pub(crate) fn local_node(n: [usize; 3]) -> usize {
     (n[0] & m) | ((n[1] & m) << BLOCK_SHIFT) | ((n[2] & m) << (2 * BLOCK_SHIFT))
 }
 
-/// Finds the active blocks in one read of the samples, in parallel over z layers of blocks.
-pub(crate) fn active_blocks(samples: &Samples) -> Blocks {
-    let [nx, ny, nz] = samples.dims;
-    let counts = [nx, ny, nz].map(|n| n.div_ceil(BLOCK));
+/// Rows of node values, for [`scan_active`].
+pub(crate) trait Rows: Sync {
+    /// The values of node row `(j, k)`, read from the source or written into `buf`.
+    fn row<'s>(&'s self, j: usize, k: usize, buf: &'s mut Vec<f32>) -> &'s [f32];
+}
+
+/// The active blocks of a grid of `dims` nodes, found in one read of every row, in parallel
+/// over z layers of blocks.
+pub(crate) fn scan_active(dims: [usize; 3], iso: f32, rows: &dyn Rows) -> Vec<u32> {
+    let counts = dims.map(|n| n.div_ceil(BLOCK));
     let [bx, by, bz] = counts;
-    let layers: Vec<Vec<u8>> = (0..bz)
+    let layers: Vec<Vec<u32>> = (0..bz)
         .into_par_iter()
-        .map(|b| layer_flags(samples, counts, b))
+        .map(|b| {
+            let flags = layer_flags(dims, iso, rows, counts, b);
+            let first = b * bx * by;
+            (0..bx * by)
+                .filter(|&at| flags[at] == BOTH)
+                .map(|at| (first + at) as u32)
+                .collect()
+        })
         .collect();
-    let mut slot = vec![INACTIVE; bx * by * bz];
-    let mut active = Vec::new();
-    for (b, flags) in layers.iter().enumerate() {
-        for (at, &f) in flags.iter().enumerate() {
-            if f == BOTH {
-                let id = b * bx * by + at;
-                slot[id] = active.len() as u32;
-                active.push(id as u32);
-            }
-        }
-    }
-    Blocks {
-        counts,
-        slot,
-        active,
-    }
+    layers.concat()
 }
 
 /// Flags of a block with both inside and outside nodes in its box.
@@ -85,19 +149,25 @@ const BOTH: u8 = 3;
 
 /// Inside/outside flags of the boxes of the blocks in z layer `b`, x fastest. Rows are read
 /// whole, so the scan streams through memory.
-fn layer_flags(samples: &Samples, counts: [usize; 3], b: usize) -> Vec<u8> {
-    let [nx, ny, nz] = samples.dims;
+fn layer_flags(
+    dims: [usize; 3],
+    iso: f32,
+    rows: &dyn Rows,
+    counts: [usize; 3],
+    b: usize,
+) -> Vec<u8> {
+    let [nx, ny, nz] = dims;
     let [bx, by, _] = counts;
     let mut flags = vec![0u8; bx * by];
     let mut row_flags = vec![0u8; bx];
     // Inside bits of one row, a byte per BLOCK nodes, plus a spare byte so every block's
     // window of BLOCK + 1 bits spans two bytes.
     let mut bits = vec![0u8; bx + 1];
+    let mut buf = Vec::new();
     let z0 = b * BLOCK;
     for k in z0..=(z0 + BLOCK).min(nz - 1) {
         for j in 0..ny {
-            let start = samples.index(0, j, k);
-            inside_bits(&samples.values[start..start + nx], samples.iso, &mut bits);
+            inside_bits(rows.row(j, k, &mut buf), iso, &mut bits);
             for (x, f) in row_flags.iter_mut().enumerate() {
                 let width = (BLOCK + 1).min(nx - x * BLOCK);
                 let full = (1u16 << width) - 1;
@@ -174,19 +244,33 @@ pub(crate) struct BoxMasks {
 }
 
 impl BoxMasks {
-    /// Reads the box of the block whose lowest node is `o`.
-    pub fn read(samples: &Samples, o: [usize; 3]) -> Self {
-        let nodes = [0, 1, 2].map(|a| (samples.dims[a] - o[a]).min(BLOCK + 1));
+    /// The masks of box `values` holding `nodes` nodes per axis.
+    pub fn new(values: &BoxValues, nodes: [usize; 3], iso: f32) -> Self {
         let mut rows = [[0u16; BLOCK + 1]; BLOCK + 1];
         for (dk, plane) in rows.iter_mut().enumerate().take(nodes[2]) {
             for (dj, mask) in plane.iter_mut().enumerate().take(nodes[1]) {
-                let start = samples.index(o[0], o[1] + dj, o[2] + dk);
-                let row = &samples.values[start..start + nodes[0]];
+                let start = box_index([0, dj, dk]);
                 let mut bits = [0u8; 3];
-                inside_bits(row, samples.iso, &mut bits);
+                inside_bits(&values[start..start + nodes[0]], iso, &mut bits);
                 *mask = u16::from(bits[0]) | (u16::from(bits[1]) << BLOCK);
             }
         }
         Self { rows, nodes }
     }
+
+    /// Whether the box holds nodes on both sides: the block is active.
+    pub fn is_mixed(&self) -> bool {
+        let full = (1u16 << self.nodes[0]) - 1;
+        let rows = self.rows[..self.nodes[2]]
+            .iter()
+            .flat_map(|plane| &plane[..self.nodes[1]]);
+        let (any, all) = rows.fold((0, full), |(any, all), &m| (any | m, all & m));
+        any != 0 && all != full
+    }
+}
+
+/// Nodes of the box of the block with lowest node `o` that lie in a grid of `dims` nodes.
+#[inline]
+pub(crate) fn box_nodes(dims: [usize; 3], o: [usize; 3]) -> [usize; 3] {
+    [0, 1, 2].map(|a| (dims[a] - o[a]).min(BOX))
 }

@@ -8,10 +8,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::blocks::{
-    active_blocks, local_node, Blocks, BoxMasks, BLOCK, BLOCK_NODES, BLOCK_SHIFT, INACTIVE,
+    box_nodes, local_node, origin, Blocks, BoxMasks, BLOCK, BLOCK_NODES, BLOCK_SHIFT, INACTIVE,
 };
 use crate::place::onto_edge;
-use crate::samples::Samples;
+use crate::samples::{box_index, BoxValues, Samples, BOX_NODES};
 
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).
 pub(crate) type Refine<'r> = dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + 'r;
@@ -50,8 +50,12 @@ const AXES_COUNT: [u8; 8] = [0, 1, 1, 2, 1, 2, 2, 3];
 
 /// Crossings of the edges owned by one active block.
 struct BlockVertices {
+    id: u32,
     /// Lowest owned node.
     origin: [usize; 3],
+    /// The node values of the box: every value contouring reads after finding the crossings
+    /// lies in the box of an active block, so these are the only samples kept.
+    values: Box<BoxValues>,
     /// Inside masks of the box, kept for the cell pass.
     masks: BoxMasks,
     /// Per owned node (see [`local_node`]): crossed axes in the low bits, then the block-local
@@ -59,6 +63,15 @@ struct BlockVertices {
     node_edges: [u16; BLOCK_NODES],
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
+}
+
+/// The box of an active block, as the cell passes read it.
+#[derive(Clone, Copy)]
+pub(crate) struct BlockBox<'a> {
+    /// Lowest owned node.
+    pub origin: [usize; 3],
+    pub values: &'a BoxValues,
+    pub masks: &'a BoxMasks,
 }
 
 /// Every crossing of the grid, block by block.
@@ -77,7 +90,7 @@ impl Crossings {
     /// Global index of the vertex on the edge along `axis` from node `n`, which must be crossed.
     #[inline]
     pub fn find(&self, n: [usize; 3], axis: usize) -> u32 {
-        let slot = self.blocks.slot[self.blocks.id_of(n)];
+        let slot = self.blocks.slot_of(n);
         debug_assert_ne!(slot, INACTIVE, "a crossed edge lies in an active block");
         self.find_in(slot as usize, n, axis)
     }
@@ -104,10 +117,23 @@ impl Crossings {
         self.base[slot] + (entry >> AXIS_BITS) + before
     }
 
-    /// Lowest owned node and box masks of the active block at `slot`.
-    pub fn block(&self, slot: usize) -> ([usize; 3], &BoxMasks) {
+    /// The box of the active block at `slot`.
+    pub fn block(&self, slot: usize) -> BlockBox<'_> {
         let v = &self.vertices[slot];
-        (v.origin, &v.masks)
+        BlockBox {
+            origin: v.origin,
+            values: &v.values,
+            masks: &v.masks,
+        }
+    }
+
+    /// The value at node `n`, read from the box of the block owning node `owner`, which must be
+    /// active and hold `n` in its box.
+    pub fn box_value(&self, owner: [usize; 3], n: [usize; 3]) -> f32 {
+        let slot = self.blocks.slot_of(owner);
+        debug_assert_ne!(slot, INACTIVE, "node {owner:?} is not in an active block");
+        let v = &self.vertices[slot as usize];
+        v.values[box_index([0, 1, 2].map(|a| n[a] - v.origin[a]))]
     }
 
     /// Crossings owned by the active block at `slot`.
@@ -142,15 +168,26 @@ impl Crossings {
     }
 }
 
-/// Finds and places all crossings, in parallel over the active blocks; the order does not
-/// depend on the number of threads.
+/// Finds and places all crossings, in parallel over the candidate blocks of the source, which
+/// are read once each; the order does not depend on the number of threads.
 pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Crossings {
-    let blocks = active_blocks(samples);
-    let vertices: Vec<BlockVertices> = blocks
-        .active
+    let counts = samples.dims.map(|n| n.div_ceil(BLOCK));
+    let vertices: Vec<BlockVertices> = samples
+        .nodes
+        .candidates(samples.iso)
         .par_iter()
-        .map(|&id| block_crossings(samples, blocks.origin(id), place))
+        .filter_map(|&id| {
+            let o = origin(counts, id);
+            let nodes = box_nodes(samples.dims, o);
+            let mut values = Box::new([0.0; BOX_NODES]);
+            samples.nodes.read_box(o, nodes, &mut values);
+            let masks = BoxMasks::new(&values, nodes, samples.iso);
+            masks
+                .is_mixed()
+                .then(|| block_crossings(samples, id, o, values, masks, place))
+        })
         .collect();
+    let blocks = Blocks::new(samples.dims, vertices.iter().map(|v| v.id).collect());
     let mut base = Vec::with_capacity(vertices.len());
     let mut n = 0usize;
     for v in &vertices {
@@ -174,12 +211,21 @@ pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Cros
     }
 }
 
-/// Crossings of the edges owned by the block whose lowest node is `o`. The edges are found
-/// with bit operations on the box's inside masks; only crossed ones touch the samples again.
-fn block_crossings(samples: &Samples, o: [usize; 3], place: Place) -> BlockVertices {
-    let masks = BoxMasks::read(samples, o);
+/// Crossings of the edges owned by block `id`, whose lowest node is `o` and whose box holds
+/// `values`. The edges are found with bit operations on the box's inside masks; only crossed
+/// ones touch the values again.
+fn block_crossings(
+    samples: &Samples,
+    id: u32,
+    o: [usize; 3],
+    values: Box<BoxValues>,
+    masks: BoxMasks,
+    place: Place,
+) -> BlockVertices {
     let mut out = BlockVertices {
+        id,
         origin: o,
+        values,
         masks,
         node_edges: [0; BLOCK_NODES],
         positions: Vec::new(),
@@ -235,14 +281,16 @@ fn block_crossings(samples: &Samples, o: [usize; 3], place: Place) -> BlockVerti
                 let di = todo.trailing_zeros() as usize;
                 todo &= todo - 1;
                 let a = [o[0] + di, o[1] + dj, o[2] + dk];
-                let va = samples.values[samples.index(a[0], a[1], a[2])];
+                let va = out.values[box_index([di, dj, dk])];
                 for (axis, c) in crossed.iter().enumerate() {
                     if c >> di & 1 == 0 {
                         continue;
                     }
                     let mut b = a;
                     b[axis] += 1;
-                    let vb = samples.values[samples.index(b[0], b[1], b[2])];
+                    let mut db = [di, dj, dk];
+                    db[axis] += 1;
+                    let vb = out.values[box_index(db)];
                     let (pa, pb) = (samples.node(a), samples.node(b));
                     match place {
                         Place::Position(refine) => {

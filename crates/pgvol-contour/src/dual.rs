@@ -200,9 +200,10 @@ fn block_vertices(
         double_faces: Vec::with_capacity(owned + owned / 4),
         links: Vec::with_capacity(4 * owned + owned),
     };
-    let (origin, masks) = verts.block(slot);
+    let block = verts.block(slot);
+    let origin = block.origin;
     let find = |n: [usize; 3], axis: usize| verts.find_from(slot, origin, n, axis);
-    for_crossed_cells(samples, table, origin, masks, |cell, case, joined| {
+    for_crossed_cells(table, samples.iso, block, |cell, case, joined| {
         let [i, j, k] = cell;
         let comps = components(case, joined);
         let corner = samples.node([i, j, k]);
@@ -409,7 +410,7 @@ fn quad(
     for q in 0..4 {
         polygon.push(r[q]);
         if doubled[q] {
-            let key = segment_key(samples, node, axis, q, lower_inside);
+            let key = segment_key(samples, verts, node, axis, q, lower_inside);
             polygon.push(extra(run, key));
         }
     }
@@ -433,6 +434,7 @@ fn extra(run: &mut QuadRun, key: u64) -> u32 {
 /// segment cuts off. Both quads along the segment derive the same key.
 fn segment_key(
     samples: &Samples,
+    verts: &Crossings,
     node: [usize; 3],
     axis: usize,
     q: usize,
@@ -455,7 +457,9 @@ fn segment_key(
         n[pq] += b;
         n
     });
-    let values = corner_nodes.map(|n| samples.values[samples.index(n[0], n[1], n[2])]);
+    // The face's corners are corners of the cell at `low`, which is crossed, so the box of its
+    // block holds them and that block is active.
+    let values = corner_nodes.map(|n| verts.box_value(low, n));
     let joined = joins_inside(values.map(|x| x - samples.iso), samples.inside(values[0]));
     // Separated inside corners are cut off by the segments; joined ones leave the outside
     // corners cut off. The segment through this edge cuts the edge's end of that kind.

@@ -4,13 +4,13 @@
 use glam::Vec3;
 use pgvol_core::Mesh;
 
-use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal};
+use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal, Refine};
 use crate::dual::{self, Placement};
 use crate::dual_options::DualContourOptions;
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
 use crate::root::cubic_edge_root;
-use crate::samples::Samples;
+use crate::samples::{DenseNodes, Samples};
 
 /// Extracts the surface `value == iso` by dual contouring: one vertex per surface component of
 /// each cell, placed by the tangent planes of the continuous `field`, so sharp edges and corners
@@ -55,26 +55,23 @@ pub fn dual_contour(
         let p = cubic_edge_root(field, a, va, b, vb, iso);
         with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
     };
-    dual_contour_with(values, dims, origin, spacing, iso, field, options, &place)
+    let nodes = DenseNodes::new(values, dims);
+    match Samples::checked(&nodes, origin, spacing, iso) {
+        Some(samples) => dual_contour_with(&samples, field, options, &place),
+        None => Mesh::default(),
+    }
 }
 
-/// [`dual_contour`] with the edge crossings and their normals from `place`.
-#[allow(clippy::too_many_arguments)]
+/// [`dual_contour`] on any source of samples, with the edge crossings and their normals from
+/// `place`.
 pub(crate) fn dual_contour_with(
-    values: &[f32],
-    dims: [usize; 3],
-    origin: Vec3,
-    spacing: f32,
-    iso: f32,
+    samples: &Samples,
     field: &dyn Field,
     options: &DualContourOptions,
     place: &PlaceWithNormal,
 ) -> Mesh {
-    let Some(samples) = Samples::checked(values, dims, origin, spacing, iso) else {
-        return Mesh::default();
-    };
-    let crossings = all_crossings(&samples, Place::WithNormal(place), EXTRA_FLAG);
-    dual::dual_contour(&samples, &crossings, field, Placement::Planes(options))
+    let crossings = all_crossings(samples, Place::WithNormal(place), EXTRA_FLAG);
+    dual::dual_contour(samples, &crossings, field, Placement::Planes(options))
 }
 
 /// Extracts the surface `value == iso` by surface nets: one vertex per surface component of
@@ -106,24 +103,18 @@ pub fn surface_nets(
     field: &dyn Field,
 ) -> Mesh {
     let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
-    surface_nets_with(values, dims, origin, spacing, iso, field, &refine)
+    let nodes = DenseNodes::new(values, dims);
+    match Samples::checked(&nodes, origin, spacing, iso) {
+        Some(samples) => surface_nets_with(&samples, field, &refine),
+        None => Mesh::default(),
+    }
 }
 
-/// [`surface_nets`] with the edge crossings placed by `refine`, as in [`marching_cubes_with`].
+/// [`surface_nets`] on any source of samples, with the edge crossings placed by `refine`, as in
+/// [`marching_cubes_with`].
 ///
 /// [`marching_cubes_with`]: crate::marching_cubes_with
-pub(crate) fn surface_nets_with(
-    values: &[f32],
-    dims: [usize; 3],
-    origin: Vec3,
-    spacing: f32,
-    iso: f32,
-    field: &dyn Field,
-    refine: &(dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync),
-) -> Mesh {
-    let Some(samples) = Samples::checked(values, dims, origin, spacing, iso) else {
-        return Mesh::default();
-    };
-    let crossings = all_crossings(&samples, Place::Position(refine), EXTRA_FLAG);
-    dual::dual_contour(&samples, &crossings, field, Placement::Mean)
+pub(crate) fn surface_nets_with(samples: &Samples, field: &dyn Field, refine: &Refine) -> Mesh {
+    let crossings = all_crossings(samples, Place::Position(refine), EXTRA_FLAG);
+    dual::dual_contour(samples, &crossings, field, Placement::Mean)
 }

@@ -5,7 +5,6 @@ use glam::Vec3;
 use crate::cells::for_crossed_cells;
 use crate::crossings::Crossings;
 use crate::cube::{edge_axis, EDGE_START};
-use crate::samples::Samples;
 use crate::table::{case_table, CaseTable, CENTER};
 
 /// Marks a triangle index as referring to the part's `extra` vertices rather than an edge vertex;
@@ -20,15 +19,16 @@ pub(crate) struct Part {
 }
 
 /// Triangles of the cells owned by the active block at `slot`, in cell scan order.
-pub(crate) fn block_triangles(samples: &Samples, crossings: &Crossings, slot: usize) -> Part {
+pub(crate) fn block_triangles(crossings: &Crossings, iso: f32, slot: usize) -> Part {
     let table = case_table();
     // About two triangles per vertex on a closed surface.
     let mut part = Part {
         triangles: Vec::with_capacity(2 * crossings.block_len(slot) + 8),
         extra: Vec::new(),
     };
-    let (origin, masks) = crossings.block(slot);
-    for_crossed_cells(samples, table, origin, masks, |cell, case, joined| {
+    let block = crossings.block(slot);
+    let origin = block.origin;
+    for_crossed_cells(table, iso, block, |cell, case, joined| {
         cell_triangles(
             table,
             crossings,

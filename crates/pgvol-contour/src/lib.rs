@@ -23,6 +23,9 @@
 //!   triangle order do not depend on the number of threads.
 //! * **Sparse**: one read of the samples finds the blocks whose nodes straddle iso; only those
 //!   are visited again, so the cost beyond that read grows with the surface, not the volume.
+//!   [`contour_volume`] skips that read too: it evaluates the field only in the bricks of nodes
+//!   the level set may cross, found from the coefficients, and keeps no array of the grid's
+//!   nodes, so its time and memory follow the surface.
 //!
 //! Conventions: a node is inside when its value is `< iso` and outside otherwise (`>= iso`), so a
 //! signed distance field (negative inside) gives outward-facing triangles. NaN counts as outside.
@@ -53,11 +56,13 @@ mod quality;
 mod root;
 mod samples;
 mod sparse_sample;
+mod support;
 mod table;
 #[cfg(test)]
 mod test_volumes;
 mod triangulate;
 mod volume;
+mod window_or;
 
 pub use dual_methods::{dual_contour, surface_nets};
 pub use dual_options::{DualContourOptions, DEFAULT_FEATURE_OFFSET, DEFAULT_SINGULAR_THRESHOLD};

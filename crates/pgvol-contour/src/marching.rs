@@ -5,12 +5,12 @@ use glam::Vec3;
 use pgvol_core::Mesh;
 use rayon::prelude::*;
 
-use crate::crossings::{all_crossings, Place};
+use crate::crossings::{all_crossings, Place, Refine};
 use crate::extract::{block_triangles, Part, EXTRA_FLAG};
 use crate::field::Field;
 use crate::place;
 use crate::root::cubic_edge_root;
-use crate::samples::Samples;
+use crate::samples::{DenseNodes, Samples};
 
 /// Extracts the surface `value == iso` of a grid of samples, placing each vertex on its grid edge
 /// by linear interpolation of the two node values.
@@ -53,13 +53,19 @@ pub fn marching_cubes_with(
     iso: f32,
     refine: &(dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync),
 ) -> Mesh {
-    let Some(field) = Samples::checked(values, dims, origin, spacing, iso) else {
-        return Mesh::default();
-    };
-    let crossings = all_crossings(&field, Place::Position(refine), EXTRA_FLAG);
+    let nodes = DenseNodes::new(values, dims);
+    match Samples::checked(&nodes, origin, spacing, iso) {
+        Some(samples) => marching_cubes_samples(&samples, refine),
+        None => Mesh::default(),
+    }
+}
+
+/// [`marching_cubes_with`] on any source of samples.
+pub(crate) fn marching_cubes_samples(samples: &Samples, refine: &Refine) -> Mesh {
+    let crossings = all_crossings(samples, Place::Position(refine), EXTRA_FLAG);
     let parts: Vec<Part> = (0..crossings.blocks.active.len())
         .into_par_iter()
-        .map(|slot| block_triangles(&field, &crossings, slot))
+        .map(|slot| block_triangles(&crossings, samples.iso, slot))
         .collect();
     assemble(crossings.positions, parts)
 }

@@ -9,8 +9,9 @@ use crate::dual_methods::{dual_contour_with, surface_nets_with};
 use crate::dual_options::DualContourOptions;
 use crate::edge_cubic::{crossing_on_grid_edge, thirds_on_grid_edge};
 use crate::field::Field;
-use crate::marching::marching_cubes_with;
+use crate::marching::marching_cubes_samples;
 use crate::root::{cubic_edge_root, edge_root, root_from_thirds};
+use crate::samples::{DenseNodes, Nodes, PaddedNodes, Samples};
 
 /// How the mesh is extracted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -44,47 +45,39 @@ pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
 /// layer of outside values (`iso + spacing`) so the surface is closed even where it reaches the
 /// grid's border; edges into the padding place their vertex by linear interpolation, since the
 /// padding values are artificial, and all other vertices lie on the continuous field.
+///
+/// The field is evaluated only in the bricks of nodes the level set may cross (see
+/// `sparse_sample`), so time and memory follow the surface rather than the grid.
 pub fn contour_volume(
     volume: &CoefficientVolume,
     grid: &Grid,
     iso: f32,
     method: Method,
 ) -> pgvol_core::Mesh {
-    let inner = crate::sparse_sample::sample_near_level(volume, grid, iso);
-    contour_samples(volume, grid, inner, iso, method)
+    let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso);
+    contour_nodes(volume, &padded(grid), &nodes, iso, method)
 }
 
 /// [`contour_volume`] from given samples of `volume` on `grid`.
+#[cfg(test)]
 pub(crate) fn contour_samples(
     volume: &CoefficientVolume,
     grid: &Grid,
-    inner: Vec<f32>,
+    inner: &[f32],
     iso: f32,
     method: Method,
 ) -> pgvol_core::Mesh {
-    let (padded, values) = pad(grid, &inner, iso);
-    contour_sampled(volume, &padded, &values, iso, method)
+    let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
+    contour_nodes(volume, &padded(grid), &nodes, iso, method)
 }
 
-/// `inner` on `grid` surrounded by one layer of outside values (`iso + spacing`), and the grid
-/// of the result.
-fn pad(grid: &Grid, inner: &[f32], iso: f32) -> (Grid, Vec<f32>) {
-    let [nx, ny, nz] = grid.dims;
-    let dims = [nx + 2, ny + 2, nz + 2];
-    let mut values = vec![iso + grid.spacing; dims[0] * dims[1] * dims[2]];
-    for k in 0..nz {
-        for j in 0..ny {
-            let src = nx * (j + ny * k);
-            let dst = 1 + dims[0] * ((j + 1) + dims[1] * (k + 1));
-            values[dst..dst + nx].copy_from_slice(&inner[src..src + nx]);
-        }
-    }
-    let padded = Grid {
+/// `grid` with one more node layer on every side: the grid of the padded samples.
+fn padded(grid: &Grid) -> Grid {
+    Grid {
         origin: grid.origin - Vec3::splat(grid.spacing),
         spacing: grid.spacing,
-        dims,
-    };
-    (padded, values)
+        dims: grid.dims.map(|n| n + 2),
+    }
 }
 
 /// Contours the `iso` level set of any continuous `field` given its samples `inner` on `grid`
@@ -107,8 +100,12 @@ pub fn contour_field(
     if nodes != Some(inner.len()) || !(grid.spacing.is_finite() && grid.spacing > 0.0) {
         return pgvol_core::Mesh::default();
     }
-    let (padded, values) = pad(grid, inner, iso);
-    let (dims, origin, h) = (padded.dims, padded.origin, padded.spacing);
+    // The padding is read through the source, not copied around the caller's samples.
+    let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
+    let padded = padded(grid);
+    let Some(samples) = Samples::checked(&nodes, padded.origin, padded.spacing, iso) else {
+        return pgvol_core::Mesh::default();
+    };
     let (lo, hi) = (grid.origin, grid.max_corner());
     let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
     let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
@@ -119,15 +116,15 @@ pub fn contour_field(
         }
     };
     match method {
-        Method::MarchingCubes => marching_cubes_with(&values, dims, origin, h, iso, &refine),
+        Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
             let place = |a, va, b, vb, axis| {
                 let p = refine(a, va, b, vb);
                 with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
             };
-            dual_contour_with(&values, dims, origin, h, iso, field, options, &place)
+            dual_contour_with(&samples, field, options, &place)
         }
-        Method::SurfaceNets => surface_nets_with(&values, dims, origin, h, iso, field, &refine),
+        Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
     }
 }
 
@@ -147,7 +144,21 @@ pub fn contour_sampled(
     iso: f32,
     method: Method,
 ) -> pgvol_core::Mesh {
-    let (dims, origin, h) = (grid.dims, grid.origin, grid.spacing);
+    let nodes = DenseNodes::new(values, grid.dims);
+    contour_nodes(volume, grid, &nodes, iso, method)
+}
+
+/// [`contour_sampled`] with the samples from any source.
+fn contour_nodes(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    nodes: &dyn Nodes,
+    iso: f32,
+    method: Method,
+) -> pgvol_core::Mesh {
+    let Some(samples) = Samples::checked(nodes, grid.origin, grid.spacing, iso) else {
+        return pgvol_core::Mesh::default();
+    };
     let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
     let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
     let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
@@ -159,7 +170,7 @@ pub fn contour_sampled(
         }
     };
     match method {
-        Method::MarchingCubes => marching_cubes_with(values, dims, origin, h, iso, &refine),
+        Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
             let options = DualContourOptions::default();
             // On the volume's own grid, crossing and normal come from one read of the edge's
@@ -170,9 +181,9 @@ pub fn contour_sampled(
                     with_normal(a, b, axis, p, |p| volume.value_gradient(p).1)
                 })
             };
-            dual_contour_with(values, dims, origin, h, iso, volume, &options, &place)
+            dual_contour_with(&samples, volume, &options, &place)
         }
-        Method::SurfaceNets => surface_nets_with(values, dims, origin, h, iso, volume, &refine),
+        Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
     }
 }
 
@@ -222,7 +233,7 @@ mod tests {
     fn sparse_sampling_contours_the_same_shape() {
         let v = two_balls(Basis::Bspline3);
         let method = Method::MarchingCubes;
-        let full = contour_samples(&v, &v.grid, v.sample(&v.grid), 0.0, method);
+        let full = contour_samples(&v, &v.grid, &v.sample(&v.grid), 0.0, method);
         let sparse = contour_volume(&v, &v.grid, 0.0, method);
         assert_eq!(full.triangles, sparse.triangles);
         let worst = full

@@ -84,6 +84,41 @@ fn all_pairs_of_cells_across_an_ambiguous_face() {
 }
 
 #[test]
+fn tunnels_through_a_face_whose_corners_lie_in_four_blocks() {
+    // As above, with the shared face normal to y and its corners on both sides of the block
+    // borders in x and z (blocks are 8 nodes wide): each corner lies in another block, and the
+    // blocks holding only outside corners hold nothing else.
+    let mut tunnels = 0;
+    for rest in 0..256usize {
+        for diagonal in [false, true] {
+            for (inside, outside) in [(1.0, 0.3), (0.3, 1.0)] {
+                let s = Samples::padded([11, 5, 11], 1.0, |[i, j, k]| {
+                    let in_pair =
+                        (7..=8).contains(&i) && (1..=3).contains(&j) && (7..=8).contains(&k);
+                    let corner_inside = in_pair && {
+                        let (u, v, w) = (j - 1, i - 7, k - 7);
+                        if u == 1 {
+                            (v == w) == diagonal
+                        } else {
+                            (rest >> (u / 2 * 4 + v + 2 * w)) & 1 == 1
+                        }
+                    };
+                    if corner_inside {
+                        -inside
+                    } else {
+                        outside
+                    }
+                });
+                check_dual_of_mc(&s, 0.0);
+                let mc = check_closed_manifold(&s.contour(0.0));
+                tunnels += usize::from(mc.euler == 0);
+            }
+        }
+    }
+    assert!(tunnels > 0, "no configuration made a tunnel");
+}
+
+#[test]
 fn checkerboards() {
     let mut rng = Rng::new(12);
     for parity in 0..2 {

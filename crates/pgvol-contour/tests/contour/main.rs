@@ -11,4 +11,5 @@ mod random_fields;
 mod reference_mc;
 mod shapes;
 mod single_cell;
+mod sparse_volumes;
 mod topology;

@@ -1,0 +1,140 @@
+//! Bounds of a coefficient volume over a box of points, from the coefficients that can weigh on
+//! it.
+//!
+//! For the B-spline and trilinear bases every field value is a convex combination of the
+//! coefficients in its support (non-negative weights summing to one), so where those of a box
+//! all lie above (below) the iso value the field does too, and their minimum (maximum) bounds
+//! it. An absent coefficient brick holds its side's background, so a box whose supporting
+//! bricks are all absent is decided from their sides alone, without reading a coefficient.
+//!
+//! Which bricks a box reaches depends on each axis separately, so the kinds reached by every
+//! brick of a sampling grid are found by three one-axis passes over one byte per coefficient
+//! brick, whatever the size of the supports.
+
+use std::ops::Range;
+
+use glam::Vec3;
+use pgvol_core::{Background, SparseGrid, BRICK_EDGE};
+use pgvol_field::CoefficientVolume;
+use rayon::prelude::*;
+
+use crate::window_or::or_over_boxes;
+
+/// Kinds of coefficient brick, as bits so that a set of bricks is their OR.
+pub(crate) const OUTSIDE_BACKGROUND: u8 = 1;
+pub(crate) const INSIDE_BACKGROUND: u8 = 2;
+pub(crate) const STORED: u8 = 4;
+
+/// First and last coefficient node per axis that can weigh on a point of the box `[lo, hi]`.
+pub(crate) fn coefficient_ranges(
+    volume: &CoefficientVolume,
+    lo: Vec3,
+    hi: Vec3,
+) -> [[usize; 2]; 3] {
+    let g = &volume.grid;
+    let (ulo, uhi) = (g.to_grid(lo), g.to_grid(hi));
+    // Every basis here reaches at most 2 nodes from the cell holding the point; mirrored indices
+    // beyond the border repeat coefficients inside it, so the clamped range covers them.
+    [0, 1, 2].map(|a| {
+        let n = g.dims[a] as i64;
+        [
+            (ulo[a].floor() as i64 - 2).clamp(0, n - 1) as usize,
+            (uhi[a].ceil() as i64 + 2).clamp(0, n - 1) as usize,
+        ]
+    })
+}
+
+/// The kind of every coefficient brick (x fastest), one byte each.
+pub(crate) fn brick_kinds(coeffs: &SparseGrid) -> Vec<u8> {
+    let [bx, by, bz] = coeffs.brick_counts();
+    let mut kinds = vec![0u8; bx * by * bz];
+    kinds
+        .par_chunks_mut(bx * by)
+        .enumerate()
+        .for_each(|(k, layer)| {
+            for (at, kind) in layer.iter_mut().enumerate() {
+                let b = [at % bx, at / bx, k];
+                *kind = if coeffs.is_stored(b) {
+                    STORED
+                } else if coeffs.is_inside(b) {
+                    INSIDE_BACKGROUND
+                } else {
+                    OUTSIDE_BACKGROUND
+                };
+            }
+        });
+    kinds
+}
+
+/// For boxes that are products of per-axis coefficient node ranges (`ranges[a][s]`, first and
+/// last node), the OR of the kinds of the coefficient bricks each reaches (x fastest).
+pub(crate) fn support_kinds(coeffs: &SparseGrid, ranges: [&[[usize; 2]]; 3]) -> Vec<u8> {
+    let bricks = ranges.map(|r| -> Vec<Range<usize>> {
+        r.iter()
+            .map(|&[first, last]| first / BRICK_EDGE..last / BRICK_EDGE + 1)
+            .collect()
+    });
+    let kinds = brick_kinds(coeffs);
+    or_over_boxes(
+        &kinds,
+        coeffs.brick_counts(),
+        [&bricks[0], &bricks[1], &bricks[2]],
+    )
+}
+
+/// The one-sided bound (see [`one_side`]) of a box whose supporting bricks are all absent, of
+/// the kinds in `kinds`.
+pub(crate) fn background_bound(background: Background, kinds: u8, iso: f32) -> Option<f32> {
+    let (mut min, mut max) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (kind, value) in [
+        (OUTSIDE_BACKGROUND, background.outside),
+        (INSIDE_BACKGROUND, background.inside),
+    ] {
+        if kinds & kind != 0 {
+            min = min.min(value);
+            max = max.max(value);
+        }
+    }
+    one_side(min, max, iso)
+}
+
+/// The one-sided bound of the coefficients in the node `ranges`, read one by one.
+pub(crate) fn gathered_bound(
+    volume: &CoefficientVolume,
+    ranges: [[usize; 2]; 3],
+    iso: f32,
+) -> Option<f32> {
+    let [[i0, i1], [j0, j1], [k0, k1]] = ranges;
+    let (mut min, mut max) = (f32::INFINITY, f32::NEG_INFINITY);
+    let mut row = vec![0.0f32; i1 - i0 + 1];
+    for k in k0..=k1 {
+        for j in j0..=j1 {
+            volume
+                .coeffs
+                .gather([i0, j, k], [row.len(), 1, 1], &mut row);
+            for &c in &row {
+                min = min.min(c);
+                max = max.max(c);
+            }
+        }
+        if min <= iso && max >= iso {
+            return None;
+        }
+    }
+    one_side(min, max, iso)
+}
+
+/// The bound of values in `[min, max]` when all are on one side of `iso`: `min` above it,
+/// `max` below it. Points outside the volume's grid only add their (positive) distance to the
+/// box, so a bound from the clamped box still holds there for values above iso.
+fn one_side(min: f32, max: f32, iso: f32) -> Option<f32> {
+    if min > iso {
+        Some(min)
+    } else if max < iso {
+        // Outside the grid box values grow with distance, so a negative bound could be wrong
+        // there; the sampling grids used here lie within the box.
+        Some(max)
+    } else {
+        None
+    }
+}
