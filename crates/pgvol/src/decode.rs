@@ -67,7 +67,7 @@ pub fn decode(
         return Err(Error::parameter("the level must be a finite number"));
     }
     let grid = target_grid(volume, options.res)?;
-    crate::memory::check_grid("contouring", &grid, crate::memory::BYTES_PER_NODE)?;
+    crate::memory::check_contour(volume, &grid)?;
     let mesh = progress::stage(progress, "contour", |_| {
         pgvol_contour::contour_volume(volume, &grid, options.iso, options.method)
     })?;
