@@ -13,7 +13,7 @@ pub const BYTES_PER_NODE: u64 = 13;
 /// Bytes per stored brick of 8³ nodes while encoding sparse: the band's samples (2 KiB), the
 /// coefficients of the brick and of the neighbours the local fit adds, and the compressed
 /// blobs.
-pub const BYTES_PER_BAND_BRICK: u64 = 8 * 1024;
+pub const BYTES_PER_BAND_BRICK: u64 = 10 * 1024;
 
 /// Bytes per grid node, whatever the band: the sampler's flags per brick of 4³ nodes (near a
 /// triangle, and the sign of a far region), 3 bytes per 64 nodes.
