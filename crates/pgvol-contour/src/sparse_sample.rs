@@ -17,6 +17,8 @@ use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{CoefficientVolume, Grid};
 use rayon::prelude::*;
 
+use crate::cubic_eval::bspline3_value_gradient;
+
 use crate::blocks::BLOCK;
 use crate::samples::{box_index, BoxValues, Nodes};
 use crate::support::{background_bound, coefficient_ranges, gathered_bound, support_kinds, STORED};
@@ -203,15 +205,31 @@ impl<'a> Sampler<'a> {
         row
     }
 
-    /// The field at the nodes of brick `b` (nodes past the grid's end left 0).
+    /// The field at the nodes of brick `b` (nodes past the grid's end left 0). On the volume's
+    /// own grid a separable basis at the nodes is a 3-tap blur of the coefficients (a tenth of
+    /// the work of a stencil per node); the cubic B-spline elsewhere takes its 4³ fast path.
     fn evaluate(&self, b: [usize; 3]) -> Box<BrickValues> {
         let (lo, n) = brick_extent(self.grid, b);
         let mut out = Box::new([0.0; BRICK_NODES]);
+        if *self.grid == self.volume.grid && self.volume.basis.is_separable() {
+            let values = pgvol_field::fit::brick_node_values(self.volume, b);
+            for k in 0..n[2] {
+                for j in 0..n[1] {
+                    let at = BRICK_EDGE * (j + BRICK_EDGE * k);
+                    out[at..at + n[0]].copy_from_slice(&values[at..at + n[0]]);
+                }
+            }
+            return out;
+        }
         for k in 0..n[2] {
             for j in 0..n[1] {
                 for i in 0..n[0] {
                     let p = self.grid.point(lo[0] + i, lo[1] + j, lo[2] + k);
-                    out[i + BRICK_EDGE * (j + BRICK_EDGE * k)] = self.volume.value(p);
+                    let value = match bspline3_value_gradient(self.volume, p) {
+                        Some((v, _)) => v,
+                        None => self.volume.value(p),
+                    };
+                    out[i + BRICK_EDGE * (j + BRICK_EDGE * k)] = value;
                 }
             }
         }

@@ -30,7 +30,7 @@ pub use node_values::node_values;
 pub use options::{FitMethod, FitOptions};
 pub use report::{FitReport, FitStages};
 pub use sign_check::spurious_sign_changes;
-pub use sparse_node_values::node_values_sparse;
+pub use sparse_node_values::{brick_node_values, node_values_sparse};
 pub use wls::wls_band;
 
 use std::time::Instant;

@@ -55,8 +55,9 @@ pub(crate) fn touched_bricks(grid: &SparseGrid) -> Vec<[usize; 3]> {
     touched
 }
 
-/// The field at the nodes of brick `b`.
-fn brick_node_values(volume: &CoefficientVolume, b: [usize; 3]) -> BrickValues {
+/// The field at the nodes of brick `b` of the volume's own grid (nodes past the grid's end hold
+/// the brick's background).
+pub fn brick_node_values(volume: &CoefficientVolume, b: [usize; 3]) -> BrickValues {
     let coeffs = &volume.coeffs;
     let (lo, n) = coeffs.brick_extent(b);
     let mut out = [coeffs.background_of(b); BRICK_NODES];
