@@ -282,6 +282,8 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
     let mesh = pgvol::decode_shape(&shape, &options, &Bars::new(a.out.silent()))
         .map_err(|e| at_input(e, &a.input))?;
     let seconds = t.elapsed().as_secs_f64();
+    // The coefficients are not needed to write the mesh: free them first.
+    drop(shape);
     pgvol::write_mesh(&a.output, &mesh)?;
     if a.out.json {
         return print_json(&serde_json::json!({
