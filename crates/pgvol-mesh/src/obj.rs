@@ -9,6 +9,12 @@ use glam::Vec3;
 use crate::{Mesh, MeshError};
 
 pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
+    if let Some(line) = short_face(bytes) {
+        return Err(MeshError::new(
+            name,
+            format!("line {line}: a face ('f') with fewer than three vertices (a truncated file?)"),
+        ));
+    }
     // tobj's optional features add fields; the update keeps this compiling if one is enabled.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -50,6 +56,21 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
         }
     }
     Ok(mesh)
+}
+
+/// The number of the first `f` line naming fewer than three vertices, which the parser would
+/// drop without a word.
+fn short_face(bytes: &[u8]) -> Option<usize> {
+    bytes
+        .split(|&b| b == b'\n')
+        .enumerate()
+        .find_map(|(i, line)| {
+            let mut words = line
+                .split(|b| b.is_ascii_whitespace())
+                .filter(|w| !w.is_empty());
+            (words.next() == Some(&b"f"[..]) && words.take_while(|w| w[0] != b'#').count() < 3)
+                .then_some(i + 1)
+        })
 }
 
 fn describe(e: &tobj::LoadError) -> String {

@@ -181,6 +181,25 @@ fn obj_quads_negative_indices_and_several_objects() {
 }
 
 #[test]
+fn obj_faces_with_one_or_two_vertices_are_reported_with_their_line() {
+    for (face, line) in [("f 1 2", 5), ("f 3", 5), ("f 1 2 # a comment 4", 5)] {
+        let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n{face}\nf 1 3 2\n");
+        let msg = err_of(read_bytes(
+            text.as_bytes(),
+            MeshFormat::Obj,
+            Path::new("t.obj"),
+        ));
+        assert!(
+            msg.contains(&format!("line {line}")) && msg.contains("fewer than three"),
+            "{face}: {msg}"
+        );
+    }
+    // Three vertices with texture and normal indices are a face.
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\n";
+    assert!(read_bytes(text.as_bytes(), MeshFormat::Obj, Path::new("ok.obj")).is_ok());
+}
+
+#[test]
 fn binary_stl_detected_by_size_even_when_header_says_solid() {
     let cube = unit_cube();
     let mut bytes = Vec::new();
