@@ -309,3 +309,32 @@ def test_eval_refuses_an_endless_points_file(knot_pgv, tmp_path, pgvol):
     points.symlink_to("/dev/zero")
     r = helpers.run([pgvol, "eval", knot_pgv, points], timeout=60)
     assert r.returncode == 1 and "not a regular file" in r.stderr, r.describe()
+
+
+def test_a_terminated_write_leaves_no_temporary_and_keeps_the_old_file(tmp_path, pgvol):
+    import signal
+    import time
+
+    out = tmp_path / "grid.nrrd"
+    out.write_bytes(b"old")
+    knot = helpers.REPO_ROOT / "fixtures" / "torus-knot.obj"
+    # A banded grid is quick to sample and slow to write (256 MB), so the signal lands mid-write.
+    proc = subprocess.Popen(
+        [str(pgvol), "sdf", str(knot), "-o", str(out), "--res", "400", "--band", "3", "-q"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    deadline = time.monotonic() + 120
+    caught = False
+    while proc.poll() is None and time.monotonic() < deadline:
+        if any(p.name.endswith(".tmp") for p in tmp_path.iterdir()):
+            proc.send_signal(signal.SIGTERM)
+            caught = True
+            break
+        time.sleep(0.005)
+    proc.communicate(timeout=120)
+    if not caught:
+        pytest.skip("the write finished before the signal could be sent")
+    assert proc.returncode == 130
+    assert [p.name for p in tmp_path.iterdir()] == ["grid.nrrd"]
+    assert out.read_bytes() == b"old"

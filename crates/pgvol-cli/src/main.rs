@@ -24,6 +24,13 @@ struct Cli {
 }
 
 fn main() {
+    // Interrupted or terminated mid-write: remove the temporary files, keep the old outputs.
+    // Without the handler the process still ends, only leaving the temporaries behind.
+    let _ = ctrlc::set_handler(|| {
+        pgvol::core::atomic::remove_pending_temporaries();
+        eprintln!("pgvol: interrupted");
+        std::process::exit(130);
+    });
     let cli = Cli::parse();
     if let Err(e) = commands::run(cli.command) {
         eprintln!("error: {e:#}");

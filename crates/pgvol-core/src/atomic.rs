@@ -5,8 +5,44 @@ use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 use crate::FileError;
+
+/// Temporary files being written, so a signal handler can remove them before the process ends.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary file a write in progress holds. For a termination handler: the
+/// process is about to end, and the files it was replacing stay as they were.
+pub fn remove_pending_temporaries() {
+    let pending = match PENDING.lock() {
+        Ok(p) => p.clone(),
+        Err(poisoned) => poisoned.into_inner().clone(),
+    };
+    for tmp in pending {
+        let _ = fs::remove_file(tmp);
+    }
+}
+
+/// Registers `tmp` as pending for as long as the guard lives.
+struct Pending(PathBuf);
+
+impl Pending {
+    fn new(tmp: &Path) -> Self {
+        if let Ok(mut p) = PENDING.lock() {
+            p.push(tmp.to_path_buf());
+        }
+        Pending(tmp.to_path_buf())
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        if let Ok(mut p) = PENDING.lock() {
+            p.retain(|t| t != &self.0);
+        }
+    }
+}
 
 /// Writes `path` by letting `f` fill a temporary file in the same directory (so the final
 /// rename cannot cross file systems), flushing and syncing it, then renaming it over `path`.
@@ -46,6 +82,7 @@ pub fn write_atomic(
         std::process::id()
     ));
 
+    let _pending = Pending::new(&tmp);
     let file = OpenOptions::new()
         .write(true)
         .create_new(true)
@@ -114,6 +151,47 @@ fn sync_dir(dir: &Path) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_termination_mid_write_removes_the_temporary_and_keeps_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.bin");
+        fs::write(&path, b"old").unwrap();
+        let (started, wait) = std::sync::mpsc::channel();
+        let (resume, go) = std::sync::mpsc::channel::<()>();
+        let writer = {
+            let path = path.clone();
+            std::thread::spawn(move || {
+                write_atomic(&path, |w| {
+                    w.write_all(b"partial")?;
+                    started.send(()).unwrap();
+                    go.recv().unwrap();
+                    Ok(())
+                })
+            })
+        };
+        wait.recv().unwrap();
+        let temporaries = || {
+            fs::read_dir(dir.path())
+                .unwrap()
+                .filter(|e| {
+                    e.as_ref()
+                        .unwrap()
+                        .file_name()
+                        .to_string_lossy()
+                        .ends_with(".tmp")
+                })
+                .count()
+        };
+        assert_eq!(temporaries(), 1);
+        remove_pending_temporaries();
+        assert_eq!(temporaries(), 0);
+        resume.send(()).unwrap();
+        // The finished file can no longer be moved into place: the old one stays.
+        assert!(writer.join().unwrap().is_err());
+        assert_eq!(fs::read(&path).unwrap(), b"old");
+        assert_eq!(temporaries(), 0);
+    }
 
     #[test]
     fn a_failed_write_keeps_the_old_file_and_leaves_no_temporary() {
