@@ -338,3 +338,27 @@ def test_a_terminated_write_leaves_no_temporary_and_keeps_the_old_file(tmp_path,
     assert proc.returncode == 130
     assert [p.name for p in tmp_path.iterdir()] == ["grid.nrrd"]
     assert out.read_bytes() == b"old"
+
+
+def test_specks_are_removed_by_default_and_kept_on_request(tmp_path, pgvol):
+    import trimesh
+
+    # A unit tetrahedron and one of side 0.1 (about two grid cells at 64³) far from it.
+    lines = []
+    for s, at in [(1.0, 0.0), (0.1, 2.0)]:
+        for p in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]:
+            lines.append("v " + " ".join(str(at + s * c) for c in p))
+    for base in (0, 4):
+        for f in [(1, 3, 2), (1, 2, 4), (1, 4, 3), (2, 3, 4)]:
+            lines.append("f " + " ".join(str(base + i) for i in f))
+    src = tmp_path / "speck.obj"
+    src.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "out.glb"
+
+    default = helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 64])
+    assert "removed 1 piece" in default.stderr, default.describe()
+    assert len(trimesh.load(out, force="mesh").split(only_watertight=False)) == 1
+    helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 64, "--min-component", 0])
+    assert len(trimesh.load(out, force="mesh").split(only_watertight=False)) == 2
+    r = helpers.run([pgvol, "remesh", src, "-o", out, "--min-component=-1"])
+    assert r.returncode != 0 and "at least 0" in r.stderr, r.describe()

@@ -152,8 +152,17 @@ fn sync_dir(dir: &Path) {
 mod tests {
     use super::*;
 
+    /// Removing pending temporaries reaches every write in the process: the tests that write
+    /// take turns.
+    static SERIAL: Mutex<()> = Mutex::new(());
+
+    fn turn() -> std::sync::MutexGuard<'static, ()> {
+        SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     #[test]
     fn a_termination_mid_write_removes_the_temporary_and_keeps_the_old_file() {
+        let _turn = turn();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.bin");
         fs::write(&path, b"old").unwrap();
@@ -195,6 +204,7 @@ mod tests {
 
     #[test]
     fn a_failed_write_keeps_the_old_file_and_leaves_no_temporary() {
+        let _turn = turn();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.bin");
         fs::write(&path, b"old").unwrap();
@@ -211,6 +221,7 @@ mod tests {
     #[cfg(unix)]
     #[test]
     fn a_replaced_file_keeps_its_mode() {
+        let _turn = turn();
         use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("run.sh");

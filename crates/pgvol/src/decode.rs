@@ -18,6 +18,36 @@ pub struct DecodeOptions {
     /// Resample on this many nodes along the longest side over the same box; `None` (the
     /// default) contours on the stored grid.
     pub res: Option<usize>,
+    /// Pieces enclosing less than this volume (mesh units cubed) are removed; `None` (the
+    /// default) removes those under [`SPECK_VOXELS`] cells of the contouring grid, `Some(0.0)`
+    /// keeps every piece.
+    pub min_component: Option<f32>,
+}
+
+/// Pieces of a contour smaller than this many grid cells are specks (noise, features thinner
+/// than the grid), not parts: removed by default, with a warning.
+pub const SPECK_VOXELS: f32 = 8.0;
+
+/// Removes the pieces of `mesh` under `min_component`, or under [`SPECK_VOXELS`] cells of
+/// spacing `h` by default, and says how many went.
+pub(crate) fn remove_specks(
+    mesh: &mut Mesh,
+    min_component: Option<f32>,
+    h: f32,
+    progress: &dyn Progress,
+) {
+    let limit = min_component.unwrap_or(SPECK_VOXELS * h * h * h);
+    if limit.is_nan() || limit <= 0.0 {
+        return;
+    }
+    let removed = mesh.remove_small_components(limit as f64);
+    if removed > 0 {
+        progress.warn(&format!(
+            "removed {removed} piece{} enclosing less than {limit:.3e} (--min-component sets \
+             the volume; 0 keeps every piece)",
+            if removed == 1 { "" } else { "s" }
+        ));
+    }
 }
 
 impl Default for DecodeOptions {
@@ -26,6 +56,7 @@ impl Default for DecodeOptions {
             iso: 0.0,
             method: Method::MarchingCubes,
             res: None,
+            min_component: None,
         }
     }
 }
@@ -68,9 +99,10 @@ pub fn decode(
     }
     let grid = target_grid(volume, options.res)?;
     crate::memory::check_contour(volume, &grid)?;
-    let mesh = progress::stage(progress, "contour", |_| {
+    let mut mesh = progress::stage(progress, "contour", |_| {
         pgvol_contour::contour_volume(volume, &grid, options.iso, options.method)
     })?;
+    remove_specks(&mut mesh, options.min_component, grid.spacing, progress);
     if mesh.triangles.is_empty() {
         return Err(Error::new(
             ErrorKind::BadParameter,

@@ -74,7 +74,7 @@ mod remesh;
 mod shape;
 mod slice;
 
-pub use decode::{decode, decode_shape, DecodeOptions};
+pub use decode::{decode, decode_shape, DecodeOptions, SPECK_VOXELS};
 pub use distance::{
     mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
 };

@@ -36,6 +36,9 @@ pub struct RemeshOptions {
     pub method: Method,
     /// The field the vertices lie on (default exact).
     pub field: RemeshField,
+    /// Pieces enclosing less than this volume are removed; see
+    /// [`DecodeOptions::min_component`] (default: specks under 8 grid cells).
+    pub min_component: Option<f32>,
 }
 
 impl Default for RemeshOptions {
@@ -44,6 +47,7 @@ impl Default for RemeshOptions {
             grid: GridSpec::default(),
             method: Method::MarchingCubes,
             field: RemeshField::Exact,
+            min_component: None,
         }
     }
 }
@@ -66,7 +70,9 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
     let out = match options.field {
         RemeshField::Exact => {
             crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
-            contour_exact(mesh, &grid, options.method, &mut timings, progress)?
+            let mut out = contour_exact(mesh, &grid, options.method, &mut timings, progress)?;
+            crate::decode::remove_specks(&mut out, options.min_component, grid.spacing, progress);
+            out
         }
         RemeshField::Decoded(basis) => {
             let encode = EncodeOptions {
@@ -82,6 +88,7 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
             let start = Instant::now();
             let decode_options = DecodeOptions {
                 method: options.method,
+                min_component: options.min_component,
                 ..DecodeOptions::default()
             };
             let out = decode(&volume, &decode_options, progress);

@@ -196,3 +196,11 @@ pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
         None => e.at(input),
     }
 }
+
+/// A finite number of at least zero.
+pub fn non_negative(text: &str) -> std::result::Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("expected a number of at least 0, got '{text}'")),
+    }
+}

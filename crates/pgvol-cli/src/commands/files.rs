@@ -7,7 +7,8 @@ use clap::Args;
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg,
+    at_input, load_mesh, non_negative, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs,
+    PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -102,6 +103,10 @@ pub struct DecodeArgs {
     /// stored grid).
     #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: Option<u32>,
+    /// Remove pieces of the output enclosing less than this volume (model units cubed); by
+    /// default specks under 8 grid cells go, with a warning; 0 keeps every piece.
+    #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
+    pub min_component: Option<f32>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -278,6 +283,7 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
         iso: a.iso,
         method: a.method.into(),
         res: a.res.map(|r| r as usize),
+        min_component: a.min_component,
     };
     let mesh = pgvol::decode_shape(&shape, &options, &Bars::new(a.out.silent()))
         .map_err(|e| at_input(e, &a.input))?;

@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{at_input, print_json, MethodArg, OutputArgs, PathArg};
+use super::args::{at_input, non_negative, print_json, MethodArg, OutputArgs, PathArg};
 use crate::output::outln;
 use crate::progress::Bars;
 
@@ -17,7 +17,7 @@ fn write_result(
     volume: pgvol::CoefficientVolume,
     shape: &pgvol::Shape,
     operation: &str,
-    method: MethodArg,
+    args: &ShapeOutputArgs,
     progress: &Bars,
 ) -> Result<usize> {
     if pgvol::is_pgv(output) {
@@ -26,7 +26,8 @@ fn write_result(
         return Ok(0);
     }
     let options = pgvol::DecodeOptions {
-        method: method.into(),
+        method: args.method.into(),
+        min_component: args.min_component,
         ..Default::default()
     };
     let mesh = pgvol::decode(&volume, &options, progress).map_err(|e| {
@@ -151,6 +152,10 @@ pub struct ShapeOutputArgs {
     /// Contouring method for mesh outputs.
     #[arg(long, value_enum, default_value_t)]
     pub method: MethodArg,
+    /// Remove pieces of the output enclosing less than this volume (model units cubed); by
+    /// default specks under 8 grid cells go, with a warning; 0 keeps every piece.
+    #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
+    pub min_component: Option<f32>,
 }
 
 #[derive(Args)]
@@ -183,7 +188,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     )?;
     let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(None, a.distance);
-    let triangles = write_result(&a.output, volume, &shape, &operation, a.shape.method, &bars)?;
+    let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles)
 }
 
@@ -250,7 +255,7 @@ pub fn shell(a: ShellArgs) -> Result<()> {
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
         .map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
-    let triangles = write_result(&a.output, volume, &shape, &operation, a.shape.method, &bars)?;
+    let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles)
 }
 

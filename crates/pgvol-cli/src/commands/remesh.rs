@@ -7,7 +7,8 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg,
+    at_input, load_mesh, non_negative, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs,
+    PathArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -41,6 +42,10 @@ pub struct RemeshArgs {
     /// Field that places the vertices (node signs always come from the mesh's distance).
     #[arg(long, value_enum, default_value_t)]
     pub field: FieldArg,
+    /// Remove pieces of the output enclosing less than this volume (model units cubed); by
+    /// default specks under 8 grid cells go, with a warning; 0 keeps every piece.
+    #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
+    pub min_component: Option<f32>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -75,6 +80,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
             FieldArg::Exact => pgvol::RemeshField::Exact,
             FieldArg::Decoded => pgvol::RemeshField::Decoded(a.basis.basis()?),
         },
+        min_component: a.min_component,
     };
     let remeshed =
         pgvol::remesh(&mesh, &options, &Bars::new(quiet)).map_err(|e| at_input(e, &a.input))?;

@@ -94,7 +94,7 @@ impl Mesh {
     }
 }
 
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
+pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {
     while parent[i as usize] != i {
         // Path halving keeps trees shallow without recursion.
         let g = parent[parent[i as usize] as usize];
@@ -104,7 +104,7 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
     i
 }
 
-fn union(parent: &mut [u32], a: u32, b: u32) {
+pub(super) fn union(parent: &mut [u32], a: u32, b: u32) {
     let (ra, rb) = (find(parent, a), find(parent, b));
     if ra != rb {
         // Smaller root wins: deterministic and good enough with path halving.
