@@ -1,4 +1,5 @@
-//! Wavefront OBJ via `tobj`: all objects and groups merged into one mesh, polygons fanned.
+//! Wavefront OBJ via `tobj`: all objects and groups merged into one mesh; polygons fanned, or
+//! split in halves when large.
 
 use std::io::{self, Write};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -19,7 +20,7 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         single_index: false,
-        triangulate: true,
+        triangulate: false,
         ignore_points: true,
         ignore_lines: true,
         ..Default::default()
@@ -47,15 +48,66 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
                 .chunks_exact(3)
                 .map(|c| Vec3::new(c[0], c[1], c[2])),
         );
-        for t in m.indices.chunks_exact(3) {
-            let tri = [t[0], t[1], t[2]].map(|i| i.checked_add(base));
-            match tri {
-                [Some(a), Some(b), Some(c)] => mesh.triangles.push([a, b, c]),
-                _ => return Err(MeshError::new(name, "more than 2^32 vertices")),
+        let mut corners = Vec::new();
+        let mut at = 0usize;
+        let arities = (!m.face_arities.is_empty())
+            .then_some(&m.face_arities)
+            .into_iter()
+            .flatten()
+            .map(|&k| k as usize);
+        let all_triangles = std::iter::repeat_n(3, m.indices.len() / 3);
+        let faces: Box<dyn Iterator<Item = usize>> = if m.face_arities.is_empty() {
+            Box::new(all_triangles)
+        } else {
+            Box::new(arities)
+        };
+        for k in faces {
+            let Some(face) = m.indices.get(at..at + k) else {
+                return Err(MeshError::new(name, "malformed face list"));
+            };
+            at += k;
+            corners.clear();
+            for &i in face {
+                corners.push(
+                    i.checked_add(base)
+                        .ok_or_else(|| MeshError::new(name, "more than 2^32 vertices"))?,
+                );
             }
+            triangulate(&corners, &mut mesh.triangles);
         }
     }
     Ok(mesh)
+}
+
+/// Polygons up to this many corners are fanned from their first corner, as OBJ readers do.
+const FAN_LIMIT: usize = 32;
+
+/// Triangles of one polygon, in its order (so its orientation). A fan of a large polygon is a
+/// sheaf of needles, each spanning the polygon, which every distance query near it must visit
+/// (a 50,000-sided cap took minutes); split in halves instead, the triangles shrink by half at
+/// each level and a point meets a few dozen. Both are exact for convex polygons.
+fn triangulate(corners: &[u32], out: &mut Vec<[u32; 3]>) {
+    let k = corners.len();
+    if k < 3 {
+        return;
+    }
+    if k <= FAN_LIMIT {
+        for i in 1..k - 1 {
+            out.push([corners[0], corners[i], corners[i + 1]]);
+        }
+        return;
+    }
+    // Ranges of corners closed by the chord from their last back to their first.
+    let mut ranges = vec![(0usize, k - 1)];
+    while let Some((lo, hi)) = ranges.pop() {
+        if hi - lo < 2 {
+            continue;
+        }
+        let mid = (lo + hi) / 2;
+        out.push([corners[lo], corners[mid], corners[hi]]);
+        ranges.push((mid, hi));
+        ranges.push((lo, mid));
+    }
 }
 
 /// The number of the first `f` line naming fewer than three vertices, which the parser would

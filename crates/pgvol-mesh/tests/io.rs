@@ -181,6 +181,33 @@ fn obj_quads_negative_indices_and_several_objects() {
 }
 
 #[test]
+fn large_obj_polygons_become_triangles_of_the_same_area_and_orientation() {
+    for n in [5usize, 33, 100, 1001] {
+        let mut text = String::new();
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            text += &format!("v {} {} 0\n", a.cos(), a.sin());
+        }
+        text += "f";
+        for i in 1..=n {
+            text += &format!(" {i}");
+        }
+        text += "\n";
+        let m = read_bytes(text.as_bytes(), MeshFormat::Obj, Path::new("p.obj")).unwrap();
+        assert_eq!(m.triangles.len(), n - 2, "{n}");
+        let want = 0.5 * n as f64 * (std::f64::consts::TAU / n as f64).sin();
+        let mut area = 0.0f64;
+        for t in 0..m.triangles.len() {
+            let [a, b, c] = m.triangle(t).map(|p| p.as_dvec3());
+            let z = (b - a).cross(c - a).z;
+            assert!(z >= 0.0, "{n}: triangle {t} turned over");
+            area += 0.5 * z;
+        }
+        assert!((area - want).abs() < 1e-5 * want, "{n}: {area} vs {want}");
+    }
+}
+
+#[test]
 fn obj_faces_with_one_or_two_vertices_are_reported_with_their_line() {
     for (face, line) in [("f 1 2", 5), ("f 3", 5), ("f 1 2 # a comment 4", 5)] {
         let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n{face}\nf 1 3 2\n");
