@@ -98,3 +98,25 @@ def test_eval_matches_decoded_surface(pgvol, encoded, work_dir):
     # A signed distance has gradients of length close to one near the surface.
     lengths = np.linalg.norm(grads, axis=1)
     assert np.median(np.abs(lengths - 1)) < 0.05, np.median(lengths)
+
+
+def test_every_json_report_times_its_run_the_same_way(tmp_path, pgvol):
+    """`seconds` is an object with the total and the stages, in every command's --json."""
+    knot = helpers.REPO_ROOT / "fixtures" / "torus-knot.obj"
+    pgv = tmp_path / "knot.pgv"
+    runs = {
+        "encode": [pgvol, "encode", knot, "-o", pgv, "--res", 32],
+        "decode": [pgvol, "decode", pgv, "-o", tmp_path / "k.glb"],
+        "remesh": [pgvol, "remesh", knot, "-o", tmp_path / "r.glb", "--res", 32],
+        "sdf": [pgvol, "sdf", knot, "-o", tmp_path / "k.nrrd", "--res", 24],
+        "export": [pgvol, "export", pgv, "-o", tmp_path / "e.npy"],
+        "offset": [pgvol, "offset", pgv, "-o", tmp_path / "o.glb", "--distance", 0.01],
+        "slice": [pgvol, "slice", pgv, "-o", tmp_path / "s.json", "--layer-height", 0.5],
+    }
+    for name, args in runs.items():
+        report = helpers.run_json(args + ["--json"])
+        seconds = report.get("seconds")
+        assert isinstance(seconds, dict), f"{name}: seconds is {seconds!r}"
+        assert seconds.get("total", -1) >= 0, f"{name}: {seconds}"
+        assert all(isinstance(v, (int, float)) and v >= 0 for v in seconds.values()), f"{name}: {seconds}"
+        assert all(v <= seconds["total"] + 1e-6 for k, v in seconds.items()), f"{name}: {seconds}"

@@ -204,3 +204,13 @@ pub fn non_negative(text: &str) -> std::result::Result<f32, String> {
         _ => Err(format!("expected a number of at least 0, got '{text}'")),
     }
 }
+
+/// The `seconds` object every `--json` report carries: the total and each stage, by name.
+pub fn seconds_json(stages: &[(&str, f64)], total: f64) -> serde_json::Value {
+    let mut map = serde_json::Map::new();
+    for (name, s) in stages {
+        map.insert((*name).into(), (*s).into());
+    }
+    map.insert("total".into(), total.into());
+    serde_json::Value::Object(map)
+}

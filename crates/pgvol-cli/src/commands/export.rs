@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{print_json, OutputArgs, PathArg};
+use super::args::{print_json, seconds_json, OutputArgs, PathArg};
 use crate::output::outln;
 
 #[derive(Args)]
@@ -40,6 +40,7 @@ pub enum WhatArg {
 }
 
 pub fn run(a: ExportArgs) -> Result<()> {
+    let start = std::time::Instant::now();
     let kind = pgvol::ExportKind::from_path(&a.output, a.what == WhatArg::Coefficients)?;
     let file = pgvol::read_pgv(&a.input)?;
     let grid = pgvol::export(&a.output, &file, kind, a.res.map(|r| r as usize), &a.unit)?;
@@ -52,6 +53,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
     if a.out.json {
         return print_json(&serde_json::json!({
             "output": a.output, "what": what, "grid": grid, "bytes": bytes, "unit": unit,
+            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
         }));
     }
     if !a.out.quiet {

@@ -7,8 +7,8 @@ use clap::Args;
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, non_negative, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs,
-    PathArg, SignArg,
+    at_input, load_mesh, non_negative, print_json, seconds_json, BasisArgs, GridArgs, MethodArg,
+    OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -276,6 +276,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
 }
 
 pub fn decode(a: DecodeArgs) -> Result<()> {
+    let start = Instant::now();
     pgvol::mesh_format(&a.output)?;
     let shape = pgvol::Shape::from_file(pgvol::read_pgv(&a.input)?);
     let t = Instant::now();
@@ -294,7 +295,7 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
     if a.out.json {
         return print_json(&serde_json::json!({
             "output": a.output, "triangles": mesh.triangles.len(), "vertices": mesh.positions.len(),
-            "seconds": seconds,
+            "seconds": seconds_json(&[("contour", seconds)], start.elapsed().as_secs_f64()),
         }));
     }
     if !a.out.quiet {

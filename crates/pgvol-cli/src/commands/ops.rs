@@ -2,11 +2,14 @@
 //! read from a .pgv file or encoded on the fly from a mesh.
 
 use std::path::Path;
+use std::time::Instant;
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{at_input, non_negative, print_json, MethodArg, OutputArgs, PathArg};
+use super::args::{
+    at_input, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg,
+};
 use crate::output::outln;
 use crate::progress::Bars;
 
@@ -101,7 +104,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         })?;
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
-    let start = std::time::Instant::now();
+    let start = Instant::now();
     let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, &bars)?;
     let settings = pgvol::SliceSettings {
         axis: match a.axis {
@@ -114,7 +117,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         resolution: a.resolution,
         tolerance: a.tolerance,
     };
-    let t = std::time::Instant::now();
+    let t = Instant::now();
     let layers = pgvol::slice(&shape, &settings, &bars).map_err(|e| at_input(e, &a.input))?;
     let slice_seconds = t.elapsed().as_secs_f64();
     pgvol::write_layers(&a.output, &layers, format, a.units_mm)?;
@@ -176,6 +179,7 @@ pub struct OffsetArgs {
 }
 
 pub fn offset(a: OffsetArgs) -> Result<()> {
+    let start = Instant::now();
     check_output_name(&a.output)?;
     let bars = Bars::new(a.out.silent());
     pgvol::check_offset(a.distance).map_err(|e| anyhow::anyhow!("--distance: {e}"))?;
@@ -189,7 +193,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(None, a.distance);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
-    report(&a.out, &a.output, triangles)
+    report(&a.out, &a.output, triangles, start)
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
@@ -238,6 +242,7 @@ fn parse_drain(s: &str) -> Result<pgvol::Drain, String> {
 }
 
 pub fn shell(a: ShellArgs) -> Result<()> {
+    let start = Instant::now();
     check_output_name(&a.output)?;
     pgvol::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
     let bars = Bars::new(a.out.silent());
@@ -256,12 +261,15 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         .map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
-    report(&a.out, &a.output, triangles)
+    report(&a.out, &a.output, triangles, start)
 }
 
-fn report(out: &OutputArgs, output: &Path, triangles: usize) -> Result<()> {
+fn report(out: &OutputArgs, output: &Path, triangles: usize, start: Instant) -> Result<()> {
     if out.json {
-        print_json(&serde_json::json!({ "output": output, "triangles": triangles }))?;
+        print_json(&serde_json::json!({
+            "output": output, "triangles": triangles,
+            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
+        }))?;
     } else if !out.quiet {
         if triangles > 0 {
             outln!("{}: {} triangles", output.display(), triangles);

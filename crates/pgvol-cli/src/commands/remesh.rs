@@ -7,8 +7,8 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, non_negative, print_json, BasisArgs, GridArgs, MethodArg, OutputArgs,
-    PathArg,
+    at_input, load_mesh, non_negative, print_json, seconds_json, BasisArgs, GridArgs, MethodArg,
+    OutputArgs, PathArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -59,8 +59,7 @@ struct Report<'a> {
     input_triangles: usize,
     triangles: usize,
     vertices: usize,
-    seconds: pgvol::Timings,
-    total_seconds: f64,
+    seconds: serde_json::Value,
 }
 
 pub fn run(a: RemeshArgs) -> Result<()> {
@@ -94,6 +93,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         pgvol::RemeshField::Decoded(b) => b.name(),
     };
     let grid = remeshed.grid;
+    let total = start.elapsed().as_secs_f64();
     let report = Report {
         input: &a.input,
         output: &a.output,
@@ -102,8 +102,16 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         input_triangles: mesh.triangles.len(),
         triangles: remeshed.mesh.triangles.len(),
         vertices: remeshed.mesh.positions.len(),
-        seconds,
-        total_seconds: start.elapsed().as_secs_f64(),
+        seconds: seconds_json(
+            &[
+                ("read", seconds.read),
+                ("sdf", seconds.sdf),
+                ("fit", seconds.fit),
+                ("contour", seconds.contour),
+                ("write", seconds.write),
+            ],
+            total,
+        ),
     };
     if a.out.json {
         return print_json(&report);
@@ -116,7 +124,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
             report.triangles,
             grid.dims[0],
             report.basis,
-            report.total_seconds
+            total
         );
     }
     Ok(())

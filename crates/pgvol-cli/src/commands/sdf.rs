@@ -4,7 +4,9 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::args::{at_input, load_mesh, print_json, GridArgs, OutputArgs, PathArg, SignArg};
+use super::args::{
+    at_input, load_mesh, print_json, seconds_json, GridArgs, OutputArgs, PathArg, SignArg,
+};
 use crate::output::outln;
 use crate::progress::Bars;
 
@@ -44,6 +46,7 @@ pub struct SdfArgs {
 }
 
 pub fn run(a: SdfArgs) -> Result<()> {
+    let start = std::time::Instant::now();
     let format = match a.format {
         Some(GridFormat::Nrrd) => pgvol::GridFormat::Nrrd,
         Some(GridFormat::Npy) => pgvol::GridFormat::Npy,
@@ -67,7 +70,7 @@ pub fn run(a: SdfArgs) -> Result<()> {
         band: a.band,
         exact_nodes: sampled.exact_nodes,
         samples: values.len(),
-        seconds: sampled.seconds,
+        seconds: seconds_json(&[("sdf", sampled.seconds)], start.elapsed().as_secs_f64()),
         samples_per_second: values.len() as f64 / sampled.seconds.max(1e-9),
         inside: values.iter().filter(|v| **v < 0.0).count(),
     };
@@ -96,7 +99,7 @@ struct Report {
     band: Option<f32>,
     exact_nodes: usize,
     samples: usize,
-    seconds: f64,
+    seconds: serde_json::Value,
     samples_per_second: f64,
     inside: usize,
 }
