@@ -26,7 +26,7 @@ pub struct DecodeOptions {
 
 /// Pieces of a contour smaller than this many grid cells are specks (noise, features thinner
 /// than the grid), not parts: removed by default, with a warning.
-pub const SPECK_VOXELS: f32 = 8.0;
+pub const SPECK_VOXELS: f32 = 2.0;
 
 /// Removes the pieces of `mesh` under `min_component`, or under [`SPECK_VOXELS`] cells of
 /// spacing `h` by default, and says how many went.

@@ -37,7 +37,7 @@ pub struct RemeshOptions {
     /// The field the vertices lie on (default exact).
     pub field: RemeshField,
     /// Pieces enclosing less than this volume are removed; see
-    /// [`DecodeOptions::min_component`] (default: specks under 8 grid cells).
+    /// [`DecodeOptions::min_component`] (default: specks under 2 grid cells).
     pub min_component: Option<f32>,
 }
 

@@ -104,7 +104,7 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: Option<u32>,
     /// Remove pieces of the output enclosing less than this volume (model units cubed); by
-    /// default specks under 8 grid cells go, with a warning; 0 keeps every piece.
+    /// default specks under 2 grid cells go, with a warning; 0 keeps every piece.
     #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
     pub min_component: Option<f32>,
     #[command(flatten)]

@@ -43,7 +43,7 @@ pub struct RemeshArgs {
     #[arg(long, value_enum, default_value_t)]
     pub field: FieldArg,
     /// Remove pieces of the output enclosing less than this volume (model units cubed); by
-    /// default specks under 8 grid cells go, with a warning; 0 keeps every piece.
+    /// default specks under 2 grid cells go, with a warning; 0 keeps every piece.
     #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
     pub min_component: Option<f32>,
     #[command(flatten)]

@@ -10,6 +10,7 @@
 mod brick;
 mod candidates;
 mod carry;
+mod flags;
 mod near;
 mod row;
 
@@ -18,6 +19,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
+
+use flags::{Bits, RegionSigns};
 
 use crate::consistency::{sign_contradictions, sparse_sign_contradictions};
 use crate::{grid::Grid, sdf::MeshSdf, SignMode};
@@ -134,9 +137,9 @@ struct Plan<'a> {
     bricks: [usize; 3],
     clamp: f32,
     /// Per brick, whether it is within the band of some triangle (`None`: dense, all are).
-    near: Option<Vec<bool>>,
+    near: Option<Bits>,
     /// Per brick away from the surface, its sign when one winding number decides its region.
-    regions: Option<Vec<Option<bool>>>,
+    regions: Option<RegionSigns>,
 }
 
 /// The values of one row of bricks: nodes `(i, j, k)` of the row's `j` and `k` ranges, x

@@ -3,6 +3,7 @@
 
 use glam::Vec3A;
 
+use super::flags::{Bits, RegionSigns};
 use super::BRICK;
 use crate::{grid::Grid, sdf::MeshSdf};
 
@@ -20,10 +21,10 @@ impl MeshSdf {
         grid: &Grid,
         bricks: [usize; 3],
         reach: f32,
-    ) -> Vec<bool> {
+    ) -> Bits {
         // A little more than `reach`, so rounding in the cell arithmetic cannot miss a cell.
         let reach = reach + 0.01 * grid.spacing;
-        let mut near = vec![false; bricks[0] * bricks[1] * bricks[2]];
+        let mut near = Bits::new(bricks[0] * bricks[1] * bricks[2]);
         let span = grid.spacing * BRICK as f32;
         let cell = |x: f32, axis: usize| -> usize {
             ((x - grid.origin[axis]) / span)
@@ -40,7 +41,7 @@ impl MeshSdf {
             for k in k0..=k1 {
                 for j in j0..=j1 {
                     let row = bricks[0] * (j + bricks[1] * k);
-                    near[row + i0..=row + i1].iter_mut().for_each(|n| *n = true);
+                    near.set_range(row + i0..=row + i1);
                 }
             }
         }
@@ -57,17 +58,18 @@ impl MeshSdf {
         &self,
         grid: &Grid,
         bricks: [usize; 3],
-        near: &[bool],
-    ) -> Option<Vec<Option<bool>>> {
+        near: &Bits,
+    ) -> Option<RegionSigns> {
         if !self.rims().is_empty() {
             return None;
         }
-        let mut sign: Vec<Option<bool>> = vec![None; near.len()];
-        let mut seen = vec![false; near.len()];
+        let len = bricks[0] * bricks[1] * bricks[2];
+        let mut sign = RegionSigns::new(len);
+        let mut seen = Bits::new(len);
         let mut queue = std::collections::VecDeque::new();
         let span = grid.spacing * BRICK as f32;
-        for start in 0..near.len() {
-            if near[start] || seen[start] {
+        for start in 0..len {
+            if near.get(start) || seen.get(start) {
                 continue;
             }
             let at = [
@@ -79,18 +81,18 @@ impl MeshSdf {
                 + (glam::Vec3::new(at[0] as f32, at[1] as f32, at[2] as f32) + 0.5) * span;
             let w = self.winding_number(centre);
             let region_sign = ((w - 0.5).abs() >= REGION_SIGN_MARGIN).then_some(w > 0.5);
-            seen[start] = true;
+            seen.set(start);
             queue.push_back(start);
             while let Some(b) = queue.pop_front() {
-                sign[b] = region_sign;
+                sign.set(b, region_sign);
                 let (i, j, k) = (
                     b % bricks[0],
                     (b / bricks[0]) % bricks[1],
                     b / (bricks[0] * bricks[1]),
                 );
                 let mut visit = |n: usize| {
-                    if !near[n] && !seen[n] {
-                        seen[n] = true;
+                    if !near.get(n) && !seen.get(n) {
+                        seen.set(n);
                         queue.push_back(n);
                     }
                 };

@@ -80,9 +80,9 @@ impl MeshSdf {
                 [bi * size, j0, k0],
                 [(bi * size + size).min(nx), j1, k1],
             );
-            let far = plan.near.as_ref().is_some_and(|near| !near[b]);
+            let far = plan.near.as_ref().is_some_and(|near| !near.get(b));
             if far {
-                match plan.regions.as_ref().and_then(|r| r[b]) {
+                match plan.regions.as_ref().and_then(|r| r.get(b)) {
                     Some(inside) => {
                         let v = if inside { -plan.clamp } else { plan.clamp };
                         brick.for_each_node(grid, |at, _| out.put(at, v));
