@@ -140,6 +140,9 @@ impl Field {
     }
 }
 
+// Python signatures show literal defaults only; these are the library's.
+const _: () = assert!(pgvol::ENCODE_BAND == 4.0);
+
 /// The grid choice of `res` and `voxel`.
 fn grid_spec(py: Python<'_>, res: Option<usize>, voxel: Option<f32>) -> PyResult<pgvol::GridSpec> {
     match (res, voxel) {
@@ -188,7 +191,7 @@ fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Drain> {
 impl Field {
     /// Encodes a triangle mesh: signed distance on a cube grid around it, fitted with a basis.
     #[staticmethod]
-    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=pgvol::ENCODE_BAND, basis="bspline3", fit="interp", sign="auto", z_step=None, progress=None))]
+    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", fit="interp", sign="auto", z_step=None, progress=None))]
     fn from_mesh(
         py: Python<'_>,
         vertices: &Bound<'_, PyAny>,
@@ -394,14 +397,14 @@ impl Field {
     /// A wall of `thickness` around the surface (`side` "inner", "outer" or "centred"), or with
     /// `hollow=True` the shape with a cavity `thickness` inside its surface and optional drain
     /// holes.
-    #[pyo3(signature = (thickness, *, side="inner", hollow=false, drains=Vec::new(), progress=None))]
+    #[pyo3(signature = (thickness, *, side="inner", hollow=false, drains=None, progress=None))]
     fn shell(
         &self,
         py: Python<'_>,
         thickness: f32,
         side: &str,
         hollow: bool,
-        drains: Vec<Bound<'_, PyAny>>,
+        drains: Option<Vec<Bound<'_, PyAny>>>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Field> {
         let kind = if hollow {
@@ -410,6 +413,7 @@ impl Field {
             pgvol::ShellKind::Wall(names::side(py, side)?)
         };
         let drains = drains
+            .unwrap_or_default()
             .iter()
             .map(|d| drain(py, d))
             .collect::<PyResult<Vec<_>>>()?;

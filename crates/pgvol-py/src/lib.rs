@@ -55,7 +55,7 @@ fn write_mesh(
 /// area-uniform samples on each, reproducible from `seed`. Each mesh is a (vertices, faces)
 /// pair or an object with `vertices` and `faces` (a `trimesh.Trimesh`).
 #[pyfunction]
-#[pyo3(signature = (a, b, *, samples=pgvol::COMPARE_SAMPLES, seed=0))]
+#[pyo3(signature = (a, b, *, samples=200_000, seed=0))]
 fn compare<'py>(
     py: Python<'py>,
     a: &Bound<'py, PyAny>,
@@ -103,6 +103,9 @@ fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound
         }
     })
 }
+
+// Python signatures show literal defaults only; this is the library's.
+const _: () = assert!(pgvol::COMPARE_SAMPLES == 200_000);
 
 /// Sets the largest estimated peak memory, in bytes, a call may start with; None returns to
 /// the default, the memory the machine has available when the call starts.

@@ -1,10 +1,27 @@
 """Type stubs of the pgvol extension module."""
 
 import os
-from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
+
+__all__ = [
+    "Field",
+    "Grid",
+    "Layer",
+    "read_mesh",
+    "write_mesh",
+    "compare",
+    "set_memory_limit",
+    "memory_limit",
+    "__version__",
+    "DEFAULT_RES",
+    "MIN_RES",
+    "MAX_RES",
+    "ENCODE_BAND",
+    "COMPARE_SAMPLES",
+]
 
 __version__: str
 DEFAULT_RES: int
@@ -13,27 +30,28 @@ MAX_RES: int
 ENCODE_BAND: float
 COMPARE_SAMPLES: int
 
-PathLike = Union[str, "os.PathLike[str]"]
-Points = npt.ArrayLike
+_PathLike = Union[str, "os.PathLike[str]"]
+_Points = npt.ArrayLike
 """(N, 3) float32 or float64, any memory order."""
-Faces = npt.ArrayLike
+_Faces = npt.ArrayLike
 """(M, 3) int32, int64, uint32 or uint64 vertex indices, counter-clockwise seen from outside."""
-Progress = Callable[[str, float], Any]
+_Progress = Callable[[str, float], Any]
 """Called as progress(stage, fraction): at the start of each stage (0.0), at most every 0.1 s
 while it runs, and at its end (1.0). An exception it raises stops the call and propagates."""
-MeshLike = Union[Tuple[Points, Faces], Any]
+_MeshLike = Union[Tuple[_Points, _Faces], Any]
 """A (vertices, faces) pair, or an object with .vertices and .faces (a trimesh.Trimesh)."""
-Vec3 = Tuple[float, float, float]
-Drain = Union[Sequence[float], Tuple[Sequence[float], Sequence[float], float]]
+_Vec3 = Tuple[float, float, float]
+_Drain = Union[Sequence[float], Tuple[Sequence[float], Sequence[float], float]]
 """(x, y, z, dx, dy, dz, diameter) or ((x, y, z), (dx, dy, dz), diameter): a point inside the
 cavity, the direction out through the wall, and the hole's diameter."""
 
+@final
 class Grid:
     """Grid nodes: node (i, j, k) lies at origin + spacing * (i, j, k)."""
 
-    def __init__(self, origin: Vec3, spacing: float, dims: Tuple[int, int, int]) -> None: ...
+    def __new__(cls, origin: _Vec3, spacing: float, dims: Tuple[int, int, int]) -> "Grid": ...
     @property
-    def origin(self) -> Vec3:
+    def origin(self) -> _Vec3:
         """The position of node (0, 0, 0)."""
     @property
     def spacing(self) -> float:
@@ -42,10 +60,11 @@ class Grid:
     def dims(self) -> Tuple[int, int, int]:
         """Nodes along x, y and z."""
     @property
-    def max_corner(self) -> Vec3:
+    def max_corner(self) -> _Vec3:
         """The position of the last node, origin + spacing * (dims - 1)."""
-    def __eq__(self, other: object) -> bool: ...
+    def __eq__(self, other: object, /) -> bool: ...
 
+@final
 class Layer:
     """The closed contours of one layer plane."""
 
@@ -60,6 +79,7 @@ class Layer:
     def holes(self) -> List[bool]:
         """Per loop: a hole (clockwise) rather than an outer boundary (counter-clockwise)."""
 
+@final
 class Field:
     """A smooth implicit field: coefficients of a compactly supported basis on a grid.
 
@@ -71,8 +91,8 @@ class Field:
 
     @staticmethod
     def from_mesh(
-        vertices: Points,
-        faces: Faces,
+        vertices: _Points,
+        faces: _Faces,
         *,
         res: Optional[int] = None,
         voxel: Optional[float] = None,
@@ -81,7 +101,7 @@ class Field:
         fit: Literal["interp", "iso", "wls"] = "interp",
         sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
         z_step: Optional[float] = None,
-        progress: Optional[Progress] = None,
+        progress: Optional[_Progress] = None,
     ) -> "Field":
         """Encodes a triangle mesh.
 
@@ -95,14 +115,14 @@ class Field:
     def from_trimesh(mesh: Any, **kwargs: Any) -> "Field":
         """Encodes a trimesh.Trimesh; the keywords are those of from_mesh."""
     @staticmethod
-    def load(path: PathLike) -> "Field":
+    def load(path: _PathLike) -> "Field":
         """Reads a .pgv file."""
     @staticmethod
     def from_bytes(data: bytes) -> "Field":
         """Decodes the bytes of a .pgv file."""
     def save(
         self,
-        path: PathLike,
+        path: _PathLike,
         *,
         dense: Optional[bool] = None,
         precision: Optional[Literal["f32", "f16", "q16", "fixed"]] = None,
@@ -117,13 +137,13 @@ class Field:
         precision: Optional[Literal["f32", "f16", "q16", "fixed"]] = None,
     ) -> bytes:
         """The bytes save() would write."""
-    def __call__(self, points: Points) -> npt.NDArray[np.float32]:
+    def __call__(self, points: _Points) -> npt.NDArray[np.float32]:
         """Values at (N, 3) points: an (N,) float32 array, negative inside."""
     def eval_with_gradient(
-        self, points: Points
+        self, points: _Points
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
         """Values (N,) and analytic gradients (N, 3), float32."""
-    def is_exact(self, points: Points) -> npt.NDArray[np.bool_]:
+    def is_exact(self, points: _Points) -> npt.NDArray[np.bool_]:
         """Whether each value is an exact distance: inside the grid's box and within
         exact_band of the surface."""
     def sample_grid(self, grid: Optional[Grid] = None) -> npt.NDArray[np.float32]:
@@ -138,7 +158,7 @@ class Field:
         method: Literal["mc", "sn", "dc"] = "mc",
         iso: float = 0.0,
         res: Optional[int] = None,
-        progress: Optional[Progress] = None,
+        progress: Optional[_Progress] = None,
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
         """Contours the level set ``iso`` into a watertight, manifold mesh: vertices (N, 3)
         float32 and faces (M, 3) int32, counter-clockwise seen from outside. ``method``:
@@ -155,8 +175,8 @@ class Field:
         *,
         side: Literal["inner", "outer", "centred"] = "inner",
         hollow: bool = False,
-        drains: Sequence[Drain] = (),
-        progress: Optional[Progress] = None,
+        drains: Optional[Sequence[_Drain]] = None,
+        progress: Optional[_Progress] = None,
     ) -> "Field":
         """A wall of ``thickness`` on ``side`` of the surface, or with ``hollow=True`` the
         shape with a cavity ``thickness`` inside its surface and optional drain holes."""
@@ -168,7 +188,7 @@ class Field:
         first: Optional[float] = None,
         resolution: Optional[float] = None,
         tolerance: Optional[float] = None,
-        progress: Optional[Progress] = None,
+        progress: Optional[_Progress] = None,
     ) -> List[Layer]:
         """Layers of closed contours ``layer_height`` apart along ``axis``, the first half a
         layer above the bottom unless ``first`` is given."""
@@ -189,21 +209,21 @@ class Field:
     def exact_band(self) -> float:
         """The distance from the surface within which values are exact distances."""
     @property
-    def bounds(self) -> Tuple[Vec3, Vec3]:
+    def bounds(self) -> Tuple[_Vec3, _Vec3]:
         """The box of the source shape: (min corner, max corner)."""
     @property
     def metadata(self) -> Dict[str, str]:
         """The file header's key/value metadata."""
 
-def read_mesh(path: PathLike) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
+def read_mesh(path: _PathLike) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
     """Reads an OBJ, glTF/GLB, STL or PLY file (by extension), welding bit-identical vertices
     and dropping degenerate and repeated triangles."""
 
-def write_mesh(path: PathLike, vertices: Points, faces: Faces) -> None:
+def write_mesh(path: _PathLike, vertices: _Points, faces: _Faces) -> None:
     """Writes a GLB, glTF, OBJ, STL or PLY file (by extension), atomically."""
 
 def compare(
-    a: MeshLike, b: MeshLike, *, samples: int = 200000, seed: int = 0
+    a: _MeshLike, b: _MeshLike, *, samples: int = 200000, seed: int = 0
 ) -> Dict[str, Any]:
     """Mesh ``a`` against reference ``b``: symmetric Hausdorff and Chamfer-L1 distances (also
     in percent of b's bounding-box diagonal), mean distances each way, normal deviation in
