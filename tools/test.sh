@@ -70,8 +70,8 @@ fi
 echo "built and installed in $((SECONDS - py_start)) s"
 
 section "cargo test --release --workspace"
-# The bindings have no Rust tests (their suite is pytest's, below); building them here would
-# build pyo3 with other settings than pip's build and undo its cache.
+# The bindings have no Rust tests (their suite is pytest's, below); leaving them out keeps
+# their dependencies' features (glam's bytemuck) out of the Rust test build.
 cargo test --release --workspace --exclude pgvol-py || failed+=("cargo test")
 
 section "python package tests (pytest crates/pgvol-py/tests)"
