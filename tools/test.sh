@@ -70,8 +70,9 @@ fi
 echo "built and installed in $((SECONDS - py_start)) s"
 
 section "cargo test --release --workspace"
-# The bindings have no Rust tests (their suite is pytest's, below); leaving them out keeps
-# their dependencies' features (glam's bytemuck) out of the Rust test build.
+# The bindings have no Rust tests (their suite is pytest's, below). Left in, pyo3's macros
+# would turn on more of syn's features, and every crate of the test build would be compiled again
+# with them instead of reusing the builds of earlier runs.
 cargo test --release --workspace --exclude pgvol-py || failed+=("cargo test")
 
 section "python package tests (pytest crates/pgvol-py/tests)"
