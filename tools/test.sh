@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The project's single test command: checks formatting and lints, builds pgvol, sets up the
-# Python and Node helpers, runs the Rust tests (with the library's doctests) and the end-to-end
-# checks in tools/checks.
+# Python and Node helpers, installs the Python package (crates/pgvol-py) into the venv, runs the
+# Rust tests (with the library's doctests), the Python package's tests and the end-to-end checks
+# in tools/checks.
 # Usage: bash tools/test.sh   (from any directory; needs only the package registries)
 set -euo pipefail
 
@@ -52,11 +53,33 @@ else
     echo "package-lock unchanged; skipping npm ci"
 fi
 
-# Both suites run even if the first fails, so one CI log shows every failure.
+# Every suite runs even if one before it fails, so one CI log shows every failure.
 failed=()
 
+section "python package (pip install ./crates/pgvol-py)"
+# pip builds the package in place with maturin, in release, into the repository's target/
+# (or CARGO_TARGET_DIR): after the first build only what changed is compiled again.
+py_start=$SECONDS
+if CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$ROOT/target}" \
+    .venv/bin/python -m pip install -q --disable-pip-version-check ./crates/pgvol-py; then
+    py_installed=1
+else
+    py_installed=0
+    failed+=("pip install ./crates/pgvol-py")
+fi
+echo "built and installed in $((SECONDS - py_start)) s"
+
 section "cargo test --release --workspace"
-cargo test --release --workspace || failed+=("cargo test")
+# The bindings have no Rust tests (their suite is pytest's, below). Left in, pyo3's macros
+# would turn on more of syn's features, and every crate of the test build would be compiled again
+# with them instead of reusing the builds of earlier runs.
+cargo test --release --workspace --exclude pgvol-py || failed+=("cargo test")
+
+section "python package tests (pytest crates/pgvol-py/tests)"
+if [[ $py_installed == 1 ]]; then
+    .venv/bin/python -m pytest -q -p no:cacheprovider crates/pgvol-py/tests \
+        || failed+=("pytest crates/pgvol-py/tests")
+fi
 
 section "end-to-end checks (pytest tools/checks)"
 .venv/bin/python -m pytest -q -p no:cacheprovider tools/checks || failed+=("pytest tools/checks")

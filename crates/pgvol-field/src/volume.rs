@@ -163,6 +163,11 @@ impl CoefficientVolume {
         points.par_iter().map(|&p| self.eval(p)).collect()
     }
 
+    /// Values only at many points, in parallel.
+    pub fn values_many(&self, points: &[Vec3]) -> Vec<f32> {
+        points.par_iter().map(|&p| self.value(p)).collect()
+    }
+
     /// The field sampled at every node of `grid` (x fastest), in parallel over z-planes.
     pub fn sample(&self, grid: &Grid) -> Vec<f32> {
         let [nx, ny, _] = grid.dims;

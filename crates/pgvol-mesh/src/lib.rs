@@ -21,7 +21,7 @@ pub use format::MeshFormat;
 pub use io::{read, read_bytes, write, write_to};
 pub use normals::{face_normal, vertex_normals};
 pub use pgvol_core::{write_atomic, FileError, Mesh, MeshStats};
-pub use validate::{coordinate_out_of_range, too_small, MAX_COORDINATE, MIN_EXTENT};
+pub use validate::{coordinate_out_of_range, mesh_problem, too_small, MAX_COORDINATE, MIN_EXTENT};
 
 /// The error of every reader and writer here: the file and what is wrong with it.
 pub type MeshError = FileError;

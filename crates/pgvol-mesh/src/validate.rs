@@ -48,6 +48,12 @@ pub(crate) fn problem(mesh: &Mesh, owner: &str) -> Option<String> {
     })
 }
 
+/// The first problem found in a mesh given in memory (not read from a file), phrased for a
+/// person; `None` when it is usable. The same checks as every reader and writer makes.
+pub fn mesh_problem(mesh: &Mesh) -> Option<String> {
+    problem(mesh, "mesh")
+}
+
 /// The first vertex with a coordinate at or beyond [`MAX_COORDINATE`], and that coordinate.
 pub fn coordinate_out_of_range(mesh: &Mesh) -> Option<(usize, f32)> {
     mesh.positions.iter().enumerate().find_map(|(i, p)| {

@@ -4,6 +4,7 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use glam::Vec3;
+use pgvol_core::Grid;
 use pgvol_field::CoefficientVolume;
 
 use serde::Serialize;
@@ -95,6 +96,39 @@ pub fn eval(shape: &Shape, points: &[Vec3]) -> Vec<Evaluation> {
             exact: value.abs() < band && p.cmpge(lo).all() && p.cmple(hi).all(),
         })
         .collect()
+}
+
+/// The field of `volume` sampled at every node of `grid`, x fastest (flat index
+/// `i + nx · (j + ny · k)`). Refuses a grid that is not finite, positive and within the node
+/// limit, or that would not fit in memory.
+pub fn sample(volume: &CoefficientVolume, grid: &Grid) -> Result<Vec<f32>> {
+    if !(grid.spacing.is_finite() && grid.spacing > 0.0) {
+        return Err(Error::parameter(format!(
+            "the grid spacing must be a positive number, got {}",
+            grid.spacing
+        )));
+    }
+    if !grid.origin.is_finite() || !grid.max_corner().is_finite() {
+        return Err(Error::parameter("the grid's corners must be finite"));
+    }
+    if grid.dims.contains(&0) {
+        return Err(Error::parameter(format!(
+            "the grid needs at least one node per axis, got {:?}",
+            grid.dims
+        )));
+    }
+    let nodes = grid.dims.iter().map(|&n| n as u128).product::<u128>();
+    if nodes > pgvol_core::MAX_GRID_NODES {
+        return Err(Error::new(
+            ErrorKind::ResourceLimit,
+            format!(
+                "a grid of {nodes} nodes exceeds the limit of {}",
+                pgvol_core::MAX_GRID_NODES
+            ),
+        ));
+    }
+    crate::memory::check_grid("sampling", grid, crate::memory::BYTES_PER_SDF_NODE)?;
+    Ok(volume.sample(grid))
 }
 
 /// The rows `x,y,z,value,gx,gy,gz,exact` of [`eval`]'s results (`exact` 1 or 0), with a header

@@ -84,12 +84,14 @@ pub use encode::{
     MIN_BAND, PG_ORDER, PG_RADIUS,
 };
 pub use error::{Error, ErrorKind, Result};
-pub use eval::{eval, eval_csv, read_points, read_points_file, Evaluation};
+pub use eval::{eval, eval_csv, read_points, read_points_file, sample, Evaluation};
 pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT, THREEMF_UNITS};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
 pub use memory::{human, memory_limit, parse_size, set_memory_limit};
-pub use mesh_io::{mesh_format, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to};
+pub use mesh_io::{
+    mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
+};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};

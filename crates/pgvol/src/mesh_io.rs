@@ -6,7 +6,7 @@ use std::path::Path;
 use pgvol_core::Mesh;
 use pgvol_mesh::{CleanReport, MeshFormat};
 
-use crate::error::{FileResult, Result};
+use crate::error::{Error, FileResult, Result};
 
 /// Reads a mesh file (OBJ, glTF/GLB, STL, PLY by extension), welds bit-identical vertices and
 /// drops degenerate triangles; the report says how many of each.
@@ -22,6 +22,22 @@ pub fn read_mesh_bytes(
 ) -> Result<(Mesh, CleanReport)> {
     let mut mesh = pgvol_mesh::read_bytes(bytes, format, name).reading()?;
     let report = pgvol_mesh::clean(&mut mesh, name).reading()?;
+    Ok((mesh, report))
+}
+
+/// A mesh given as vertex positions and triangles in memory (by a binding, say), checked as a
+/// mesh read from a file is (finite coordinates below 1e8, indices in range, an extent of at
+/// least 1e-6) and cleaned as [`read_mesh`] cleans it. Problems are bad parameters.
+pub fn mesh_from_parts(
+    positions: Vec<glam::Vec3>,
+    triangles: Vec<[u32; 3]>,
+) -> Result<(Mesh, CleanReport)> {
+    let mut mesh = Mesh::new(positions, triangles);
+    if let Some(problem) = pgvol_mesh::mesh_problem(&mesh) {
+        return Err(Error::parameter(format!("the mesh is unusable: {problem}")));
+    }
+    let report = pgvol_mesh::clean(&mut mesh, Path::new(""))
+        .map_err(|e| Error::parameter(format!("the mesh is unusable: {}", e.problem)))?;
     Ok((mesh, report))
 }
 

@@ -605,3 +605,96 @@ fn load_names_the_mesh_when_encoding_it_fails() {
     let shape = Shape::load(&path, 16, 0.0, 0.1, &Silent).unwrap();
     assert!(shape.band.is_some() && shape.mesh.is_some());
 }
+
+// ---------------------------------------------------------------------------------------------
+// Meshes and grids given in memory (as the Python bindings give them).
+
+#[test]
+fn meshes_from_parts_are_checked_and_cleaned_like_read_meshes() {
+    let s = sphere();
+    // A triangle soup: every triangle with its own corners, plus one degenerate triangle.
+    let mut positions: Vec<Vec3> = (0..s.triangles.len()).flat_map(|t| s.triangle(t)).collect();
+    let mut triangles: Vec<[u32; 3]> = (0..s.triangles.len() as u32)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    positions.push(Vec3::ZERO);
+    let last = positions.len() as u32 - 1;
+    triangles.push([last, last, 0]);
+    let (mesh, report) = pgvol::mesh_from_parts(positions, triangles).unwrap();
+    assert_eq!(report.degenerate_dropped, 1);
+    assert_eq!(mesh.triangles.len(), s.triangles.len());
+    assert!(mesh.stats().watertight);
+
+    let bad = [
+        (
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            vec![[0, 1, 3]],
+            "refers to vertex 3",
+        ),
+        (vec![Vec3::ZERO, Vec3::X, Vec3::NAN], vec![[0, 1, 2]], "NaN"),
+        (
+            vec![Vec3::ZERO, Vec3::X * 1e9, Vec3::Y],
+            vec![[0, 1, 2]],
+            "out of range",
+        ),
+        (
+            vec![Vec3::ZERO, Vec3::X * 1e-8, Vec3::Y * 1e-8],
+            vec![[0, 1, 2]],
+            "too small",
+        ),
+        (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![], "no triangles"),
+        (
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            vec![[0, 1, 1]],
+            "no triangles left",
+        ),
+    ];
+    for (positions, triangles, problem) in bad {
+        let e = assert_error(
+            pgvol::mesh_from_parts(positions, triangles),
+            ErrorKind::BadParameter,
+            None,
+        );
+        assert!(e.to_string().contains(problem), "{e}");
+    }
+}
+
+#[test]
+fn sampling_a_grid_gives_the_field_at_its_nodes_x_fastest() {
+    let volume = encoded(24).file.volume;
+    let grid = pgvol::Grid {
+        origin: Vec3::new(-0.5, -0.25, 0.0),
+        spacing: 0.125,
+        dims: [3, 4, 5],
+    };
+    let values = pgvol::sample(&volume, &grid).unwrap();
+    assert_eq!(values.len(), 60);
+    for (k, j, i) in [(0, 0, 0), (4, 3, 2), (2, 1, 0), (1, 3, 1)] {
+        let p = grid.origin + grid.spacing * Vec3::new(i as f32, j as f32, k as f32);
+        assert_eq!(values[i + 3 * (j + 4 * k)], volume.value(p));
+    }
+    let nodes: Vec<Vec3> = (0..60)
+        .map(|n| {
+            grid.origin
+                + grid.spacing * Vec3::new((n % 3) as f32, (n / 3 % 4) as f32, (n / 12) as f32)
+        })
+        .collect();
+    assert_eq!(volume.values_many(&nodes), values);
+    for (spacing, dims) in [(0.0, [2, 2, 2]), (f32::NAN, [2, 2, 2]), (0.1, [2, 0, 2])] {
+        let grid = pgvol::Grid {
+            spacing,
+            dims,
+            ..grid
+        };
+        assert_error(pgvol::sample(&volume, &grid), ErrorKind::BadParameter, None);
+    }
+    let huge = pgvol::Grid {
+        dims: [1 << 12, 1 << 12, 1 << 12],
+        ..grid
+    };
+    assert_error(
+        pgvol::sample(&volume, &huge),
+        ErrorKind::ResourceLimit,
+        None,
+    );
+}

@@ -1,0 +1,84 @@
+"""pgvol: triangle meshes to compact, smooth implicit fields and back, with NumPy arrays in
+and out.
+
+A :class:`Field` holds the coefficients of a compactly supported basis (the cubic B-spline by
+default) on a grid; its value at a point is their weighted sum, the signed distance to the
+surface near it (negative inside, positive outside, in the mesh's units), with an analytic
+gradient.
+
+    >>> import pgvol
+    >>> v, t = pgvol.read_mesh("part.stl")
+    >>> f = pgvol.Field.from_mesh(v, t, res=256)
+    >>> d = f(points)                       # (N,) float32
+    >>> v2, t2 = f.to_mesh(method="dc")     # a watertight mesh
+
+See docs/python.md in the repository for the conventions, errors, threads and progress.
+"""
+
+from ._errors import (
+    CancelledError,
+    InputFileError,
+    InternalError,
+    MissingFileError,
+    OutputFileError,
+    ParameterError,
+    PgvolError,
+    PgvolWarning,
+    ResourceLimitError,
+)
+from ._pgvol import (
+    COMPARE_SAMPLES,
+    DEFAULT_RES,
+    ENCODE_BAND,
+    MAX_RES,
+    MIN_RES,
+    Field,
+    Grid,
+    Layer,
+    __version__,
+    compare,
+    memory_limit,
+    read_mesh,
+    set_memory_limit,
+    write_mesh,
+)
+
+for _cls in (
+    CancelledError,
+    InputFileError,
+    InternalError,
+    MissingFileError,
+    OutputFileError,
+    ParameterError,
+    PgvolError,
+    PgvolWarning,
+    ResourceLimitError,
+):
+    _cls.__module__ = __name__
+del _cls
+
+__all__ = [
+    "COMPARE_SAMPLES",
+    "DEFAULT_RES",
+    "ENCODE_BAND",
+    "MAX_RES",
+    "MIN_RES",
+    "CancelledError",
+    "Field",
+    "Grid",
+    "InputFileError",
+    "InternalError",
+    "Layer",
+    "MissingFileError",
+    "OutputFileError",
+    "ParameterError",
+    "PgvolError",
+    "PgvolWarning",
+    "ResourceLimitError",
+    "__version__",
+    "compare",
+    "memory_limit",
+    "read_mesh",
+    "set_memory_limit",
+    "write_mesh",
+]

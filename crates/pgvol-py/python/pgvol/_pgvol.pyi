@@ -1,0 +1,237 @@
+"""Type stubs of the pgvol extension module."""
+
+import os
+from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union, final
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "Field",
+    "Grid",
+    "Layer",
+    "read_mesh",
+    "write_mesh",
+    "compare",
+    "set_memory_limit",
+    "memory_limit",
+    "__version__",
+    "DEFAULT_RES",
+    "MIN_RES",
+    "MAX_RES",
+    "ENCODE_BAND",
+    "COMPARE_SAMPLES",
+]
+
+__version__: str
+DEFAULT_RES: int
+MIN_RES: int
+MAX_RES: int
+ENCODE_BAND: float
+COMPARE_SAMPLES: int
+
+_PathLike = Union[str, "os.PathLike[str]"]
+_Points = npt.ArrayLike
+"""(N, 3) float32 or float64, any memory order."""
+_Faces = npt.ArrayLike
+"""(M, 3) int32, int64, uint32 or uint64 vertex indices, counter-clockwise seen from outside."""
+_Progress = Callable[[str, float], Any]
+"""Called as progress(stage, fraction): at the start of each stage (0.0), at most every 0.1 s
+while it runs, and at its end (1.0). An exception it raises stops the call and propagates."""
+_MeshLike = Union[Tuple[_Points, _Faces], Any]
+"""A (vertices, faces) pair, or an object with .vertices and .faces (a trimesh.Trimesh)."""
+_Vec3 = Tuple[float, float, float]
+_Drain = Union[Sequence[float], Tuple[Sequence[float], Sequence[float], float]]
+"""(x, y, z, dx, dy, dz, diameter) or ((x, y, z), (dx, dy, dz), diameter): a point inside the
+cavity, the direction out through the wall, and the hole's diameter."""
+
+@final
+class Grid:
+    """Grid nodes: node (i, j, k) lies at origin + spacing * (i, j, k)."""
+
+    def __new__(cls, origin: _Vec3, spacing: float, dims: Tuple[int, int, int]) -> "Grid": ...
+    @property
+    def origin(self) -> _Vec3:
+        """The position of node (0, 0, 0)."""
+    @property
+    def spacing(self) -> float:
+        """The distance between neighbouring nodes along every axis."""
+    @property
+    def dims(self) -> Tuple[int, int, int]:
+        """Nodes along x, y and z."""
+    @property
+    def max_corner(self) -> _Vec3:
+        """The position of the last node, origin + spacing * (dims - 1)."""
+    def __eq__(self, other: object, /) -> bool: ...
+
+@final
+class Layer:
+    """The closed contours of one layer plane."""
+
+    @property
+    def height(self) -> float:
+        """Position of the plane along the slicing axis."""
+    @property
+    def loops(self) -> List[npt.NDArray[np.float32]]:
+        """One (M, 2) float32 array of in-plane coordinates per closed loop: (y, z) for axis x,
+        (z, x) for axis y, (x, y) for axis z."""
+    @property
+    def holes(self) -> List[bool]:
+        """Per loop: a hole (clockwise) rather than an outer boundary (counter-clockwise)."""
+
+@final
+class Field:
+    """A smooth implicit field: coefficients of a compactly supported basis on a grid.
+
+    Near the surface its value is the signed distance (negative inside, positive outside, in
+    the mesh's units); beyond ``exact_band`` it keeps the right sign with a clamped magnitude.
+    Fields are immutable: operations return new ones. Every method that takes time releases
+    the GIL.
+    """
+
+    @staticmethod
+    def from_mesh(
+        vertices: _Points,
+        faces: _Faces,
+        *,
+        res: Optional[int] = None,
+        voxel: Optional[float] = None,
+        band: float = 4.0,
+        basis: str = "bspline3",
+        fit: Literal["interp", "iso", "wls"] = "interp",
+        sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
+        z_step: Optional[float] = None,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """Encodes a triangle mesh.
+
+        The grid is a cube of side 1.1 x the mesh's longest extent, centred on it, with ``res``
+        nodes per axis (default 128) or spacing ``voxel``. Exact distances are sampled within
+        ``band`` grid spacings of the surface (widen it for larger offsets and shells) and
+        fitted with ``basis`` ("bspline3", "bspline2", "trilinear", "pg" or "pg-n<N>-r<R>").
+        Vertices are welded and degenerate triangles dropped as when reading a file.
+        """
+    @staticmethod
+    def from_trimesh(mesh: Any, **kwargs: Any) -> "Field":
+        """Encodes a trimesh.Trimesh; the keywords are those of from_mesh."""
+    @staticmethod
+    def load(path: _PathLike) -> "Field":
+        """Reads a .pgv file."""
+    @staticmethod
+    def from_bytes(data: bytes) -> "Field":
+        """Decodes the bytes of a .pgv file."""
+    def save(
+        self,
+        path: _PathLike,
+        *,
+        dense: Optional[bool] = None,
+        precision: Optional[Literal["f32", "f16", "q16", "fixed"]] = None,
+    ) -> None:
+        """Writes a .pgv file atomically: sparse compressed bricks around the surface by
+        default (dense for fields made by offset or shell), every coefficient as float32 with
+        ``dense=True``."""
+    def to_bytes(
+        self,
+        *,
+        dense: Optional[bool] = None,
+        precision: Optional[Literal["f32", "f16", "q16", "fixed"]] = None,
+    ) -> bytes:
+        """The bytes save() would write."""
+    def __call__(self, points: _Points) -> npt.NDArray[np.float32]:
+        """Values at (N, 3) points: an (N,) float32 array, negative inside."""
+    def eval_with_gradient(
+        self, points: _Points
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """Values (N,) and analytic gradients (N, 3), float32."""
+    def is_exact(self, points: _Points) -> npt.NDArray[np.bool_]:
+        """Whether each value is an exact distance: inside the grid's box and within
+        exact_band of the surface."""
+    def sample_grid(self, grid: Optional[Grid] = None) -> npt.NDArray[np.float32]:
+        """The field at every node of ``grid`` (default: the field's own grid), as a float32
+        array of shape (nx, ny, nz): ``a[i, j, k]`` is the value at
+        ``origin + spacing * (i, j, k)``. The array is Fortran-ordered (x fastest in memory)."""
+    def to_dense(self) -> npt.NDArray[np.float32]:
+        """sample_grid() on the field's own grid."""
+    def to_mesh(
+        self,
+        *,
+        method: Literal["mc", "sn", "dc"] = "mc",
+        iso: float = 0.0,
+        res: Optional[int] = None,
+        progress: Optional[_Progress] = None,
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
+        """Contours the level set ``iso`` into a watertight, manifold mesh: vertices (N, 3)
+        float32 and faces (M, 3) int32, counter-clockwise seen from outside. ``method``:
+        marching cubes, surface nets or dual contouring; ``res`` resamples the box with that
+        many nodes along its longest side."""
+    def to_trimesh(self, **kwargs: Any) -> Any:
+        """to_mesh() as a trimesh.Trimesh (needs trimesh)."""
+    def offset(self, distance: float) -> "Field":
+        """The shape grown (distance > 0) or shrunk (distance < 0); |distance| must be below
+        exact_band."""
+    def shell(
+        self,
+        thickness: float,
+        *,
+        side: Literal["inner", "outer", "centred"] = "inner",
+        hollow: bool = False,
+        drains: Optional[Sequence[_Drain]] = None,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """A wall of ``thickness`` on ``side`` of the surface, or with ``hollow=True`` the
+        shape with a cavity ``thickness`` inside its surface and optional drain holes."""
+    def slice(
+        self,
+        layer_height: float,
+        *,
+        axis: Literal["x", "y", "z"] = "z",
+        first: Optional[float] = None,
+        resolution: Optional[float] = None,
+        tolerance: Optional[float] = None,
+        progress: Optional[_Progress] = None,
+    ) -> List[Layer]:
+        """Layers of closed contours ``layer_height`` apart along ``axis``, the first half a
+        layer above the bottom unless ``first`` is given."""
+    @property
+    def grid(self) -> Grid:
+        """The grid of the coefficients."""
+    @property
+    def basis(self) -> str:
+        """"bspline3", "bspline2", "trilinear" or "pg-n<N>-r<R>"."""
+    @property
+    def fit(self) -> str:
+        """How the coefficients were fitted: "interp", "iso" or "wls"."""
+    @property
+    def band(self) -> Optional[float]:
+        """The recorded distance from the surface, in mesh units, within which the fitted
+        samples were exact distances; None when not recorded."""
+    @property
+    def exact_band(self) -> float:
+        """The distance from the surface within which values are exact distances."""
+    @property
+    def bounds(self) -> Tuple[_Vec3, _Vec3]:
+        """The box of the source shape: (min corner, max corner)."""
+    @property
+    def metadata(self) -> Dict[str, str]:
+        """The file header's key/value metadata."""
+
+def read_mesh(path: _PathLike) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
+    """Reads an OBJ, glTF/GLB, STL or PLY file (by extension), welding bit-identical vertices
+    and dropping degenerate and repeated triangles."""
+
+def write_mesh(path: _PathLike, vertices: _Points, faces: _Faces) -> None:
+    """Writes a GLB, glTF, OBJ, STL or PLY file (by extension), atomically."""
+
+def compare(
+    a: _MeshLike, b: _MeshLike, *, samples: int = 200000, seed: int = 0
+) -> Dict[str, Any]:
+    """Mesh ``a`` against reference ``b``: symmetric Hausdorff and Chamfer-L1 distances (also
+    in percent of b's bounding-box diagonal), mean distances each way, normal deviation in
+    degrees, and the topology statistics of both ("a", "b")."""
+
+def set_memory_limit(limit: Optional[int]) -> None:
+    """Sets the largest estimated peak memory in bytes a call may start with; None restores the
+    default, the memory available when the call starts."""
+
+def memory_limit() -> Optional[int]:
+    """The memory limit in force, in bytes."""

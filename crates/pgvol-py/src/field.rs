@@ -1,0 +1,524 @@
+//! `pgvol.Field`: a coefficient volume with what is known of its shape, and every library call
+//! on it.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use numpy::{PyArray1, PyArray2, PyArray3};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyTuple};
+
+use crate::arrays;
+use crate::errors;
+use crate::names;
+use crate::progress::{quiet, run};
+
+/// A grid of nodes: node `(i, j, k)` lies at `origin + spacing * (i, j, k)`.
+#[pyclass(frozen, eq, module = "pgvol")]
+#[derive(Clone, Copy, PartialEq)]
+pub(crate) struct Grid {
+    pub(crate) grid: pgvol::Grid,
+}
+
+#[pymethods]
+impl Grid {
+    #[new]
+    fn new(origin: (f32, f32, f32), spacing: f32, dims: (usize, usize, usize)) -> Self {
+        Self {
+            grid: pgvol::Grid {
+                origin: glam::Vec3::new(origin.0, origin.1, origin.2),
+                spacing,
+                dims: [dims.0, dims.1, dims.2],
+            },
+        }
+    }
+
+    /// The position of node (0, 0, 0).
+    #[getter]
+    fn origin(&self) -> (f32, f32, f32) {
+        self.grid.origin.into()
+    }
+
+    /// The distance between neighbouring nodes along every axis.
+    #[getter]
+    fn spacing(&self) -> f32 {
+        self.grid.spacing
+    }
+
+    /// Nodes along x, y and z.
+    #[getter]
+    fn dims(&self) -> (usize, usize, usize) {
+        let [nx, ny, nz] = self.grid.dims;
+        (nx, ny, nz)
+    }
+
+    /// The position of the last node, `origin + spacing * (dims - 1)`.
+    #[getter]
+    fn max_corner(&self) -> (f32, f32, f32) {
+        self.grid.max_corner().into()
+    }
+
+    fn __repr__(&self) -> String {
+        let o = self.grid.origin;
+        let [nx, ny, nz] = self.grid.dims;
+        format!(
+            "Grid(origin=({}, {}, {}), spacing={}, dims=({nx}, {ny}, {nz}))",
+            o.x, o.y, o.z, self.grid.spacing
+        )
+    }
+}
+
+/// The closed contours of one layer plane.
+#[pyclass(frozen, get_all, module = "pgvol")]
+pub(crate) struct Layer {
+    /// Position of the plane along the slicing axis.
+    height: f32,
+    /// One (M, 2) float32 array of layer coordinates per closed loop.
+    loops: Vec<Py<PyArray2<f32>>>,
+    /// Per loop: a hole (clockwise) rather than an outer boundary (counter-clockwise).
+    holes: Vec<bool>,
+}
+
+#[pymethods]
+impl Layer {
+    fn __repr__(&self) -> String {
+        format!("Layer(height={}, loops={})", self.height, self.loops.len())
+    }
+}
+
+/// A smooth implicit field: coefficients of a compactly supported basis on a grid.
+#[pyclass(frozen, module = "pgvol")]
+pub(crate) struct Field {
+    shape: pgvol::Shape,
+    header: pgvol::PgvHeader,
+    /// Made by an operation (offset, shell): saved dense, as the tool saves such files.
+    derived: bool,
+}
+
+impl Field {
+    fn from_file(file: pgvol::PgvFile, derived: bool) -> Self {
+        let header = file.header.clone();
+        Self {
+            shape: pgvol::Shape::from_file(file),
+            header,
+            derived,
+        }
+    }
+
+    fn file(&self) -> pgvol::PgvFile {
+        pgvol::PgvFile {
+            header: self.header.clone(),
+            volume: self.shape.volume.clone(),
+        }
+    }
+
+    fn storage(
+        &self,
+        py: Python<'_>,
+        dense: Option<bool>,
+        precision: Option<&str>,
+    ) -> PyResult<pgvol::StorageOptions> {
+        let mut storage = if self.derived {
+            pgvol::DERIVED_STORAGE
+        } else {
+            pgvol::StorageOptions::default()
+        };
+        if let Some(dense) = dense {
+            storage.dense = dense;
+        }
+        if let Some(p) = precision {
+            storage.precision = Some(names::precision(py, p)?);
+            if dense.is_none() {
+                storage.dense = false;
+            }
+        }
+        Ok(storage)
+    }
+
+    fn derive(&self, volume: pgvol::CoefficientVolume, operation: &str) -> Field {
+        Field::from_file(self.shape.derived_file(volume, operation), true)
+    }
+}
+
+// Python signatures show literal defaults only; these are the library's.
+const _: () = assert!(pgvol::ENCODE_BAND == 4.0);
+
+/// The grid choice of `res` and `voxel`.
+fn grid_spec(py: Python<'_>, res: Option<usize>, voxel: Option<f32>) -> PyResult<pgvol::GridSpec> {
+    match (res, voxel) {
+        (Some(_), Some(_)) => Err(errors::parameter(py, "give res or voxel, not both")),
+        (None, Some(h)) if !(h.is_finite() && h > 0.0) => Err(errors::parameter(
+            py,
+            format!("voxel must be a positive number, got {h}"),
+        )),
+        (None, Some(h)) => Ok(pgvol::GridSpec::Voxel(h)),
+        (res, None) => {
+            let n = res.unwrap_or(pgvol::DEFAULT_RES);
+            let (lo, hi) = (pgvol::MIN_RES as usize, pgvol::MAX_RES as usize);
+            if !(lo..=hi).contains(&n) {
+                return Err(errors::parameter(
+                    py,
+                    format!("res must be from {lo} to {hi}, got {n}"),
+                ));
+            }
+            Ok(pgvol::GridSpec::Res(n))
+        }
+    }
+}
+
+/// A drain hole from seven numbers `x, y, z, dx, dy, dz, diameter` or from
+/// `((x, y, z), (dx, dy, dz), diameter)`, checked by the library.
+fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Drain> {
+    let numbers: Vec<f32> = match obj.extract::<Vec<f32>>() {
+        Ok(v) => v,
+        Err(_) => {
+            let (p, d, diameter) = obj
+                .extract::<((f32, f32, f32), (f32, f32, f32), f32)>()
+                .map_err(|_| {
+                    errors::parameter(
+                        py,
+                        "a drain is (x, y, z, dx, dy, dz, diameter) or ((x, y, z), (dx, dy, dz), diameter)",
+                    )
+                })?;
+            vec![p.0, p.1, p.2, d.0, d.1, d.2, diameter]
+        }
+    };
+    let text: Vec<String> = numbers.iter().map(f32::to_string).collect();
+    pgvol::parse_drain(&text.join(",")).map_err(|e| errors::to_py(py, e))
+}
+
+#[pymethods]
+impl Field {
+    /// Encodes a triangle mesh: signed distance on a cube grid around it, fitted with a basis.
+    #[staticmethod]
+    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", fit="interp", sign="auto", z_step=None, progress=None))]
+    fn from_mesh(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        res: Option<usize>,
+        voxel: Option<f32>,
+        band: f32,
+        basis: &str,
+        fit: &str,
+        sign: &str,
+        z_step: Option<f32>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let positions = arrays::points(vertices, "vertices")?;
+        let triangles = arrays::faces(faces)?;
+        let options = pgvol::EncodeOptions {
+            grid: grid_spec(py, res, voxel)?,
+            basis: names::basis(py, basis)?,
+            fit: names::fit(py, fit, z_step)?,
+            band,
+            sign: names::sign(py, sign)?,
+        };
+        let encoded = run(py, progress, |p| {
+            let (mesh, _) = pgvol::mesh_from_parts(positions, triangles)?;
+            pgvol::encode(&mesh, &options, p)
+        })?;
+        Ok(Field::from_file(encoded.file, false))
+    }
+
+    /// Encodes a `trimesh.Trimesh` (or anything with `vertices` and `faces`); the keywords are
+    /// those of `from_mesh`.
+    #[staticmethod]
+    #[pyo3(signature = (mesh, **kwargs))]
+    fn from_trimesh(
+        py: Python<'_>,
+        mesh: &Bound<'_, PyAny>,
+        kwargs: Option<&Bound<'_, pyo3::types::PyDict>>,
+    ) -> PyResult<Py<PyAny>> {
+        let args = PyTuple::new(py, [mesh.getattr("vertices")?, mesh.getattr("faces")?])?;
+        let cls = py.get_type::<Field>();
+        Ok(cls.getattr("from_mesh")?.call(args, kwargs)?.unbind())
+    }
+
+    /// Reads a `.pgv` file.
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Field> {
+        let file = quiet(py, || pgvol::read_pgv(&path))?;
+        Ok(Field::from_file(file, false))
+    }
+
+    /// Decodes the bytes of a `.pgv` file.
+    #[staticmethod]
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Field> {
+        let file = quiet(py, || pgvol::read_pgv_bytes(data, Path::new("<bytes>")))?;
+        Ok(Field::from_file(file, false))
+    }
+
+    /// Writes the field to a `.pgv` file, atomically.
+    #[pyo3(signature = (path, *, dense=None, precision=None))]
+    fn save(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        dense: Option<bool>,
+        precision: Option<&str>,
+    ) -> PyResult<()> {
+        let storage = self.storage(py, dense, precision)?;
+        quiet(py, || {
+            pgvol::check_pgv_name(&path)?;
+            pgvol::write_pgv(&path, &self.file(), &storage).map(|_| ())
+        })
+    }
+
+    /// The bytes of the field's `.pgv` file.
+    #[pyo3(signature = (*, dense=None, precision=None))]
+    fn to_bytes<'py>(
+        &self,
+        py: Python<'py>,
+        dense: Option<bool>,
+        precision: Option<&str>,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let storage = self.storage(py, dense, precision)?;
+        let (bytes, _) = quiet(py, || pgvol::pgv_bytes(&self.file(), &storage))?;
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let bytes = self.to_bytes(py, Some(true), None)?;
+        Ok((py.get_type::<Field>().getattr("from_bytes")?, (bytes,)))
+    }
+
+    /// The field's values at (N, 3) points: an (N,) float32 array, negative inside.
+    fn __call__<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let points = arrays::points(points, "points")?;
+        let values = py.detach(|| self.shape.volume.values_many(&points));
+        Ok(arrays::vector(py, values))
+    }
+
+    /// Values (N,) and analytic gradients (N, 3) at (N, 3) points.
+    #[allow(clippy::type_complexity)]
+    fn eval_with_gradient<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<f32>>)> {
+        let points = arrays::points(points, "points")?;
+        let (values, gradients): (Vec<f32>, Vec<glam::Vec3>) =
+            py.detach(|| self.shape.volume.eval_many(&points).into_iter().unzip());
+        Ok((arrays::vector(py, values), arrays::vec3s(py, gradients)))
+    }
+
+    /// Whether the value at each of (N, 3) points is an exact distance: inside the grid's box
+    /// and within `exact_band` of the surface. A bool array (N,).
+    fn is_exact<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let points = arrays::points(points, "points")?;
+        let exact: Vec<bool> = py.detach(|| {
+            pgvol::eval(&self.shape, &points)
+                .into_iter()
+                .map(|e| e.exact)
+                .collect()
+        });
+        Ok(PyArray1::from_vec(py, exact))
+    }
+
+    /// The field sampled at every node of `grid` (default: its own grid), as a float32 array
+    /// of shape (nx, ny, nz) indexed `[i, j, k]`.
+    #[pyo3(signature = (grid=None))]
+    fn sample_grid<'py>(
+        &self,
+        py: Python<'py>,
+        grid: Option<&Bound<'py, Grid>>,
+    ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let grid = grid.map_or(self.shape.volume.grid, |g| g.get().grid);
+        let values = quiet(py, || pgvol::sample(&self.shape.volume, &grid))?;
+        Ok(arrays::grid_values(py, values, grid.dims))
+    }
+
+    /// The field sampled at every node of its own grid; see `sample_grid`.
+    fn to_dense<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        self.sample_grid(py, None)
+    }
+
+    /// Contours the level set `iso` into a mesh: (vertices (N, 3) float32, faces (M, 3) int32).
+    #[pyo3(signature = (*, method="mc", iso=0.0, res=None, progress=None))]
+    #[allow(clippy::type_complexity)]
+    fn to_mesh<'py>(
+        &self,
+        py: Python<'py>,
+        method: &str,
+        iso: f32,
+        res: Option<usize>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+        let options = pgvol::DecodeOptions {
+            iso,
+            method: names::method(py, method)?,
+            res,
+        };
+        let mesh = run(py, progress, |p| {
+            pgvol::decode_shape(&self.shape, &options, p)
+        })?;
+        let n = mesh.positions.len();
+        Ok((
+            arrays::vec3s(py, mesh.positions),
+            arrays::triangles(py, mesh.triangles, n)?,
+        ))
+    }
+
+    /// The contoured mesh as a `trimesh.Trimesh`; the keywords are those of `to_mesh`.
+    #[pyo3(signature = (**kwargs))]
+    fn to_trimesh(
+        slf: &Bound<'_, Self>,
+        kwargs: Option<&Bound<'_, pyo3::types::PyDict>>,
+    ) -> PyResult<Py<PyAny>> {
+        let py = slf.py();
+        let trimesh = py.import("trimesh")?;
+        let (v, f): (Bound<'_, PyAny>, Bound<'_, PyAny>) =
+            slf.getattr("to_mesh")?.call((), kwargs)?.extract()?;
+        let kw = pyo3::types::PyDict::new(py);
+        kw.set_item("vertices", v)?;
+        kw.set_item("faces", f)?;
+        kw.set_item("process", false)?;
+        Ok(trimesh.getattr("Trimesh")?.call((), Some(&kw))?.unbind())
+    }
+
+    /// The shape grown (distance > 0) or shrunk (distance < 0) by `distance`.
+    fn offset(&self, py: Python<'_>, distance: f32) -> PyResult<Field> {
+        let volume = quiet(py, || pgvol::offset(&self.shape, distance))?;
+        Ok(self.derive(volume, &pgvol::operation_name(None, distance)))
+    }
+
+    /// A wall of `thickness` around the surface (`side` "inner", "outer" or "centred"), or with
+    /// `hollow=True` the shape with a cavity `thickness` inside its surface and optional drain
+    /// holes.
+    #[pyo3(signature = (thickness, *, side="inner", hollow=false, drains=None, progress=None))]
+    fn shell(
+        &self,
+        py: Python<'_>,
+        thickness: f32,
+        side: &str,
+        hollow: bool,
+        drains: Option<Vec<Bound<'_, PyAny>>>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let kind = if hollow {
+            pgvol::ShellKind::Hollow
+        } else {
+            pgvol::ShellKind::Wall(names::side(py, side)?)
+        };
+        let drains = drains
+            .unwrap_or_default()
+            .iter()
+            .map(|d| drain(py, d))
+            .collect::<PyResult<Vec<_>>>()?;
+        let volume = run(py, progress, |p| {
+            pgvol::shell(&self.shape, thickness, kind, &drains, p)
+        })?;
+        Ok(self.derive(volume, &pgvol::operation_name(Some(kind), thickness)))
+    }
+
+    /// Layers of closed contours `layer_height` apart along `axis`.
+    #[pyo3(signature = (layer_height, *, axis="z", first=None, resolution=None, tolerance=None, progress=None))]
+    fn slice(
+        &self,
+        py: Python<'_>,
+        layer_height: f32,
+        axis: &str,
+        first: Option<f32>,
+        resolution: Option<f32>,
+        tolerance: Option<f32>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Vec<Layer>> {
+        let settings = pgvol::SliceSettings {
+            axis: names::axis(py, axis)?,
+            layer_height,
+            first,
+            resolution,
+            tolerance,
+        };
+        let layers = run(py, progress, |p| pgvol::slice(&self.shape, &settings, p))?;
+        layers
+            .into_iter()
+            .map(|layer| {
+                let holes = layer.loops.iter().map(|l| l.hole).collect();
+                let loops = layer
+                    .loops
+                    .into_iter()
+                    .map(|l| arrays::points2(py, l.points).unbind())
+                    .collect();
+                Ok(Layer {
+                    height: layer.height,
+                    loops,
+                    holes,
+                })
+            })
+            .collect()
+    }
+
+    /// The grid of the coefficients.
+    #[getter]
+    fn grid(&self) -> Grid {
+        Grid {
+            grid: self.shape.volume.grid,
+        }
+    }
+
+    /// The basis: "bspline3", "bspline2", "trilinear" or "pg-n<N>-r<R>".
+    #[getter]
+    fn basis(&self) -> String {
+        self.shape.volume.basis.to_string()
+    }
+
+    /// How the coefficients were fitted ("interp", "iso", "wls").
+    #[getter]
+    fn fit(&self) -> String {
+        self.header.fit.clone()
+    }
+
+    /// The recorded distance from the surface within which the stored samples were exact
+    /// distances, in mesh units; None when the file records none.
+    #[getter]
+    fn band(&self) -> Option<f32> {
+        self.shape.band
+    }
+
+    /// The distance from the surface within which values are exact distances: the band less
+    /// the reach of the basis. Offsets, shells and levels must stay within it.
+    #[getter]
+    fn exact_band(&self) -> f32 {
+        self.shape.exact_band()
+    }
+
+    /// The box of the source shape: ((x, y, z) min, (x, y, z) max).
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn bounds(&self) -> ((f32, f32, f32), (f32, f32, f32)) {
+        let (lo, hi) = self.shape.bounds;
+        (lo.into(), hi.into())
+    }
+
+    /// The header's key/value metadata.
+    #[getter]
+    fn metadata(&self) -> BTreeMap<String, String> {
+        self.header.metadata.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        let g = self.shape.volume.grid;
+        let [nx, ny, nz] = g.dims;
+        let band = match self.shape.band {
+            Some(b) => format!("{b}"),
+            None => "None".into(),
+        };
+        format!(
+            "Field(basis={}, dims=({nx}, {ny}, {nz}), spacing={}, band={band})",
+            self.shape.volume.basis, g.spacing
+        )
+    }
+}

@@ -1,0 +1,141 @@
+//! The `pgvol._pgvol` extension module: the pgvol library facade for Python, with NumPy arrays
+//! in and out. Every call goes through the `pgvol` crate; this crate only converts arguments,
+//! results and errors, releases the GIL around the work and forwards progress.
+//!
+//! The Python package `pgvol` (in `python/`) re-exports this module with its exception classes
+//! and type stubs.
+
+// Python signatures take their options as keyword arguments, one Rust parameter each.
+#![allow(clippy::too_many_arguments)]
+
+mod arrays;
+mod errors;
+mod field;
+mod names;
+mod progress;
+
+use std::path::PathBuf;
+
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::progress::quiet;
+
+/// Reads a mesh file (OBJ, glTF/GLB, STL or PLY by extension), with bit-identical vertices
+/// welded and degenerate or repeated triangles dropped: (vertices (N, 3) float32, faces (M, 3)
+/// int32).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn read_mesh(
+    py: Python<'_>,
+    path: PathBuf,
+) -> PyResult<(Bound<'_, PyArray2<f32>>, Bound<'_, PyArray2<i32>>)> {
+    let (mesh, _) = quiet(py, || pgvol::read_mesh(&path))?;
+    let n = mesh.positions.len();
+    Ok((
+        arrays::vec3s(py, mesh.positions),
+        arrays::triangles(py, mesh.triangles, n)?,
+    ))
+}
+
+/// Writes a mesh file (GLB, glTF, OBJ, STL or PLY by extension), atomically.
+#[pyfunction]
+fn write_mesh(
+    py: Python<'_>,
+    path: PathBuf,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let mesh = pgvol::Mesh::new(arrays::points(vertices, "vertices")?, arrays::faces(faces)?);
+    quiet(py, || pgvol::write_mesh(&path, &mesh))
+}
+
+/// Surface distances and statistics of mesh `a` against reference mesh `b`, from `samples`
+/// area-uniform samples on each, reproducible from `seed`. Each mesh is a (vertices, faces)
+/// pair or an object with `vertices` and `faces` (a `trimesh.Trimesh`).
+#[pyfunction]
+#[pyo3(signature = (a, b, *, samples=200_000, seed=0))]
+fn compare<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    samples: usize,
+    seed: u64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (va, fa) = arrays::mesh_parts(a, "a")?;
+    let (vb, fb) = arrays::mesh_parts(b, "b")?;
+    let comparison = quiet(py, || {
+        let (a, _) = pgvol::mesh_from_parts(va, fa)?;
+        let (b, _) = pgvol::mesh_from_parts(vb, fb)?;
+        pgvol::compare(&a, &b, samples, seed)
+    })?;
+    let value = serde_json::to_value(&comparison)
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+    json_to_py(py, &value)
+}
+
+/// A JSON value as Python dicts, lists, numbers, strings, booleans and None.
+fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    use serde_json::Value;
+    Ok(match value {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        Value::Number(n) => match (n.as_i64(), n.as_f64()) {
+            (Some(i), _) => i.into_pyobject(py)?.into_any(),
+            (None, Some(f)) => f.into_pyobject(py)?.into_any(),
+            _ => n.to_string().into_pyobject(py)?.into_any(),
+        },
+        Value::String(s) => s.into_pyobject(py)?.into_any(),
+        Value::Array(items) => {
+            let list = PyList::empty(py);
+            for item in items {
+                list.append(json_to_py(py, item)?)?;
+            }
+            list.into_any()
+        }
+        Value::Object(map) => {
+            let dict = PyDict::new(py);
+            for (k, v) in map {
+                dict.set_item(k, json_to_py(py, v)?)?;
+            }
+            dict.into_any()
+        }
+    })
+}
+
+// Python signatures show literal defaults only; this is the library's.
+const _: () = assert!(pgvol::COMPARE_SAMPLES == 200_000);
+
+/// Sets the largest estimated peak memory, in bytes, a call may start with; None returns to
+/// the default, the memory the machine has available when the call starts.
+#[pyfunction]
+#[pyo3(signature = (limit))]
+fn set_memory_limit(limit: Option<u64>) {
+    pgvol::set_memory_limit(limit);
+}
+
+/// The memory limit in force, in bytes (None where the platform does not tell).
+#[pyfunction]
+fn memory_limit() -> Option<u64> {
+    pgvol::memory_limit()
+}
+
+#[pymodule]
+fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<field::Field>()?;
+    m.add_class::<field::Grid>()?;
+    m.add_class::<field::Layer>()?;
+    m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(set_memory_limit, m)?)?;
+    m.add_function(wrap_pyfunction!(memory_limit, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("DEFAULT_RES", pgvol::DEFAULT_RES)?;
+    m.add("MIN_RES", pgvol::MIN_RES)?;
+    m.add("MAX_RES", pgvol::MAX_RES)?;
+    m.add("ENCODE_BAND", pgvol::ENCODE_BAND)?;
+    m.add("COMPARE_SAMPLES", pgvol::COMPARE_SAMPLES)?;
+    Ok(())
+}

@@ -1,0 +1,98 @@
+//! The names Python callers give options by, mapped to the library's enums.
+
+use pyo3::prelude::*;
+
+use crate::errors;
+
+fn unknown(py: Python<'_>, what: &str, got: &str, expected: &str) -> PyErr {
+    errors::parameter(py, format!("unknown {what} '{got}' (expected {expected})"))
+}
+
+/// "bspline3", "bspline2", "trilinear", "pg" (the default order and radius) or
+/// "pg-n<N>-r<R>".
+pub(crate) fn basis(py: Python<'_>, name: &str) -> PyResult<pgvol::Basis> {
+    if name == "pg" {
+        return Ok(pgvol::Basis::Pg {
+            n: pgvol::PG_ORDER,
+            r: pgvol::PG_RADIUS,
+        });
+    }
+    pgvol::Basis::from_name(name).ok_or_else(|| {
+        unknown(
+            py,
+            "basis",
+            name,
+            "bspline3, bspline2, trilinear, pg or pg-n<N>-r<R> with N in 1..4",
+        )
+    })
+}
+
+/// "interp", "iso" (with an optional step in grid spacings) or "wls".
+pub(crate) fn fit(py: Python<'_>, name: &str, z_step: Option<f32>) -> PyResult<pgvol::FitMethod> {
+    let method = match name {
+        "interp" => pgvol::FitMethod::Interp,
+        "iso" => pgvol::FitMethod::Iso { z_step },
+        "wls" => pgvol::FitMethod::Wls,
+        _ => return Err(unknown(py, "fit", name, "interp, iso or wls")),
+    };
+    if z_step.is_some() && name != "iso" {
+        return Err(errors::parameter(py, "z_step applies to fit='iso' only"));
+    }
+    Ok(method)
+}
+
+/// "auto", "winding", "pseudonormal" or "parity".
+pub(crate) fn sign(py: Python<'_>, name: &str) -> PyResult<pgvol::SignMode> {
+    Ok(match name {
+        "auto" => pgvol::SignMode::Auto,
+        "winding" => pgvol::SignMode::Winding,
+        "pseudonormal" => pgvol::SignMode::Pseudonormal,
+        "parity" => pgvol::SignMode::Parity,
+        _ => {
+            return Err(unknown(
+                py,
+                "sign",
+                name,
+                "auto, winding, pseudonormal or parity",
+            ))
+        }
+    })
+}
+
+/// "mc" (marching cubes), "sn" (surface nets) or "dc" (dual contouring).
+pub(crate) fn method(py: Python<'_>, name: &str) -> PyResult<pgvol::Method> {
+    Ok(match name {
+        "mc" => pgvol::Method::MarchingCubes,
+        "sn" => pgvol::Method::SurfaceNets,
+        "dc" => pgvol::Method::DualContouring,
+        _ => return Err(unknown(py, "method", name, "mc, sn or dc")),
+    })
+}
+
+/// "x", "y" or "z".
+pub(crate) fn axis(py: Python<'_>, name: &str) -> PyResult<pgvol::Axis> {
+    Ok(match name {
+        "x" => pgvol::Axis::X,
+        "y" => pgvol::Axis::Y,
+        "z" => pgvol::Axis::Z,
+        _ => return Err(unknown(py, "axis", name, "x, y or z")),
+    })
+}
+
+/// "inner", "outer" or "centred".
+pub(crate) fn side(py: Python<'_>, name: &str) -> PyResult<pgvol::ShellSide> {
+    Ok(match name {
+        "inner" => pgvol::ShellSide::Inner,
+        "outer" => pgvol::ShellSide::Outer,
+        "centred" | "centered" => pgvol::ShellSide::Centred,
+        _ => return Err(unknown(py, "side", name, "inner, outer or centred")),
+    })
+}
+
+/// "f32", "f16", "q16" or "fixed".
+pub(crate) fn precision(py: Python<'_>, name: &str) -> PyResult<pgvol::Precision> {
+    pgvol::Precision::ALL
+        .into_iter()
+        .find(|p| p.name() == name)
+        .ok_or_else(|| unknown(py, "precision", name, "f32, f16, q16 or fixed"))
+}
