@@ -346,20 +346,27 @@ impl Field {
     }
 
     /// Contours the level set `iso` into a mesh: (vertices (N, 3) float32, faces (M, 3) int32).
-    #[pyo3(signature = (*, method="mc", iso=0.0, res=None, progress=None))]
-    #[allow(clippy::type_complexity)]
+    #[pyo3(signature = (*, method="mc", iso=0.0, res=None, min_component=None, progress=None))]
+    #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn to_mesh<'py>(
         &self,
         py: Python<'py>,
         method: &str,
         iso: f32,
         res: Option<usize>,
+        min_component: Option<f32>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+        if min_component.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "min_component must be a finite volume of at least 0",
+            ));
+        }
         let options = pgvol::DecodeOptions {
             iso,
             method: names::method(py, method)?,
             res,
+            min_component,
         };
         let mesh = run(py, progress, |p| {
             pgvol::decode_shape(&self.shape, &options, p)

@@ -158,12 +158,14 @@ class Field:
         method: Literal["mc", "sn", "dc"] = "mc",
         iso: float = 0.0,
         res: Optional[int] = None,
+        min_component: Optional[float] = None,
         progress: Optional[_Progress] = None,
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
         """Contours the level set ``iso`` into a watertight, manifold mesh: vertices (N, 3)
         float32 and faces (M, 3) int32, counter-clockwise seen from outside. ``method``:
         marching cubes, surface nets or dual contouring; ``res`` resamples the box with that
-        many nodes along its longest side."""
+        many nodes along its longest side; pieces enclosing less than ``min_component``
+        (default: 2 grid cells) are removed, ``0`` keeps every piece."""
     def to_trimesh(self, **kwargs: Any) -> Any:
         """to_mesh() as a trimesh.Trimesh (needs trimesh)."""
     def offset(self, distance: float) -> "Field":
