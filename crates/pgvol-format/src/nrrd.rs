@@ -348,7 +348,13 @@ pub fn decode_nrrd(bytes: &[u8], path: &Path) -> Result<NrrdGrid, FormatError> {
 
 /// Rebuilds a `.pgv` file from a coefficient NRRD written by [`write_coefficients_nrrd`].
 pub fn read_coefficients_nrrd(path: &Path) -> Result<PgvFile, FormatError> {
-    let (grid, coeffs, kv) = read_nrrd(path)?;
+    let bytes = pgvol_core::read_input(path).map_err(|e| err(path, e.problem))?;
+    decode_coefficients_nrrd(&bytes, path)
+}
+
+/// [`read_coefficients_nrrd`] on bytes; `path` names the file in errors.
+pub fn decode_coefficients_nrrd(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
+    let (grid, coeffs, kv) = decode_nrrd(bytes, path)?;
     let need = |k: &str| {
         kv.get(k).ok_or_else(|| {
             err(

@@ -1,6 +1,7 @@
 //! Wavefront OBJ via `tobj`: all objects and groups merged into one mesh; polygons fanned, or
-//! split in halves when large.
+//! split in halves when large; polylines (`l`) and points ignored.
 
+use std::borrow::Cow;
 use std::io::{self, Write};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -10,12 +11,8 @@ use glam::Vec3;
 use crate::{Mesh, MeshError};
 
 pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
-    if let Some(line) = short_face(bytes) {
-        return Err(MeshError::new(
-            name,
-            format!("line {line}: a face ('f') with fewer than three vertices (a truncated file?)"),
-        ));
-    }
+    let bytes = check_lines(bytes).map_err(|problem| MeshError::new(name, problem))?;
+    let bytes = &bytes[..];
     // tobj's optional features add fields; the update keeps this compiling if one is enabled.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -110,19 +107,76 @@ fn triangulate(corners: &[u32], out: &mut Vec<[u32; 3]>) {
     }
 }
 
-/// The number of the first `f` line naming fewer than three vertices, which the parser would
-/// drop without a word.
-fn short_face(bytes: &[u8]) -> Option<usize> {
-    bytes
-        .split(|&b| b == b'\n')
-        .enumerate()
-        .find_map(|(i, line)| {
-            let mut words = line
-                .split(|b| b.is_ascii_whitespace())
-                .filter(|w| !w.is_empty());
-            (words.next() == Some(&b"f"[..]) && words.take_while(|w| w[0] != b'#').count() < 3)
-                .then_some(i + 1)
-        })
+/// Checks the `f` lines before the parser sees them, split as it splits them (at Unicode
+/// whitespace, up to the first line that is not UTF-8, where it stops), and hides the `l` lines
+/// it would misread. Refused, with the number of the line:
+/// - a face naming fewer than three vertices, which the parser would drop without a word;
+/// - a corner index of 0, one counting back past the first element, or one too large for any
+///   file this size: the parser scales texture-coordinate and normal indices without overflow
+///   checks, so such an index could read another element or take it down.
+///
+/// A polyline (`l`) of three or more points would be read as a face, so those lines are turned
+/// into comments in a copy (the bytes themselves when there is none).
+fn check_lines(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
+    const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let mut counts = [0usize; 3];
+    let mut polylines = Vec::new();
+    let mut start = 0;
+    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let at = start;
+        start += raw.len() + 1;
+        let Ok(line) = std::str::from_utf8(raw) else {
+            break;
+        };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("l") if words.clone().count() >= 3 => {
+                polylines.push(at + line.len() - line.trim_start().len());
+            }
+            Some("f") => {
+                let corners = words.take_while(|w| !w.starts_with('#'));
+                if corners.clone().count() < 3 {
+                    return Err(format!(
+                        "line {}: a face ('f') with fewer than three vertices (a truncated file?)",
+                        i + 1
+                    ));
+                }
+                for corner in corners {
+                    for (k, part) in corner.split('/').enumerate().take(3) {
+                        let Ok(index) = part.parse::<isize>() else {
+                            continue;
+                        };
+                        let (kind, back) = (KINDS[k], index.unsigned_abs());
+                        let problem = if index == 0 {
+                            format!("{kind} index 0 (OBJ indices count from 1)")
+                        } else if index < 0 && back > counts[k] {
+                            format!("{kind} {index}, but only {} precede it", counts[k])
+                        } else if index > 0 && back > bytes.len() {
+                            format!("{kind} {index}, which the file does not have")
+                        } else {
+                            continue;
+                        };
+                        return Err(format!(
+                            "line {}: face corner '{corner}' refers to {problem}",
+                            i + 1
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    if polylines.is_empty() {
+        return Ok(Cow::Borrowed(bytes));
+    }
+    let mut copy = bytes.to_vec();
+    for at in polylines {
+        copy[at] = b'#';
+    }
+    Ok(Cow::Owned(copy))
 }
 
 fn describe(e: &tobj::LoadError) -> String {

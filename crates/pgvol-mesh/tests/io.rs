@@ -227,6 +227,71 @@ fn obj_faces_with_one_or_two_vertices_are_reported_with_their_line() {
 }
 
 #[test]
+fn obj_faces_split_by_any_whitespace_are_checked() {
+    // A vertical tab separates words for the parser: this line is a face of two corners.
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf\u{b}1 2\n";
+    let msg = err_of(read_bytes(
+        text.as_bytes(),
+        MeshFormat::Obj,
+        Path::new("t.obj"),
+    ));
+    assert_mentions(&msg, &["t.obj", "line 5", "fewer than three"]);
+}
+
+#[test]
+fn obj_corner_indices_that_would_wrap_are_refused_with_their_line() {
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvn 0 0 1\n";
+    for (face, words) in [
+        // Found by the read_obj fuzz target: a relative texture index past the first one
+        // overflowed in the parser (a panic with overflow checks, a wrong read without).
+        (
+            "f 1/1/1 1/-7 2/1",
+            &["'1/-7'", "texture coordinate -7, but only 2 precede it"][..],
+        ),
+        ("f 1/0 2/1 3/1", &["'1/0'", "texture coordinate index 0"]),
+        ("f 0 2 3", &["'0'", "vertex index 0"]),
+        ("f 1 2 -4", &["'-4'", "vertex -4, but only 3 precede it"]),
+        (
+            "f 1//1 2//1 3//6148914691236517206",
+            &["normal 6148914691236517206, which the file does not have"],
+        ),
+        (
+            "f 1/-9223372036854775807 2 3",
+            &["texture coordinate -9223372036854775807"],
+        ),
+    ] {
+        let text = format!("{head}{face}\n");
+        let msg = err_of(read_bytes(
+            text.as_bytes(),
+            MeshFormat::Obj,
+            Path::new("w.obj"),
+        ));
+        assert_mentions(&msg, &["w.obj", "line 7"]);
+        assert_mentions(&msg, words);
+    }
+    // The fuzz target's input itself.
+    let found = b"# hand-written\nmtllib none.mtl\no tetra\nv 0 0 0\nv 1 0 0\n0\nv 0 0 1\n\
+        v 1 1 1\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 -1\nvn 0 -1 0\ng faces\nusemtl a\ns off\n\
+        f 1/1/1 1/3/1 2/2/1\nf 1/-7 4/1 3/2\n";
+    let msg = err_of(read_bytes(found, MeshFormat::Obj, Path::new("f.obj")));
+    assert_mentions(
+        &msg,
+        &["line 18", "texture coordinate -7, but only 3 precede it"],
+    );
+    // Relative indices reaching exactly the first element are fine.
+    let text = format!("{head}f -3/-2/-1 -2/-1/-1 -1/-1/-1\n");
+    let mesh = read_bytes(text.as_bytes(), MeshFormat::Obj, Path::new("ok.obj")).unwrap();
+    assert_eq!(mesh.triangles.len(), 1);
+}
+
+#[test]
+fn obj_polylines_are_not_read_as_faces() {
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nl 1 2 3 4\n  l 2 3 4\nl 1 4\n";
+    let mesh = read_bytes(text.as_bytes(), MeshFormat::Obj, Path::new("l.obj")).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+}
+
+#[test]
 fn binary_stl_detected_by_size_even_when_header_says_solid() {
     let cube = unit_cube();
     let mut bytes = Vec::new();

@@ -8,6 +8,7 @@ use zstd::bulk::Decompressor;
 
 use super::brick_decoder::{decode_values, raw_len, WordScratch};
 use super::index::{bit, Layout};
+use crate::container::crc_ok;
 use crate::error::{err, FormatError};
 use crate::sparse_params::Compression;
 
@@ -66,7 +67,7 @@ pub(crate) fn checked_blob<'a>(
     let (offset, len, crc) = l.entries[e];
     // The layout check put every entry inside the data.
     let blob = &l.data[offset as usize..offset as usize + len as usize];
-    if crc32fast::hash(blob) != crc {
+    if !crc_ok(crc, crc32fast::hash(blob)) {
         return Err(err(
             path,
             format!(

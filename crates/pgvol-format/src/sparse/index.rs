@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::bricks::Bricks;
+use crate::container::crc_ok;
 use crate::error::{err, FormatError};
 use crate::header::PgvHeader;
 use crate::sparse_params::{Precision, SparseParams, BRICK_RANGE};
@@ -99,7 +100,7 @@ pub(crate) fn layout<'a>(
     }
     let meta = meta as usize;
     let icrc = u32::from_le_bytes(payload[meta..meta + 4].try_into().expect("4 bytes"));
-    if crc32fast::hash(&payload[..meta]) != icrc {
+    if !crc_ok(icrc, crc32fast::hash(&payload[..meta])) {
         return Err(err(
             path,
             "brick index checksum mismatch: the file is corrupt",

@@ -1,0 +1,61 @@
+//! The contract every mesh reader is held to by the fuzz targets `read_obj`, `read_stl`,
+//! `read_ply`, `read_gltf` and `read_glb`.
+
+use std::path::Path;
+use std::sync::Once;
+
+use pgvol_mesh::{read_bytes, too_small, write_to, Mesh, MeshFormat, MAX_COORDINATE};
+
+/// Reads `data` as `format` and checks the result: an error names the file and a problem; a mesh
+/// has triangles, only indices of its own vertices, finite coordinates within the accepted range
+/// and an extent large enough to process, and it writes in the same format and reads back with
+/// the same triangle corners. The first call also checks that every seed file reads, so a reader
+/// that refuses everything fails at once.
+pub fn mesh_target(format: MeshFormat, seeds: &[&[u8]], data: &[u8]) {
+    static SEEDS_READ: Once = Once::new();
+    SEEDS_READ.call_once(|| {
+        for (i, seed) in seeds.iter().enumerate() {
+            let name = format!("seed.{}", format.extension());
+            if let Err(e) = read_bytes(seed, format, Path::new(&name)) {
+                panic!("seed {i} does not read: {e}");
+            }
+        }
+    });
+    let name = format!("fuzz.{}", format.extension());
+    let name = Path::new(&name);
+    match read_bytes(data, format, name) {
+        Err(e) => {
+            assert!(e.to_string().starts_with("fuzz."), "{e}");
+            assert!(!e.problem.is_empty());
+        }
+        Ok(mesh) => {
+            check_mesh(&mesh);
+            let mut written = Vec::new();
+            write_to(&mut written, &mesh, format, name).expect("a mesh that was read writes");
+            let back = read_bytes(&written, format, name).expect("a written mesh reads back");
+            assert_eq!(back.triangles.len(), mesh.triangles.len());
+            for t in 0..mesh.triangles.len() {
+                assert_eq!(back.triangle(t), mesh.triangle(t), "triangle {t}");
+            }
+        }
+    }
+}
+
+/// The checks every mesh leaving a reader must pass.
+fn check_mesh(mesh: &Mesh) {
+    assert!(!mesh.triangles.is_empty(), "a mesh without triangles");
+    let n = mesh.positions.len();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        assert!(
+            tri.iter().all(|&i| (i as usize) < n),
+            "triangle {t} {tri:?} indexes past {n} vertices"
+        );
+    }
+    for (i, p) in mesh.positions.iter().enumerate() {
+        assert!(
+            p.is_finite() && p.abs().max_element() < MAX_COORDINATE,
+            "vertex {i} at {p}"
+        );
+    }
+    assert_eq!(too_small(mesh), None, "a mesh too small to process");
+}
