@@ -5,6 +5,7 @@ use rayon::prelude::*;
 
 use crate::basis::Basis;
 use crate::stencil::{self, GRADIENT, HESSIAN, VALUE};
+use pgvol_core::sparse::brick_offset;
 use pgvol_core::{Background, Grid, SparseGrid};
 
 /// Why a coefficient volume could not be made.
@@ -52,6 +53,40 @@ pub(crate) fn check_inputs(grid: &Grid, basis: Basis, values: &[f32]) -> Result<
     Ok(())
 }
 
+/// What every sparse constructor needs: a valid basis, at least 2 nodes per axis, values on
+/// `grid`'s nodes, a finite background and finite stored values at the grid's nodes (the error
+/// names the first bad node's flat index).
+pub fn check_sparse(grid: &Grid, basis: Basis, values: &SparseGrid) -> Result<(), FieldError> {
+    basis.validate().map_err(FieldError::BadBasis)?;
+    if grid.dims.iter().any(|&n| n < 2) {
+        return Err(FieldError::GridTooSmall(grid.dims));
+    }
+    if values.dims() != grid.dims {
+        return Err(FieldError::DimsMismatch {
+            got: values.dims(),
+            want: grid.dims,
+        });
+    }
+    let bg = values.background();
+    if !(bg.inside.is_finite() && bg.outside.is_finite()) {
+        return Err(FieldError::NonFinite { index: 0 });
+    }
+    for (b, brick) in values.stored() {
+        let (lo, n) = values.brick_extent(b);
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    if !brick[brick_offset([i, j, k])].is_finite() {
+                        let index = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
+                        return Err(FieldError::NonFinite { index });
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 impl CoefficientVolume {
     /// Wraps existing coefficients (one per node, x fastest), checking the basis, their count
     /// and finiteness; every brick is stored.
@@ -65,25 +100,9 @@ impl CoefficientVolume {
         })
     }
 
-    /// Wraps sparse coefficients, checking the basis, their grid and finiteness.
+    /// Wraps sparse coefficients, checking them as [`check_sparse`] does.
     pub fn from_sparse(grid: Grid, basis: Basis, coeffs: SparseGrid) -> Result<Self, FieldError> {
-        basis.validate().map_err(FieldError::BadBasis)?;
-        if grid.dims.iter().any(|&n| n < 2) {
-            return Err(FieldError::GridTooSmall(grid.dims));
-        }
-        if coeffs.dims() != grid.dims {
-            return Err(FieldError::DimsMismatch {
-                got: coeffs.dims(),
-                want: grid.dims,
-            });
-        }
-        let bg = coeffs.background();
-        let stored_finite = coeffs
-            .stored()
-            .all(|(_, v)| v.iter().all(|c| c.is_finite()));
-        if !(stored_finite && bg.inside.is_finite() && bg.outside.is_finite()) {
-            return Err(FieldError::NonFinite { index: 0 });
-        }
+        check_sparse(&grid, basis, &coeffs)?;
         Ok(CoefficientVolume {
             grid,
             basis,

@@ -35,7 +35,6 @@ pub use wls::wls_band;
 
 use std::time::Instant;
 
-use pgvol_core::sparse::brick_offset;
 use pgvol_core::{Grid, SparseGrid};
 
 use crate::basis::Basis;
@@ -105,7 +104,7 @@ pub fn interp_sparse(
     samples: &SparseGrid,
 ) -> Result<(CoefficientVolume, FitReport), FieldError> {
     let start = Instant::now();
-    check_sparse(&grid, basis, samples)?;
+    crate::volume::check_sparse(&grid, basis, samples)?;
     let (coeffs, mut report) = match basis {
         Basis::Trilinear => (samples.clone(), report::report("none", None)),
         Basis::Bspline2 => (
@@ -129,40 +128,6 @@ pub fn interp_sparse(
     report.stages.check = t.elapsed().as_secs_f64();
     report.seconds = start.elapsed().as_secs_f64();
     Ok((volume, report))
-}
-
-/// What [`check_inputs`] checks, for sparse samples: a valid basis, at least 2 nodes per axis,
-/// samples on `grid`'s nodes, finite stored values and background.
-fn check_sparse(grid: &Grid, basis: Basis, samples: &SparseGrid) -> Result<(), FieldError> {
-    basis.validate().map_err(FieldError::BadBasis)?;
-    if grid.dims.iter().any(|&n| n < 2) {
-        return Err(FieldError::GridTooSmall(grid.dims));
-    }
-    if samples.dims() != grid.dims {
-        return Err(FieldError::DimsMismatch {
-            got: samples.dims(),
-            want: grid.dims,
-        });
-    }
-    let bg = samples.background();
-    if !(bg.inside.is_finite() && bg.outside.is_finite()) {
-        return Err(FieldError::NonFinite { index: 0 });
-    }
-    for (b, values) in samples.stored() {
-        let (lo, n) = samples.brick_extent(b);
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let v = values[brick_offset([i, j, k])];
-                    if !v.is_finite() {
-                        let index = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
-                        return Err(FieldError::NonFinite { index });
-                    }
-                }
-            }
-        }
-    }
-    Ok(())
 }
 
 // Here rather than in `volume`, which the fits build on: pseudo-Gaussians interpolate by a fit.

@@ -3,8 +3,6 @@
 
 use std::path::Path;
 
-use pgvol_field::{CoefficientVolume, FieldError};
-
 use super::brick_encoder::StoredBricks;
 use super::bricks::Bricks;
 use super::coverage::Coverage;
@@ -36,7 +34,8 @@ pub fn encode_pgv_with(
     if !(opts.band.is_finite() && opts.band >= 0.0) {
         return Err(fail(format!("band {} must be finite and >= 0", opts.band)));
     }
-    check_volume(volume).map_err(|e| fail(format!("invalid volume: {e}")))?;
+    pgvol_field::volume::check_sparse(&volume.grid, volume.basis, &volume.coeffs)
+        .map_err(|e| fail(format!("invalid volume: {e}")))?;
     // Steps in units of field error: a coefficient error δ moves the field by at most W·δ.
     let weight = basis_weight_bound(volume.basis);
     let scale = fixed_scale(opts, g.spacing, weight).map_err(fail)?;
@@ -90,30 +89,6 @@ pub fn encode_pgv_with(
         clamp,
     };
     Ok((bytes, report))
-}
-
-/// The checks of [`CoefficientVolume::from_sparse`], without taking (or copying) the
-/// coefficients.
-fn check_volume(volume: &CoefficientVolume) -> Result<(), FieldError> {
-    let (g, coeffs) = (&volume.grid, &volume.coeffs);
-    volume.basis.validate().map_err(FieldError::BadBasis)?;
-    if g.dims.iter().any(|&n| n < 2) {
-        return Err(FieldError::GridTooSmall(g.dims));
-    }
-    if coeffs.dims() != g.dims {
-        return Err(FieldError::DimsMismatch {
-            got: coeffs.dims(),
-            want: g.dims,
-        });
-    }
-    let bg = coeffs.background();
-    let stored_finite = coeffs
-        .stored()
-        .all(|(_, v)| v.iter().all(|c| c.is_finite()));
-    if !(stored_finite && bg.inside.is_finite() && bg.outside.is_finite()) {
-        return Err(FieldError::NonFinite { index: 0 });
-    }
-    Ok(())
 }
 
 /// Writes `file` to `path` atomically in the `sparse-bricks` encoding.
