@@ -161,12 +161,25 @@ impl MeshSdf {
     /// `sign_contradictions`), the mesh does not bound a solid: the sign falls back to the
     /// winding number for good and the grid is sampled again.
     pub fn sample(&self, grid: &Grid, extent: Extent, progress: &(dyn Fn(f64) + Sync)) -> Sampled {
-        let sampled = self.sample_once(grid, extent, progress);
+        self.with_sign_fallback(
+            || self.sample_once(grid, extent, progress),
+            |s| sign_contradictions(grid, &s.values),
+        )
+    }
+
+    /// `sample()`, and once more after falling back to the winding number when the pseudonormal
+    /// sign gave `contradictions`.
+    fn with_sign_fallback<T>(
+        &self,
+        sample: impl Fn() -> T,
+        contradictions: impl Fn(&T) -> usize,
+    ) -> T {
+        let sampled = sample();
         if self.sign_mode() == SignMode::Pseudonormal
-            && sign_contradictions(grid, &sampled.values) > 0
+            && contradictions(&sampled) > 0
             && self.fall_back_to_winding()
         {
-            return self.sample_once(grid, extent, progress);
+            return sample();
         }
         sampled
     }
@@ -181,14 +194,10 @@ impl MeshSdf {
         width: f32,
         progress: &(dyn Fn(f64) + Sync),
     ) -> SparseSampled {
-        let sampled = self.sample_sparse_once(grid, width, progress);
-        if self.sign_mode() == SignMode::Pseudonormal
-            && sparse_sign_contradictions(grid, &sampled.values) > 0
-            && self.fall_back_to_winding()
-        {
-            return self.sample_sparse_once(grid, width, progress);
-        }
-        sampled
+        self.with_sign_fallback(
+            || self.sample_sparse_once(grid, width, progress),
+            |s| sparse_sign_contradictions(grid, &s.values),
+        )
     }
 
     /// The band's plan: bricks near triangles and the signs of far regions.
@@ -263,32 +272,19 @@ impl MeshSdf {
     }
 
     fn sample_once(&self, grid: &Grid, extent: Extent, progress: &(dyn Fn(f64) + Sync)) -> Sampled {
-        let [nx, ny, nz] = grid.dims;
-        // The band's brick grid is also what `bricks_near_triangles` and `region_signs` use.
-        let brick = match extent {
-            Extent::Dense => DENSE_BRICK,
-            Extent::Band(_) => BRICK,
+        let [nx, ny, _] = grid.dims;
+        let plan = match extent {
+            Extent::Band(w) => self.band_plan(grid, w),
+            Extent::Dense => Plan {
+                grid,
+                brick: DENSE_BRICK,
+                bricks: grid.dims.map(|n| n.div_ceil(DENSE_BRICK)),
+                clamp: f32::INFINITY,
+                near: None,
+                regions: None,
+            },
         };
-        let bricks = [nx.div_ceil(brick), ny.div_ceil(brick), nz.div_ceil(brick)];
-        let clamp = match extent {
-            Extent::Dense => f32::INFINITY,
-            Extent::Band(w) => w.max(0.0) * grid.spacing,
-        };
-        let near = match extent {
-            Extent::Dense => None,
-            Extent::Band(_) => Some(self.bricks_near_triangles(grid, bricks, clamp)),
-        };
-        let regions = near
-            .as_ref()
-            .and_then(|near| self.region_signs(grid, bricks, near));
-        let plan = Plan {
-            grid,
-            brick,
-            bricks,
-            clamp,
-            near,
-            regions,
-        };
+        let (brick, bricks, clamp) = (plan.brick, plan.bricks, plan.clamp);
         let rows = bricks[1] * bricks[2];
         let done = AtomicUsize::new(0);
         let results: Vec<RowValues> = (0..rows)
