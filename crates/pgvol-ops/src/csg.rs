@@ -44,7 +44,7 @@ pub struct Drain {
 impl Drain {
     /// Exact signed distance to the half-infinite cylinder (flat cap at `point`), given a unit
     /// direction.
-    fn distance(&self, unit: Vec3, p: Vec3) -> f32 {
+    pub(crate) fn distance(&self, unit: Vec3, p: Vec3) -> f32 {
         let d = p - self.point;
         let along = d.dot(unit);
         let radial = (d - unit * along).length() - 0.5 * self.diameter;
@@ -53,7 +53,7 @@ impl Drain {
     }
 }
 
-fn check(name: &str, x: f32, positive: bool) -> Result<(), OpsError> {
+pub(crate) fn check(name: &str, x: f32, positive: bool) -> Result<(), OpsError> {
     if !x.is_finite() || (positive && x <= 0.0) {
         let want = if positive {
             "positive and finite"
@@ -98,7 +98,7 @@ pub fn support_reach(volume: &CoefficientVolume) -> f32 {
 /// bricks whose node values vary are mapped node by node, every other brick is its side's
 /// background mapped once. `varies(lo, hi, v)` says whether `f` could change with position
 /// over the box `[lo, hi]` for the node value `v` (drains crossing far space).
-fn remap(
+pub(crate) fn remap(
     volume: &CoefficientVolume,
     f: impl Fn(Vec3, f32) -> f32 + Sync,
     varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
@@ -194,6 +194,17 @@ pub fn hollow(
     drains: &[Drain],
 ) -> Result<CoefficientVolume, OpsError> {
     check("wall thickness", wall, true)?;
+    let units = drain_units(drains)?;
+    let wall_only = |v: f32| v.max(-(v + wall));
+    remap(
+        volume,
+        |p, v| cut_drains(drains, &units, p, wall_only(v)),
+        |lo, hi, v| drain_reaches(drains, &units, lo, hi, wall_only(v)),
+    )
+}
+
+/// The unit directions of valid drains, or why one is not.
+pub(crate) fn drain_units(drains: &[Drain]) -> Result<Vec<Vec3>, OpsError> {
     let mut units = Vec::with_capacity(drains.len());
     for d in drains {
         check("drain diameter", d.diameter, true)?;
@@ -205,27 +216,32 @@ pub fn hollow(
         }
         units.push(u);
     }
-    let wall_only = |v: f32| v.max(-(v + wall));
-    // Over a box, a drain's distance varies by at most the box's half diagonal from its
-    // value at the centre; it matters where `−distance` can exceed the wall-only value.
-    let drain_reaches = |lo: Vec3, hi: Vec3, v: f32| {
-        let (centre, reach) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
-        drains
-            .iter()
-            .zip(&units)
-            .any(|(d, &u)| -(d.distance(u, centre) - reach) >= wall_only(v))
-    };
-    remap(
-        volume,
-        |p, v| {
-            let mut g = wall_only(v);
-            for (d, &u) in drains.iter().zip(&units) {
-                g = g.max(-d.distance(u, p));
-            }
-            g
-        },
-        drain_reaches,
-    )
+    Ok(units)
+}
+
+/// The field `value` at `p` with the drains removed from it.
+pub(crate) fn cut_drains(drains: &[Drain], units: &[Vec3], p: Vec3, value: f32) -> f32 {
+    drains
+        .iter()
+        .zip(units)
+        .fold(value, |g, (d, &u)| g.max(-d.distance(u, p)))
+}
+
+/// Whether a drain can change the field over the box `[lo, hi]` whose value without drains is
+/// `value`: over a box, a drain's distance varies by at most the box's half diagonal from its
+/// value at the centre, and it matters where its negative can exceed `value`.
+pub(crate) fn drain_reaches(
+    drains: &[Drain],
+    units: &[Vec3],
+    lo: Vec3,
+    hi: Vec3,
+    value: f32,
+) -> bool {
+    let (centre, reach) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+    drains
+        .iter()
+        .zip(units)
+        .any(|(d, &u)| -(d.distance(u, centre) - reach) >= value)
 }
 
 #[cfg(test)]

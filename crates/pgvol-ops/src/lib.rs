@@ -7,6 +7,8 @@
 //!   scripts.
 //! * [`offset`], [`shell`], [`hollow`]: new coefficient volumes from constructive operations on
 //!   the field, with [`needs_wider_band`] telling when a narrow-band field cannot support them.
+//! * [`lattice_part`], [`infill`]: triply periodic lattices ([`Lattice`], [`Tpms`]) cut to a part
+//!   or filling a hollowed part's cavity, with drain holes through both.
 //!
 //! Conventions are the workspace's: fields are negative inside, units are those of the mesh.
 
@@ -16,6 +18,7 @@
 mod cli_file;
 mod csg;
 mod error;
+mod lattice;
 mod polygon;
 mod simplify;
 mod slice;
@@ -26,6 +29,9 @@ pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
 };
 pub use error::OpsError;
+pub use lattice::{
+    infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeStyle, Ramp, Tpms, TPMS_NAMES,
+};
 pub use simplify::simplify_loops;
 pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,

@@ -66,6 +66,7 @@ mod eval;
 mod exact_field;
 mod export;
 mod grid;
+mod lattice;
 mod memory;
 mod mesh_io;
 mod pgv_io;
@@ -88,6 +89,9 @@ pub use eval::{eval, eval_csv, read_points, read_points_file, sample, Evaluation
 pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT, THREEMF_UNITS};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
+pub use lattice::{
+    infill, lattice, lattice_reach, solid_report, SolidReport, BYTES_PER_LATTICE_BRICK,
+};
 pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
@@ -117,7 +121,9 @@ pub use pgvol_core::{Grid, Mesh};
 pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
-pub use pgvol_ops::{Axis, Drain, Layer, ShellSide};
+pub use pgvol_ops::{
+    Axis, Drain, Grade, Lattice, LatticeStyle, Layer, Ramp, ShellSide, Tpms, TPMS_NAMES,
+};
 pub use pgvol_sdf::SignMode;
 
 /// Seconds spent per stage of a call.

@@ -233,7 +233,24 @@ pub fn shell(
         return Err(Error::parameter("drain holes apply to hollowing only"));
     }
     shape.check_reach(thickness)?;
-    if let (ShellKind::Hollow, Some(mesh)) = (kind, &shape.mesh) {
+    if kind == ShellKind::Hollow {
+        check_drains(shape, thickness, drains, progress)?;
+    }
+    Ok(match kind {
+        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, drains)?,
+        ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,
+    })
+}
+
+/// Warns when hollowing an open mesh, and refuses a drain whose point is not in the cavity
+/// left inside walls of `thickness` (it would open nothing).
+pub(crate) fn check_drains(
+    shape: &Shape,
+    thickness: f32,
+    drains: &[Drain],
+    progress: &dyn Progress,
+) -> Result<()> {
+    if let Some(mesh) = &shape.mesh {
         let stats = mesh.stats();
         if stats.boundary_edges > 0 {
             progress.warn(&format!(
@@ -263,10 +280,7 @@ pub fn shell(
             )));
         }
     }
-    Ok(match kind {
-        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, drains)?,
-        ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,
-    })
+    Ok(())
 }
 
 /// The operation's name as recorded in a derived file.

@@ -28,6 +28,14 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     )
     .unwrap_err();
     let compare = pgvol::compare(&mesh, &mesh, 10_000, 1).unwrap_err();
+    // The lattice of a sphere stores every brick inside it: refused with the brick count.
+    let shape = pgvol::Shape::from_file(encoded.file.clone());
+    let gyroid = pgvol::Lattice::sheet(pgvol::Tpms::Gyroid, 0.8, 0.2);
+    pgvol::set_memory_limit(Some(10_000));
+    let lattice = pgvol::lattice(&shape, &gyroid, &Silent).unwrap_err();
+    pgvol::set_memory_limit(Some(100_000));
+    assert_eq!(lattice.kind(), ErrorKind::ResourceLimit, "{lattice}");
+    assert!(lattice.message().contains("a lattice filling"), "{lattice}");
     pgvol::set_memory_limit(None);
 
     for e in [&read, &encode, &remesh, &compare] {

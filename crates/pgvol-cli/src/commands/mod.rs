@@ -5,6 +5,7 @@ mod compare;
 mod eval;
 mod export;
 mod files;
+mod lattice;
 mod ops;
 mod remesh;
 mod sdf;
@@ -53,8 +54,14 @@ pub enum Command {
     Slice(ops::SliceArgs),
     /// Offsets a shape by a distance (positive outward, negative inward).
     Offset(ops::OffsetArgs),
-    /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes.
+    /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes,
+    /// optionally filling the cavity with a lattice (--infill).
     Shell(ops::ShellArgs),
+    /// Cuts a triply periodic lattice (gyroid, Schwarz P, diamond, Neovius) to a part.
+    ///
+    /// Sheet or strut solids with a cell size and thickness, optionally graded with depth or
+    /// along a segment; reports the solid's volume fraction of the part and its surface area.
+    Lattice(lattice::LatticeArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -74,6 +81,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Slice(a) => ops::slice(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
+        Command::Lattice(a) => lattice::lattice(a),
     }
 }
 
@@ -92,6 +100,7 @@ impl Command {
             Command::Slice(a) => a.out,
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
+            Command::Lattice(a) => a.out,
         }
     }
 
@@ -107,6 +116,7 @@ impl Command {
             Command::Slice(a) => Some((&a.output, a.out)),
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
+            Command::Lattice(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }

@@ -10,6 +10,7 @@ use clap::{Args, ValueEnum};
 use super::args::{
     at_input, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg,
 };
+use super::lattice::{build_lattice, write_solid, GradeArgs, StyleArg};
 use crate::output::outln;
 use crate::progress::Bars;
 
@@ -42,7 +43,7 @@ fn write_result(
     Ok(mesh.triangles.len())
 }
 
-fn check_output_name(output: &Path) -> Result<()> {
+pub(super) fn check_output_name(output: &Path) -> Result<()> {
     if !pgvol::is_pgv(output) {
         pgvol::mesh_format(output)?;
     }
@@ -209,7 +210,9 @@ pub enum SideArg {
 
 #[derive(Args)]
 #[command(
-    after_help = "Example: pgvol shell part.stl -o hollow.glb --thickness 1.2 --hollow --drain 0,0,-5,0,0,-1,2"
+    after_help = "Example: pgvol shell part.stl -o hollow.glb --thickness 1.2 --hollow --drain 0,0,-5,0,0,-1,2\n\n\
+    With an infill: pgvol shell part.stl -o infill.stl --thickness 1.2 --infill gyroid --cell 5 \
+    --infill-thickness 0.6 --drain 0,0,-5,0,0,-1,2"
 )]
 pub struct ShellArgs {
     /// A .pgv file, or a mesh.
@@ -227,10 +230,26 @@ pub struct ShellArgs {
     /// Hollow for printing: keep the outer surface and add an inner cavity at --thickness.
     #[arg(long)]
     pub hollow: bool,
-    /// A drain hole through the wall, with --hollow: `x,y,z,dx,dy,dz,diameter` (a point inside the
-    /// cavity, the direction out through the wall, the hole's diameter). Repeat for more holes.
-    #[arg(long, value_parser = parse_drain, requires = "hollow")]
+    /// A drain hole through the wall (and the infill), with --hollow or --infill:
+    /// `x,y,z,dx,dy,dz,diameter` (a point inside the cavity, the direction out through the wall,
+    /// the hole's diameter). Repeat for more holes.
+    #[arg(long, value_parser = parse_drain)]
     pub drain: Vec<pgvol::Drain>,
+    /// Hollow and fill the cavity with this lattice: gyroid, schwarz-p, diamond or neovius
+    /// (see `pgvol lattice`).
+    #[arg(long, value_name = "SURFACE", value_parser = parse_surface, requires = "cell")]
+    pub infill: Option<pgvol::Tpms>,
+    /// With --infill: the lattice's cell size, model units.
+    #[arg(long, requires = "infill")]
+    pub cell: Option<f32>,
+    /// With --infill: the lattice's sheet thickness or strut level (default: --thickness).
+    #[arg(long, allow_negative_numbers = true, requires = "infill")]
+    pub infill_thickness: Option<f32>,
+    /// With --infill: sheet or strut.
+    #[arg(long, value_enum, default_value_t, requires = "infill")]
+    pub infill_style: StyleArg,
+    #[command(flatten)]
+    pub grade: GradeArgs,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
     #[command(flatten)]
@@ -241,10 +260,45 @@ fn parse_drain(s: &str) -> Result<pgvol::Drain, String> {
     pgvol::parse_drain(s).map_err(|e| e.to_string())
 }
 
+fn parse_surface(s: &str) -> Result<pgvol::Tpms, String> {
+    s.parse()
+}
+
+/// `shell --infill`: the hollowed part with its cavity filled by a lattice.
+fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()> {
+    let cell = a.cell.unwrap_or_default();
+    let thickness = a.infill_thickness.unwrap_or(a.thickness);
+    let lattice = build_lattice(surface, a.infill_style, cell, thickness, &a.grade)?;
+    lattice
+        .check()
+        .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
+    let bars = Bars::new(a.out.silent());
+    let reach = pgvol::lattice_reach(&lattice, a.thickness);
+    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
+        .map_err(|e| at_input(e, &a.input))?;
+    let operation = format!(
+        "hollow {} infill {surface} cell {cell} thickness {thickness}",
+        a.thickness
+    );
+    write_solid(
+        &a.output, volume, &shape, &operation, &a.shape, &a.out, &bars, start,
+    )
+}
+
 pub fn shell(a: ShellArgs) -> Result<()> {
     let start = Instant::now();
     check_output_name(&a.output)?;
     pgvol::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
+    if let Some(surface) = a.infill {
+        return shell_infill(a, surface, start);
+    }
+    if a.grade.grade_depth.is_some() || a.grade.grade_linear.is_some() {
+        anyhow::bail!("--grade-depth and --grade-linear apply to an --infill lattice");
+    }
+    if !a.drain.is_empty() && !a.hollow {
+        anyhow::bail!("--drain needs --hollow or --infill");
+    }
     let bars = Bars::new(a.out.silent());
     let kind = if a.hollow {
         pgvol::ShellKind::Hollow

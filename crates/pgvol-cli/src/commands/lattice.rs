@@ -1,0 +1,197 @@
+//! `pgvol lattice` and the lattice options of `pgvol shell --infill`: triply periodic lattices cut
+//! to a part or filling its cavity, with the solid's volume fraction and area reported.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::{Args, ValueEnum};
+
+use super::args::{at_input, print_json, seconds_json, OutputArgs, PathArg};
+use super::ops::{check_output_name, ShapeOutputArgs};
+use crate::output::outln;
+use crate::progress::Bars;
+
+#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+pub enum StyleArg {
+    /// A wall of --thickness centred on the surface.
+    #[default]
+    Sheet,
+    /// One of the two labyrinths, bounded at the level --thickness (negative thins the struts).
+    Strut,
+}
+
+/// Grading of the cell size and thickness from their values at the ramp's start to far values.
+#[derive(Args, Clone, Copy, Debug, Default)]
+pub struct GradeArgs {
+    /// Grade with depth: the thickness goes from its value at the skin to --thickness-far at
+    /// this depth inside the part (model units) and stays there.
+    #[arg(long, value_name = "DEPTH", conflicts_with = "grade_linear")]
+    pub grade_depth: Option<f32>,
+    /// Grade along a segment `x0,y0,z0,x1,y1,z1`: cell and thickness go from their values at the
+    /// first point to --cell-far and --thickness-far at the second, constant beyond.
+    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = parse_segment, allow_hyphen_values = true)]
+    pub grade_linear: Option<[f32; 6]>,
+    /// The cell size at the ramp's end (default: the cell size; linear ramps only).
+    #[arg(long, value_name = "SIZE")]
+    pub cell_far: Option<f32>,
+    /// The thickness at the ramp's end (default: the thickness).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub thickness_far: Option<f32>,
+}
+
+fn parse_segment(text: &str) -> Result<[f32; 6], String> {
+    let numbers: Vec<f32> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("'{text}' is not six comma-separated numbers"))?;
+    <[f32; 6]>::try_from(numbers).map_err(|_| format!("'{text}': expected six numbers"))
+}
+
+fn parse_surface(text: &str) -> Result<pgvol::Tpms, String> {
+    text.parse()
+}
+
+/// The lattice of the command line; `--grade-*` without far values grades nothing.
+pub fn build_lattice(
+    surface: pgvol::Tpms,
+    style: StyleArg,
+    cell: f32,
+    thickness: f32,
+    grade: &GradeArgs,
+) -> Result<pgvol::Lattice> {
+    let ramp = match (grade.grade_depth, grade.grade_linear) {
+        (Some(depth), _) => Some(pgvol::Ramp::Depth { depth }),
+        (None, Some(s)) => Some(pgvol::Ramp::Linear {
+            from: pgvol::glam::Vec3::new(s[0], s[1], s[2]),
+            to: pgvol::glam::Vec3::new(s[3], s[4], s[5]),
+        }),
+        (None, None) => None,
+    };
+    if ramp.is_none() && (grade.cell_far.is_some() || grade.thickness_far.is_some()) {
+        anyhow::bail!(
+            "--cell-far and --thickness-far need a ramp: --grade-depth or --grade-linear"
+        );
+    }
+    let lattice = pgvol::Lattice {
+        surface,
+        style: match style {
+            StyleArg::Sheet => pgvol::LatticeStyle::Sheet,
+            StyleArg::Strut => pgvol::LatticeStyle::Strut,
+        },
+        cell,
+        thickness,
+        grade: ramp.map(|ramp| pgvol::Grade {
+            ramp,
+            cell: grade.cell_far.unwrap_or(cell),
+            thickness: grade.thickness_far.unwrap_or(thickness),
+        }),
+    };
+    Ok(lattice)
+}
+
+#[derive(Args)]
+#[command(
+    after_help = "Defaults: sheet style, 128 nodes per axis for a mesh input.\n\n\
+    Example: pgvol lattice part.stl -o lattice.stl --surface gyroid --cell 5 --thickness 0.6 \
+    --res 256"
+)]
+pub struct LatticeArgs {
+    /// A .pgv file, or a mesh (encoded on the fly at --res).
+    pub input: PathArg,
+    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// The periodic surface: gyroid, schwarz-p, diamond or neovius.
+    #[arg(long, value_parser = parse_surface)]
+    pub surface: pgvol::Tpms,
+    /// Sheet (a wall on the surface) or strut (a labyrinth).
+    #[arg(long, value_enum, default_value_t)]
+    pub style: StyleArg,
+    /// The cell size (the surface's period along each axis), model units.
+    #[arg(long)]
+    pub cell: f32,
+    /// Sheet: the wall thickness. Strut: the level bounding the struts (0 fills half of each
+    /// cell, negative thins them). Model units.
+    #[arg(long, allow_negative_numbers = true)]
+    pub thickness: f32,
+    #[command(flatten)]
+    pub grade: GradeArgs,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+pub fn lattice(a: LatticeArgs) -> Result<()> {
+    let start = Instant::now();
+    check_output_name(&a.output)?;
+    let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
+    lattice.check().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let bars = Bars::new(a.out.silent());
+    let reach = pgvol::lattice_reach(&lattice, 0.0);
+    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let volume = pgvol::lattice(&shape, &lattice, &bars).map_err(|e| at_input(e, &a.input))?;
+    let operation = format!(
+        "lattice {} cell {} thickness {}",
+        lattice.surface, lattice.cell, lattice.thickness
+    );
+    write_solid(
+        &a.output, volume, &shape, &operation, &a.shape, &a.out, &bars, start,
+    )
+}
+
+/// Writes a lattice solid as .pgv or as a mesh by the output's extension, and reports it: the
+/// solid is contoured in either case for its volume fraction and area.
+#[allow(clippy::too_many_arguments)]
+pub fn write_solid(
+    output: &Path,
+    volume: pgvol::CoefficientVolume,
+    shape: &pgvol::Shape,
+    operation: &str,
+    args: &ShapeOutputArgs,
+    out: &OutputArgs,
+    progress: &Bars,
+    start: Instant,
+) -> Result<()> {
+    let options = pgvol::DecodeOptions {
+        method: args.method.into(),
+        min_component: args.min_component,
+        ..Default::default()
+    };
+    let mesh = pgvol::decode(&volume, &options, progress).map_err(|e| {
+        anyhow::anyhow!("{operation}: the result is empty (no lattice inside the part): {e}")
+    })?;
+    let report = pgvol::solid_report(shape, &mesh, progress)?;
+    let triangles = if pgvol::is_pgv(output) {
+        let file = shape.derived_file(volume, operation);
+        pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
+        0
+    } else {
+        pgvol::write_mesh(output, &mesh)?;
+        mesh.triangles.len()
+    };
+    if out.json {
+        return print_json(&serde_json::json!({
+            "output": output, "triangles": triangles, "solid": report,
+            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
+        }));
+    }
+    if !out.quiet {
+        outln!(
+            "{}: {}volume {:.6} ({:.2} % of the part's {:.6}), area {:.6}",
+            output.display(),
+            if triangles > 0 {
+                format!("{triangles} triangles, ")
+            } else {
+                String::new()
+            },
+            report.volume,
+            100.0 * report.fraction,
+            report.part_volume,
+            report.area
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,166 @@
+//! Lattices for additive manufacturing on a shape: a triply periodic lattice cut to the part, or
+//! filling the cavity of the hollowed part with drain holes through both; and the report of the
+//! solid they make (volume fraction and surface area).
+
+use pgvol_core::Mesh;
+use pgvol_field::CoefficientVolume;
+use pgvol_ops::{Drain, Lattice, Ramp};
+
+use crate::decode::{decode, DecodeOptions};
+use crate::error::{Error, Result};
+use crate::memory::check_memory;
+use crate::progress::{self, Progress};
+use crate::shape::{check_drains, check_thickness, Shape};
+
+/// Bytes per brick of 8³ nodes a lattice stores: the node values and the coefficients (2 KiB
+/// each), and the local fit's working copy with its halo.
+pub const BYTES_PER_LATTICE_BRICK: u64 = 8 * 1024;
+
+/// How far into the part the lattice reads the part's field as a distance: the depth of a depth
+/// ramp, and `wall` for an infill.
+pub fn lattice_reach(lattice: &Lattice, wall: f32) -> f32 {
+    let depth = match lattice.grade.map(|g| g.ramp) {
+        Some(Ramp::Depth { depth }) => depth,
+        _ => 0.0,
+    };
+    depth.max(wall)
+}
+
+/// Refuses a lattice whose finest wall is thinner than two grid spacings: the field cannot
+/// hold it and the solid would break into specks.
+fn check_resolution(shape: &Shape, lattice: &Lattice) -> Result<()> {
+    lattice.check()?;
+    let spacing = shape.volume.grid.spacing;
+    let thinnest = lattice
+        .grade
+        .map_or(lattice.thickness, |g| g.thickness.min(lattice.thickness));
+    if lattice.style == pgvol_ops::LatticeStyle::Sheet && thinnest < 2.0 * spacing {
+        return Err(Error::parameter(format!(
+            "the sheet thickness {thinnest} is under two grid spacings ({}); use a thicker \
+             sheet or a finer grid (--res)",
+            2.0 * spacing
+        )));
+    }
+    let finest = lattice
+        .grade
+        .map_or(lattice.cell, |g| g.cell.min(lattice.cell));
+    if finest < 8.0 * spacing {
+        return Err(Error::parameter(format!(
+            "the cell size {finest} is under eight grid spacings ({}); use a larger cell or a \
+             finer grid (--res)",
+            8.0 * spacing
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses a lattice on `shape` that would not fit in memory.
+fn check_lattice_memory(shape: &Shape) -> Result<()> {
+    let bricks = pgvol_ops::lattice_bricks(&shape.volume) as u64;
+    let [nx, ny, nz] = shape.volume.grid.dims;
+    check_memory(
+        &format!("a lattice filling {bricks} bricks of a {nx} x {ny} x {nz} grid"),
+        bricks.saturating_mul(BYTES_PER_LATTICE_BRICK),
+        "lower the resolution",
+    )
+}
+
+/// The part of `shape` intersected with `lattice`.
+pub fn lattice(
+    shape: &Shape,
+    lattice: &Lattice,
+    progress: &dyn Progress,
+) -> Result<CoefficientVolume> {
+    check_resolution(shape, lattice)?;
+    shape.check_reach(lattice_reach(lattice, 0.0))?;
+    check_lattice_memory(shape)?;
+    Ok(progress::stage(progress, "lattice", |_| {
+        pgvol_ops::lattice_part(&shape.volume, lattice)
+    })??)
+}
+
+/// `shape` hollowed to walls of `wall` thickness, the cavity filled with `lattice` and the
+/// drains cut through wall and lattice.
+pub fn infill(
+    shape: &Shape,
+    wall: f32,
+    lattice: &Lattice,
+    drains: &[Drain],
+    progress: &dyn Progress,
+) -> Result<CoefficientVolume> {
+    check_thickness(wall)?;
+    check_resolution(shape, lattice)?;
+    shape.check_reach(lattice_reach(lattice, wall))?;
+    check_drains(shape, wall, drains, progress)?;
+    check_lattice_memory(shape)?;
+    Ok(progress::stage(progress, "infill", |_| {
+        pgvol_ops::infill(&shape.volume, wall, lattice, drains)
+    })??)
+}
+
+/// What a lattice solid measures.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SolidReport {
+    /// Volume of the solid, model units cubed.
+    pub volume: f64,
+    /// Its surface area, model units squared.
+    pub area: f64,
+    /// Volume of the part it was cut from (its field's zero level set, contoured alike).
+    pub part_volume: f64,
+    /// `volume / part_volume`.
+    pub fraction: f64,
+    /// Whether the contoured solid is closed, manifold and consistently oriented.
+    pub watertight: bool,
+    /// Closed voids inside the solid (surface pieces enclosing negative volume): pockets of
+    /// powder or resin with no way out. A sheet splits a cavity into two labyrinths, so an
+    /// infill needs a drain into each.
+    pub enclosed_voids: usize,
+}
+
+/// The volume fraction and area of `solid` (the contoured result) against the part of
+/// `shape`, contoured the same way.
+pub fn solid_report(shape: &Shape, solid: &Mesh, progress: &dyn Progress) -> Result<SolidReport> {
+    let part = decode(&shape.volume, &DecodeOptions::default(), progress)?;
+    let (s, p) = (solid.stats(), part.stats());
+    let enclosed_voids = piece_volumes(solid).iter().filter(|&&v| v < 0.0).count();
+    if enclosed_voids > 0 {
+        progress.warn(&format!(
+            "the solid encloses {enclosed_voids} void{} with no way out; add a drain into each \
+             (--drain)",
+            if enclosed_voids == 1 { "" } else { "s" }
+        ));
+    }
+    Ok(SolidReport {
+        enclosed_voids,
+        volume: s.volume,
+        area: s.area,
+        part_volume: p.volume,
+        fraction: s.volume / p.volume,
+        watertight: s.watertight && s.winding_consistent && s.non_manifold_edges == 0,
+    })
+}
+
+/// The signed volume enclosed by each connected piece of `mesh` (triangles sharing vertices).
+fn piece_volumes(mesh: &Mesh) -> Vec<f64> {
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+    for t in &mesh.triangles {
+        for &other in &t[1..] {
+            let (a, b) = (root(&mut parent, t[0]), root(&mut parent, other));
+            parent[a as usize] = b;
+        }
+    }
+    let mut volume = vec![None; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let [p, q, r] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        let slot = &mut volume[root(&mut parent, t[0]) as usize];
+        *slot = Some(slot.unwrap_or(0.0) + p.dot(q.cross(r)) / 6.0);
+    }
+    volume.into_iter().flatten().collect()
+}

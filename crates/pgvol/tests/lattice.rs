@@ -1,0 +1,77 @@
+//! Lattices through the facade: parameters the grid cannot hold are refused with the figure, an
+//! infill leaves the two labyrinths of a sheet as enclosed voids until a drain opens each.
+
+use glam::Vec3;
+use pgvol::{ErrorKind, Lattice, Shape, Silent, Tpms};
+
+const WALL: f32 = 0.1;
+
+fn sphere() -> Shape {
+    let mesh = pgvol::mesh::shapes::octasphere(5);
+    Shape::from_mesh(mesh, 96, 0.0, WALL, &Silent).unwrap()
+}
+
+fn solid(shape: &Shape, volume: &pgvol::CoefficientVolume) -> pgvol::SolidReport {
+    let mesh = pgvol::decode(volume, &pgvol::DecodeOptions::default(), &Silent).unwrap();
+    pgvol::solid_report(shape, &mesh, &Silent).unwrap()
+}
+
+#[test]
+fn lattices_the_grid_cannot_hold_are_refused_with_the_figure() {
+    let shape = sphere();
+    let thin = Lattice::sheet(Tpms::Gyroid, 0.5, 0.01);
+    let e = pgvol::lattice(&shape, &thin, &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::BadParameter);
+    assert!(e.message().contains("under two grid spacings"), "{e}");
+    let fine = Lattice::sheet(Tpms::Gyroid, 0.1, 0.049);
+    let e = pgvol::lattice(&shape, &fine, &Silent).unwrap_err();
+    assert!(e.message().contains("under eight grid spacings"), "{e}");
+    let too_thick = Lattice::sheet(Tpms::Gyroid, 0.5, 0.3);
+    let e = pgvol::lattice(&shape, &too_thick, &Silent).unwrap_err();
+    assert!(e.message().contains("under half the cell"), "{e}");
+}
+
+#[test]
+fn drains_open_the_labyrinths_of_an_infill() {
+    let shape = sphere();
+    let gyroid = Lattice::sheet(Tpms::Gyroid, 0.6, 0.08);
+    let closed = pgvol::infill(&shape, WALL, &gyroid, &[], &Silent).unwrap();
+    let sealed = solid(&shape, &closed);
+    assert!(sealed.watertight, "{sealed:?}");
+    assert!(sealed.enclosed_voids >= 2, "{sealed:?}");
+    assert!(sealed.fraction > 0.2 && sealed.fraction < 0.6, "{sealed:?}");
+
+    // One drain from a point deep in each labyrinth, out through the top.
+    let labyrinth = |sign: f32| {
+        let points = (0..1000).map(|i| glam::UVec3::new(i % 10, (i / 10) % 10, i / 100).as_vec3());
+        points
+            .map(|p| (p - Vec3::splat(4.5)) * 0.1)
+            .max_by(|&a, &b| {
+                let d = |p| sign * gyroid.surface_distance(p, -1.0);
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap()
+    };
+    let drains: Vec<pgvol::Drain> = [1.0, -1.0]
+        .map(|sign| pgvol::Drain {
+            point: labyrinth(sign),
+            direction: Vec3::Z,
+            diameter: 0.08,
+        })
+        .to_vec();
+    let open = pgvol::infill(&shape, WALL, &gyroid, &drains, &Silent).unwrap();
+    let drained = solid(&shape, &open);
+    assert!(drained.watertight, "{drained:?}");
+    assert!(
+        drained.enclosed_voids + 2 <= sealed.enclosed_voids,
+        "{sealed:?} then {drained:?}"
+    );
+    assert!(drained.volume < sealed.volume);
+    // A drain point in the wall opens nothing and is refused.
+    let wall = pgvol::Drain {
+        point: Vec3::new(0.0, 0.0, 0.95),
+        ..drains[0]
+    };
+    let e = pgvol::infill(&shape, WALL, &gyroid, &[wall], &Silent).unwrap_err();
+    assert!(e.message().contains("in the wall"), "{e}");
+}
