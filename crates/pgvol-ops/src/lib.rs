@@ -19,6 +19,7 @@ mod cli_file;
 mod csg;
 mod error;
 mod lattice;
+mod measure;
 mod polygon;
 mod simplify;
 mod slice;
@@ -32,6 +33,7 @@ pub use error::OpsError;
 pub use lattice::{
     infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeStyle, Ramp, Tpms, TPMS_NAMES,
 };
+pub use measure::{measure_field, FieldMeasure};
 pub use simplify::simplify_loops;
 pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,

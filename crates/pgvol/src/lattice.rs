@@ -3,10 +3,10 @@
 //! solid they make (volume fraction and surface area).
 
 use pgvol_core::Mesh;
+use pgvol_field::fit::node_values_sparse;
 use pgvol_field::CoefficientVolume;
 use pgvol_ops::{Drain, Lattice, Ramp};
 
-use crate::decode::{decode, DecodeOptions};
 use crate::error::{Error, Result};
 use crate::memory::check_memory;
 use crate::progress::{self, Progress};
@@ -105,39 +105,65 @@ pub struct SolidReport {
     pub volume: f64,
     /// Its surface area, model units squared.
     pub area: f64,
-    /// Volume of the part it was cut from (its field's zero level set, contoured alike).
+    /// Volume of the part it was cut from, estimated from the part's field.
     pub part_volume: f64,
     /// `volume / part_volume`.
     pub fraction: f64,
-    /// Whether the contoured solid is closed, manifold and consistently oriented.
-    pub watertight: bool,
-    /// Closed voids inside the solid (surface pieces enclosing negative volume): pockets of
-    /// powder or resin with no way out. A sheet splits a cavity into two labyrinths, so an
-    /// infill needs a drain into each.
-    pub enclosed_voids: usize,
+    /// Where volume and area come from: `"mesh"` (the contoured solid, exact sums over its
+    /// triangles) or `"field"` (node values, see [`pgvol_ops::measure_field`]).
+    pub measured_on: &'static str,
+    /// Closed voids inside the solid (mesh pieces enclosing negative volume), when measured on
+    /// a mesh: pockets of powder or resin with no way out. A sheet splits a cavity into two
+    /// labyrinths, so an infill needs a drain into each.
+    pub enclosed_voids: Option<usize>,
 }
 
-/// The volume fraction and area of `solid` (the contoured result) against the part of
-/// `shape`, contoured the same way.
-pub fn solid_report(shape: &Shape, solid: &Mesh, progress: &dyn Progress) -> Result<SolidReport> {
-    let part = decode(&shape.volume, &DecodeOptions::default(), progress)?;
-    let (s, p) = (solid.stats(), part.stats());
-    let enclosed_voids = piece_volumes(solid).iter().filter(|&&v| v < 0.0).count();
-    if enclosed_voids > 0 {
-        progress.warn(&format!(
-            "the solid encloses {enclosed_voids} void{} with no way out; add a drain into each \
-             (--drain)",
-            if enclosed_voids == 1 { "" } else { "s" }
-        ));
-    }
+/// The volume fraction and area of `solid` against the part of `shape`: on `mesh`, the
+/// contoured solid, when there is one, else on the field's node values (no contouring).
+pub fn solid_report(
+    shape: &Shape,
+    solid: &CoefficientVolume,
+    mesh: Option<&Mesh>,
+    progress: &dyn Progress,
+) -> Result<SolidReport> {
+    let grid = shape.volume.grid;
+    let part = pgvol_ops::measure_field(&node_values_sparse(&shape.volume), &grid);
+    let (volume, area, enclosed_voids) = match mesh {
+        Some(mesh) => {
+            let pieces = piece_volumes(mesh);
+            let voids = pieces.iter().filter(|&&v| v < 0.0).count();
+            if voids > 0 {
+                progress.warn(&format!(
+                    "the solid encloses {voids} void{} with no way out; add a drain into each \
+                     (--drain)",
+                    if voids == 1 { "" } else { "s" }
+                ));
+            }
+            (pieces.iter().sum(), mesh_area(mesh), Some(voids))
+        }
+        None => {
+            let m = pgvol_ops::measure_field(&node_values_sparse(solid), &solid.grid);
+            (m.volume, m.area, None)
+        }
+    };
     Ok(SolidReport {
+        volume,
+        area,
+        part_volume: part.volume,
+        fraction: volume / part.volume,
+        measured_on: if mesh.is_some() { "mesh" } else { "field" },
         enclosed_voids,
-        volume: s.volume,
-        area: s.area,
-        part_volume: p.volume,
-        fraction: s.volume / p.volume,
-        watertight: s.watertight && s.winding_consistent && s.non_manifold_edges == 0,
     })
+}
+
+fn mesh_area(mesh: &Mesh) -> f64 {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum()
 }
 
 /// The signed volume enclosed by each connected piece of `mesh` (triangles sharing vertices).

@@ -132,18 +132,30 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, 0.0);
     let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::lattice(&shape, &lattice, &bars).map_err(|e| at_input(e, &a.input))?;
+    let stages = [
+        ("load", loaded),
+        ("lattice", start.elapsed().as_secs_f64() - loaded),
+    ];
     let operation = format!(
         "lattice {} cell {} thickness {}",
         lattice.surface, lattice.cell, lattice.thickness
     );
     write_solid(
-        &a.output, volume, &shape, &operation, &a.shape, &a.out, &bars, start,
+        &a.output,
+        volume,
+        &shape,
+        &operation,
+        &a.shape,
+        &a.out,
+        &bars,
+        (start, stages),
     )
 }
 
-/// Writes a lattice solid as .pgv or as a mesh by the output's extension, and reports it: the
-/// solid is contoured in either case for its volume fraction and area.
+/// Writes a lattice solid as .pgv or as a mesh by the output's extension, and reports its
+/// volume fraction and area.
 #[allow(clippy::too_many_arguments)]
 pub fn write_solid(
     output: &Path,
@@ -153,29 +165,45 @@ pub fn write_solid(
     args: &ShapeOutputArgs,
     out: &OutputArgs,
     progress: &Bars,
-    start: Instant,
+    (start, stages): (Instant, [(&str, f64); 2]),
 ) -> Result<()> {
-    let options = pgvol::DecodeOptions {
-        method: args.method.into(),
-        min_component: args.min_component,
-        ..Default::default()
-    };
-    let mesh = pgvol::decode(&volume, &options, progress).map_err(|e| {
-        anyhow::anyhow!("{operation}: the result is empty (no lattice inside the part): {e}")
-    })?;
-    let report = pgvol::solid_report(shape, &mesh, progress)?;
-    let triangles = if pgvol::is_pgv(output) {
-        let file = shape.derived_file(volume, operation);
-        pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
-        0
+    // A mesh output is contoured anyway and measured exactly; a .pgv is measured on the field.
+    let t = Instant::now();
+    let mesh = if pgvol::is_pgv(output) {
+        None
     } else {
-        pgvol::write_mesh(output, &mesh)?;
-        mesh.triangles.len()
+        let options = pgvol::DecodeOptions {
+            method: args.method.into(),
+            min_component: args.min_component,
+            ..Default::default()
+        };
+        Some(pgvol::decode(&volume, &options, progress).map_err(|e| {
+            anyhow::anyhow!("{operation}: the result is empty (no lattice inside the part): {e}")
+        })?)
     };
+    let contour = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let report = pgvol::solid_report(shape, &volume, mesh.as_ref(), progress)?;
+    let measure = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let triangles = match mesh {
+        Some(mesh) => {
+            pgvol::write_mesh(output, &mesh)?;
+            mesh.triangles.len()
+        }
+        None => {
+            let file = shape.derived_file(volume, operation);
+            pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
+            0
+        }
+    };
+    let write = t.elapsed().as_secs_f64();
     if out.json {
+        let mut seconds = stages.to_vec();
+        seconds.extend([("contour", contour), ("measure", measure), ("write", write)]);
         return print_json(&serde_json::json!({
             "output": output, "triangles": triangles, "solid": report,
-            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
+            "seconds": seconds_json(&seconds, start.elapsed().as_secs_f64()),
         }));
     }
     if !out.quiet {

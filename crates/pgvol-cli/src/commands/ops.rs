@@ -275,14 +275,26 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, a.thickness);
     let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
         .map_err(|e| at_input(e, &a.input))?;
+    let stages = [
+        ("load", loaded),
+        ("infill", start.elapsed().as_secs_f64() - loaded),
+    ];
     let operation = format!(
         "hollow {} infill {surface} cell {cell} thickness {thickness}",
         a.thickness
     );
     write_solid(
-        &a.output, volume, &shape, &operation, &a.shape, &a.out, &bars, start,
+        &a.output,
+        volume,
+        &shape,
+        &operation,
+        &a.shape,
+        &a.out,
+        &bars,
+        (start, stages),
     )
 }
 
