@@ -12,6 +12,7 @@
 
 use glam::Vec3;
 use pgvol_core::sparse::BrickValues;
+use pgvol_core::sparse::SparseGrid;
 use pgvol_core::{Background, BRICK_EDGE};
 use pgvol_field::fit::node_values_sparse;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
@@ -103,8 +104,20 @@ pub(crate) fn remap(
     f: impl Fn(Vec3, f32) -> f32 + Sync,
     varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
 ) -> Result<CoefficientVolume, OpsError> {
-    let grid: Grid = volume.grid;
     let mut values = node_values_sparse(volume);
+    map_nodes(&mut values, volume.grid, f, varies);
+    let (result, _) = pgvol_field::fit::interp_sparse(volume.grid, volume.basis, &values)?;
+    Ok(result)
+}
+
+/// The node values `values` on `grid` mapped by `f` in place, as [`remap`] does before
+/// interpolating.
+pub(crate) fn map_nodes(
+    values: &mut SparseGrid,
+    grid: Grid,
+    f: impl Fn(Vec3, f32) -> f32 + Sync,
+    varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
+) {
     let background = values.background();
     // Absent bricks where `f` depends on position become stored bricks of their background.
     let absent: Vec<[usize; 3]> = values
@@ -144,8 +157,6 @@ pub(crate) fn remap(
         outside: f(grid.origin, background.outside),
         inside: f(grid.origin, background.inside),
     });
-    let (result, _) = pgvol_field::fit::interp_sparse(grid, volume.basis, &values)?;
-    Ok(result)
 }
 
 /// The surface moved by `distance` along its normals (outward when positive): the field minus

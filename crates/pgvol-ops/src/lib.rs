@@ -31,7 +31,8 @@ pub use csg::{
 };
 pub use error::OpsError;
 pub use lattice::{
-    infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeStyle, Ramp, Tpms, TPMS_NAMES,
+    infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms,
+    TPMS_NAMES,
 };
 pub use measure::{measure_field, FieldMeasure};
 pub use simplify::simplify_loops;

@@ -3,9 +3,7 @@
 //! solid they make (volume fraction and surface area).
 
 use pgvol_core::Mesh;
-use pgvol_field::fit::node_values_sparse;
-use pgvol_field::CoefficientVolume;
-use pgvol_ops::{Drain, Lattice, Ramp};
+use pgvol_ops::{Drain, Lattice, LatticeSolid, Ramp};
 
 use crate::error::{Error, Result};
 use crate::memory::check_memory;
@@ -66,11 +64,7 @@ fn check_lattice_memory(shape: &Shape) -> Result<()> {
 }
 
 /// The part of `shape` intersected with `lattice`.
-pub fn lattice(
-    shape: &Shape,
-    lattice: &Lattice,
-    progress: &dyn Progress,
-) -> Result<CoefficientVolume> {
+pub fn lattice(shape: &Shape, lattice: &Lattice, progress: &dyn Progress) -> Result<LatticeSolid> {
     check_resolution(shape, lattice)?;
     shape.check_reach(lattice_reach(lattice, 0.0))?;
     check_lattice_memory(shape)?;
@@ -87,7 +81,7 @@ pub fn infill(
     lattice: &Lattice,
     drains: &[Drain],
     progress: &dyn Progress,
-) -> Result<CoefficientVolume> {
+) -> Result<LatticeSolid> {
     check_thickness(wall)?;
     check_resolution(shape, lattice)?;
     shape.check_reach(lattice_reach(lattice, wall))?;
@@ -118,16 +112,13 @@ pub struct SolidReport {
     pub enclosed_voids: Option<usize>,
 }
 
-/// The volume fraction and area of `solid` against the part of `shape`: on `mesh`, the
-/// contoured solid, when there is one, else on the field's node values (no contouring).
+/// The volume fraction and area of `solid`: on `mesh`, the contoured solid, when there is one
+/// (exact sums over its triangles), else from the field's node values (no contouring).
 pub fn solid_report(
-    shape: &Shape,
-    solid: &CoefficientVolume,
+    solid: &LatticeSolid,
     mesh: Option<&Mesh>,
     progress: &dyn Progress,
-) -> Result<SolidReport> {
-    let grid = shape.volume.grid;
-    let part = pgvol_ops::measure_field(&node_values_sparse(&shape.volume), &grid);
+) -> SolidReport {
     let (volume, area, enclosed_voids) = match mesh {
         Some(mesh) => {
             let pieces = piece_volumes(mesh);
@@ -141,19 +132,16 @@ pub fn solid_report(
             }
             (pieces.iter().sum(), mesh_area(mesh), Some(voids))
         }
-        None => {
-            let m = pgvol_ops::measure_field(&node_values_sparse(solid), &solid.grid);
-            (m.volume, m.area, None)
-        }
+        None => (solid.solid.volume, solid.solid.area, None),
     };
-    Ok(SolidReport {
+    SolidReport {
         volume,
         area,
-        part_volume: part.volume,
-        fraction: volume / part.volume,
+        part_volume: solid.part.volume,
+        fraction: volume / solid.part.volume,
         measured_on: if mesh.is_some() { "mesh" } else { "field" },
         enclosed_voids,
-    })
+    }
 }
 
 fn mesh_area(mesh: &Mesh) -> f64 {

@@ -122,7 +122,8 @@ pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
 pub use pgvol_ops::{
-    Axis, Drain, Grade, Lattice, LatticeStyle, Layer, Ramp, ShellSide, Tpms, TPMS_NAMES,
+    Axis, Drain, Grade, Lattice, LatticeSolid, LatticeStyle, Layer, Ramp, ShellSide, Tpms,
+    TPMS_NAMES,
 };
 pub use pgvol_sdf::SignMode;
 

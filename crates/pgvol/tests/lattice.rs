@@ -11,16 +11,16 @@ fn sphere() -> Shape {
     Shape::from_mesh(mesh, 96, 0.0, WALL, &Silent).unwrap()
 }
 
-fn solid(shape: &Shape, volume: &pgvol::CoefficientVolume) -> pgvol::SolidReport {
-    let mesh = pgvol::decode(volume, &pgvol::DecodeOptions::default(), &Silent).unwrap();
+fn solid(solid: &pgvol::LatticeSolid) -> pgvol::SolidReport {
+    let mesh = pgvol::decode(&solid.volume, &pgvol::DecodeOptions::default(), &Silent).unwrap();
     let s = mesh.stats();
     assert!(
         s.watertight && s.winding_consistent && s.non_manifold_edges == 0,
         "{s:?}"
     );
-    let on_mesh = pgvol::solid_report(shape, volume, Some(&mesh), &Silent).unwrap();
+    let on_mesh = pgvol::solid_report(solid, Some(&mesh), &Silent);
     // The estimate from node values agrees with the contoured solid.
-    let on_field = pgvol::solid_report(shape, volume, None, &Silent).unwrap();
+    let on_field = pgvol::solid_report(solid, None, &Silent);
     assert!(
         (on_field.volume / on_mesh.volume - 1.0).abs() < 0.01,
         "{on_field:?} {on_mesh:?}"
@@ -52,7 +52,7 @@ fn drains_open_the_labyrinths_of_an_infill() {
     let shape = sphere();
     let gyroid = Lattice::sheet(Tpms::Gyroid, 0.6, 0.08);
     let closed = pgvol::infill(&shape, WALL, &gyroid, &[], &Silent).unwrap();
-    let sealed = solid(&shape, &closed);
+    let sealed = solid(&closed);
     assert!(sealed.enclosed_voids.unwrap() >= 2, "{sealed:?}");
     assert!(sealed.fraction > 0.2 && sealed.fraction < 0.6, "{sealed:?}");
 
@@ -75,7 +75,7 @@ fn drains_open_the_labyrinths_of_an_infill() {
         })
         .to_vec();
     let open = pgvol::infill(&shape, WALL, &gyroid, &drains, &Silent).unwrap();
-    let drained = solid(&shape, &open);
+    let drained = solid(&open);
     assert!(
         drained.enclosed_voids.unwrap() + 2 <= sealed.enclosed_voids.unwrap(),
         "{sealed:?} then {drained:?}"

@@ -159,7 +159,7 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
 #[allow(clippy::too_many_arguments)]
 pub fn write_solid(
     output: &Path,
-    volume: pgvol::CoefficientVolume,
+    solid: pgvol::LatticeSolid,
     shape: &pgvol::Shape,
     operation: &str,
     args: &ShapeOutputArgs,
@@ -177,13 +177,17 @@ pub fn write_solid(
             min_component: args.min_component,
             ..Default::default()
         };
-        Some(pgvol::decode(&volume, &options, progress).map_err(|e| {
-            anyhow::anyhow!("{operation}: the result is empty (no lattice inside the part): {e}")
-        })?)
+        Some(
+            pgvol::decode(&solid.volume, &options, progress).map_err(|e| {
+                anyhow::anyhow!(
+                    "{operation}: the result is empty (no lattice inside the part): {e}"
+                )
+            })?,
+        )
     };
     let contour = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let report = pgvol::solid_report(shape, &volume, mesh.as_ref(), progress)?;
+    let report = pgvol::solid_report(&solid, mesh.as_ref(), progress);
     let measure = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let triangles = match mesh {
@@ -192,7 +196,7 @@ pub fn write_solid(
             mesh.triangles.len()
         }
         None => {
-            let file = shape.derived_file(volume, operation);
+            let file = shape.derived_file(solid.volume, operation);
             pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
             0
         }

@@ -13,18 +13,48 @@ mod tpms;
 pub use field::{Grade, Lattice, LatticeStyle, Ramp};
 pub use tpms::{Tpms, TPMS_NAMES};
 
+use glam::Vec3;
+use pgvol_field::fit::{interp_sparse, node_values_sparse};
 use pgvol_field::CoefficientVolume;
 
-use crate::csg::{check, cut_drains, drain_reaches, drain_units, remap, Drain};
+use crate::csg::{check, cut_drains, drain_reaches, drain_units, map_nodes, Drain};
 use crate::error::OpsError;
+use crate::measure::{measure_field, FieldMeasure};
+
+/// A lattice solid with the measures of its field and of the part's, taken from the node values
+/// both pass through anyway.
+#[derive(Clone, Debug)]
+pub struct LatticeSolid {
+    pub volume: CoefficientVolume,
+    pub solid: FieldMeasure,
+    pub part: FieldMeasure,
+}
+
+/// The part's node values mapped by `f` and interpolated again, measured before and after.
+fn solid_of(
+    volume: &CoefficientVolume,
+    f: impl Fn(Vec3, f32) -> f32 + Sync,
+    varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
+) -> Result<LatticeSolid, OpsError> {
+    let mut values = node_values_sparse(volume);
+    let part = measure_field(&values, &volume.grid);
+    map_nodes(&mut values, volume.grid, f, varies);
+    let solid = measure_field(&values, &volume.grid);
+    let (volume, _) = interp_sparse(volume.grid, volume.basis, &values)?;
+    Ok(LatticeSolid {
+        volume,
+        solid,
+        part,
+    })
+}
 
 /// The part intersected with the lattice: `max(f, lattice)`.
 pub fn lattice_part(
     volume: &CoefficientVolume,
     lattice: &Lattice,
-) -> Result<CoefficientVolume, OpsError> {
+) -> Result<LatticeSolid, OpsError> {
     lattice.check()?;
-    remap(volume, |p, v| v.max(lattice.value(p, v)), |_, _, v| v < 0.0)
+    solid_of(volume, |p, v| v.max(lattice.value(p, v)), |_, _, v| v < 0.0)
 }
 
 /// The part hollowed to walls of `wall` thickness with the cavity filled by the lattice,
@@ -35,11 +65,11 @@ pub fn infill(
     wall: f32,
     lattice: &Lattice,
     drains: &[Drain],
-) -> Result<CoefficientVolume, OpsError> {
+) -> Result<LatticeSolid, OpsError> {
     check("wall thickness", wall, true)?;
     lattice.check()?;
     let units = drain_units(drains)?;
-    remap(
+    solid_of(
         volume,
         |p, v| {
             let filled = v.max((-(v + wall)).min(lattice.value(p, v)));
