@@ -168,6 +168,50 @@ fn grid_spec(py: Python<'_>, res: Option<usize>, voxel: Option<f32>) -> PyResult
 
 /// A drain hole from seven numbers `x, y, z, dx, dy, dz, diameter` or from
 /// `((x, y, z), (dx, dy, dz), diameter)`, checked by the library.
+/// A segment ((x0, y0, z0), (x1, y1, z1)).
+type Segment = ((f32, f32, f32), (f32, f32, f32));
+
+/// A lattice from the keyword arguments of `lattice` and `infill`: the grading is
+/// (depth, linear segment, far cell, far thickness).
+fn make_lattice(
+    py: Python<'_>,
+    surface: &str,
+    style: &str,
+    cell: f32,
+    thickness: f32,
+    (depth, linear, cell_far, thickness_far): (
+        Option<f32>,
+        Option<Segment>,
+        Option<f32>,
+        Option<f32>,
+    ),
+) -> PyResult<pgvol::Lattice> {
+    let ramp = match (depth, linear) {
+        (Some(_), Some(_)) => {
+            return Err(errors::parameter(
+                py,
+                "give grade_depth or grade_linear, not both",
+            ))
+        }
+        (Some(depth), None) => Some(pgvol::Ramp::Depth { depth }),
+        (None, Some((a, b))) => Some(pgvol::Ramp::Linear {
+            from: glam::Vec3::new(a.0, a.1, a.2),
+            to: glam::Vec3::new(b.0, b.1, b.2),
+        }),
+        (None, None) => None,
+    };
+    pgvol::make_lattice(
+        names::tpms(py, surface)?,
+        names::lattice_style(py, style)?,
+        cell,
+        thickness,
+        ramp,
+        cell_far,
+        thickness_far,
+    )
+    .map_err(|e| errors::to_py(py, e))
+}
+
 fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Drain> {
     let numbers: Vec<f32> = match obj.extract::<Vec<f32>>() {
         Ok(v) => v,
@@ -428,6 +472,66 @@ impl Field {
             pgvol::shell(&self.shape, thickness, kind, &drains, p)
         })?;
         Ok(self.derive(volume, &pgvol::operation_name(Some(kind), thickness)))
+    }
+
+    /// The part cut by a triply periodic lattice: `surface` "gyroid", "schwarz-p", "diamond" or
+    /// "neovius" with period `cell`; `style` "sheet" (a wall of `thickness`) or "strut" (a
+    /// labyrinth bounded at the level `thickness`). Grading: `grade_depth` (the thickness from
+    /// the skin to that depth) or `grade_linear` ((x0, y0, z0), (x1, y1, z1)), towards
+    /// `cell_far` and `thickness_far`. See docs/lattices.md.
+    #[pyo3(signature = (surface, cell, thickness, *, style="sheet", grade_depth=None, grade_linear=None, cell_far=None, thickness_far=None, progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn lattice(
+        &self,
+        py: Python<'_>,
+        surface: &str,
+        cell: f32,
+        thickness: f32,
+        style: &str,
+        grade_depth: Option<f32>,
+        grade_linear: Option<Segment>,
+        cell_far: Option<f32>,
+        thickness_far: Option<f32>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let grading = (grade_depth, grade_linear, cell_far, thickness_far);
+        let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
+        let solid = run(py, progress, |p| pgvol::lattice(&self.shape, &lattice, p))?;
+        let operation = format!("lattice {surface} cell {cell} thickness {thickness}");
+        Ok(self.derive(solid.volume, &operation))
+    }
+
+    /// The shape hollowed to walls of `wall` thickness with the cavity filled by a lattice (the
+    /// parameters of `lattice`), and `drains` (as for `shell`) cut through wall and lattice.
+    #[pyo3(signature = (wall, surface, cell, thickness, *, style="sheet", drains=None, grade_depth=None, grade_linear=None, cell_far=None, thickness_far=None, progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn infill(
+        &self,
+        py: Python<'_>,
+        wall: f32,
+        surface: &str,
+        cell: f32,
+        thickness: f32,
+        style: &str,
+        drains: Option<Vec<Bound<'_, PyAny>>>,
+        grade_depth: Option<f32>,
+        grade_linear: Option<Segment>,
+        cell_far: Option<f32>,
+        thickness_far: Option<f32>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let grading = (grade_depth, grade_linear, cell_far, thickness_far);
+        let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
+        let drains = drains
+            .unwrap_or_default()
+            .iter()
+            .map(|d| drain(py, d))
+            .collect::<PyResult<Vec<_>>>()?;
+        let solid = run(py, progress, |p| {
+            pgvol::infill(&self.shape, wall, &lattice, &drains, p)
+        })?;
+        let operation = format!("hollow {wall} infill {surface} cell {cell} thickness {thickness}");
+        Ok(self.derive(solid.volume, &operation))
     }
 
     /// Layers of closed contours `layer_height` apart along `axis`.

@@ -96,3 +96,18 @@ pub(crate) fn precision(py: Python<'_>, name: &str) -> PyResult<pgvol::Precision
         .find(|p| p.name() == name)
         .ok_or_else(|| unknown(py, "precision", name, "f32, f16, q16 or fixed"))
 }
+
+/// "gyroid", "schwarz-p" (or "primitive"), "diamond" or "neovius".
+pub(crate) fn tpms(py: Python<'_>, name: &str) -> PyResult<pgvol::Tpms> {
+    name.parse()
+        .map_err(|_| unknown(py, "surface", name, "gyroid, schwarz-p, diamond or neovius"))
+}
+
+/// "sheet" or "strut".
+pub(crate) fn lattice_style(py: Python<'_>, name: &str) -> PyResult<pgvol::LatticeStyle> {
+    match name {
+        "sheet" => Ok(pgvol::LatticeStyle::Sheet),
+        "strut" => Ok(pgvol::LatticeStyle::Strut),
+        _ => Err(unknown(py, "lattice style", name, "sheet or strut")),
+    }
+}

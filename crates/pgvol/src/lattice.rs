@@ -3,7 +3,7 @@
 //! solid they make (volume fraction and surface area).
 
 use pgvol_core::Mesh;
-use pgvol_ops::{Drain, Lattice, LatticeSolid, Ramp};
+use pgvol_ops::{Drain, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms};
 
 use crate::error::{Error, Result};
 use crate::memory::check_memory;
@@ -13,6 +13,37 @@ use crate::shape::{check_drains, check_thickness, Shape};
 /// Bytes per brick of 8³ nodes a lattice stores: the node values and the coefficients (2 KiB
 /// each), and the local fit's working copy with its halo.
 pub const BYTES_PER_LATTICE_BRICK: u64 = 8 * 1024;
+
+/// The lattice of these parameters, checked: the far values of a grading default to the near
+/// ones and need a ramp.
+pub fn make_lattice(
+    surface: Tpms,
+    style: LatticeStyle,
+    cell: f32,
+    thickness: f32,
+    ramp: Option<Ramp>,
+    cell_far: Option<f32>,
+    thickness_far: Option<f32>,
+) -> Result<Lattice> {
+    if ramp.is_none() && (cell_far.is_some() || thickness_far.is_some()) {
+        return Err(Error::parameter(
+            "a far cell size or thickness needs a ramp: a grading depth or a linear segment",
+        ));
+    }
+    let lattice = Lattice {
+        surface,
+        style,
+        cell,
+        thickness,
+        grade: ramp.map(|ramp| Grade {
+            ramp,
+            cell: cell_far.unwrap_or(cell),
+            thickness: thickness_far.unwrap_or(thickness),
+        }),
+    };
+    lattice.check()?;
+    Ok(lattice)
+}
 
 /// How far into the part the lattice reads the part's field as a distance: the depth of a depth
 /// ramp, and `wall` for an infill.
@@ -32,7 +63,7 @@ fn check_resolution(shape: &Shape, lattice: &Lattice) -> Result<()> {
     let thinnest = lattice
         .grade
         .map_or(lattice.thickness, |g| g.thickness.min(lattice.thickness));
-    if lattice.style == pgvol_ops::LatticeStyle::Sheet && thinnest < 2.0 * spacing {
+    if lattice.style == LatticeStyle::Sheet && thinnest < 2.0 * spacing {
         return Err(Error::parameter(format!(
             "the sheet thickness {thinnest} is under two grid spacings ({}); use a thicker \
              sheet or a finer grid (--res)",

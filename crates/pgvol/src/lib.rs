@@ -90,7 +90,8 @@ pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT, THREEMF_UNITS};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
 pub use lattice::{
-    infill, lattice, lattice_reach, solid_report, SolidReport, BYTES_PER_LATTICE_BRICK,
+    infill, lattice, lattice_reach, make_lattice, solid_report, SolidReport,
+    BYTES_PER_LATTICE_BRICK,
 };
 pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{

@@ -53,7 +53,7 @@ fn parse_surface(text: &str) -> Result<pgvol::Tpms, String> {
     text.parse()
 }
 
-/// The lattice of the command line; `--grade-*` without far values grades nothing.
+/// The lattice of the command line.
 pub fn build_lattice(
     surface: pgvol::Tpms,
     style: StyleArg,
@@ -69,26 +69,19 @@ pub fn build_lattice(
         }),
         (None, None) => None,
     };
-    if ramp.is_none() && (grade.cell_far.is_some() || grade.thickness_far.is_some()) {
-        anyhow::bail!(
-            "--cell-far and --thickness-far need a ramp: --grade-depth or --grade-linear"
-        );
-    }
-    let lattice = pgvol::Lattice {
+    let style = match style {
+        StyleArg::Sheet => pgvol::LatticeStyle::Sheet,
+        StyleArg::Strut => pgvol::LatticeStyle::Strut,
+    };
+    Ok(pgvol::make_lattice(
         surface,
-        style: match style {
-            StyleArg::Sheet => pgvol::LatticeStyle::Sheet,
-            StyleArg::Strut => pgvol::LatticeStyle::Strut,
-        },
+        style,
         cell,
         thickness,
-        grade: ramp.map(|ramp| pgvol::Grade {
-            ramp,
-            cell: grade.cell_far.unwrap_or(cell),
-            thickness: grade.thickness_far.unwrap_or(thickness),
-        }),
-    };
-    Ok(lattice)
+        ramp,
+        grade.cell_far,
+        grade.thickness_far,
+    )?)
 }
 
 #[derive(Args)]
@@ -128,7 +121,6 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
     let start = Instant::now();
     check_output_name(&a.output)?;
     let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
-    lattice.check().map_err(|e| anyhow::anyhow!("{e}"))?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, 0.0);
     let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;

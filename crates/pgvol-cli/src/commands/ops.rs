@@ -268,9 +268,7 @@ fn parse_surface(s: &str) -> Result<pgvol::Tpms, String> {
 fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()> {
     let cell = a.cell.unwrap_or_default();
     let thickness = a.infill_thickness.unwrap_or(a.thickness);
-    let lattice = build_lattice(surface, a.infill_style, cell, thickness, &a.grade)?;
-    lattice
-        .check()
+    let lattice = build_lattice(surface, a.infill_style, cell, thickness, &a.grade)
         .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, a.thickness);
