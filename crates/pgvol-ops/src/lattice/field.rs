@@ -119,6 +119,19 @@ impl Lattice {
         0.5 * self.grade.map_or(self.cell, |g| g.cell.max(self.cell))
     }
 
+    /// The largest value [`Lattice::value`] takes anywhere: the clamp less the thinnest
+    /// sheet's half thickness, or less the lowest strut level. A part's field above it wins
+    /// every max with the lattice.
+    pub fn max_value(&self) -> f32 {
+        let thinnest = self
+            .grade
+            .map_or(self.thickness, |g| g.thickness.min(self.thickness));
+        match self.style {
+            LatticeStyle::Sheet => self.clamp() - 0.5 * thinnest,
+            LatticeStyle::Strut => self.clamp() - thinnest,
+        }
+    }
+
     /// Position along the ramp, 0 at its start and 1 at its end, and its gradient; `part` is
     /// the part's field at `p` (negative inside).
     fn ramp(&self, p: Vec3, part: f32) -> (f32, Vec3) {
@@ -194,6 +207,21 @@ mod tests {
             let d = lattice.surface_distance(p, -1.0);
             assert!((d + offset).abs() < 2e-3, "{offset}: {d}");
             assert!((lattice.value(p, -1.0) - (offset.abs() - 0.2)).abs() < 2e-3);
+        }
+    }
+
+    #[test]
+    fn no_value_exceeds_the_bound() {
+        for style in [LatticeStyle::Sheet, LatticeStyle::Strut] {
+            let lattice = Lattice {
+                style,
+                ..Lattice::sheet(Tpms::Neovius, 1.5, 0.2)
+            };
+            let bound = lattice.max_value();
+            for i in 0..4000 {
+                let p = Vec3::new(i as f32 * 0.013, i as f32 * 0.0071, i as f32 * 0.0037);
+                assert!(lattice.value(p, -1.0) <= bound + 1e-6);
+            }
         }
     }
 

@@ -54,7 +54,16 @@ pub fn lattice_part(
     lattice: &Lattice,
 ) -> Result<LatticeSolid, OpsError> {
     lattice.check()?;
-    solid_of(volume, |p, v| v.max(lattice.value(p, v)), |_, _, v| v < 0.0)
+    // Nodes whose part value exceeds every lattice value keep it: no lattice to evaluate.
+    let above = lattice.max_value();
+    let cut = |p, v: f32| {
+        if v >= above {
+            v
+        } else {
+            v.max(lattice.value(p, v))
+        }
+    };
+    solid_of(volume, cut, |_, _, v| v < 0.0)
 }
 
 /// The part hollowed to walls of `wall` thickness with the cavity filled by the lattice,
@@ -72,7 +81,12 @@ pub fn infill(
     solid_of(
         volume,
         |p, v| {
-            let filled = v.max((-(v + wall)).min(lattice.value(p, v)));
+            // Outside the part, −(v + w) < v already: the lattice cannot win the max.
+            let filled = if v >= 0.0 {
+                v
+            } else {
+                v.max((-(v + wall)).min(lattice.value(p, v)))
+            };
             cut_drains(drains, &units, p, filled)
         },
         |lo, hi, v| v < 0.0 || drain_reaches(drains, &units, lo, hi, v),
