@@ -7,12 +7,15 @@
 //!   scripts.
 //! * [`offset`], [`shell`], [`hollow`]: new coefficient volumes from constructive operations on
 //!   the field, with [`needs_wider_band`] telling when a narrow-band field cannot support them.
+//! * [`combine`], [`sample_bricks`]: sharp and rounded Booleans of fields, re-fitted brick by
+//!   brick into one coefficient volume.
 //!
 //! Conventions are the workspace's: fields are negative inside, units are those of the mesh.
 
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 #![forbid(unsafe_code)]
 
+mod booleans;
 mod cli_file;
 mod csg;
 mod error;
@@ -21,6 +24,7 @@ mod simplify;
 mod slice;
 mod write;
 
+pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
 pub use cli_file::{write_cli, write_cli_with, CliEncoding};
 pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,

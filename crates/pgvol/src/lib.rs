@@ -58,6 +58,7 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
+mod csg;
 mod decode;
 mod distance;
 mod encode;
@@ -68,12 +69,16 @@ mod export;
 mod grid;
 mod memory;
 mod mesh_io;
+mod operand;
 mod pgv_io;
 mod progress;
 mod remesh;
 mod shape;
 mod slice;
 
+pub use csg::{
+    covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings, CSG_RES,
+};
 pub use decode::{decode, decode_shape, DecodeOptions, SPECK_VOXELS};
 pub use distance::{
     mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
@@ -92,6 +97,7 @@ pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
 };
+pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
@@ -117,7 +123,7 @@ pub use pgvol_core::{Grid, Mesh};
 pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
-pub use pgvol_ops::{Axis, Drain, Layer, ShellSide};
+pub use pgvol_ops::{Axis, Blend, BoolOp, Drain, Layer, ShellSide};
 pub use pgvol_sdf::SignMode;
 
 /// Seconds spent per stage of a call.

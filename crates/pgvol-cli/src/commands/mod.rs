@@ -2,6 +2,7 @@
 
 mod args;
 mod compare;
+mod edit;
 mod eval;
 mod export;
 mod files;
@@ -55,6 +56,14 @@ pub enum Command {
     Offset(ops::OffsetArgs),
     /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes.
     Shell(ops::ShellArgs),
+    /// Union, intersection or difference of fields, meshes and analytic primaries, sharp or
+    /// with round fillets (--radius).
+    ///
+    /// Every operand is placed on one grid covering all (meshes are encoded onto it) and the
+    /// result is re-fitted brick by brick. With --radius r the rounded field lies between the
+    /// sharp one and r below it (r above for intersections), equals it where the operands are
+    /// more than r apart, and is Lipschitz with constant √2, so offsets and shells still work.
+    Csg(edit::CsgArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -74,6 +83,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Slice(a) => ops::slice(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
+        Command::Csg(a) => edit::csg(a),
     }
 }
 
@@ -92,6 +102,7 @@ impl Command {
             Command::Slice(a) => a.out,
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
+            Command::Csg(a) => a.out,
         }
     }
 
@@ -107,6 +118,7 @@ impl Command {
             Command::Slice(a) => Some((&a.output, a.out)),
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
+            Command::Csg(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }

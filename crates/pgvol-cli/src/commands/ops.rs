@@ -42,7 +42,7 @@ fn write_result(
     Ok(mesh.triangles.len())
 }
 
-fn check_output_name(output: &Path) -> Result<()> {
+pub(super) fn check_output_name(output: &Path) -> Result<()> {
     if !pgvol::is_pgv(output) {
         pgvol::mesh_format(output)?;
     }
@@ -264,7 +264,12 @@ pub fn shell(a: ShellArgs) -> Result<()> {
     report(&a.out, &a.output, triangles, start)
 }
 
-fn report(out: &OutputArgs, output: &Path, triangles: usize, start: Instant) -> Result<()> {
+pub(super) fn report(
+    out: &OutputArgs,
+    output: &Path,
+    triangles: usize,
+    start: Instant,
+) -> Result<()> {
     if out.json {
         print_json(&serde_json::json!({
             "output": output, "triangles": triangles,

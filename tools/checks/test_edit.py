@@ -1,0 +1,88 @@
+"""`pgvol csg` on analytic primaries, checked against closed-form volumes, trimesh's and
+manifold3d's view of the contoured results."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import helpers
+
+RES = 96
+VOLUME_TOLERANCE = 0.005
+SPHERE_A = "sphere:0,0,0,1"
+SPHERE_B = "sphere:1,0,0,1"
+
+
+def lens_volume(radius: float, distance: float) -> float:
+    """Volume shared by two balls of equal radius whose centres lie `distance` apart."""
+    return math.pi * (4 * radius + distance) * (2 * radius - distance) ** 2 / 12
+
+
+@pytest.mark.parametrize("op", ["union", "intersection", "difference"])
+def test_two_spheres_match_the_lens_formulas(pgvol, work_dir, op):
+    ball = 4 / 3 * math.pi
+    lens = lens_volume(1.0, 1.0)
+    expected = {"union": 2 * ball - lens, "intersection": lens, "difference": ball - lens}[op]
+    out = work_dir / "edit" / f"spheres-{op}.stl"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    helpers.run_ok([pgvol, "csg", op, SPHERE_A, SPHERE_B, "-o", out, "--res", RES, "-q"])
+    mesh = helpers.load_output(out)
+    assert helpers.manifold_ok(helpers.manifold_status(mesh)), op
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    error = helpers.rel_diff(helpers.signed_volume(mesh), expected)
+    assert error <= VOLUME_TOLERANCE, f"{op}: volume off by {error:.4%}"
+
+
+def seam_angles(mesh) -> np.ndarray:
+    """Angles (degrees) between adjacent faces near one side of the seam where the small box
+    stands on the large one (x = 0.5, z = 1), away from the boxes' own edges."""
+    c = mesh.triangles_center
+    near = (c[:, 0] > 0.45) & (c[:, 0] < 0.8) & (c[:, 2] > 0.95) & (c[:, 2] < 1.3) & (np.abs(c[:, 1]) < 0.3)
+    pairs = mesh.face_adjacency
+    both = near[pairs[:, 0]] & near[pairs[:, 1]]
+    assert both.sum() > 100, "too few faces near the seam"
+    return np.degrees(mesh.face_adjacency_angles[both])
+
+
+def test_smooth_union_of_boxes_has_no_sharp_seam(pgvol, work_dir):
+    boxes = ["box:0,0,0,1,1,1", "box:0,0,1.4,0.5,0.5,0.5"]
+    sharp = work_dir / "edit" / "boxes-sharp.stl"
+    smooth = work_dir / "edit" / "boxes-smooth.stl"
+    sharp.parent.mkdir(parents=True, exist_ok=True)
+    helpers.run_ok([pgvol, "csg", "union", *boxes, "-o", sharp, "--res", RES, "-q"])
+    helpers.run_ok([pgvol, "csg", "union", *boxes, "-o", smooth, "--res", RES, "--radius", 0.2, "-q"])
+    sharp_mesh, smooth_mesh = helpers.load_output(sharp), helpers.load_output(smooth)
+    for mesh in (sharp_mesh, smooth_mesh):
+        assert helpers.manifold_ok(helpers.manifold_status(mesh))
+    # The crease: the sharp union turns by 90 degrees over a few faces, the fillet of radius
+    # 0.2 (about six grid spacings) by small steps.
+    assert seam_angles(sharp_mesh).max() > 40.0
+    assert seam_angles(smooth_mesh).max() < 20.0
+    # The fillet adds material only in the concave corner: at most the region between the
+    # quarter circle and the corner, (1 − π/4) r² per unit length of the 4 m long seam.
+    added = helpers.signed_volume(smooth_mesh) - helpers.signed_volume(sharp_mesh)
+    assert 0 < added < 2 * (1 - math.pi / 4) * 0.2**2 * 4.0
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["union", SPHERE_A], ["2 values"]),
+        (["union", "sphere:0,0,1", SPHERE_B], ["sphere", "4"]),
+        (["union", "plane:0,0,1,0", "plane:1,0,0,0"], ["--box"]),
+        (["union", SPHERE_A, SPHERE_B, "--radius", "-1"], ["radius"]),
+        (["union", SPHERE_A, "missing.stl"], ["missing.stl"]),
+    ],
+)
+def test_bad_csg_input_is_explained(pgvol, work_dir, args, words):
+    out = work_dir / "edit" / "bad.stl"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    run = helpers.run([pgvol, "csg", *args, "-o", out, "--res", 32])
+    assert run.returncode != 0
+    text = run.stderr.lower()
+    assert "panicked" not in text
+    for w in words:
+        assert w.lower() in text, run.stderr
