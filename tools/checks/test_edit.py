@@ -86,3 +86,26 @@ def test_bad_csg_input_is_explained(pgvol, work_dir, args, words):
     assert "panicked" not in text
     for w in words:
         assert w.lower() in text, run.stderr
+
+
+def test_repair_removes_a_bump_and_keeps_the_rest(pgvol, work_dir):
+    """A unit sphere with a ball of radius 0.3 on top; the mask covers the ball, its base
+    crossing the mask's lower face."""
+    bumped = work_dir / "edit" / "bumped.stl"
+    fixed = work_dir / "edit" / "fixed.stl"
+    bumped.parent.mkdir(parents=True, exist_ok=True)
+    helpers.run_ok([pgvol, "csg", "union", SPHERE_A, "sphere:0,0,1,0.3", "-o", bumped, "--res", 64, "-q"])
+    mask = "-0.45,-0.45,0.75,0.45,0.45,1.45"
+    report = helpers.run_json(
+        [pgvol, "repair", bumped, "-o", fixed, f"--mask={mask}", "--face=-z", "--alpha", 0.9, "--res", 64, "--json"]
+    )
+    assert report["masks"][0]["fit_error"] < 1e-3
+    mesh = helpers.load_output(fixed)
+    assert helpers.manifold_ok(helpers.manifold_status(mesh))
+    v = mesh.vertices
+    error = np.abs(np.linalg.norm(v, axis=1) - 1.0)
+    inside = (np.abs(v[:, 0]) < 0.45) & (np.abs(v[:, 1]) < 0.45) & (v[:, 2] > 0.75)
+    # Before: the bump stands 0.3 proud. After: within 3 % of the radius in the mask, and
+    # the rest of the sphere as the encoding left it.
+    assert error[inside].max() < 0.03, error[inside].max()
+    assert error[~inside].max() < 0.002, error[~inside].max()

@@ -9,6 +9,8 @@
 //!   the field, with [`needs_wider_band`] telling when a narrow-band field cannot support them.
 //! * [`combine`], [`sample_bricks`]: sharp and rounded Booleans of fields, re-fitted brick by
 //!   brick into one coefficient volume.
+//! * [`repair`]: protrusion removal and denoising inside masks, re-fitting only the
+//!   coefficients whose support meets a mask.
 //!
 //! Conventions are the workspace's: fields are negative inside, units are those of the mesh.
 
@@ -19,7 +21,9 @@ mod booleans;
 mod cli_file;
 mod csg;
 mod error;
+mod local_fit;
 mod polygon;
+mod repair;
 mod simplify;
 mod slice;
 mod write;
@@ -30,6 +34,10 @@ pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
 };
 pub use error::OpsError;
+pub use local_fit::{node_value, refit_box, LocalFit, NodeBox};
+pub use repair::{
+    mask_nodes, repair, Face, LaplaceSystem, Mask, MaskReport, Restore, MAX_MASK_NODES,
+};
 pub use simplify::simplify_loops;
 pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,

@@ -73,6 +73,7 @@ mod operand;
 mod pgv_io;
 mod progress;
 mod remesh;
+mod repair;
 mod shape;
 mod slice;
 
@@ -101,6 +102,7 @@ pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, 
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
+pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
 pub use shape::{
     check_offset, check_thickness, growth, offset, operation_name, parse_drain, shell, Shape,
     ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
@@ -123,7 +125,9 @@ pub use pgvol_core::{Grid, Mesh};
 pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
-pub use pgvol_ops::{Axis, Blend, BoolOp, Drain, Layer, ShellSide};
+pub use pgvol_ops::{
+    Axis, Blend, BoolOp, Drain, Face, Layer, Mask, MaskReport, Restore, ShellSide,
+};
 pub use pgvol_sdf::SignMode;
 
 /// Seconds spent per stage of a call.

@@ -125,3 +125,90 @@ pub fn csg(a: CsgArgs) -> Result<()> {
     let triangles = write_edited(&a.output, volume, &operation, band, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
 }
+
+fn parse_mask(s: &str) -> Result<pgvol::Mask, String> {
+    pgvol::parse_mask(s).map_err(|e| e.to_string())
+}
+
+fn parse_face(s: &str) -> Result<pgvol::Face, String> {
+    pgvol::parse_face(s).map_err(|e| e.to_string())
+}
+
+#[derive(Args)]
+#[command(
+    after_help = "Examples:\n  pgvol repair part.pgv -o fixed.pgv --mask -5,-5,20,5,5,32 --face -z\n  \
+pgvol repair scan.stl -o smooth.glb --mask 0,0,0,10,10,10 --denoise --coarse 20"
+)]
+pub struct RepairArgs {
+    /// A .pgv file, or a mesh (encoded on the fly at --res with exact distances over the
+    /// masks).
+    pub input: PathArg,
+    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// An axis-aligned box x0,y0,z0,x1,y1,z1 in model units to restore; repeat for more.
+    /// Coefficients whose support misses every mask stay bit-identical.
+    #[arg(long, required = true, value_parser = parse_mask, allow_negative_numbers = true)]
+    pub mask: Vec<pgvol::Mask>,
+    /// Protrusion removal: the mask's face the protrusion's base crosses (+x, -x, +y, -y, +z,
+    /// -z), where the new field joins the body.
+    #[arg(long, value_parser = parse_face, allow_hyphen_values = true, required_unless_present = "denoise", conflicts_with = "denoise")]
+    pub face: Option<pgvol::Face>,
+    /// Normal derivative of the field across --face: 1 (a distance's) continues the body;
+    /// larger values lower and flatten the cap, smaller ones raise it.
+    #[arg(long, default_value_t = pgvol::DEFAULT_ALPHA, allow_negative_numbers = true, conflicts_with = "denoise")]
+    pub alpha: f32,
+    /// Denoise instead: resample the field coarsely inside the masks and interpolate it with
+    /// the quadratic B-spline.
+    #[arg(long)]
+    pub denoise: bool,
+    /// Coarse samples along a mask's longest side when denoising (fewer smooth more).
+    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, requires = "denoise")]
+    pub coarse: usize,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+pub fn repair(a: RepairArgs) -> Result<()> {
+    let start = Instant::now();
+    check_output_name(&a.output)?;
+    let bars = Bars::new(a.out.silent());
+    let restore = match a.face {
+        Some(face) if !a.denoise => pgvol::Restore::Protrusion {
+            face,
+            alpha: a.alpha,
+        },
+        _ => pgvol::Restore::Denoise { coarse: a.coarse },
+    };
+    let reach = pgvol::repair_reach(&a.mask);
+    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let (volume, reports) =
+        pgvol::repair(&shape, &a.mask, restore).map_err(|e| super::args::at_input(e, &a.input))?;
+    let band = shape
+        .band
+        .unwrap_or_else(|| pgvol::ops::stored_band(&volume));
+    let operation = if a.denoise {
+        format!("denoise coarse {}", a.coarse)
+    } else {
+        format!("repair alpha {}", a.alpha)
+    };
+    let triangles = write_edited(&a.output, volume, &operation, band, &a.shape, &bars)?;
+    if a.out.json {
+        let masks: Vec<_> = reports
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "nodes": r.nodes, "iterations": r.iterations,
+                    "coefficients": r.refit.coefficients, "fit_error": r.refit.max_error,
+                })
+            })
+            .collect();
+        return super::args::print_json(&serde_json::json!({
+            "output": a.output, "triangles": triangles, "masks": masks,
+            "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
+        }));
+    }
+    report(&a.out, &a.output, triangles, start)
+}

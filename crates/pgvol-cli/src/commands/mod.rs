@@ -64,6 +64,13 @@ pub enum Command {
     /// sharp one and r below it (r above for intersections), equals it where the operands are
     /// more than r apart, and is Lipschitz with constant √2, so offsets and shells still work.
     Csg(edit::CsgArgs),
+    /// Restores a field inside axis-aligned masks: removes a protrusion, or smooths noise.
+    ///
+    /// A protrusion is replaced by the least-squares solution of Laplace's equation inside the
+    /// mask, with the field's values around the mask fixed and its normal derivative across
+    /// --face set by --alpha; --denoise resamples coarsely instead. Only the coefficients whose
+    /// support meets a mask change, so the field stays continuous at the mask's boundary.
+    Repair(edit::RepairArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -84,6 +91,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
         Command::Csg(a) => edit::csg(a),
+        Command::Repair(a) => edit::repair(a),
     }
 }
 
@@ -103,6 +111,7 @@ impl Command {
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
             Command::Csg(a) => a.out,
+            Command::Repair(a) => a.out,
         }
     }
 
@@ -119,6 +128,7 @@ impl Command {
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
             Command::Csg(a) => Some((&a.output, a.out)),
+            Command::Repair(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }
