@@ -109,3 +109,20 @@ def test_repair_removes_a_bump_and_keeps_the_rest(pgvol, work_dir):
     # the rest of the sphere as the encoding left it.
     assert error[inside].max() < 0.03, error[inside].max()
     assert error[~inside].max() < 0.002, error[~inside].max()
+
+
+def test_liming_blend_is_a_closed_manifold(pgvol, work_dir):
+    out = work_dir / "edit" / "liming.stl"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    helpers.run_ok(
+        [pgvol, "blend", "liming", "plane:1,0,0,0", "plane:0,1,0,0", "--cut", "plane:-1,-1,0,0.6",
+         "--box=-1,-1,-1,1,1,1", "-o", out, "--res", 64, "-q"]
+    )
+    mesh = helpers.load_output(out)
+    assert helpers.manifold_ok(helpers.manifold_status(mesh))
+    # The rounding removes material from the sharp corner's quadrant: between the chamfer
+    # x + y = −0.6 (0.18 per unit length) and nothing.
+    side = mesh.bounds[1, 2] - mesh.bounds[0, 2]
+    quadrant = (mesh.bounds[1, 0] - mesh.bounds[0, 0]) * (mesh.bounds[1, 1] - mesh.bounds[0, 1]) * side
+    removed = quadrant - helpers.signed_volume(mesh)
+    assert 0.0 < removed < 0.18 * side

@@ -9,6 +9,8 @@
 //!   the field, with [`needs_wider_band`] telling when a narrow-band field cannot support them.
 //! * [`combine`], [`sample_bricks`]: sharp and rounded Booleans of fields, re-fitted brick by
 //!   brick into one coefficient volume.
+//! * [`liming`], [`functional_spline`], [`ipatch`]: algebraic blends between primaries, with
+//!   [`renormalised`] making them distance-like again.
 //! * [`repair`]: protrusion removal and denoising inside masks, re-fitting only the
 //!   coefficients whose support meets a mask.
 //!
@@ -17,6 +19,7 @@
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 #![forbid(unsafe_code)]
 
+mod blend;
 mod booleans;
 mod cli_file;
 mod csg;
@@ -28,6 +31,9 @@ mod simplify;
 mod slice;
 mod write;
 
+pub use blend::{
+    edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming, renormalised,
+};
 pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
 pub use cli_file::{write_cli, write_cli_with, CliEncoding};
 pub use csg::{

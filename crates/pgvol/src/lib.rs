@@ -58,6 +58,7 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
+mod blend;
 mod csg;
 mod decode;
 mod distance;
@@ -77,6 +78,7 @@ mod repair;
 mod shape;
 mod slice;
 
+pub use blend::{blend, BlendOperator, BlendSettings, Blended, DEFAULT_LAMBDA};
 pub use csg::{
     covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings, CSG_RES,
 };

@@ -130,3 +130,32 @@ fn a_pgv_operand_too_narrow_for_the_radius_is_refused_by_name() {
     assert!(v.value(Vec3::ZERO) < -0.2);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
+    // P₁ = x, P₂ = y, C = (−x − y − 0.6)/√2, λ = ½: on the bisector x = y = −s the blend
+    // vanishes where (2s − 0.6)² / 2 = s², s = 0.6 / (2 + √2).
+    let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
+    let operator = pgvol::BlendOperator::Liming {
+        cut: pgvol::parse_operand("plane:-1,-1,0,0.6").unwrap(),
+        lambda: 0.5,
+    };
+    let settings = pgvol::BlendSettings {
+        res: 64,
+        bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+    };
+    let blended = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap();
+    let v = &blended.volume;
+    let p = zero_between(v, Vec3::new(0.0, 0.0, 0.1), Vec3::new(-0.5, -0.5, 0.1));
+    let s = 0.6 / (2.0 + std::f32::consts::SQRT_2);
+    assert!((p.x + s).abs() < 0.01 && (p.y + s).abs() < 0.01, "{p} vs −{s}");
+    // Renormalised: the gradient has about unit length on the blend surface.
+    let g = v.eval(p).1.length();
+    assert!((g - 1.0).abs() < 0.15, "gradient {g}");
+    // Away from the cut the planes are unchanged.
+    let q = zero_between(v, Vec3::new(0.3, -0.8, 0.0), Vec3::new(-0.3, -0.8, 0.0));
+    assert!(q.x.abs() < 1e-3, "{q}");
+    // Too few operands are refused.
+    let e = pgvol::blend(&planes[..1], &operator, &settings, &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::BadParameter);
+}

@@ -71,6 +71,12 @@ pub enum Command {
     /// --face set by --alpha; --denoise resamples coarsely instead. Only the coefficients whose
     /// support meets a mask change, so the field stays continuous at the mask's boundary.
     Repair(edit::RepairArgs),
+    /// Blends primaries algebraically: Liming rounding, functional splines or I-patches.
+    ///
+    /// Primaries are analytic (plane, sphere, cylinder, box), .pgv files or meshes. The result is
+    /// renormalised near its surface (value over gradient length) so it is distance-like again,
+    /// and re-fitted into one coefficient volume.
+    Blend(edit::BlendArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -92,6 +98,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Shell(a) => ops::shell(a),
         Command::Csg(a) => edit::csg(a),
         Command::Repair(a) => edit::repair(a),
+        Command::Blend(a) => edit::blend(a),
     }
 }
 
@@ -112,6 +119,7 @@ impl Command {
             Command::Shell(a) => a.out,
             Command::Csg(a) => a.out,
             Command::Repair(a) => a.out,
+            Command::Blend(a) => a.out,
         }
     }
 
@@ -129,6 +137,7 @@ impl Command {
             Command::Shell(a) => Some((&a.output, a.out)),
             Command::Csg(a) => Some((&a.output, a.out)),
             Command::Repair(a) => Some((&a.output, a.out)),
+            Command::Blend(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }
