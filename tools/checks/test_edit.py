@@ -126,3 +126,31 @@ def test_liming_blend_is_a_closed_manifold(pgvol, work_dir):
     quadrant = (mesh.bounds[1, 0] - mesh.bounds[0, 0]) * (mesh.bounds[1, 1] - mesh.bounds[0, 1]) * side
     removed = quadrant - helpers.signed_volume(mesh)
     assert 0.0 < removed < 0.18 * side
+
+
+def test_denoising_smooths_a_noisy_sphere_inside_the_mask_only(pgvol, work_dir):
+    import trimesh
+
+    rng = np.random.default_rng(7)
+    ball = trimesh.creation.icosphere(subdivisions=5)
+    ball.vertices *= (1 + 0.015 * rng.standard_normal(len(ball.vertices)))[:, None]
+    noisy = work_dir / "edit" / "noisy.ply"
+    noisy.parent.mkdir(parents=True, exist_ok=True)
+    ball.export(noisy)
+    plain, smooth = work_dir / "edit" / "noisy.stl", work_dir / "edit" / "denoised.stl"
+    helpers.run_ok([pgvol, "remesh", noisy, "-o", plain, "--res", 96, "--field", "decoded", "-q"])
+    mask = "--mask=-0.6,-0.6,0.4,0.6,0.6,1.2"
+    helpers.run_ok([pgvol, "repair", noisy, "-o", smooth, mask, "--denoise", "--coarse", 12, "--res", 96, "-q"])
+
+    def deviation(path):
+        """Mean angle (degrees) between face normals and the sphere's, inside and outside."""
+        m = helpers.load_output(path)
+        c = m.triangles_center
+        radial = c / np.linalg.norm(c, axis=1)[:, None]
+        angle = np.degrees(np.arccos(np.clip((m.face_normals * radial).sum(1), -1, 1)))
+        inside = (np.abs(c[:, 0]) < 0.6) & (np.abs(c[:, 1]) < 0.6) & (c[:, 2] > 0.4)
+        return angle[inside].mean(), angle[~inside].mean()
+
+    (in_before, out_before), (in_after, out_after) = deviation(plain), deviation(smooth)
+    assert in_after < 0.6 * in_before, (in_before, in_after)
+    assert abs(out_after - out_before) < 0.02 * out_before, (out_before, out_after)

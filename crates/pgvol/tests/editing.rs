@@ -148,7 +148,10 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
     let v = &blended.volume;
     let p = zero_between(v, Vec3::new(0.0, 0.0, 0.1), Vec3::new(-0.5, -0.5, 0.1));
     let s = 0.6 / (2.0 + std::f32::consts::SQRT_2);
-    assert!((p.x + s).abs() < 0.01 && (p.y + s).abs() < 0.01, "{p} vs −{s}");
+    assert!(
+        (p.x + s).abs() < 0.01 && (p.y + s).abs() < 0.01,
+        "{p} vs −{s}"
+    );
     // Renormalised: the gradient has about unit length on the blend surface.
     let g = v.eval(p).1.length();
     assert!((g - 1.0).abs() < 0.15, "gradient {g}");
