@@ -72,44 +72,33 @@ fn node_weights(basis: Basis) -> Result<[f32; 3], OpsError> {
     }
 }
 
-/// For each node of `rows`, the coefficients of `cols` in its value with their weights
-/// (mirrored indices past the grid's border, as the basis lays them).
-fn stencils(
-    volume: &CoefficientVolume,
-    rows: &NodeBox,
+/// Calls `f(column, weight)` for each coefficient of `cols` in the value at node `n`
+/// (mirrored indices past the grid's border, as the basis lays them, may repeat a column).
+fn for_each_column(
+    w: &[f32; 3],
+    dims: [usize; 3],
     cols: &NodeBox,
-) -> Result<Vec<Vec<(usize, f32)>>, OpsError> {
-    let w = node_weights(volume.basis)?;
-    let dims = volume.grid.dims;
-    Ok((0..rows.count())
-        .map(|r| {
-            let n = rows.node(r);
-            let mut entries: Vec<(usize, f32)> = Vec::with_capacity(27);
-            for dz in 0..3 {
-                for dy in 0..3 {
-                    for dx in 0..3 {
-                        let weight = w[dx] * w[dy] * w[dz];
-                        if weight == 0.0 {
-                            continue;
-                        }
-                        let c = [dx, dy, dz]
-                            .iter()
-                            .enumerate()
-                            .map(|(a, &d)| mirror(n[a] as i64 + d as i64 - 1, dims[a]))
-                            .collect::<Vec<_>>();
-                        let c = [c[0], c[1], c[2]];
-                        let col = cols.contains(c).then(|| cols.index(c));
-                        let entry = (col.unwrap_or(usize::MAX), weight);
-                        match entries.iter_mut().find(|e| e.0 == entry.0) {
-                            Some(e) => e.1 += weight,
-                            None => entries.push(entry),
-                        }
-                    }
+    n: [usize; 3],
+    mut f: impl FnMut(usize, f32),
+) {
+    for (dz, wz) in w.iter().enumerate() {
+        for (dy, wy) in w.iter().enumerate() {
+            for (dx, wx) in w.iter().enumerate() {
+                let weight = wx * wy * wz;
+                if weight == 0.0 {
+                    continue;
+                }
+                let c = [
+                    mirror(n[0] as i64 + dx as i64 - 1, dims[0]),
+                    mirror(n[1] as i64 + dy as i64 - 1, dims[1]),
+                    mirror(n[2] as i64 + dz as i64 - 1, dims[2]),
+                ];
+                if cols.contains(c) {
+                    f(cols.index(c), weight);
                 }
             }
-            entries
-        })
-        .collect())
+        }
+    }
 }
 
 /// The field's value at node `n` from the coefficients.
@@ -156,7 +145,7 @@ pub fn refit_box(
     let dims = volume.grid.dims;
     let cols = region.grown(2, dims);
     let rows = region.grown(3, dims);
-    let stencil = stencils(volume, &rows, &cols)?;
+    let w = node_weights(volume.basis)?;
     let mut target = Vec::with_capacity(rows.count());
     for r in 0..rows.count() {
         let n = rows.node(r);
@@ -169,26 +158,26 @@ pub fn refit_box(
         target.push((want - now) as f64);
     }
     let forward = |x: &[f64]| -> Vec<f64> {
-        stencil
-            .iter()
-            .map(|row| {
-                row.iter()
-                    .filter(|e| e.0 != usize::MAX)
-                    .map(|&(c, w)| w as f64 * x[c])
-                    .sum()
+        (0..rows.count())
+            .map(|r| {
+                let mut sum = 0.0;
+                for_each_column(&w, dims, &cols, rows.node(r), |c, wt| {
+                    sum += wt as f64 * x[c]
+                });
+                sum
             })
             .collect()
     };
-    let adjoint = |r: &[f64]| -> Vec<f64> {
+    let adjoint = |res: &[f64]| -> Vec<f64> {
         let mut y = vec![0.0; cols.count()];
-        for (row, &ri) in stencil.iter().zip(r) {
-            for &(c, w) in row.iter().filter(|e| e.0 != usize::MAX) {
-                y[c] += w as f64 * ri;
-            }
+        for (r, &ri) in res.iter().enumerate() {
+            for_each_column(&w, dims, &cols, rows.node(r), |c, wt| {
+                y[c] += wt as f64 * ri
+            });
         }
         y
     };
-    let (delta, outcome) = cgls(forward, adjoint, &target, cols.count(), 0.0, 1e-7, 500);
+    let (delta, outcome) = cgls(forward, adjoint, &target, cols.count(), 0.0, 1e-5, 200);
     for (i, d) in delta.iter().enumerate() {
         let n = cols.node(i);
         let b = pgvol_core::sparse::brick_of(n);

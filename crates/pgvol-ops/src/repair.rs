@@ -23,8 +23,9 @@ use pgvol_field::{Basis, CoefficientVolume, Grid};
 use crate::error::OpsError;
 use crate::local_fit::{node_value, refit_box, LocalFit, NodeBox};
 
-/// Masks larger than this many nodes are refused (the solve holds a few arrays of them).
-pub const MAX_MASK_NODES: usize = 1 << 24;
+/// Masks larger than this many nodes are refused: the solve holds a few arrays of f64 per node
+/// and its iterations grow with the mask's side.
+pub const MAX_MASK_NODES: usize = 1 << 22;
 
 /// An axis-aligned box in world coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
