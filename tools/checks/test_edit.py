@@ -154,3 +154,24 @@ def test_denoising_smooths_a_noisy_sphere_inside_the_mask_only(pgvol, work_dir):
     (in_before, out_before), (in_after, out_after) = deviation(plain), deviation(smooth)
     assert in_after < 0.6 * in_before, (in_before, in_after)
     assert abs(out_after - out_before) < 0.02 * out_before, (out_before, out_after)
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--mask=5,5,5,6,6,6", "--face=-z"], ["ball.pgv", "mask 5,5,5,6,6,6", "no grid node"]),
+        (["--mask=0,0,0,1,1", "--face=-z"], ["mask", "six"]),
+        (["--mask=0,0,0,1,1,1", "--face=z"], ["+z"]),
+        (["--mask=0,0,0,1,1,1"], ["--face"]),
+    ],
+)
+def test_bad_repair_input_is_explained(pgvol, work_dir, extra, words):
+    ball = work_dir / "edit" / "ball.pgv"
+    ball.parent.mkdir(parents=True, exist_ok=True)
+    if not ball.exists():
+        helpers.run_ok([pgvol, "csg", "union", SPHERE_A, "sphere:0,0,0.5,0.5", "-o", ball, "--res", 32, "-q"])
+    run = helpers.run([pgvol, "repair", ball, "-o", work_dir / "edit" / "bad.pgv", *extra])
+    assert run.returncode != 0
+    assert "panicked" not in run.stderr.lower()
+    for w in words:
+        assert w.lower() in run.stderr.lower(), run.stderr

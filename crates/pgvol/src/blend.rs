@@ -149,7 +149,7 @@ pub fn blend(
                 .iter()
                 .map(|&p| pgvol_ops::ipatch_terms(&value(prim, p), &value(rest, p)))
                 .collect();
-            Some(pgvol_ops::fit_ipatch_weights(&terms)?)
+            Some(pgvol_ops::fit_ipatch_weights(&terms).map_err(crate::csg::ops_error)?)
         }
         _ => None,
     };
@@ -183,7 +183,8 @@ pub fn blend(
     let band = ENCODE_BAND * grid.spacing;
     // Renormalised fields are distances only near their surface: a generous constant keeps
     // bricks the surface crosses from being skipped.
-    let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, 3.0, field)?;
+    let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, 3.0, field)
+        .map_err(crate::csg::ops_error)?;
     crate::progress::check(progress)?;
     Ok(Blended { volume, weights })
 }

@@ -12,6 +12,14 @@ use crate::error::{Error, Result};
 use crate::operand::{LoadedOperand, Operand, OperandField};
 use crate::progress::Progress;
 
+/// An operation's refusal of a parameter as a facade error carrying the message once.
+pub(crate) fn ops_error(e: pgvol_ops::OpsError) -> Error {
+    match e {
+        pgvol_ops::OpsError::BadParameter(message) => Error::parameter(message),
+        other => other.into(),
+    }
+}
+
 /// Grid nodes per axis of a Boolean's result, unless given.
 pub const CSG_RES: usize = 128;
 
@@ -132,7 +140,7 @@ pub fn csg(
             operands.len()
         )));
     }
-    pgvol_ops::check_blend(settings.blend)?;
+    pgvol_ops::check_blend(settings.blend).map_err(ops_error)?;
     let radius = match settings.blend {
         Blend::Sharp => 0.0,
         Blend::Round(r) => r,
@@ -154,7 +162,8 @@ pub fn csg(
             let values: Vec<f32> = fields.iter().map(|f| f.value(p)).collect();
             pgvol_ops::combine(op, blend, &values)
         }
-    })?;
+    })
+    .map_err(ops_error)?;
     crate::progress::check(progress)?;
     Ok(volume)
 }

@@ -6,6 +6,7 @@ use pgvol_field::CoefficientVolume;
 use pgvol_ops::{Face, Mask, MaskReport, Restore};
 
 use crate::error::{Error, Result};
+use crate::progress::Progress;
 use crate::shape::Shape;
 
 /// Default normal derivative across the face a protrusion crosses: that of a distance, so the
@@ -77,6 +78,7 @@ pub fn repair(
     shape: &Shape,
     masks: &[Mask],
     restore: Restore,
+    progress: &dyn Progress,
 ) -> Result<(CoefficientVolume, Vec<MaskReport>)> {
     if let Restore::Protrusion { alpha, .. } = restore {
         if !alpha.is_finite() {
@@ -85,7 +87,11 @@ pub fn repair(
             )));
         }
     }
-    Ok(pgvol_ops::repair(&shape.volume, masks, restore)?)
+    progress.stage("restoring the masks");
+    let repaired =
+        pgvol_ops::repair(&shape.volume, masks, restore).map_err(crate::csg::ops_error)?;
+    crate::progress::check(progress)?;
+    Ok(repaired)
 }
 
 #[cfg(test)]

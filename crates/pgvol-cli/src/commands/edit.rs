@@ -184,8 +184,8 @@ pub fn repair(a: RepairArgs) -> Result<()> {
     };
     let reach = pgvol::repair_reach(&a.mask);
     let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
-    let (volume, reports) =
-        pgvol::repair(&shape, &a.mask, restore).map_err(|e| super::args::at_input(e, &a.input))?;
+    let (volume, reports) = pgvol::repair(&shape, &a.mask, restore, &bars)
+        .map_err(|e| super::args::at_input(e, &a.input))?;
     let band = shape
         .band
         .unwrap_or_else(|| pgvol::ops::stored_band(&volume));
