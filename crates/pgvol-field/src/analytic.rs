@@ -91,6 +91,47 @@ impl SignedDistance for Torus {
     }
 }
 
+/// The half-space `normal · p ≤ offset` (`normal` of unit length): its boundary plane.
+#[derive(Clone, Copy, Debug)]
+pub struct Plane {
+    pub normal: Vec3,
+    pub offset: f32,
+}
+
+/// An infinite solid cylinder of `radius` around the line through `point` along unit `axis`.
+#[derive(Clone, Copy, Debug)]
+pub struct Cylinder {
+    pub point: Vec3,
+    pub axis: Vec3,
+    pub radius: f32,
+}
+
+impl SignedDistance for Plane {
+    fn distance(&self, p: Vec3) -> f32 {
+        self.normal.dot(p) - self.offset
+    }
+    fn distance_gradient(&self, p: Vec3) -> (f32, Vec3) {
+        (self.distance(p), self.normal)
+    }
+}
+
+impl SignedDistance for Cylinder {
+    fn distance(&self, p: Vec3) -> f32 {
+        self.distance_gradient(p).0
+    }
+    fn distance_gradient(&self, p: Vec3) -> (f32, Vec3) {
+        let d = p - self.point;
+        let radial = d - self.axis * d.dot(self.axis);
+        let l = radial.length();
+        let n = if l > 0.0 {
+            radial / l
+        } else {
+            self.axis.any_orthonormal_vector()
+        };
+        (l - self.radius, n)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -123,6 +164,15 @@ mod tests {
             centre: Vec3::splat(0.1),
             radius: 0.6,
         };
+        let plane = Plane {
+            normal: Vec3::Y,
+            offset: 0.2,
+        };
+        let cylinder = Cylinder {
+            point: Vec3::ZERO,
+            axis: Vec3::Z,
+            radius: 0.5,
+        };
         for p in [
             Vec3::new(0.7, 0.2, 0.1),
             Vec3::new(0.05, 0.02, -0.01),
@@ -131,7 +181,11 @@ mod tests {
             check_gradient(&b, p);
             check_gradient(&t, p);
             check_gradient(&s, p);
+            check_gradient(&plane, p);
+            check_gradient(&cylinder, p);
         }
+        assert!((cylinder.distance(Vec3::new(3.0, 0.0, 7.0)) - 2.5).abs() < 1e-6);
+        assert!((plane.distance(Vec3::new(0.0, 2.0, 0.0)) - 1.8).abs() < 1e-6);
         assert!((b.distance(b.centre) + 0.3).abs() < 1e-6);
         assert!((t.distance(Vec3::new(0.5, 0.0, 0.0)) + 0.2).abs() < 1e-6);
     }

@@ -58,6 +58,8 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
+mod blend;
+mod csg;
 mod decode;
 mod distance;
 mod encode;
@@ -69,12 +71,18 @@ mod grid;
 mod lattice;
 mod memory;
 mod mesh_io;
+mod operand;
 mod pgv_io;
 mod progress;
 mod remesh;
+mod repair;
 mod shape;
 mod slice;
 
+pub use blend::{blend, BlendOperator, BlendSettings, Blended, DEFAULT_LAMBDA};
+pub use csg::{
+    covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings, CSG_RES,
+};
 pub use decode::{decode, decode_shape, DecodeOptions, SPECK_VOXELS};
 pub use distance::{
     mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
@@ -97,9 +105,11 @@ pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
 };
+pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
+pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
 pub use shape::{
     check_offset, check_thickness, growth, offset, operation_name, parse_drain, shell, Shape,
     ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
@@ -123,8 +133,8 @@ pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
 pub use pgvol_ops::{
-    Axis, Drain, Grade, Lattice, LatticeSolid, LatticeStyle, Layer, Ramp, ShellSide, Tpms,
-    TPMS_NAMES,
+    Axis, Blend, BoolOp, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Layer, Mask,
+    MaskReport, Ramp, Restore, ShellSide, Tpms, TPMS_NAMES,
 };
 pub use pgvol_sdf::SignMode;
 

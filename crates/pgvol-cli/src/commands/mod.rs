@@ -2,6 +2,7 @@
 
 mod args;
 mod compare;
+mod edit;
 mod eval;
 mod export;
 mod files;
@@ -62,6 +63,27 @@ pub enum Command {
     /// Sheet or strut solids with a cell size and thickness, optionally graded with depth or
     /// along a segment; reports the solid's volume fraction of the part and its surface area.
     Lattice(lattice::LatticeArgs),
+    /// Union, intersection or difference of fields, meshes and analytic primaries, sharp or
+    /// with round fillets (--radius).
+    ///
+    /// Every operand is placed on one grid covering all (meshes are encoded onto it) and the
+    /// result is re-fitted brick by brick. With --radius r the rounded field lies between the
+    /// sharp one and r below it (r above for intersections), equals it where the operands are
+    /// more than r apart, and is Lipschitz with constant √2, so offsets and shells still work.
+    Csg(edit::CsgArgs),
+    /// Restores a field inside axis-aligned masks: removes a protrusion, or smooths noise.
+    ///
+    /// A protrusion is replaced by the least-squares solution of Laplace's equation inside the
+    /// mask, with the field's values around the mask fixed and its normal derivative across
+    /// --face set by --alpha; --denoise resamples coarsely instead. Only the coefficients whose
+    /// support meets a mask change, so the field stays continuous at the mask's boundary.
+    Repair(edit::RepairArgs),
+    /// Blends primaries algebraically: Liming rounding, functional splines or I-patches.
+    ///
+    /// Primaries are analytic (plane, sphere, cylinder, box), .pgv files or meshes. The result is
+    /// renormalised near its surface (value over gradient length) so it is distance-like again,
+    /// and re-fitted into one coefficient volume.
+    Blend(edit::BlendArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -82,6 +104,9 @@ pub fn run(command: Command) -> Result<()> {
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
         Command::Lattice(a) => lattice::lattice(a),
+        Command::Csg(a) => edit::csg(a),
+        Command::Repair(a) => edit::repair(a),
+        Command::Blend(a) => edit::blend(a),
     }
 }
 
@@ -101,6 +126,9 @@ impl Command {
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
             Command::Lattice(a) => a.out,
+            Command::Csg(a) => a.out,
+            Command::Repair(a) => a.out,
+            Command::Blend(a) => a.out,
         }
     }
 
@@ -117,6 +145,9 @@ impl Command {
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
             Command::Lattice(a) => Some((&a.output, a.out)),
+            Command::Csg(a) => Some((&a.output, a.out)),
+            Command::Repair(a) => Some((&a.output, a.out)),
+            Command::Blend(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }

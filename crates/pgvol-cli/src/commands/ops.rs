@@ -328,7 +328,12 @@ pub fn shell(a: ShellArgs) -> Result<()> {
     report(&a.out, &a.output, triangles, start)
 }
 
-fn report(out: &OutputArgs, output: &Path, triangles: usize, start: Instant) -> Result<()> {
+pub(super) fn report(
+    out: &OutputArgs,
+    output: &Path,
+    triangles: usize,
+    start: Instant,
+) -> Result<()> {
     if out.json {
         print_json(&serde_json::json!({
             "output": output, "triangles": triangles,

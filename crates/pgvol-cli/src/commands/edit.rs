@@ -1,0 +1,342 @@
+//! `pgvol csg`: Booleans of fields, meshes and analytic primaries, sharp or rounded.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::{Args, ValueEnum};
+
+use super::args::{OutputArgs, PathArg};
+use super::ops::{check_output_name, report, ShapeOutputArgs};
+use crate::progress::Bars;
+
+/// Writes an edited volume as .pgv, or contours it into a mesh file, by the output's
+/// extension; returns the triangles written (0 for a .pgv).
+pub(super) fn write_edited(
+    output: &Path,
+    volume: pgvol::CoefficientVolume,
+    operation: &str,
+    band: f32,
+    args: &ShapeOutputArgs,
+    progress: &Bars,
+) -> Result<usize> {
+    if pgvol::is_pgv(output) {
+        let file = pgvol::edited_file(volume, operation, band);
+        pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
+        return Ok(0);
+    }
+    let options = pgvol::DecodeOptions {
+        method: args.method.into(),
+        min_component: args.min_component,
+        ..Default::default()
+    };
+    let mesh = pgvol::decode(&volume, &options, progress)
+        .map_err(|e| anyhow::anyhow!("{operation}: the result is empty: {e}"))?;
+    pgvol::write_mesh(output, &mesh)?;
+    Ok(mesh.triangles.len())
+}
+
+/// A box from `x0,y0,z0,x1,y1,z1`.
+pub(super) fn parse_box(text: &str) -> Result<(pgvol::glam::Vec3, pgvol::glam::Vec3), String> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected six numbers x0,y0,z0,x1,y1,z1, got '{text}'"))?;
+    if v.len() != 6 || v.iter().any(|x| !x.is_finite()) || v[3] < v[0] || v[4] < v[1] || v[5] < v[2]
+    {
+        return Err(format!(
+            "expected six finite numbers x0,y0,z0,x1,y1,z1 with each upper corner coordinate \
+             at least the lower one, got '{text}'"
+        ));
+    }
+    Ok((
+        pgvol::glam::Vec3::new(v[0], v[1], v[2]),
+        pgvol::glam::Vec3::new(v[3], v[4], v[5]),
+    ))
+}
+
+fn parse_operand(text: &str) -> Result<pgvol::Operand, String> {
+    pgvol::parse_operand(text).map_err(|e| e.to_string())
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum OpArg {
+    /// Everything inside any operand.
+    Union,
+    /// What is inside every operand.
+    Intersection,
+    /// The first operand less all the others.
+    Difference,
+}
+
+#[derive(Args)]
+#[command(
+    after_help = "Operands: a .pgv file, a mesh file (encoded onto the result's grid), or \
+an analytic primary:\n  sphere:cx,cy,cz,r  box:cx,cy,cz,hx,hy,hz  plane:nx,ny,nz,d (the half-space \
+n·p ≤ d)  cylinder:px,py,pz,ax,ay,az,r\n\nExample: pgvol csg union part.stl sphere:0,0,10,4 -o \
+merged.glb --radius 1.5"
+)]
+pub struct CsgArgs {
+    /// The operation.
+    #[arg(value_enum)]
+    pub op: OpArg,
+    /// Two or more operands (see below).
+    #[arg(required = true, num_args = 2.., value_parser = parse_operand)]
+    pub operands: Vec<pgvol::Operand>,
+    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// Fillet radius where the surfaces meet, in model units (default: sharp, min/max). The
+    /// rounded field stays within the radius of the sharp one and equals it wherever the
+    /// operands are more than the radius apart.
+    #[arg(long, allow_negative_numbers = true)]
+    pub radius: Option<f32>,
+    /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: every bounded operand's box,
+    /// grown by the radius); needed when every operand is a plane or cylinder.
+    #[arg(long = "box", value_parser = parse_box, allow_negative_numbers = true)]
+    pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+pub fn csg(a: CsgArgs) -> Result<()> {
+    let start = Instant::now();
+    check_output_name(&a.output)?;
+    let bars = Bars::new(a.out.silent());
+    let settings = pgvol::CsgSettings {
+        op: match a.op {
+            OpArg::Union => pgvol::BoolOp::Union,
+            OpArg::Intersection => pgvol::BoolOp::Intersection,
+            OpArg::Difference => pgvol::BoolOp::Difference,
+        },
+        blend: match a.radius {
+            None => pgvol::Blend::Sharp,
+            Some(r) => pgvol::Blend::Round(r),
+        },
+        res: a.shape.res as usize,
+        bounds: a.bounds,
+    };
+    let volume = pgvol::csg(&a.operands, &settings, &bars)?;
+    let band = pgvol::ENCODE_BAND * volume.grid.spacing;
+    let operation = pgvol::csg_name(&settings);
+    let triangles = write_edited(&a.output, volume, &operation, band, &a.shape, &bars)?;
+    report(&a.out, &a.output, triangles, start)
+}
+
+fn parse_mask(s: &str) -> Result<pgvol::Mask, String> {
+    pgvol::parse_mask(s).map_err(|e| e.to_string())
+}
+
+fn parse_face(s: &str) -> Result<pgvol::Face, String> {
+    pgvol::parse_face(s).map_err(|e| e.to_string())
+}
+
+#[derive(Args)]
+#[command(
+    after_help = "Examples:\n  pgvol repair part.pgv -o fixed.pgv --mask -5,-5,20,5,5,32 --face -z\n  \
+pgvol repair scan.stl -o smooth.glb --mask 0,0,0,10,10,10 --denoise --coarse 20"
+)]
+pub struct RepairArgs {
+    /// A .pgv file, or a mesh (encoded on the fly at --res with exact distances over the
+    /// masks).
+    pub input: PathArg,
+    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// An axis-aligned box x0,y0,z0,x1,y1,z1 in model units to restore; repeat for more.
+    /// Coefficients whose support misses every mask stay bit-identical.
+    #[arg(long, required = true, value_parser = parse_mask, allow_negative_numbers = true)]
+    pub mask: Vec<pgvol::Mask>,
+    /// Protrusion removal: the mask's face the protrusion's base crosses (+x, -x, +y, -y, +z,
+    /// -z), where the new field joins the body.
+    #[arg(long, value_parser = parse_face, allow_hyphen_values = true, required_unless_present = "denoise", conflicts_with = "denoise")]
+    pub face: Option<pgvol::Face>,
+    /// Normal derivative of the field across --face: 1 (a distance's) continues the body;
+    /// larger values lower and flatten the cap, smaller ones raise it.
+    #[arg(long, default_value_t = pgvol::DEFAULT_ALPHA, allow_negative_numbers = true, conflicts_with = "denoise")]
+    pub alpha: f32,
+    /// Denoise instead: resample the field coarsely inside the masks and interpolate it with
+    /// the quadratic B-spline.
+    #[arg(long)]
+    pub denoise: bool,
+    /// Coarse samples along a mask's longest side when denoising (fewer smooth more).
+    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, requires = "denoise")]
+    pub coarse: usize,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+pub fn repair(a: RepairArgs) -> Result<()> {
+    let start = Instant::now();
+    check_output_name(&a.output)?;
+    let bars = Bars::new(a.out.silent());
+    let restore = match a.face {
+        Some(face) if !a.denoise => pgvol::Restore::Protrusion {
+            face,
+            alpha: a.alpha,
+        },
+        _ => pgvol::Restore::Denoise { coarse: a.coarse },
+    };
+    let reach = pgvol::repair_reach(&a.mask);
+    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let (volume, reports) = pgvol::repair(&shape, &a.mask, restore, &bars)
+        .map_err(|e| super::args::at_input(e, &a.input))?;
+    let band = shape
+        .band
+        .unwrap_or_else(|| pgvol::ops::stored_band(&volume));
+    let operation = if a.denoise {
+        format!("denoise coarse {}", a.coarse)
+    } else {
+        format!("repair alpha {}", a.alpha)
+    };
+    let triangles = write_edited(&a.output, volume, &operation, band, &a.shape, &bars)?;
+    if a.out.json {
+        let masks: Vec<_> = reports
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "nodes": r.nodes, "iterations": r.iterations,
+                    "coefficients": r.refit.coefficients, "fit_error": r.refit.max_error,
+                })
+            })
+            .collect();
+        return super::args::print_json(&serde_json::json!({
+            "output": a.output, "triangles": triangles, "masks": masks,
+            "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
+        }));
+    }
+    report(&a.out, &a.output, triangles, start)
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum BlendKind {
+    /// Liming rounding (1 − λ)·P1·P2 + λ·C² of two primaries with a cutting surface (--cut).
+    Liming,
+    /// Functional spline (1 − λ)·P1·P2 + λ·B1²·B2² with one bound per primary (--bound twice).
+    Spline,
+    /// I-patch Σ wi·Pi·Π(j≠i) Bj² + w·Π Bi², one bound per primary; weights by --weights or
+    /// fitted by least squares to --points.
+    Ipatch,
+}
+
+fn parse_weights(text: &str) -> Result<Vec<f32>, String> {
+    text.split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f32>()
+                .map_err(|_| format!("'{x}' is not a number"))
+        })
+        .collect()
+}
+
+#[derive(Args)]
+#[command(
+    after_help = "Operands as for `pgvol csg`. Fields are negative inside; the edge blends \
+round the edge of the two primaries' intersection where every bound (or the cut) is negative.\n\n\
+Example: pgvol blend liming plane:1,0,0,0 plane:0,1,0,0 --cut plane:-1,-1,0,0.5 --box -1,-1,-1,1,1,1 -o round.stl"
+)]
+pub struct BlendArgs {
+    /// The blend.
+    #[arg(value_enum)]
+    pub kind: BlendKind,
+    /// The primaries (two; two or more for an I-patch).
+    #[arg(required = true, num_args = 2.., value_parser = parse_operand)]
+    pub primaries: Vec<pgvol::Operand>,
+    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// Liming's cutting surface (negative on the edge's side).
+    #[arg(long, value_parser = parse_operand)]
+    pub cut: Option<pgvol::Operand>,
+    /// A bound per primary, in order (spline, ipatch).
+    #[arg(long, value_parser = parse_operand)]
+    pub bound: Vec<pgvol::Operand>,
+    /// λ in (0, 1) for liming and spline: larger moves the blend away from the edge.
+    #[arg(long, default_value_t = pgvol::DEFAULT_LAMBDA)]
+    pub lambda: f32,
+    /// I-patch weights w1,..,wn,w.
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "points")]
+    pub weights: Option<String>,
+    /// I-patch: a CSV of points (x,y,z per line) on the wanted surface, to fit the weights.
+    #[arg(long)]
+    pub points: Option<PathArg>,
+    /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: the bounded primaries' box).
+    #[arg(long = "box", value_parser = parse_box, allow_negative_numbers = true)]
+    pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
+    #[command(flatten)]
+    pub shape: ShapeOutputArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+pub fn blend(a: BlendArgs) -> Result<()> {
+    let start = Instant::now();
+    check_output_name(&a.output)?;
+    let bars = Bars::new(a.out.silent());
+    let operator = match a.kind {
+        BlendKind::Liming => pgvol::BlendOperator::Liming {
+            cut: a
+                .cut
+                .clone()
+                .ok_or_else(|| anyhow::anyhow!("liming needs --cut, the cutting surface"))?,
+            lambda: a.lambda,
+        },
+        BlendKind::Spline => {
+            let [b1, b2]: [pgvol::Operand; 2] = a
+                .bound
+                .clone()
+                .try_into()
+                .map_err(|_| anyhow::anyhow!("spline needs --bound twice, one per primary"))?;
+            pgvol::BlendOperator::Spline {
+                bounds: [b1, b2],
+                lambda: a.lambda,
+            }
+        }
+        BlendKind::Ipatch => {
+            let parsed = match &a.weights {
+                Some(text) => {
+                    Some(parse_weights(text).map_err(|e| anyhow::anyhow!("--weights: {e}"))?)
+                }
+                None => None,
+            };
+            let weights = match &parsed {
+                Some(w) if w.len() >= 2 => Some((w[..w.len() - 1].to_vec(), w[w.len() - 1])),
+                Some(w) => anyhow::bail!("--weights: expected w1,..,wn,w, got {} numbers", w.len()),
+                None => None,
+            };
+            let points = match &a.points {
+                Some(p) => pgvol::read_points_file(p)?,
+                None if weights.is_none() => {
+                    anyhow::bail!("ipatch needs --weights or --points to fit them to")
+                }
+                None => Vec::new(),
+            };
+            pgvol::BlendOperator::IPatch {
+                bounds: a.bound.clone(),
+                weights,
+                points,
+            }
+        }
+    };
+    let settings = pgvol::BlendSettings {
+        res: a.shape.res as usize,
+        bounds: a.bounds,
+    };
+    let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
+    let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;
+    let operation = format!("blend {:?}", a.kind).to_lowercase();
+    let triangles = write_edited(&a.output, blended.volume, &operation, band, &a.shape, &bars)?;
+    if a.out.json {
+        return super::args::print_json(&serde_json::json!({
+            "output": a.output, "triangles": triangles,
+            "weights": blended.weights.map(|(w, w0)| serde_json::json!({"w": w, "w0": w0})),
+            "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
+        }));
+    }
+    report(&a.out, &a.output, triangles, start)
+}

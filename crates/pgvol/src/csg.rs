@@ -1,0 +1,180 @@
+//! Booleans of two or more operands, sharp or rounded, re-fitted into one coefficient volume on
+//! a grid covering all of them.
+
+use glam::Vec3;
+use pgvol_core::Grid;
+use pgvol_field::{Basis, CoefficientVolume};
+use pgvol_format::PgvFile;
+use pgvol_ops::{Blend, BoolOp};
+
+use crate::encode::{BAND_KEY, ENCODE_BAND};
+use crate::error::{Error, Result};
+use crate::operand::{LoadedOperand, Operand, OperandField};
+use crate::progress::Progress;
+
+/// An operation's refusal of a parameter as a facade error carrying the message once.
+pub(crate) fn ops_error(e: pgvol_ops::OpsError) -> Error {
+    match e {
+        pgvol_ops::OpsError::BadParameter(message) => Error::parameter(message),
+        other => other.into(),
+    }
+}
+
+/// Grid nodes per axis of a Boolean's result, unless given.
+pub const CSG_RES: usize = 128;
+
+/// What to compute.
+#[derive(Clone, Copy, Debug)]
+pub struct CsgSettings {
+    /// Union, intersection or difference (the first operand less the others).
+    pub op: BoolOp,
+    /// Sharp, or rounded with a radius in model units.
+    pub blend: Blend,
+    /// Grid nodes per axis of the result (default [`CSG_RES`]).
+    pub res: usize,
+    /// The box the result's grid covers (grown as [`Grid::cube_res`] grows it); by default the
+    /// box of every bounded operand, grown by the blend radius. Needed when no operand is
+    /// bounded (planes, cylinders).
+    pub bounds: Option<(Vec3, Vec3)>,
+}
+
+impl Default for CsgSettings {
+    fn default() -> Self {
+        CsgSettings {
+            op: BoolOp::Union,
+            blend: Blend::Sharp,
+            res: CSG_RES,
+            bounds: None,
+        }
+    }
+}
+
+/// The operation's name as recorded in the result's file.
+pub fn csg_name(settings: &CsgSettings) -> String {
+    let op = match settings.op {
+        BoolOp::Union => "union",
+        BoolOp::Intersection => "intersection",
+        BoolOp::Difference => "difference",
+    };
+    match settings.blend {
+        Blend::Sharp => op.to_string(),
+        Blend::Round(r) => format!("{op} radius {r}"),
+    }
+}
+
+/// The grid every operand is placed on: a cube over `bounds`, or else over the bounded
+/// operands, grown by `grow`.
+pub fn covering_grid(
+    operands: &[LoadedOperand],
+    bounds: Option<(Vec3, Vec3)>,
+    grow: f32,
+    res: usize,
+) -> Result<Grid> {
+    let (lo, hi) = match bounds {
+        Some(b) => b,
+        None => operands
+            .iter()
+            .filter_map(LoadedOperand::bounds)
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+            .ok_or_else(|| {
+                Error::parameter(
+                    "no operand is bounded (planes and cylinders are infinite); give the box \
+                     the result should cover with --box x0,y0,z0,x1,y1,z1",
+                )
+            })?,
+    };
+    if !(lo.is_finite() && hi.is_finite()) || (hi - lo).min_element() < 0.0 {
+        return Err(Error::parameter(format!(
+            "the box must be finite with its second corner above the first, got {lo} to {hi}"
+        )));
+    }
+    Ok(Grid::cube_res(lo - grow, hi + grow, res)?)
+}
+
+/// Reads the operands: `.pgv` files and meshes by extension, primaries as given.
+pub fn load_operands(operands: &[Operand]) -> Result<Vec<LoadedOperand>> {
+    operands
+        .iter()
+        .map(|o| {
+            LoadedOperand::load(o).map_err(|e| match (o, e.path()) {
+                (Operand::File(path), None) => e.at(path),
+                _ => e,
+            })
+        })
+        .collect()
+}
+
+/// Places the operands on `grid` as fields with exact distances `reach` out.
+pub fn operand_fields(
+    operands: &[Operand],
+    loaded: &[LoadedOperand],
+    grid: Grid,
+    reach: f32,
+    progress: &dyn Progress,
+) -> Result<Vec<OperandField>> {
+    operands
+        .iter()
+        .zip(loaded)
+        .map(|(o, l)| {
+            l.field(grid, reach, progress)
+                .map_err(|e| match (o, e.path()) {
+                    (Operand::File(path), None) => e.at(path),
+                    _ => e,
+                })
+        })
+        .collect()
+}
+
+/// The Boolean of the operands (the first less the others for a difference), re-fitted in the
+/// cubic B-spline on one grid covering all, brick by brick. The result is a distance within
+/// [`ENCODE_BAND`] spacings of its surface where the operands are, bounded as
+/// [`pgvol_ops::union`] documents in the blends.
+pub fn csg(
+    operands: &[Operand],
+    settings: &CsgSettings,
+    progress: &dyn Progress,
+) -> Result<CoefficientVolume> {
+    if operands.len() < 2 {
+        return Err(Error::parameter(format!(
+            "a Boolean needs two or more operands, got {}",
+            operands.len()
+        )));
+    }
+    pgvol_ops::check_blend(settings.blend).map_err(ops_error)?;
+    let radius = match settings.blend {
+        Blend::Sharp => 0.0,
+        Blend::Round(r) => r,
+    };
+    let loaded = load_operands(operands)?;
+    let grid = covering_grid(&loaded, settings.bounds, radius, settings.res)?;
+    let fields = operand_fields(operands, &loaded, grid, radius, progress)?;
+    progress.stage("combining the fields");
+    let band = ENCODE_BAND * grid.spacing;
+    let (op, blend) = (settings.op, settings.blend);
+    let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, blend.lipschitz(), |p| {
+        let mut values = [0.0f32; 16];
+        if fields.len() <= values.len() {
+            for (v, f) in values.iter_mut().zip(&fields) {
+                *v = f.value(p);
+            }
+            pgvol_ops::combine(op, blend, &values[..fields.len()])
+        } else {
+            let values: Vec<f32> = fields.iter().map(|f| f.value(p)).collect();
+            pgvol_ops::combine(op, blend, &values)
+        }
+    })
+    .map_err(ops_error)?;
+    crate::progress::check(progress)?;
+    Ok(volume)
+}
+
+/// The `.pgv` file of an edited field: its operation and the band within which its values
+/// are distances recorded in the header.
+pub fn edited_file(volume: CoefficientVolume, operation: &str, band: f32) -> PgvFile {
+    let mut header = pgvol_format::header_for(&volume, "interp", None);
+    header
+        .metadata
+        .insert("operation".into(), operation.to_string());
+    header.metadata.insert(BAND_KEY.into(), format!("{band}"));
+    PgvFile { header, volume }
+}

@@ -1,0 +1,256 @@
+//! Operands of the editing operations: analytic primaries given by a short text, or fields read
+//! from `.pgv` files or encoded from meshes onto the operation's grid.
+
+use std::path::PathBuf;
+
+use glam::{Quat, Vec3};
+use pgvol_core::{Grid, Mesh};
+use pgvol_field::analytic::{Cylinder, Plane, RotatedBox, Sphere};
+use pgvol_field::{Basis, CoefficientVolume, FitMethod, SignedDistance};
+use pgvol_sdf::SignMode;
+
+use crate::encode::{fit_volume, is_pgv, EncodeOptions, ENCODE_BAND};
+use crate::error::{Error, Result};
+use crate::grid::GridSpec;
+use crate::pgv_io::read_pgv;
+use crate::progress::Progress;
+use crate::shape::Shape;
+use crate::{mesh_io, Timings};
+
+/// The forms of [`parse_operand`]'s analytic primaries, for help texts and errors.
+pub const PRIMARY_FORMS: &str = "sphere:cx,cy,cz,r  box:cx,cy,cz,hx,hy,hz  \
+     plane:nx,ny,nz,d (the half-space n·p ≤ d)  cylinder:px,py,pz,ax,ay,az,r";
+
+/// An analytic solid with its exact signed distance.
+#[derive(Clone, Copy, Debug)]
+pub enum Primary {
+    /// A ball.
+    Sphere(Sphere),
+    /// An axis-aligned box.
+    Box(RotatedBox),
+    /// A half-space.
+    Plane(Plane),
+    /// An infinite cylinder.
+    Cylinder(Cylinder),
+}
+
+impl Primary {
+    /// Signed distance at `p`, negative inside.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        match self {
+            Primary::Sphere(s) => s.distance(p),
+            Primary::Box(b) => b.distance(p),
+            Primary::Plane(h) => h.distance(p),
+            Primary::Cylinder(c) => c.distance(p),
+        }
+    }
+
+    /// The solid's bounding box, when it is bounded.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        match self {
+            Primary::Sphere(s) => Some((s.centre - s.radius, s.centre + s.radius)),
+            Primary::Box(b) => Some((b.centre - b.half, b.centre + b.half)),
+            Primary::Plane(_) | Primary::Cylinder(_) => None,
+        }
+    }
+}
+
+/// What an operand names before it is loaded.
+#[derive(Clone, Debug)]
+pub enum Operand {
+    /// An analytic solid.
+    Primary(Primary),
+    /// A `.pgv` file or a mesh file.
+    File(PathBuf),
+}
+
+/// An operand as a field to evaluate anywhere.
+#[derive(Clone, Debug)]
+pub enum OperandField {
+    /// An analytic solid's exact distance.
+    Primary(Primary),
+    /// A coefficient volume.
+    Volume(CoefficientVolume),
+}
+
+impl OperandField {
+    /// The field's value at `p`.
+    pub fn value(&self, p: Vec3) -> f32 {
+        match self {
+            OperandField::Primary(s) => s.distance(p),
+            OperandField::Volume(v) => v.value(p),
+        }
+    }
+}
+
+fn numbers(kind: &str, text: &str, count: usize, form: &str) -> Result<Vec<f32>> {
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| Error::parameter(format!("{kind}: '{text}' is not {count} numbers {form}")))?;
+    if values.len() != count || values.iter().any(|x| !x.is_finite()) {
+        return Err(Error::parameter(format!(
+            "{kind}: expected {count} finite numbers {form}, got '{text}'"
+        )));
+    }
+    Ok(values)
+}
+
+fn positive(kind: &str, what: &str, x: f32) -> Result<f32> {
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::parameter(format!(
+            "{kind}: the {what} must be positive, got {x}"
+        )))
+    }
+}
+
+fn unit(kind: &str, v: Vec3) -> Result<Vec3> {
+    v.try_normalize()
+        .ok_or_else(|| Error::parameter(format!("{kind}: the direction must be non-zero")))
+}
+
+/// An analytic primary from `kind:numbers` (see [`PRIMARY_FORMS`]); anything else is a path.
+pub fn parse_operand(text: &str) -> Result<Operand> {
+    let Some((kind, rest)) = text.split_once(':') else {
+        return Ok(Operand::File(PathBuf::from(text)));
+    };
+    let v3 = |v: &[f32]| Vec3::new(v[0], v[1], v[2]);
+    let primary = match kind {
+        "sphere" => {
+            let v = numbers(kind, rest, 4, "cx,cy,cz,r")?;
+            Primary::Sphere(Sphere {
+                centre: v3(&v),
+                radius: positive(kind, "radius", v[3])?,
+            })
+        }
+        "box" => {
+            let v = numbers(kind, rest, 6, "cx,cy,cz,hx,hy,hz")?;
+            let half = v3(&v[3..]);
+            if half.min_element() <= 0.0 {
+                return Err(Error::parameter(format!(
+                    "box: the half-extents must be positive, got {half}"
+                )));
+            }
+            Primary::Box(RotatedBox {
+                centre: v3(&v),
+                half,
+                rotation: Quat::IDENTITY,
+            })
+        }
+        "plane" => {
+            let v = numbers(kind, rest, 4, "nx,ny,nz,d")?;
+            let n = v3(&v);
+            let length = n.length();
+            let normal = unit(kind, n)?;
+            Primary::Plane(Plane {
+                normal,
+                offset: v[3] / length,
+            })
+        }
+        "cylinder" => {
+            let v = numbers(kind, rest, 7, "px,py,pz,ax,ay,az,r")?;
+            Primary::Cylinder(Cylinder {
+                point: v3(&v),
+                axis: unit(kind, v3(&v[3..]))?,
+                radius: positive(kind, "radius", v[6])?,
+            })
+        }
+        // Windows drive letters and other paths with a colon.
+        _ => return Ok(Operand::File(PathBuf::from(text))),
+    };
+    Ok(Operand::Primary(primary))
+}
+
+/// Operands read, ready to be placed on one grid.
+#[derive(Clone, Debug)]
+pub enum LoadedOperand {
+    /// An analytic solid.
+    Primary(Primary),
+    /// A `.pgv` file's field.
+    Field(Box<Shape>),
+    /// A mesh, encoded later onto the operation's grid.
+    Mesh(Box<Mesh>),
+}
+
+impl LoadedOperand {
+    /// Reads a file operand (`.pgv` or mesh); primaries pass through.
+    pub fn load(operand: &Operand) -> Result<LoadedOperand> {
+        Ok(match operand {
+            Operand::Primary(p) => LoadedOperand::Primary(*p),
+            Operand::File(path) if is_pgv(path) => {
+                LoadedOperand::Field(Box::new(Shape::from_file(read_pgv(path)?)))
+            }
+            Operand::File(path) => {
+                let (mesh, _) = mesh_io::read_mesh(path)?;
+                if mesh.bounds().is_none() {
+                    return Err(Error::parameter("the mesh has no triangles").at(path));
+                }
+                LoadedOperand::Mesh(Box::new(mesh))
+            }
+        })
+    }
+
+    /// The bounding box, when bounded.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        match self {
+            LoadedOperand::Primary(p) => p.bounds(),
+            LoadedOperand::Field(s) => Some(s.bounds),
+            LoadedOperand::Mesh(m) => m.bounds(),
+        }
+    }
+
+    /// The field on `grid`: meshes are encoded onto it with exact distances `reach` beyond the
+    /// usual band; `.pgv` files keep their own grid and are refused when their band is too
+    /// narrow for `reach`.
+    pub fn field(&self, grid: Grid, reach: f32, progress: &dyn Progress) -> Result<OperandField> {
+        match self {
+            LoadedOperand::Primary(p) => Ok(OperandField::Primary(*p)),
+            LoadedOperand::Field(shape) => {
+                shape.check_reach(reach)?;
+                Ok(OperandField::Volume(shape.volume.clone()))
+            }
+            LoadedOperand::Mesh(mesh) => {
+                let options = EncodeOptions {
+                    grid: GridSpec::Res(grid.dims[0]),
+                    basis: Basis::Bspline3,
+                    fit: FitMethod::Interp,
+                    band: ENCODE_BAND + reach / grid.spacing,
+                    sign: SignMode::Auto,
+                };
+                crate::memory::check_sparse_encode("encoding the mesh", mesh, &grid, options.band)?;
+                let fitted = fit_volume(mesh, grid, &options, &mut Timings::default(), progress)?;
+                Ok(OperandField::Volume(fitted.volume))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn primaries_parse_and_bad_ones_are_refused() {
+        let Operand::Primary(s) = parse_operand("sphere:0,0,0,2").unwrap() else {
+            panic!("not a primary")
+        };
+        assert_eq!(s.distance(Vec3::new(3.0, 0.0, 0.0)), 1.0);
+        let Operand::Primary(h) = parse_operand("plane:0,0,2,1").unwrap() else {
+            panic!("not a primary")
+        };
+        assert!((h.distance(Vec3::new(0.0, 0.0, 1.0)) - 0.5).abs() < 1e-6);
+        assert!(matches!(parse_operand("part.stl"), Ok(Operand::File(_))));
+        for bad in [
+            "sphere:0,0,0",
+            "sphere:0,0,0,-1",
+            "box:0,0,0,1,0,1",
+            "plane:0,0,0,1",
+        ] {
+            let e = parse_operand(bad).unwrap_err().to_string();
+            assert!(e.contains(bad.split(':').next().unwrap()), "{e}");
+        }
+    }
+}
