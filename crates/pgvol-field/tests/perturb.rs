@@ -50,6 +50,27 @@ fn bumpy_sphere(rings: u32, sectors: u32) -> Mesh {
     Mesh::new(positions, triangles)
 }
 
+/// Points on a lattice around the bumpy sphere with half their radial gap to the surface, an
+/// underestimate of their distance with the right sign.
+fn sign_points() -> Vec<(Vec3, f32)> {
+    let mut out = Vec::new();
+    for k in 0..16 {
+        for j in 0..16 {
+            for i in 0..16 {
+                let p = (Vec3::new(i as f32, j as f32, k as f32) / 15.0 - 0.5) * 3.0;
+                let r = p.length();
+                if r > 1e-3 {
+                    let gap = 0.5 * (r - radius(p / r));
+                    if gap.abs() > 0.1 {
+                        out.push((p, gap));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
 #[test]
 fn error_falls_monotonically_on_a_sphere_with_bumps() {
     let mesh = bumpy_sphere(40, 80);
@@ -57,14 +78,14 @@ fn error_falls_monotonically_on_a_sphere_with_bumps() {
         max_functions: 400,
         tolerance: 1e-3,
     };
-    let (field, report) = build(&mesh, &options, &mut |_| true).unwrap();
+    let (field, report) = build(&mesh, &sign_points(), &options, &mut |_| true).unwrap();
     eprintln!(
         "functions {} base mean {:.5} max {:.5} -> mean {:.5} max {:.5} stop {:?} trials {} set aside {} exact {} in {:.2} s",
         report.functions, report.base_mean, report.base_max, report.mean, report.max,
         report.stop, report.trials, report.seeds_set_aside, report.exact_solves, report.seconds
     );
     assert!(report.functions > 10, "{report:?}");
-    assert_eq!(report.history.len(), report.functions);
+    assert_eq!(report.history.len(), report.loop_functions);
     let mut previous = report.base_mean;
     for (k, &e) in report.history.iter().enumerate() {
         assert!(
@@ -101,6 +122,10 @@ fn error_falls_monotonically_on_a_sphere_with_bumps() {
         report.max
     );
     assert_ne!(report.stop, StopReason::Cancelled);
+    assert_eq!(report.wrong_side_after, 0, "{report:?}");
+    for (p, d) in sign_points() {
+        assert_eq!(field.value(p) > 0.0, d > 0.0, "sign at {p}");
+    }
 }
 
 #[test]
@@ -110,11 +135,11 @@ fn the_budget_and_cancellation_stop_the_loop() {
         max_functions: 5,
         tolerance: 0.0,
     };
-    let (_, report) = build(&mesh, &options, &mut |_| true).unwrap();
+    let (_, report) = build(&mesh, &[], &options, &mut |_| true).unwrap();
     assert_eq!(report.stop, StopReason::MaxFunctions);
     assert_eq!(report.functions, 5);
     let mut calls = 0;
-    let (field, report) = build(&mesh, &options, &mut |_| {
+    let (field, report) = build(&mesh, &[], &options, &mut |_| {
         calls += 1;
         calls <= 2
     })
@@ -129,6 +154,6 @@ fn too_few_vertices_are_refused() {
         vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
         vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
     );
-    let e = build(&mesh, &PerturbOptions::default(), &mut |_| true).unwrap_err();
+    let e = build(&mesh, &[], &PerturbOptions::default(), &mut |_| true).unwrap_err();
     assert!(e.to_string().contains("4 vertices"), "{e}");
 }

@@ -68,6 +68,7 @@ mod export;
 mod grid;
 mod memory;
 mod mesh_io;
+mod perturb;
 mod pgv_io;
 mod progress;
 mod remesh;
@@ -92,7 +93,9 @@ pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
 };
+pub use perturb::{perturb, perturbation_mesh, resample, Perturbed, RESAMPLE_BAND, SOURCE_KEY};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
+pub use pgvol_field::perturb::{PerturbOptions, PerturbReport, PerturbationField, StopReason};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use shape::{

@@ -6,6 +6,7 @@ mod eval;
 mod export;
 mod files;
 mod ops;
+mod perturb;
 mod remesh;
 mod sdf;
 
@@ -27,8 +28,10 @@ pub enum Command {
     ///
     /// Hausdorff and Chamfer-L1 (mean of the two mean distances) from area-uniform samples with
     /// exact point-to-triangle distances, in absolute units and as % of B's bounding-box diagonal;
-    /// normal deviation between each sample and its closest point; triangles, boundary and
-    /// non-manifold edges, watertightness, Euler characteristic, volume and area of both.
+    /// normal deviation between each sample and its closest point; the deviation of A's
+    /// vertices and vertex normals from B and the mean depth-buffer difference over 14 views;
+    /// triangles, boundary and non-manifold edges, watertightness, Euler characteristic, volume
+    /// and area of both.
     Compare(compare::CompareArgs),
     /// Samples the signed distance of a mesh on a dense grid and writes NRRD or NPY (float32).
     Sdf(sdf::SdfArgs),
@@ -55,6 +58,13 @@ pub enum Command {
     Offset(ops::OffsetArgs),
     /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes.
     Shell(ops::ShellArgs),
+    /// Converts a mesh into an implicit surface of quadric perturbations.
+    ///
+    /// A base quadric fitted by least squares plus local bumps f·Q³ (each quadric Q through ten
+    /// vertices), added where the vertices are farthest from the zero set until --tolerance or
+    /// --max-functions; the loop stops with a report when no bump lowers the error. The field is
+    /// resampled into a coefficient volume (.pgv) or contoured into a mesh.
+    Perturb(perturb::PerturbArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -74,6 +84,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Slice(a) => ops::slice(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
+        Command::Perturb(a) => perturb::run(a),
     }
 }
 
@@ -92,6 +103,7 @@ impl Command {
             Command::Slice(a) => a.out,
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
+            Command::Perturb(a) => a.out,
         }
     }
 
@@ -107,6 +119,7 @@ impl Command {
             Command::Slice(a) => Some((&a.output, a.out)),
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
+            Command::Perturb(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }

@@ -82,7 +82,16 @@ pub enum StopReason {
 /// What the conversion did, deviations in mesh units.
 #[derive(Clone, Debug, Serialize)]
 pub struct PerturbReport {
+    /// Perturbations in the field: the loop's plus the clearing bumps.
     pub functions: usize,
+    /// Perturbations the paper's loop added.
+    pub loop_functions: usize,
+    /// Sign points given, and how many were on the wrong side of the base quadric, after the
+    /// loop (before its clearing pass) and at the end.
+    pub sign_points: usize,
+    pub wrong_side_of_base: usize,
+    pub wrong_side_before_clearing: usize,
+    pub wrong_side_after: usize,
     pub vertices: usize,
     pub diagonal: f64,
     /// Mean and largest vertex deviation estimate of the base quadric alone.
@@ -186,16 +195,18 @@ struct State {
     points: Vec<DVec3>,
     value: Vec<f64>,
     gradient: Vec<DVec3>,
-    /// Probes: `2n` points, the first `n` outside (`P + δn`), the rest inside.
+    /// Probes: points of known side, `P ± δn` along the vertex normals and the caller's sign
+    /// points; a perturbation may not put more of them on the wrong side.
     probes: Vec<DVec3>,
     probe_value: Vec<f64>,
+    probe_outside: Vec<bool>,
     point_grid: PointGrid,
     probe_grid: PointGrid,
 }
 
 impl State {
     fn wrong(&self, i: usize, v: f64) -> bool {
-        if i < self.points.len() {
+        if self.probe_outside[i] {
             v <= 0.0
         } else {
             v >= 0.0
@@ -328,10 +339,14 @@ fn solve_term(
         .map(|t| (t, false))
 }
 
-/// Converts `mesh` into a perturbation field. `progress` gets the fraction of the function
-/// budget used and returns `false` to stop (the field so far is returned, marked cancelled).
+/// Converts `mesh` into a perturbation field. `sign_points` are points off the surface with
+/// their signed distance (negative inside), from any exact source: no perturbation may turn
+/// more of them to the wrong side, and after the loop those still on the wrong side are
+/// cleared (by spherical bumps that reach no vertex). `progress` gets the fraction of the function budget
+/// used and returns `false` to stop (the field so far is returned, marked cancelled).
 pub fn build(
     mesh: &Mesh,
+    sign_points: &[(Vec3, f32)],
     options: &PerturbOptions,
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<(PerturbationField, PerturbReport), PerturbError> {
@@ -352,7 +367,7 @@ pub fn build(
     let (base, base_exact) = fit_base(&points, &normals, diagonal).ok_or(PerturbError::BaseFit)?;
 
     let probe_offset = PROBE_EDGES * edge;
-    let probes: Vec<DVec3> = [1.0, -1.0]
+    let mut probes: Vec<DVec3> = [1.0, -1.0]
         .iter()
         .flat_map(|s| {
             points
@@ -361,6 +376,13 @@ pub fn build(
                 .map(move |(p, n)| *p + *n * (s * probe_offset))
         })
         .collect();
+    let mut probe_outside: Vec<bool> = (0..2 * n).map(|i| i < n).collect();
+    for &(p, d) in sign_points {
+        if d != 0.0 && d.is_finite() && p.is_finite() {
+            probes.push(p.as_dvec3());
+            probe_outside.push(d > 0.0);
+        }
+    }
     let cell = (RADIUS_EDGES * edge) as f32;
     let as_f32 = |v: &[DVec3]| v.iter().map(|p| p.as_vec3()).collect::<Vec<_>>();
     let (value, gradient): (Vec<f64>, Vec<DVec3>) =
@@ -370,6 +392,7 @@ pub fn build(
         probe_grid: PointGrid::new(&as_f32(&probes), cell),
         probe_value: probes.iter().map(|&p| base.value(p)).collect(),
         probes,
+        probe_outside,
         points,
         value,
         gradient,
@@ -382,6 +405,12 @@ pub fn build(
             .map(|(&v, &g)| deviation(v, g))
             .collect()
     };
+    // The base quadric's sheets far from every vertex are cleared first, so that the loop's
+    // rule (no probe turned to the wrong side) starts from a field with none there.
+    let wrong_base = count_wrong(&state);
+    let mut terms = Vec::new();
+    clear_wrong_sides(&mut state, sign_points, &mut terms);
+    let clearing_terms = terms.len();
     let mut dev = deviations(&state);
     let mean_of = |d: &[f64]| d.iter().sum::<f64>() / d.len() as f64;
     let max_of = |d: &[f64]| d.iter().cloned().fold(0.0, f64::max);
@@ -389,13 +418,14 @@ pub fn build(
     let mut sum: f64 = dev.iter().sum();
     let limit = options.tolerance * diagonal;
     let mut set_aside = vec![false; n];
-    let (mut terms, mut history) = (Vec::new(), Vec::new());
+    let mut history = Vec::new();
     let (mut trials, mut seeds_set_aside, mut exact_solves) = (0, 0, 0);
     let stop = loop {
-        if terms.len() >= options.max_functions {
+        let added = terms.len() - clearing_terms;
+        if added >= options.max_functions {
             break StopReason::MaxFunctions;
         }
-        if !progress(terms.len() as f64 / options.max_functions.max(1) as f64) {
+        if !progress(added as f64 / options.max_functions.max(1) as f64) {
             break StopReason::Cancelled;
         }
         let worst = (0..n)
@@ -446,9 +476,21 @@ pub fn build(
         terms.push(trial.term);
         history.push(sum / n as f64);
     };
+    let paper_terms = terms.len() - clearing_terms;
+    let wrong_before = count_wrong(&state);
+    if stop != StopReason::Cancelled {
+        clear_wrong_sides(&mut state, sign_points, &mut terms);
+    }
+    let wrong_after = count_wrong(&state);
+    let dev = deviations(&state);
     let field = PerturbationField::new(base, terms).expect("every accepted term is a bounded bump");
     let report = PerturbReport {
         functions: field.terms().len(),
+        loop_functions: paper_terms,
+        sign_points: sign_points.len(),
+        wrong_side_of_base: wrong_base,
+        wrong_side_before_clearing: wrong_before,
+        wrong_side_after: wrong_after,
         vertices: n,
         diagonal,
         base_mean,
@@ -464,4 +506,79 @@ pub fn build(
         seconds: start.elapsed().as_secs_f64(),
     };
     Ok((field, report))
+}
+
+fn count_wrong(state: &State) -> usize {
+    let first = 2 * state.points.len();
+    (first..state.probes.len())
+        .filter(|&i| state.wrong(i, state.probe_value[i]))
+        .count()
+}
+
+/// Clears sign points left on the wrong side, deepest first, each with a spherical bump
+/// `f · Q³`, `Q = a (1 − |x − s|² / ρ²)`, centred on the point `s` with `ρ` 0.9 of its distance to
+/// the surface: the ball holds no surface, so the bump moves no vertex and turns no point of
+/// the right side to the wrong one; `a³ = |M(s)| + |d(s)|` puts the point on its side with a
+/// margin of its distance. The paper's loop pins the zero set at the vertices only, so
+/// without this a sheet of the base quadric far from every vertex would stay.
+fn clear_wrong_sides(
+    state: &mut State,
+    sign_points: &[(Vec3, f32)],
+    terms: &mut Vec<Perturbation>,
+) {
+    let first = 2 * state.points.len();
+    let mut order: Vec<usize> = (first..state.probes.len()).collect();
+    let depth: Vec<f64> = sign_points
+        .iter()
+        .filter(|(p, d)| *d != 0.0 && d.is_finite() && p.is_finite())
+        .map(|(_, d)| d.abs() as f64)
+        .collect();
+    order.sort_by(|&a, &b| {
+        depth[b - first]
+            .total_cmp(&depth[a - first])
+            .then(a.cmp(&b))
+    });
+    for i in order {
+        let v = state.probe_value[i];
+        if !state.wrong(i, v) {
+            continue;
+        }
+        let rho = 0.9 * depth[i - first];
+        let a = (v.abs() + depth[i - first]).cbrt();
+        let term = Perturbation {
+            quadric: Quadric {
+                centre: state.probes[i],
+                scale: rho,
+                q: [-a, -a, -a, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, a],
+            },
+            factor: if state.probe_outside[i] { 1.0 } else { -1.0 },
+        };
+        let Some((lo, hi)) = term.quadric.positive_box() else {
+            continue;
+        };
+        let inside = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
+        state
+            .probe_grid
+            .for_each_in_box(lo.as_vec3(), hi.as_vec3(), |k| {
+                let p = state.probes[k as usize];
+                if inside(p) {
+                    if let Some((r, _)) = term.shape(p) {
+                        state.probe_value[k as usize] += term.factor * r;
+                    }
+                }
+            });
+        // No vertex lies in the ball; the update keeps the state exact all the same.
+        state
+            .point_grid
+            .for_each_in_box(lo.as_vec3(), hi.as_vec3(), |k| {
+                let p = state.points[k as usize];
+                if inside(p) {
+                    if let Some((r, dr)) = term.shape(p) {
+                        state.value[k as usize] += term.factor * r;
+                        state.gradient[k as usize] += term.factor * dr;
+                    }
+                }
+            });
+        terms.push(term);
+    }
 }

@@ -7,6 +7,7 @@ mod build;
 mod field;
 mod point_grid;
 pub mod quadric;
+mod resample;
 
 pub use box_tree::BoxTree;
 pub use build::{
@@ -15,3 +16,4 @@ pub use build::{
 };
 pub use field::{Perturbation, PerturbationError, PerturbationField};
 pub use quadric::Quadric;
+pub use resample::sample_band;

@@ -7,6 +7,9 @@ use glam::{IVec3, Vec3};
 pub struct PointGrid {
     cell: f32,
     buckets: HashMap<IVec3, Vec<u32>>,
+    /// The occupied cells in a fixed order, so a scan visits points in the same order on
+    /// every run (sums and ties come out alike).
+    keys: Vec<IVec3>,
 }
 
 impl PointGrid {
@@ -18,7 +21,13 @@ impl PointGrid {
                 .or_default()
                 .push(i as u32);
         }
-        Self { cell, buckets }
+        let mut keys: Vec<IVec3> = buckets.keys().copied().collect();
+        keys.sort_unstable_by_key(|k| (k.z, k.y, k.x));
+        Self {
+            cell,
+            buckets,
+            keys,
+        }
     }
 
     fn key(p: Vec3, cell: f32) -> IVec3 {
@@ -32,9 +41,9 @@ impl PointGrid {
         let cells = (b - a + IVec3::ONE).max(IVec3::ZERO).as_i64vec3();
         if cells.x * cells.y * cells.z > self.buckets.len() as i64 {
             // A box larger than the occupied cells: scanning the buckets is cheaper.
-            for (k, items) in &self.buckets {
+            for k in &self.keys {
                 if k.cmpge(a).all() && k.cmple(b).all() {
-                    items.iter().for_each(|&i| visit(i));
+                    self.buckets[k].iter().for_each(|&i| visit(i));
                 }
             }
             return;
