@@ -74,7 +74,7 @@ pub fn perturb(
 
 /// Nodes per axis of the coarse grid whose exact signed distances guard the sides (the
 /// default cube around the mesh).
-pub const SIGN_RES: usize = 40;
+pub const SIGN_RES: usize = 64;
 
 /// Sign points nearer the surface than this many coarse spacings are left out: the
 /// perturbations near the surface are held by the probes along the vertex normals.

@@ -9,7 +9,8 @@
 //!    right-hand sides `|M(Pᵢ)|^(1/3)`, so that `M + f Q³` with `f = −sign M` vanishes there;
 //! 3. the 10 × 10 system is solved exactly when its solution is a bounded bump, otherwise in
 //!    the least-squares sense with a growing pull toward a spherical bump at the seed;
-//! 4. the trial lowering the sum of deviation estimates most, without turning more probes
+//! 4. the trial lowering the paper's functional, the sum of `|M|` over the vertices, most,
+//!    without turning more probes
 //!    (points a little outside and inside along the normals) to the wrong sign, is kept.
 //!
 //! A seed whose every trial fails is set aside until a later term changes its neighbourhood;
@@ -36,6 +37,11 @@ pub const RADIUS_EDGES: f64 = 2.0;
 
 /// A bump may reach at most this many trial radii from its seed, so each term stays local.
 pub const MAX_REACH: f64 = 2.0;
+
+/// A bump's apex may exceed the largest of its ten right-hand sides by at most this factor:
+/// a narrow quadric through ten points can peak far above them between or beside them, which
+/// makes a steep field and surface pieces away from the mesh.
+pub const MAX_PEAK_RATIO: f64 = 2.0;
 
 /// Probe offset along the vertex normals, in mean edge lengths.
 pub const PROBE_EDGES: f64 = 0.25;
@@ -100,7 +106,9 @@ pub struct PerturbReport {
     /// The same after the last perturbation.
     pub mean: f64,
     pub max: f64,
-    /// Mean deviation estimate after each accepted perturbation (never increasing).
+    /// The functional the loop lowers, the mean of `|M|` over the vertices, for the base
+    /// quadric alone and after each accepted perturbation (never increasing).
+    pub base_functional: f64,
     pub history: Vec<f64>,
     /// Whether the base quadric took the exact least-squares fit (else it was pulled toward a
     /// sphere to stay an ellipsoid).
@@ -236,7 +244,7 @@ fn evaluate(state: &State, term: Perturbation) -> Option<Trial> {
             if let Some((r, dr)) = term.shape(p) {
                 let (v0, g0) = (state.value[i as usize], state.gradient[i as usize]);
                 let (v, g) = (v0 + term.factor * r, g0 + term.factor * dr);
-                gain += deviation(v0, g0) - deviation(v, g);
+                gain += v0.abs() - v.abs();
                 vertices.push((i, v, g));
             }
         });
@@ -321,13 +329,17 @@ fn solve_term(
     let factor = -state.value[seed].signum();
     let s0 = targets[0];
     let prior = [-s0, -s0, -s0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, s0];
+    let highest = targets.iter().cloned().fold(0.0, f64::max);
     let local = |q: [f64; TERMS]| {
         let quadric = Quadric {
             centre,
             scale: radius,
             q,
         };
-        let ok = quadric.positive_reach().is_some_and(|r| r <= MAX_REACH);
+        let ok = quadric.positive_reach().is_some_and(|r| r <= MAX_REACH)
+            && quadric
+                .peak()
+                .is_some_and(|p| p <= MAX_PEAK_RATIO * highest);
         ok.then_some(Perturbation { quadric, factor })
     };
     if let Some(term) = quadric::interpolate(&rows, &targets).and_then(local) {
@@ -342,8 +354,9 @@ fn solve_term(
 /// Converts `mesh` into a perturbation field. `sign_points` are points off the surface with
 /// their signed distance (negative inside), from any exact source: no perturbation may turn
 /// more of them to the wrong side, and after the loop those still on the wrong side are
-/// cleared (by spherical bumps that reach no vertex). `progress` gets the fraction of the function budget
-/// used and returns `false` to stop (the field so far is returned, marked cancelled).
+/// cleared (by spherical bumps that reach no vertex). `progress` gets the fraction of the
+/// function budget used and returns `false` to stop (the field so far is returned, marked
+/// cancelled).
 pub fn build(
     mesh: &Mesh,
     sign_points: &[(Vec3, f32)],
@@ -415,7 +428,8 @@ pub fn build(
     let mean_of = |d: &[f64]| d.iter().sum::<f64>() / d.len() as f64;
     let max_of = |d: &[f64]| d.iter().cloned().fold(0.0, f64::max);
     let (base_mean, base_max) = (mean_of(&dev), max_of(&dev));
-    let mut sum: f64 = dev.iter().sum();
+    let mut sum: f64 = state.value.iter().map(|v| v.abs()).sum();
+    let base_functional = sum / n as f64;
     let limit = options.tolerance * diagonal;
     let mut set_aside = vec![false; n];
     let mut history = Vec::new();
@@ -462,11 +476,10 @@ pub fn build(
         exact_solves += exact as usize;
         for &(i, v, g) in &trial.vertices {
             let i = i as usize;
-            state.value[i] = v;
             state.gradient[i] = g;
-            let d = deviation(v, g);
-            sum += d - dev[i];
-            dev[i] = d;
+            sum += v.abs() - state.value[i].abs();
+            state.value[i] = v;
+            dev[i] = deviation(v, g);
             // Its neighbourhood changed: a set-aside vertex may now find a term.
             set_aside[i] = false;
         }
@@ -497,6 +510,7 @@ pub fn build(
         base_max,
         mean: mean_of(&dev),
         max: max_of(&dev),
+        base_functional,
         history,
         base_exact,
         trials,

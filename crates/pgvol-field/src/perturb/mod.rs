@@ -11,8 +11,8 @@ mod resample;
 
 pub use box_tree::BoxTree;
 pub use build::{
-    build, PerturbError, PerturbOptions, PerturbReport, StopReason, MAX_REACH, POINTS_PER_TERM,
-    PROBE_EDGES, RADIUS_EDGES, TRIAL_RADII,
+    build, PerturbError, PerturbOptions, PerturbReport, StopReason, MAX_PEAK_RATIO, MAX_REACH,
+    POINTS_PER_TERM, PROBE_EDGES, RADIUS_EDGES, TRIAL_RADII,
 };
 pub use field::{Perturbation, PerturbationError, PerturbationField};
 pub use quadric::Quadric;

@@ -115,6 +115,17 @@ impl Quadric {
         Some((lo, hi))
     }
 
+    /// The largest value of a bounded bump (at its apex), or `None` when it is not one.
+    pub fn peak(&self) -> Option<f64> {
+        if !self.is_bounded_bump() {
+            return None;
+        }
+        let a = self.quadratic_part();
+        let b = DVec3::new(self.q[6], self.q[7], self.q[8]);
+        let u0 = -0.5 * mul3(&inverse3(&a)?, b);
+        Some(self.q[9] + 0.5 * b.dot(u0))
+    }
+
     /// The largest half-width of [`positive_box`](Self::positive_box), in local units.
     pub fn positive_reach(&self) -> Option<f64> {
         self.positive_box()
