@@ -1,6 +1,7 @@
 //! The iterative conversion of a mesh into a [`PerturbationField`]: a base quadric fitted by
 //! least squares, then perturbations added one at a time where the vertices are farthest from
-//! the zero set, each accepted only if it lowers the total vertex deviation.
+//! the zero set, each accepted only if it lowers the paper's functional, the sum of `|M|` over
+//! the vertices.
 //!
 //! One step (see `docs/perturbation.md` for the choices the paper leaves open):
 //! 1. the seed is the vertex with the largest deviation estimate `|M| / |∇M|`;
@@ -8,10 +9,11 @@
 //!    (the seed and nine spread by farthest-point sampling) give the rows `m(uᵢ)` and the
 //!    right-hand sides `|M(Pᵢ)|^(1/3)`, so that `M + f Q³` with `f = −sign M` vanishes there;
 //! 3. the 10 × 10 system is solved exactly when its solution is a bounded bump, otherwise in
-//!    the least-squares sense with a growing pull toward a spherical bump at the seed;
-//! 4. the trial lowering the paper's functional, the sum of `|M|` over the vertices, most,
-//!    without turning more probes
-//!    (points a little outside and inside along the normals) to the wrong sign, is kept.
+//!    the least-squares sense with a growing pull toward a spherical bump at the seed; a bump
+//!    reaching too far or peaking too high is refused;
+//! 4. the trial lowering the functional most, without turning more probes (points a little
+//!    outside and inside along the normals, and the caller's sign points) to the wrong side,
+//!    is kept.
 //!
 //! A seed whose every trial fails is set aside until a later term changes its neighbourhood;
 //! the loop stops at the tolerance, at the function budget or when no seed is left.
