@@ -1,6 +1,7 @@
 //! Continuous fields that contouring can evaluate between the grid nodes.
 
 use glam::Vec3;
+use pgvol_field::perturb::PerturbationField;
 use pgvol_field::CoefficientVolume;
 
 use crate::cubic_eval::bspline3_value_gradient;
@@ -32,6 +33,20 @@ impl Field for CoefficientVolume {
 }
 
 /// Any closure returning value and gradient is a field, which suits analytic shapes.
+/// The perturbation field as it is: its value is not a distance, but its zero set and its
+/// gradient are what vertex placement needs.
+impl Field for PerturbationField {
+    #[inline]
+    fn value(&self, p: Vec3) -> f32 {
+        PerturbationField::value(self, p)
+    }
+
+    #[inline]
+    fn value_gradient(&self, p: Vec3) -> (f32, Vec3) {
+        PerturbationField::value_gradient(self, p)
+    }
+}
+
 impl<F> Field for F
 where
     F: Fn(Vec3) -> (f32, Vec3) + Sync,

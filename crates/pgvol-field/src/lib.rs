@@ -9,6 +9,7 @@ pub mod basis;
 mod distance;
 pub mod fit;
 pub mod kernel;
+pub mod perturb;
 pub mod prefilter;
 mod stencil;
 pub mod volume;

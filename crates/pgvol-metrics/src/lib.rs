@@ -5,7 +5,9 @@
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 #![forbid(unsafe_code)]
 
+pub mod depth_buffer;
 pub mod sampling;
+pub mod vertex_deviation;
 
 use glam::{Vec3, Vec3A};
 use pgvol_mesh::{Mesh, MeshStats};
@@ -13,7 +15,9 @@ use pgvol_sdf::Bvh;
 use rayon::prelude::*;
 use serde::Serialize;
 
+pub use depth_buffer::{depth_difference, DepthDifference, ViewDifference, DEPTH_RESOLUTION};
 pub use sampling::{sample_surface, SurfaceSample};
+pub use vertex_deviation::{vertex_deviation, VertexDeviation};
 
 /// The result of comparing mesh A against reference mesh B.
 #[derive(Clone, Debug, Serialize)]
@@ -34,6 +38,15 @@ pub struct Comparison {
     /// pooled over both directions, in degrees.
     pub normal_deviation_mean_deg: f64,
     pub normal_deviation_p95_deg: f64,
+    /// Distance from each vertex of A to B and the angle between A's vertex normal and B's
+    /// normal there (the perturbation paper's first two measures).
+    pub vertex_deviation: VertexDeviation,
+    pub vertex_deviation_mean_pct: f64,
+    pub vertex_deviation_max_pct: f64,
+    /// Mean absolute difference of depth buffers rendered from the 14 views of
+    /// [`depth_buffer`] (the paper's third measure), and as % of the diagonal.
+    pub depth_buffer: DepthDifference,
+    pub depth_buffer_pct: f64,
 }
 
 /// Distances and normal angles from samples on one mesh to the closest points of another.
@@ -82,6 +95,8 @@ pub fn compare(a: &Mesh, b: &Mesh, samples: usize, seed: u64) -> Result<Comparis
     let (bvh_a, bvh_b) = rayon::join(|| Bvh::build(a), || Bvh::build(b));
     let ab = one_way(&sa, b, &bvh_b);
     let ba = one_way(&sb, a, &bvh_a);
+    let vertices = vertex_deviation(a, b, &bvh_b);
+    let depth = depth_difference(a, b, DEPTH_RESOLUTION).ok_or(CompareError::NoArea("B"))?;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let max = |v: &[f64]| v.iter().cloned().fold(0.0, f64::max);
     let (lo, hi) = b.bounds().ok_or(CompareError::NoArea("B"))?;
@@ -115,6 +130,11 @@ pub fn compare(a: &Mesh, b: &Mesh, samples: usize, seed: u64) -> Result<Comparis
         mean_b_to_a,
         normal_deviation_mean_deg: mean(&angles),
         normal_deviation_p95_deg: p95,
+        vertex_deviation_mean_pct: pct(vertices.mean),
+        vertex_deviation_max_pct: pct(vertices.max),
+        vertex_deviation: vertices,
+        depth_buffer_pct: pct(depth.mean_abs),
+        depth_buffer: depth,
     })
 }
 
@@ -149,6 +169,8 @@ mod tests {
         assert!(c.hausdorff < 1e-6 && c.chamfer_l1 < 1e-7);
         assert!(c.normal_deviation_p95_deg < 1e-2);
         assert!((c.diagonal - 3f64.sqrt()).abs() < 1e-6);
+        assert!(c.vertex_deviation.max < 1e-6 && c.vertex_deviation.normal_max_deg < 1e-2);
+        assert_eq!(c.depth_buffer_pct, 0.0);
     }
 
     #[test]
@@ -158,6 +180,9 @@ mod tests {
         let c = compare(&a, &b, 4000, 7).unwrap();
         // Every face of A is 0.1 inside B: A-to-B distances are exactly 0.1.
         assert!((c.mean_a_to_b - 0.1).abs() < 1e-5);
+        // A's corners are 0.1 from B's nearest faces too.
+        assert!((c.vertex_deviation.mean - 0.1).abs() < 1e-5);
+        assert!((c.vertex_deviation.max - 0.1).abs() < 1e-5);
         // From B's corners the farthest point of A is at distance 0.1·√3.
         assert!(c.hausdorff <= 0.1 * 3f64.sqrt() + 1e-5 && c.hausdorff > 0.1);
         // Compare the B-to-A mean with a brute-force evaluation on the same samples.

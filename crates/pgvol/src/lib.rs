@@ -72,6 +72,7 @@ mod lattice;
 mod memory;
 mod mesh_io;
 mod operand;
+mod perturb;
 mod pgv_io;
 mod progress;
 mod remesh;
@@ -106,7 +107,9 @@ pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
 };
 pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
+pub use perturb::{perturb, perturbation_mesh, resample, Perturbed, RESAMPLE_BAND, SOURCE_KEY};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
+pub use pgvol_field::perturb::{PerturbOptions, PerturbReport, PerturbationField, StopReason};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};

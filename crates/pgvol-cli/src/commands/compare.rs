@@ -7,7 +7,13 @@ use super::args::{load_mesh, print_json, OutputArgs, PathArg};
 use crate::output::outln;
 
 #[derive(Args)]
-#[command(after_help = "Example: pgvol compare remeshed.glb original.obj --samples 500000")]
+#[command(
+    after_help = "Vertex deviation: distance from each vertex of A to B (mean, max) and the angle \
+between A's vertex normal and B's interpolated normal there. Depth buffers: both meshes rasterised \
+orthographically at 256 x 256 from the 6 axis directions and the 8 cube corners, framed on the \
+sphere around both boxes; mean absolute depth difference over the pixels either covers (a pixel \
+one misses counts at the far side of the sphere).\n\nExample: pgvol compare remeshed.glb original.obj --samples 500000"
+)]
 pub struct CompareArgs {
     /// The mesh to measure.
     pub a: PathArg,
@@ -53,6 +59,27 @@ pub fn run(a: CompareArgs) -> Result<()> {
         "normal deviation      mean {:.3} deg, p95 {:.3} deg",
         c.normal_deviation_mean_deg,
         c.normal_deviation_p95_deg
+    );
+    let v = &c.vertex_deviation;
+    outln!(
+        "vertex deviation      mean {:.6} ({:.4} %), max {:.6} ({:.4} %) over {} vertices of A",
+        v.mean,
+        c.vertex_deviation_mean_pct,
+        v.max,
+        c.vertex_deviation_max_pct,
+        v.vertices
+    );
+    outln!(
+        "vertex normals        mean {:.3} deg, max {:.3} deg",
+        v.normal_mean_deg,
+        v.normal_max_deg
+    );
+    outln!(
+        "depth buffers         mean |difference| {:.6} ({:.4} %) over {} views at {}^2",
+        c.depth_buffer.mean_abs,
+        c.depth_buffer_pct,
+        c.depth_buffer.views.len(),
+        c.depth_buffer.resolution
     );
     outln!("");
     outln!("{:<22}{:>16}{:>16}", "", "A", "B");

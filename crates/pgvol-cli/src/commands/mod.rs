@@ -8,6 +8,7 @@ mod export;
 mod files;
 mod lattice;
 mod ops;
+mod perturb;
 mod remesh;
 mod sdf;
 
@@ -29,8 +30,10 @@ pub enum Command {
     ///
     /// Hausdorff and Chamfer-L1 (mean of the two mean distances) from area-uniform samples with
     /// exact point-to-triangle distances, in absolute units and as % of B's bounding-box diagonal;
-    /// normal deviation between each sample and its closest point; triangles, boundary and
-    /// non-manifold edges, watertightness, Euler characteristic, volume and area of both.
+    /// normal deviation between each sample and its closest point; the deviation of A's
+    /// vertices and vertex normals from B and the mean depth-buffer difference over 14 views;
+    /// triangles, boundary and non-manifold edges, watertightness, Euler characteristic, volume
+    /// and area of both.
     Compare(compare::CompareArgs),
     /// Samples the signed distance of a mesh on a dense grid and writes NRRD or NPY (float32).
     Sdf(sdf::SdfArgs),
@@ -84,6 +87,13 @@ pub enum Command {
     /// renormalised near its surface (value over gradient length) so it is distance-like again,
     /// and re-fitted into one coefficient volume.
     Blend(edit::BlendArgs),
+    /// Converts a mesh into an implicit surface of quadric perturbations.
+    ///
+    /// A base quadric fitted by least squares plus local bumps f·Q³ (each quadric Q through ten
+    /// vertices), added where the vertices are farthest from the zero set until --tolerance or
+    /// --max-functions; the loop stops with a report when no bump lowers the error. The field is
+    /// resampled into a coefficient volume (.pgv) or contoured into a mesh.
+    Perturb(perturb::PerturbArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -107,6 +117,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Csg(a) => edit::csg(a),
         Command::Repair(a) => edit::repair(a),
         Command::Blend(a) => edit::blend(a),
+        Command::Perturb(a) => perturb::run(a),
     }
 }
 
@@ -129,6 +140,7 @@ impl Command {
             Command::Csg(a) => a.out,
             Command::Repair(a) => a.out,
             Command::Blend(a) => a.out,
+            Command::Perturb(a) => a.out,
         }
     }
 
@@ -148,6 +160,7 @@ impl Command {
             Command::Csg(a) => Some((&a.output, a.out)),
             Command::Repair(a) => Some((&a.output, a.out)),
             Command::Blend(a) => Some((&a.output, a.out)),
+            Command::Perturb(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }

@@ -229,7 +229,9 @@ def compare(
 ) -> Dict[str, Any]:
     """Mesh ``a`` against reference ``b``: symmetric Hausdorff and Chamfer-L1 distances (also
     in percent of b's bounding-box diagonal), mean distances each way, normal deviation in
-    degrees, and the topology statistics of both ("a", "b")."""
+    degrees, the deviation of a's vertices and vertex normals from b ("vertex_deviation"), the
+    mean depth-buffer difference over 14 views ("depth_buffer", "depth_buffer_pct"), and the
+    topology statistics of both ("a", "b")."""
 
 def set_memory_limit(limit: Optional[int]) -> None:
     """Sets the largest estimated peak memory in bytes a call may start with; None restores the

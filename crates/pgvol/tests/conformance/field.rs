@@ -5,12 +5,13 @@
 //! Bounds of the encoded volumes are the largest seen over 20 000 points within two spacings of
 //! the surface at 32³, with a margin of 20 % or more: accuracy in spacings, then the Lipschitz
 //! bound (over the largest gradient norm). Exact fields are held to the distance up to rounding and
-//! to a Lipschitz bound of 1.
+//! to a Lipschitz bound of 1. The perturbation field (built from the bumpy sphere mesh) is held
+//! to the bumpy sphere's distance near its surface and to its own measured gradient bound.
 
 use pgvol::contour::Field;
 use pgvol::field::fit::SignedDistance;
 use pgvol::glam::Vec3;
-use pgvol::{Basis, CoefficientVolume, MeshField};
+use pgvol::{Basis, CoefficientVolume, MeshField, PerturbationField};
 
 use crate::properties::{property_tests, Case, Evaluate};
 use crate::subjects::{self, box_mesh, encoded, encoded_spec, Fitted};
@@ -50,6 +51,14 @@ fn mesh_field() -> Case<ViaField<MeshField<'static>>> {
     }
 }
 
+fn perturbation() -> Case<ViaField<PerturbationField>> {
+    let (field, spec) = subjects::perturbation();
+    Case {
+        field: ViaField(field),
+        spec,
+    }
+}
+
 fn closure() -> Case<ViaField<impl Fn(Vec3) -> (f32, Vec3) + Sync>> {
     let slab = subjects::slab();
     Case {
@@ -68,4 +77,5 @@ property_tests! {
     pg_n4_r1_5_volume => volume(Basis::Pg { n: 4, r: 1.5 }, 0.6, 2.0);
     exact_mesh_field => mesh_field();
     closure => closure();
+    perturbation_field => perturbation();
 }

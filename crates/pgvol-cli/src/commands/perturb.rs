@@ -1,0 +1,157 @@
+//! `pgvol perturb`.
+
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::Args;
+use serde::Serialize;
+
+use super::args::{
+    at_input, load_mesh, non_negative, print_json, seconds_json, OutputArgs, PathArg,
+};
+use crate::output::outln;
+use crate::progress::Bars;
+
+#[derive(Args)]
+#[command(
+    after_help = "Example: pgvol perturb cow.obj -o cow.pgv --max-functions 2038 --resample 128"
+)]
+pub struct PerturbArgs {
+    /// Input mesh (.obj, .gltf, .glb, .stl, .ply).
+    pub input: PathArg,
+    /// Output: a .pgv file (the field resampled into a cubic B-spline coefficient volume, which
+    /// decode, slice, eval, offset and shell read) or a mesh (.glb, .gltf, .obj, .stl, .ply: the
+    /// contoured zero set, every piece kept).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// Most perturbation functions added.
+    #[arg(long, default_value_t = pgvol::PerturbOptions::default().max_functions as u64,
+          value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub max_functions: u64,
+    /// Stop once every vertex is within this fraction of the bounding-box diagonal of the zero
+    /// set (first-order estimate |M| / |∇M|).
+    #[arg(long, default_value_t = pgvol::PerturbOptions::default().tolerance as f32, value_parser = non_negative)]
+    pub tolerance: f32,
+    /// Nodes per axis of the grid the field is resampled on (a cube 1.1 × the mesh's longest
+    /// extent).
+    #[arg(long, value_name = "RES", default_value_t = pgvol::DEFAULT_RES as u32,
+          value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    pub resample: u32,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    input: &'a std::path::Path,
+    output: &'a std::path::Path,
+    input_triangles: usize,
+    input_components: usize,
+    perturbation: &'a pgvol::PerturbReport,
+    grid: pgvol::Grid,
+    /// Bytes of the .pgv file, or triangles, vertices and components of the mesh written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bytes: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    triangles: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    components: Option<usize>,
+    seconds: serde_json::Value,
+}
+
+pub fn run(a: PerturbArgs) -> Result<()> {
+    let to_pgv = pgvol::is_pgv(&a.output);
+    if !to_pgv {
+        // Refuse an unwritable output format before doing the work.
+        pgvol::mesh_format(&a.output)?;
+    }
+    let start = Instant::now();
+    let quiet = a.out.silent();
+    let mesh = load_mesh(&a.input, quiet)?;
+    let read = start.elapsed().as_secs_f64();
+    let options = pgvol::PerturbOptions {
+        max_functions: a.max_functions as usize,
+        tolerance: a.tolerance as f64,
+    };
+    let bars = Bars::new(quiet);
+    let perturbed = pgvol::perturb(&mesh, &options, &bars).map_err(|e| at_input(e, &a.input))?;
+    let built = start.elapsed().as_secs_f64() - read;
+    let t = Instant::now();
+    let file = pgvol::resample(
+        &perturbed.field,
+        &mesh,
+        pgvol::GridSpec::Res(a.resample as usize),
+        &bars,
+    )
+    .map_err(|e| at_input(e, &a.input))?;
+    let resampled = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let (mut bytes, mut triangles, mut components) = (None, None, None);
+    let mut contour = 0.0;
+    if to_pgv {
+        pgvol::write_pgv(&a.output, &file, &pgvol::StorageOptions::default())?;
+        bytes = Some(std::fs::metadata(&a.output)?.len());
+    } else {
+        let out = pgvol::perturbation_mesh(&file, &bars)?;
+        contour = t.elapsed().as_secs_f64();
+        pgvol::write_mesh(&a.output, &out)?;
+        triangles = Some(out.triangles.len());
+        components = Some(out.stats().components);
+    }
+    let write = t.elapsed().as_secs_f64() - contour;
+    let total = start.elapsed().as_secs_f64();
+    let r = &perturbed.report;
+    let report = Report {
+        input: &a.input,
+        output: &a.output,
+        input_triangles: mesh.triangles.len(),
+        input_components: mesh.stats().components,
+        perturbation: r,
+        grid: file.volume.grid,
+        bytes,
+        triangles,
+        components,
+        seconds: seconds_json(
+            &[
+                ("read", read),
+                ("perturb", built),
+                ("resample", resampled),
+                ("contour", contour),
+                ("write", write),
+            ],
+            total,
+        ),
+    };
+    if a.out.json {
+        return print_json(&report);
+    }
+    if !a.out.quiet {
+        outln!(
+            "{} -> {}: {} functions in {:.2} s (stopped: {:?})",
+            a.input.display(),
+            a.output.display(),
+            r.functions,
+            r.seconds,
+            r.stop
+        );
+        outln!(
+            "vertex deviation estimate: base quadric mean {:.4} %, max {:.4} %; final mean {:.4} %, max {:.4} % of the diagonal",
+            100.0 * r.base_mean / r.diagonal,
+            100.0 * r.base_max / r.diagonal,
+            100.0 * r.mean / r.diagonal,
+            100.0 * r.max / r.diagonal
+        );
+        match (bytes, triangles) {
+            (Some(b), _) => outln!("resampled at {}^3: {} bytes", a.resample, b),
+            (_, Some(t)) => outln!(
+                "contoured at {}^3: {} triangles, {} components (input {})",
+                a.resample,
+                t,
+                components.unwrap_or(0),
+                report.input_components
+            ),
+            _ => {}
+        }
+    }
+    Ok(())
+}

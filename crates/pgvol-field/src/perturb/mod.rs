@@ -1,0 +1,19 @@
+//! Implicit surfaces from meshes by quadric perturbations (Vyatkin, Romanyuk and Velichko):
+//! `M(x) = F(x) + Σ fᵢ Qᵢ(x)³` over `Qᵢ ≥ 0`, a base quadric plus local bumps added until the
+//! mesh's vertices lie on the zero set. See `docs/perturbation.md`.
+
+mod box_tree;
+mod build;
+mod field;
+mod point_grid;
+pub mod quadric;
+mod resample;
+
+pub use box_tree::BoxTree;
+pub use build::{
+    build, PerturbError, PerturbOptions, PerturbReport, StopReason, MAX_PEAK_RATIO, MAX_REACH,
+    POINTS_PER_TERM, PROBE_EDGES, RADIUS_EDGES, TRIAL_RADII,
+};
+pub use field::{Perturbation, PerturbationError, PerturbationField};
+pub use quadric::Quadric;
+pub use resample::sample_band;
