@@ -69,6 +69,7 @@ mod grid;
 mod memory;
 mod mesh_io;
 mod pgv_io;
+mod points;
 mod progress;
 mod remesh;
 mod shape;
@@ -93,6 +94,10 @@ pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
 };
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
+pub use points::{
+    points, points_bytes, read_cloud_text, read_point_cloud, PointsMethod, PointsOptions,
+    Reconstructed, MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
+};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use shape::{
@@ -109,6 +114,7 @@ pub use pgvol_format as format;
 pub use pgvol_mesh as mesh;
 pub use pgvol_metrics as metrics;
 pub use pgvol_ops as ops;
+pub use pgvol_points as point_cloud;
 pub use pgvol_sdf as sdf;
 
 pub use glam;
@@ -118,6 +124,7 @@ pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
 pub use pgvol_ops::{Axis, Drain, Layer, ShellSide};
+pub use pgvol_points::{PointCloud, PointsReport};
 pub use pgvol_sdf::SignMode;
 
 /// Seconds spent per stage of a call.

@@ -6,6 +6,7 @@ mod eval;
 mod export;
 mod files;
 mod ops;
+mod points;
 mod remesh;
 mod sdf;
 
@@ -51,6 +52,12 @@ pub enum Command {
     /// Outer loops are counter-clockwise and holes clockwise (seen from +axis), simplified to
     /// --tolerance without breaking closure. Writes SVG, Common Layer Interface or JSON.
     Slice(ops::SliceArgs),
+    /// Fits a smooth surface through a point cloud and writes it as .pgv or a mesh.
+    ///
+    /// Each point is a constraint (value 0) with one more at ±ε along its normal; the field
+    /// through them is fitted into a cubic B-spline coefficient volume on the usual grid around
+    /// the points. Clouds without normals get estimated, consistently oriented ones.
+    Points(points::PointsArgs),
     /// Offsets a shape by a distance (positive outward, negative inward).
     Offset(ops::OffsetArgs),
     /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes.
@@ -72,6 +79,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Export(a) => export::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Slice(a) => ops::slice(a),
+        Command::Points(a) => points::run(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
     }
@@ -90,6 +98,7 @@ impl Command {
             Command::Export(a) => a.out,
             Command::Eval(a) => a.out,
             Command::Slice(a) => a.out,
+            Command::Points(a) => a.out,
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
         }
@@ -105,6 +114,7 @@ impl Command {
             Command::Export(a) => Some((&a.output, a.out)),
             Command::Eval(a) => a.output.as_deref().map(|o| (o, a.out)),
             Command::Slice(a) => Some((&a.output, a.out)),
+            Command::Points(a) => Some((&a.output, a.out)),
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
