@@ -14,6 +14,7 @@
 #![forbid(unsafe_code)]
 
 mod cli_file;
+mod cli_read;
 mod csg;
 mod error;
 mod polygon;
@@ -22,6 +23,7 @@ mod slice;
 mod write;
 
 pub use cli_file::{write_cli, write_cli_with, CliEncoding};
+pub use cli_read::read_cli;
 pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
 };

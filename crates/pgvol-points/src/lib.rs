@@ -17,6 +17,7 @@
 //! zero says nothing of the side, and spurious surfaces appear.
 
 pub mod band;
+pub mod contours;
 pub mod cubic;
 pub mod index;
 pub mod normals;

@@ -95,8 +95,8 @@ pub use mesh_io::{
 };
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use points::{
-    points, points_bytes, read_cloud_text, read_point_cloud, PointsMethod, PointsOptions,
-    Reconstructed, MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
+    contours, points, points_bytes, read_cloud_text, read_layers, read_point_cloud, PointsMethod,
+    PointsOptions, Reconstructed, MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
 };
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};

@@ -213,6 +213,17 @@ pub fn points(
     }
     let (lo, hi) = pgvol_points::index::bounds(&cloud.points);
     let grid = options.grid.grid_for_box(lo, hi)?;
+    fit_on_grid(cloud, grid, options, (lo, hi), progress)
+}
+
+/// The reconstruction of `cloud` on `grid`; `bounds` is the box recorded as the source's.
+fn fit_on_grid(
+    cloud: &PointCloud,
+    grid: pgvol_core::Grid,
+    options: &PointsOptions,
+    (lo, hi): (Vec3, Vec3),
+    progress: &dyn Progress,
+) -> Result<Reconstructed> {
     let spacing = pgvol_points::mean_spacing(&cloud.points);
     let [nx, ny, nz] = grid.dims;
     crate::memory::check_memory(
@@ -261,6 +272,76 @@ pub fn points(
         file: PgvFile { header, volume },
         report,
     })
+}
+
+/// Reads a stack of planar contours: the JSON or Common Layer Interface (ASCII or binary)
+/// layer files `pgvol slice` writes, by extension.
+pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let layers = match ext.as_str() {
+        "json" => pgvol_ops::read_slice_json(path).reading()?,
+        "cli" => {
+            let bytes = pgvol_core::read_input(path).reading()?;
+            pgvol_ops::read_cli(&bytes, path).reading()?
+        }
+        _ => {
+            return Err(Error::file(
+                ErrorKind::InputFile,
+                path,
+                format!(
+                    "cannot tell the contour format from the extension '{ext}': use .json or                      .cli, as `pgvol slice` writes them"
+                ),
+            ))
+        }
+    };
+    if layers.iter().all(|l| l.loops.is_empty()) {
+        return Err(Error::file(
+            ErrorKind::InputFile,
+            path,
+            "no closed contours",
+        ));
+    }
+    Ok(layers)
+}
+
+/// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`:
+/// the loops (value 0, normals in the plane) and caps half a layer beyond wherever a layer's
+/// region is not covered by its neighbour, so tops, bottoms, ends of branches and the overhang
+/// of leaning parts close. Holes and several loops per plane are allowed.
+pub fn contours(
+    layers: &[pgvol_ops::Layer],
+    axis: pgvol_ops::Axis,
+    options: &PointsOptions,
+    progress: &dyn Progress,
+) -> Result<Reconstructed> {
+    let a = match axis {
+        pgvol_ops::Axis::X => 0,
+        pgvol_ops::Axis::Y => 1,
+        pgvol_ops::Axis::Z => 2,
+    };
+    let mut planes: Vec<pgvol_points::contours::ContourPlane> = layers
+        .iter()
+        .filter(|l| !l.loops.is_empty())
+        .map(|l| pgvol_points::contours::ContourPlane {
+            height: l.height,
+            loops: l.loops.iter().map(|lp| lp.points.clone()).collect(),
+        })
+        .collect();
+    if planes.is_empty() {
+        return Err(Error::new(ErrorKind::InputFile, "no closed contours"));
+    }
+    planes.sort_by(|x, y| x.height.total_cmp(&y.height));
+    // The box of the loops, grown by the caps' half layers.
+    let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
+    let (lo, hi) = pgvol_points::index::bounds(&outline.points);
+    let grid = options.grid.grid_for_box(lo, hi)?;
+    // Samples at half the grid spacing: every cell the surface crosses holds several.
+    let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
+    fit_on_grid(&cloud, grid, options, (lo, hi), progress)
 }
 
 #[cfg(test)]

@@ -58,6 +58,12 @@ pub enum Command {
     /// through them is fitted into a cubic B-spline coefficient volume on the usual grid around
     /// the points. Clouds without normals get estimated, consistently oriented ones.
     Points(points::PointsArgs),
+    /// Rebuilds a solid from a stack of closed planar contours (JSON or CLI layer files).
+    ///
+    /// The loops are constraints with in-plane normals; caps close the stack half a layer
+    /// beyond wherever a layer is not covered by its neighbour, so branching, holes and leaning
+    /// parts are handled. Slicing the result at the input planes gives back the contours.
+    Contours(points::ContoursArgs),
     /// Offsets a shape by a distance (positive outward, negative inward).
     Offset(ops::OffsetArgs),
     /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes.
@@ -80,6 +86,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Eval(a) => eval::run(a),
         Command::Slice(a) => ops::slice(a),
         Command::Points(a) => points::run(a),
+        Command::Contours(a) => points::contours(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
     }
@@ -99,6 +106,7 @@ impl Command {
             Command::Eval(a) => a.out,
             Command::Slice(a) => a.out,
             Command::Points(a) => a.out,
+            Command::Contours(a) => a.out,
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
         }
@@ -115,6 +123,7 @@ impl Command {
             Command::Eval(a) => a.output.as_deref().map(|o| (o, a.out)),
             Command::Slice(a) => Some((&a.output, a.out)),
             Command::Points(a) => Some((&a.output, a.out)),
+            Command::Contours(a) => Some((&a.output, a.out)),
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,

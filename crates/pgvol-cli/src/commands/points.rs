@@ -91,18 +91,7 @@ pub fn run(a: PointsArgs) -> Result<()> {
         );
     }
     let t = Instant::now();
-    let mut triangles = 0;
-    if pgvol::is_pgv(&a.output) {
-        pgvol::write_pgv(&a.output, &fitted.file, &pgvol::StorageOptions::default())?;
-    } else {
-        let decode = pgvol::DecodeOptions {
-            method: a.contour.into(),
-            ..Default::default()
-        };
-        let mesh = pgvol::decode(&fitted.file.volume, &decode, &bars)?;
-        triangles = mesh.triangles.len();
-        pgvol::write_mesh(&a.output, &mesh)?;
-    }
+    let triangles = write_output(&a.output, &fitted, a.contour, &bars)?;
     let write_seconds = t.elapsed().as_secs_f64();
     let grid = fitted.file.volume.grid;
     if a.out.json {
@@ -143,4 +132,90 @@ pub fn run(a: PointsArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[derive(Args)]
+#[command(after_help = "Example: pgvol contours scan.json -o scan.glb --res 192")]
+pub struct ContoursArgs {
+    /// A stack of closed planar contours: the .json or .cli (ASCII or binary) layer files
+    /// `pgvol slice` writes.
+    pub input: PathArg,
+    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    #[arg(short, long)]
+    pub output: PathArg,
+    /// Axis the planes are stacked along (as given to `pgvol slice`).
+    #[arg(long, value_enum, default_value_t)]
+    pub axis: super::ops::AxisArg,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// How the field through the contour points is built.
+    #[arg(long, value_enum, default_value_t)]
+    pub method: PointsMethodArg,
+    /// Contouring method for mesh outputs.
+    #[arg(long = "contour", value_enum, default_value_t)]
+    pub contour: MethodArg,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+pub fn contours(a: ContoursArgs) -> Result<()> {
+    let start = Instant::now();
+    if !pgvol::is_pgv(&a.output) {
+        pgvol::mesh_format(&a.output)?;
+    }
+    let bars = Bars::new(a.out.silent());
+    let layers = pgvol::read_layers(&a.input)?;
+    let options = pgvol::PointsOptions {
+        grid: a.grid.spec(),
+        method: a.method.into(),
+        ..Default::default()
+    };
+    let axis = match a.axis {
+        super::ops::AxisArg::X => pgvol::Axis::X,
+        super::ops::AxisArg::Y => pgvol::Axis::Y,
+        super::ops::AxisArg::Z => pgvol::Axis::Z,
+    };
+    let fitted =
+        pgvol::contours(&layers, axis, &options, &bars).map_err(|e| at_input(e, &a.input))?;
+    let triangles = write_output(&a.output, &fitted, a.contour, &bars)?;
+    let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
+    if a.out.json {
+        return print_json(&serde_json::json!({
+            "output": a.output, "grid": fitted.file.volume.grid, "layers": layers.len(),
+            "loops": loops, "points": fitted.report.points, "method": fitted.report.method,
+            "triangles": triangles,
+            "seconds": { "total": start.elapsed().as_secs_f64() },
+        }));
+    }
+    if !a.out.quiet {
+        outln!(
+            "{}: {} layers, {loops} loops; {} constraint points by {}, {:.2} s",
+            a.output.display(),
+            layers.len(),
+            fitted.report.points,
+            fitted.report.method,
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// Writes a fitted volume as .pgv or contours it into a mesh; returns the triangles written.
+fn write_output(
+    output: &std::path::Path,
+    fitted: &pgvol::Reconstructed,
+    contour: MethodArg,
+    bars: &Bars,
+) -> Result<usize> {
+    if pgvol::is_pgv(output) {
+        pgvol::write_pgv(output, &fitted.file, &pgvol::StorageOptions::default())?;
+        return Ok(0);
+    }
+    let decode = pgvol::DecodeOptions {
+        method: contour.into(),
+        ..Default::default()
+    };
+    let mesh = pgvol::decode(&fitted.file.volume, &decode, bars)?;
+    pgvol::write_mesh(output, &mesh)?;
+    Ok(mesh.triangles.len())
 }
