@@ -3,7 +3,8 @@
 # Usage: bash tools/bench/run.sh [sdf|remesh|all] [--big]
 #        bash tools/bench/run.sh points [--quick]   (surfaces through points and contours)
 # Sets up tools/.venv-bench (peers that fail to install are reported as n/a),
-# installs Debian's python3-openvdb and libeigen3-dev when missing (needs root),
+# installs Debian's python3-openvdb, libeigen3-dev and libusb-1.0-0 (which Open3D loads) when
+# missing (needs root),
 # builds pgvol (cargo build --release), and prints markdown tables.
 set -euo pipefail
 
@@ -21,7 +22,7 @@ section() { printf '\n==> %s\n' "$*" >&2; }
 
 section "system packages"
 missing=()
-for pkg in python3-openvdb libeigen3-dev; do
+for pkg in python3-openvdb libeigen3-dev libusb-1.0-0; do
     dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
 done
 if [[ ${#missing[@]} -gt 0 ]]; then
