@@ -119,7 +119,10 @@ pub enum PointsError {
     TooFew(usize),
     #[error("{normals} normals for {points} points")]
     NormalCount { points: usize, normals: usize },
-    #[error("normal {0} is zero or not finite")]
+    #[error(
+        "normal {0} is zero or not finite: give unit normals, or none (leave out nx, ny, nz) to \
+         have them estimated"
+    )]
     BadNormal(usize),
     #[error(
         "rbf-cubic solves a dense system of 2 centres per point and takes at most {max} centres \
