@@ -168,7 +168,7 @@ def points_table(exe, meshes, n, res, work) -> str:
             results[method] = run
         target = results["spline"].get("tris", 200_000)
         best = None
-        for depth in [8, 9, 10]:
+        for depth in [6, 7, 8, 9]:
             out = work / f"{name}-poisson-{depth}.ply"
             run = run_case([sys.executable, __file__, "--peer", "poisson", cloud, out, depth])
             if run["status"] != "ok":

@@ -177,9 +177,13 @@ pub fn points_bytes(
             let support = options
                 .support
                 .unwrap_or_else(|| pgvol_points::default_support(spacing, grid));
-            // Two centres per point, each seeing both layers of a sheet within the support.
-            let per_row = 2.0 * std::f64::consts::PI * f64::from(support / spacing).powi(2);
-            let entries = 2.0 * points as f64 * per_row;
+            // Clouds denser than a third of the support are thinned to one point per cell of
+            // that size; two centres per kept point, each row seeing both layers of a sheet
+            // within the support.
+            let kept_spacing = f64::from(spacing.max(support / pgvol_points::SUPPORT_SPACINGS));
+            let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
+            let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
+            let entries = 2.0 * kept * per_row;
             bytes += (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
         }
         Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
