@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Benchmarks pgvol against peer libraries.
 # Usage: bash tools/bench/run.sh [sdf|remesh|all] [--big]
+#        bash tools/bench/run.sh points [--quick]   (surfaces through points and contours)
 # Sets up tools/.venv-bench (peers that fail to install are reported as n/a),
-# installs Debian's python3-openvdb and libeigen3-dev when missing (needs root),
+# installs Debian's python3-openvdb, libeigen3-dev and libusb-1.0-0 (which Open3D loads) when
+# missing (needs root),
 # builds pgvol (cargo build --release), and prints markdown tables.
 set -euo pipefail
 
@@ -14,13 +16,13 @@ if [[ $# -gt 0 && "$1" != -* ]]; then
     what="$1"
     shift
 fi
-case "$what" in sdf|remesh|all) ;; *) echo "usage: $0 [sdf|remesh|all] [--big]" >&2; exit 2 ;; esac
+case "$what" in sdf|remesh|all|points) ;; *) echo "usage: $0 [sdf|remesh|all|points] [--big]" >&2; exit 2 ;; esac
 
 section() { printf '\n==> %s\n' "$*" >&2; }
 
 section "system packages"
 missing=()
-for pkg in python3-openvdb libeigen3-dev; do
+for pkg in python3-openvdb libeigen3-dev libusb-1.0-0; do
     dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
 done
 if [[ ${#missing[@]} -gt 0 ]]; then
@@ -93,4 +95,8 @@ fi
 if [[ "$what" == remesh || "$what" == all ]]; then
     section "remesh benchmark"
     "$VENV/bin/python" tools/bench/bench_remesh.py "$@"
+fi
+if [[ "$what" == points ]]; then
+    section "points and contours benchmark"
+    "$VENV/bin/python" tools/bench/bench_points.py "$@"
 fi

@@ -85,3 +85,39 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: MeshFormat) -> std::i
         MeshFormat::Ply => ply::write(w, mesh, &normals),
     }
 }
+
+/// Reads the vertices of a PLY file as a point cloud (faces, if any, are ignored), with their
+/// normals when the vertices carry nx, ny and nz. Coordinates must be finite and below
+/// [`MAX_COORDINATE`](crate::MAX_COORDINATE), normals finite.
+pub fn read_ply_points(
+    bytes: &[u8],
+    name: &Path,
+) -> Result<(Vec<glam::Vec3>, Option<Vec<glam::Vec3>>), MeshError> {
+    if bytes.is_empty() {
+        return Err(MeshError::new(name, "empty file"));
+    }
+    let (points, normals) = ply::read_points(bytes, name)?;
+    if let Some(i) = points
+        .iter()
+        .position(|p| !(p.is_finite() && p.abs().max_element() < crate::MAX_COORDINATE))
+    {
+        return Err(MeshError::new(
+            name,
+            format!(
+                "vertex {i}: coordinates must be finite and below {:e} in magnitude, got {}",
+                crate::MAX_COORDINATE,
+                points[i]
+            ),
+        ));
+    }
+    if let Some(i) = normals
+        .as_ref()
+        .and_then(|n| n.iter().position(|v| !v.is_finite()))
+    {
+        return Err(MeshError::new(
+            name,
+            format!("vertex {i}: the normal is not finite"),
+        ));
+    }
+    Ok((points, normals))
+}

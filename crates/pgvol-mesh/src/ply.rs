@@ -100,7 +100,13 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
         let result = match element.name.as_str() {
             "vertex" if !saw_vertices => {
                 saw_vertices = true;
-                read_vertices(element, values.as_mut(), body.len(), &mut mesh.positions)
+                read_vertices(
+                    element,
+                    values.as_mut(),
+                    body.len(),
+                    &mut mesh.positions,
+                    None,
+                )
             }
             "face" => read_faces(element, values.as_mut(), &mut mesh.triangles),
             _ => skip(element, values.as_mut()),
@@ -111,6 +117,41 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
         return Err(err("PLY header declares no 'vertex' element".into()));
     }
     Ok(mesh)
+}
+
+/// The `vertex` element of a PLY file as points, with their normals when it has nx, ny, nz;
+/// faces and other elements are skipped.
+pub(crate) fn read_points(
+    bytes: &[u8],
+    name: &Path,
+) -> Result<(Vec<Vec3>, Option<Vec<Vec3>>), MeshError> {
+    let err = |problem: String| MeshError::new(name, problem);
+    let header = parse_header(bytes).map_err(err)?;
+    let body = &bytes[header.body_start..];
+    let mut values: Box<dyn Values> = match header.encoding {
+        Encoding::Ascii => Box::new(AsciiValues { body, pos: 0 }),
+        enc => Box::new(BinaryValues {
+            body,
+            pos: 0,
+            big_endian: enc == Encoding::BigEndian,
+        }),
+    };
+    let (mut points, mut normals) = (Vec::new(), Vec::new());
+    for element in &header.elements {
+        if element.name == "vertex" {
+            let normals = Some(&mut normals);
+            read_vertices(element, values.as_mut(), body.len(), &mut points, normals)
+                .map_err(err)?;
+            // Elements after the vertices (faces) are not needed.
+            break;
+        }
+        skip(element, values.as_mut()).map_err(err)?;
+    }
+    if points.is_empty() {
+        return Err(err("PLY file has no vertices to read as points".into()));
+    }
+    let normals = (normals.len() == points.len()).then_some(normals);
+    Ok((points, normals))
 }
 
 fn parse_header(bytes: &[u8]) -> Result<Header, String> {
@@ -300,11 +341,14 @@ fn at(element: &Element, i: u64, problem: String) -> String {
     format!("{} {i} (of {}): {problem}", element.name, element.count)
 }
 
+/// Reads the `vertex` element's x, y, z into `out`, and its nx, ny, nz into `normals` when
+/// given and the element has all three (`normals` is left empty otherwise).
 fn read_vertices(
     element: &Element,
     values: &mut dyn Values,
     body_len: usize,
     out: &mut Vec<Vec3>,
+    mut normals: Option<&mut Vec<Vec3>>,
 ) -> Result<(), String> {
     let find = |axis: &str| {
         element
@@ -314,7 +358,14 @@ fn read_vertices(
             .ok_or_else(|| format!("PLY 'vertex' element has no '{axis}' property"))
     };
     let slots = [find("x")?, find("y")?, find("z")?];
-    for &s in &slots {
+    let normal_slots = match (find("nx"), find("ny"), find("nz")) {
+        (Ok(a), Ok(b), Ok(c)) if normals.is_some() => Some([a, b, c]),
+        _ => None,
+    };
+    if normal_slots.is_none() {
+        normals = None;
+    }
+    for &s in slots.iter().chain(normal_slots.iter().flatten()) {
         if let Kind::List { .. } = element.props[s].kind {
             return Err(format!(
                 "vertex property '{}' is a list, expected a number",
@@ -327,17 +378,27 @@ fn read_vertices(
     }
     // The declared count is untrusted; never reserve more than the body could hold.
     out.reserve((element.count as usize).min(body_len / 3));
+    let normal_slots = normal_slots.unwrap_or([usize::MAX; 3]);
     for i in 0..element.count {
         let mut xyz = [0f32; 3];
+        let mut nxyz = [0f32; 3];
         for (k, p) in element.props.iter().enumerate() {
-            match (p.kind_scalar(), slots.iter().position(|&s| s == k)) {
-                (Some(ty), Some(axis)) => {
-                    xyz[axis] = values.next(ty).map_err(|e| at(element, i, e))? as f32;
+            let axis = slots.iter().position(|&s| s == k);
+            let normal_axis = normal_slots.iter().position(|&s| s == k);
+            match (p.kind_scalar(), axis, normal_axis) {
+                (Some(ty), Some(a), _) => {
+                    xyz[a] = values.next(ty).map_err(|e| at(element, i, e))? as f32;
+                }
+                (Some(ty), None, Some(a)) => {
+                    nxyz[a] = values.next(ty).map_err(|e| at(element, i, e))? as f32;
                 }
                 _ => skip_property(&p.kind, values).map_err(|e| at(element, i, e))?,
             }
         }
         out.push(Vec3::from_array(xyz));
+        if let Some(n) = normals.as_deref_mut() {
+            n.push(Vec3::from_array(nxyz));
+        }
     }
     Ok(())
 }

@@ -24,6 +24,7 @@
 mod blend;
 mod booleans;
 mod cli_file;
+mod cli_read;
 mod csg;
 mod error;
 mod lattice;
@@ -40,6 +41,7 @@ pub use blend::{
 };
 pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
 pub use cli_file::{write_cli, write_cli_with, CliEncoding};
+pub use cli_read::read_cli;
 pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
 };

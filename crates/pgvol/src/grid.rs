@@ -35,6 +35,11 @@ impl GridSpec {
         let (lo, hi) = mesh
             .bounds()
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
+        self.grid_for_box(lo, hi)
+    }
+
+    /// The grid around the box `[lo, hi]` (of a point cloud, say).
+    pub fn grid_for_box(self, lo: glam::Vec3, hi: glam::Vec3) -> Result<Grid> {
         let grid = match self {
             GridSpec::Res(n) => Grid::cube_res(lo, hi, n),
             GridSpec::Voxel(h) => Grid::cube_voxel(lo, hi, h),

@@ -74,6 +74,7 @@ mod mesh_io;
 mod operand;
 mod perturb;
 mod pgv_io;
+mod points;
 mod progress;
 mod remesh;
 mod repair;
@@ -110,6 +111,10 @@ pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, 
 pub use perturb::{perturb, perturbation_mesh, resample, Perturbed, RESAMPLE_BAND, SOURCE_KEY};
 pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
 pub use pgvol_field::perturb::{PerturbOptions, PerturbReport, PerturbationField, StopReason};
+pub use points::{
+    contours, points, points_bytes, read_cloud_text, read_layers, read_point_cloud, PointsMethod,
+    PointsOptions, Reconstructed, MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
+};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
@@ -127,6 +132,7 @@ pub use pgvol_format as format;
 pub use pgvol_mesh as mesh;
 pub use pgvol_metrics as metrics;
 pub use pgvol_ops as ops;
+pub use pgvol_points as point_cloud;
 pub use pgvol_sdf as sdf;
 
 pub use glam;
@@ -139,6 +145,7 @@ pub use pgvol_ops::{
     Axis, Blend, BoolOp, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Layer, Mask,
     MaskReport, Ramp, Restore, ShellSide, Tpms, TPMS_NAMES,
 };
+pub use pgvol_points::{PointCloud, PointsReport};
 pub use pgvol_sdf::SignMode;
 
 /// Seconds spent per stage of a call.

@@ -9,6 +9,7 @@ mod files;
 mod lattice;
 mod ops;
 mod perturb;
+mod points;
 mod remesh;
 mod sdf;
 
@@ -56,6 +57,18 @@ pub enum Command {
     /// Outer loops are counter-clockwise and holes clockwise (seen from +axis), simplified to
     /// --tolerance without breaking closure. Writes SVG, Common Layer Interface or JSON.
     Slice(ops::SliceArgs),
+    /// Fits a smooth surface through a point cloud and writes it as .pgv or a mesh.
+    ///
+    /// Each point is a constraint (value 0) with one more at ±ε along its normal; the field
+    /// through them is fitted into a cubic B-spline coefficient volume on the usual grid around
+    /// the points. Clouds without normals get estimated, consistently oriented ones.
+    Points(points::PointsArgs),
+    /// Rebuilds a solid from a stack of closed planar contours (JSON or CLI layer files).
+    ///
+    /// The loops are constraints with in-plane normals; caps close the stack half a layer
+    /// beyond wherever a layer is not covered by its neighbour, so branching, holes and leaning
+    /// parts are handled. Slicing the result at the input planes gives back the contours.
+    Contours(points::ContoursArgs),
     /// Offsets a shape by a distance (positive outward, negative inward).
     Offset(ops::OffsetArgs),
     /// Turns a shape into a shell of given wall thickness, or hollows it with drain holes,
@@ -111,6 +124,8 @@ pub fn run(command: Command) -> Result<()> {
         Command::Export(a) => export::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Slice(a) => ops::slice(a),
+        Command::Points(a) => points::run(a),
+        Command::Contours(a) => points::contours(a),
         Command::Offset(a) => ops::offset(a),
         Command::Shell(a) => ops::shell(a),
         Command::Lattice(a) => lattice::lattice(a),
@@ -134,6 +149,8 @@ impl Command {
             Command::Export(a) => a.out,
             Command::Eval(a) => a.out,
             Command::Slice(a) => a.out,
+            Command::Points(a) => a.out,
+            Command::Contours(a) => a.out,
             Command::Offset(a) => a.out,
             Command::Shell(a) => a.out,
             Command::Lattice(a) => a.out,
@@ -154,6 +171,8 @@ impl Command {
             Command::Export(a) => Some((&a.output, a.out)),
             Command::Eval(a) => a.output.as_deref().map(|o| (o, a.out)),
             Command::Slice(a) => Some((&a.output, a.out)),
+            Command::Points(a) => Some((&a.output, a.out)),
+            Command::Contours(a) => Some((&a.output, a.out)),
             Command::Offset(a) => Some((&a.output, a.out)),
             Command::Shell(a) => Some((&a.output, a.out)),
             Command::Lattice(a) => Some((&a.output, a.out)),

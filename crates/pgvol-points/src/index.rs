@@ -1,0 +1,184 @@
+//! A uniform hash grid over points: radius and k-nearest queries in time proportional to the
+//! points near the query. Points on a surface fill few cells of a box, so cells are kept in a
+//! hash map rather than a dense array (1M surface points would otherwise need ~10⁷ cells).
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::Vec3;
+
+/// Points bucketed by cell of side `cell`.
+pub struct PointIndex<'a> {
+    points: &'a [Vec3],
+    cell: f32,
+    /// Point indices sorted by cell.
+    order: Vec<u32>,
+    /// Per occupied cell, its range in `order`.
+    cells: HashMap<[i32; 3], (u32, u32), BuildHasherDefault<CellHasher>>,
+}
+
+/// A multiplicative hash for cell coordinates: the default SipHash, built to resist crafted
+/// keys, made lookups the bulk of a query's time.
+#[derive(Default)]
+pub struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_i32(&mut self, v: i32) {
+        self.write_u64(v as u32 as u64);
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(21) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
+impl<'a> PointIndex<'a> {
+    /// Buckets `points` into cells of side `cell` (> 0).
+    pub fn new(points: &'a [Vec3], cell: f32) -> Self {
+        let cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            1.0
+        };
+        let key = |p: Vec3| (p / cell).floor().as_ivec3().to_array();
+        let mut order: Vec<u32> = (0..points.len() as u32).collect();
+        order.sort_unstable_by_key(|&i| key(points[i as usize]));
+        let mut cells = HashMap::default();
+        let mut start = 0;
+        while start < order.len() {
+            let k = key(points[order[start] as usize]);
+            let mut end = start + 1;
+            while end < order.len() && key(points[order[end] as usize]) == k {
+                end += 1;
+            }
+            cells.insert(k, (start as u32, end as u32));
+            start = end;
+        }
+        Self {
+            points,
+            cell,
+            order,
+            cells,
+        }
+    }
+
+    /// The indexed points.
+    pub fn points(&self) -> &'a [Vec3] {
+        self.points
+    }
+
+    /// Calls `f(index, squared distance)` for every point within `r` of `p`.
+    pub fn for_each_within(&self, p: Vec3, r: f32, mut f: impl FnMut(usize, f32)) {
+        let lo = ((p - r) / self.cell).floor().as_ivec3();
+        let hi = ((p + r) / self.cell).floor().as_ivec3();
+        let r2 = r * r;
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let Some(&(a, b)) = self.cells.get(&[x, y, z]) else {
+                        continue;
+                    };
+                    for &i in &self.order[a as usize..b as usize] {
+                        let d2 = self.points[i as usize].distance_squared(p);
+                        if d2 <= r2 {
+                            f(i as usize, d2);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The `k` nearest points to `p` within `max_r` as (squared distance, index), nearest
+    /// first; fewer when fewer lie within `max_r`. The search radius doubles from one cell, so
+    /// a query costs about the cells within the k-th distance.
+    pub fn nearest(&self, p: Vec3, k: usize, max_r: f32, out: &mut Vec<(f32, u32)>) {
+        let mut r = self.cell;
+        loop {
+            out.clear();
+            let reach = r.min(max_r);
+            self.for_each_within(p, reach, |i, d2| out.push((d2, i as u32)));
+            if out.len() >= k || reach >= max_r {
+                break;
+            }
+            r *= 2.0;
+        }
+        if out.len() > k {
+            out.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+            out.truncate(k);
+        }
+        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    }
+}
+
+/// Mean distance from a point to its nearest neighbour, over up to 2000 evenly spread points;
+/// the scale every radius of the reconstruction is given in.
+pub fn mean_spacing(points: &[Vec3]) -> f32 {
+    if points.len() < 2 {
+        return 0.0;
+    }
+    let (lo, hi) = bounds(points);
+    let diag = (hi - lo).length().max(f32::MIN_POSITIVE);
+    // Surface samples of a shape of diagonal D lie about D/√N apart.
+    let index = PointIndex::new(points, diag / (points.len() as f32).sqrt());
+    let step = (points.len() / 2000).max(1);
+    let mut near = Vec::new();
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for i in (0..points.len()).step_by(step) {
+        index.nearest(points[i], 2, diag, &mut near);
+        // The first is the point itself (or a duplicate at distance 0).
+        if let Some(&(d2, _)) = near.iter().find(|(d2, j)| *j as usize != i && *d2 > 0.0) {
+            sum += f64::from(d2.sqrt());
+            count += 1;
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64) as f32
+    }
+}
+
+/// The bounding box of `points`.
+pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
+    points.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_matches_brute_force() {
+        let points: Vec<Vec3> = (0..500)
+            .map(|i| {
+                let t = i as f32 * 0.618;
+                Vec3::new(t.sin(), (t * 1.7).cos(), (t * 0.3).sin() * 0.5)
+            })
+            .collect();
+        let index = PointIndex::new(&points, 0.05);
+        let q = Vec3::new(0.1, -0.2, 0.05);
+        let mut got = Vec::new();
+        index.nearest(q, 7, 10.0, &mut got);
+        let mut want: Vec<(f32, u32)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.distance_squared(q), i as u32))
+            .collect();
+        want.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(
+            got.iter().map(|x| x.1).collect::<Vec<_>>(),
+            want[..7].iter().map(|x| x.1).collect::<Vec<_>>()
+        );
+    }
+}

@@ -1,0 +1,394 @@
+//! Implicit surfaces through oriented points, as coefficient volumes.
+//!
+//! Every method turns the points into constraints (value 0 at each point, ±ε at points moved
+//! ε along its normal), evaluates a field at the grid nodes within a band of the points and
+//! fits the cubic B-spline coefficients to those nodes brick by brick; the rest of the grid
+//! is background by side. The methods differ in the field near the points:
+//! - [`Method::Spline`]: the blended tangent-plane distance of the nearest points
+//!   ([`tangent`]), fitted straight into the B-spline volume; no system to solve.
+//! - [`Method::RbfWendland`]: compactly supported RBFs ([`wendland`]), a sparse positive
+//!   definite system solved by conjugate gradients.
+//! - [`Method::RbfCubic`]: the global r³ RBF with a linear term ([`cubic`]), dense, for small
+//!   clouds only.
+//!
+//! The Wendland RBFs interpolate the correction to the tangent-plane field rather than the
+//! constraint values themselves (a base field plus compactly supported corrections, as in
+//! Ohtake et al. 2003): alone, their sum fades to zero a support away from the points, where
+//! zero says nothing of the side, and spurious surfaces appear.
+
+pub mod band;
+pub mod contours;
+pub mod cubic;
+pub mod index;
+pub mod normals;
+pub mod tangent;
+pub mod wendland;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use pgvol_core::Grid;
+use pgvol_field::{Basis, CoefficientVolume, FieldError};
+
+pub use cubic::MAX_CUBIC_CENTRES;
+pub use index::mean_spacing;
+pub use normals::estimate_normals;
+
+/// Points with optional unit normals (outward).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    pub points: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+}
+
+/// How the field through the points is built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    /// Tangent-plane distance fitted directly into the B-spline volume.
+    #[default]
+    Spline,
+    /// Wendland compactly supported RBFs, sparse system.
+    RbfWendland,
+    /// Cubic RBFs with a linear term, dense system.
+    RbfCubic,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Spline => "spline",
+            Method::RbfWendland => "rbf-wendland",
+            Method::RbfCubic => "rbf-cubic",
+        }
+    }
+}
+
+/// Off-surface constraints lie this many point spacings along the normal: less than half the
+/// spacing keeps them nearer their own point than a neighbouring sheet a spacing away.
+pub const OFFSET_SPACINGS: f32 = 0.5;
+
+/// Wendland support radius, in point spacings: about 28 points of a flat sheet (and as many
+/// off-surface centres) fall in a support, enough to bridge uneven sampling.
+pub const SUPPORT_SPACINGS: f32 = 3.0;
+
+/// The support radius is at least this many grid spacings, so every grid cell at the surface
+/// has nodes the RBF reaches.
+pub const SUPPORT_GRID_SPACINGS: f32 = 2.0;
+
+/// Parameters of a reconstruction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointsOptions {
+    pub method: Method,
+    /// Node values are kept within this distance (mesh units) of the points and clamped to it
+    /// beyond.
+    pub band: f32,
+    /// Wendland support radius in mesh units (default from the point spacing and the grid).
+    pub support: Option<f32>,
+}
+
+/// What a reconstruction did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointsReport {
+    pub method: &'static str,
+    pub points: usize,
+    /// Whether the normals were estimated (the cloud had none).
+    pub normals_estimated: bool,
+    /// Mean distance to the nearest neighbour.
+    pub spacing: f32,
+    /// Off-surface offset ε.
+    pub offset: f32,
+    /// RBF centres (0 for the spline method).
+    pub centres: usize,
+    /// Wendland support radius (0 otherwise).
+    pub support: f32,
+    /// Conjugate-gradient iterations and final relative residual (Wendland).
+    pub iterations: usize,
+    pub residual: f64,
+    /// Stored matrix entries (Wendland).
+    pub matrix_entries: usize,
+    /// Stored bricks of node samples.
+    pub bricks: usize,
+    pub seconds_normals: f64,
+    pub seconds_solve: f64,
+    pub seconds_fit: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum PointsError {
+    #[error("{0} points given; at least 10 are needed to fit a surface")]
+    TooFew(usize),
+    #[error("{normals} normals for {points} points")]
+    NormalCount { points: usize, normals: usize },
+    #[error(
+        "normal {0} is zero or not finite: give unit normals, or none (leave out nx, ny, nz) to \
+         have them estimated"
+    )]
+    BadNormal(usize),
+    #[error(
+        "rbf-cubic solves a dense system of 2 centres per point and takes at most {max} centres \
+         ({} points); this cloud has {points} points: use --method rbf-wendland or spline, \
+         which are sparse",
+        max / 2
+    )]
+    TooManyForCubic { points: usize, max: usize },
+    #[error("the cubic RBF system is singular (repeated points, or all points on one plane)")]
+    Singular,
+    #[error("all points coincide")]
+    NoSpread,
+    #[error(transparent)]
+    Field(#[from] FieldError),
+}
+
+/// Centres and values: each point at 0, and one off-surface centre per point at ±ε along its
+/// normal, alternating sides so inside and outside are held alike with 2 centres per point.
+pub fn constraints(points: &[Vec3], normals: &[Vec3], offset: f32) -> (Vec<Vec3>, Vec<f32>) {
+    let mut centres = points.to_vec();
+    let mut values = vec![0.0; points.len()];
+    for (i, (p, n)) in points.iter().zip(normals).enumerate() {
+        let side = if i % 2 == 0 { 1.0 } else { -1.0 };
+        centres.push(*p + *n * (side * offset));
+        values.push(side * offset);
+    }
+    (centres, values)
+}
+
+/// What the tangent-plane field leaves of each constraint: the Wendland RBFs interpolate
+/// only this correction, so where they fade to zero, away from the points, the field is the
+/// tangent-plane distance with its reliable side rather than zero.
+fn residuals(centres: &[Vec3], values: &[f32], tangent: &tangent::TangentField) -> Vec<f32> {
+    use rayon::prelude::*;
+    centres
+        .par_iter()
+        .zip(values)
+        .map_init(Vec::new, |near, (&c, &v)| {
+            v - tangent.value(c, near).unwrap_or(0.0)
+        })
+        .collect()
+}
+
+/// One point per cell of side `cell` when the cloud is denser than that (with its normal),
+/// and the spacing of what is kept. The RBF correction cannot show detail finer than the grid,
+/// and a support holding hundreds of centres makes the system large and slow to converge.
+fn thin(points: &[Vec3], normals: &[Vec3], spacing: f32, cell: f32) -> (Vec<Vec3>, Vec<Vec3>, f32) {
+    if cell <= spacing {
+        return (points.to_vec(), normals.to_vec(), spacing);
+    }
+    let key = |p: Vec3| (p / cell).floor().as_ivec3().to_array();
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by_key(|&i| (key(points[i]), i));
+    order.dedup_by_key(|i| key(points[*i]));
+    let kept: Vec<Vec3> = order.iter().map(|&i| points[i]).collect();
+    let kept_spacing = mean_spacing(&kept).max(spacing);
+    (
+        kept,
+        order.iter().map(|&i| normals[i]).collect(),
+        kept_spacing,
+    )
+}
+
+/// The Wendland support radius for a cloud of `spacing` on `grid`.
+pub fn default_support(spacing: f32, grid: &Grid) -> f32 {
+    (SUPPORT_SPACINGS * spacing).max(SUPPORT_GRID_SPACINGS * grid.spacing)
+}
+
+/// Removes exact duplicates (they make the RBF systems singular), keeping the first normal.
+pub fn dedup(cloud: &PointCloud) -> PointCloud {
+    let mut order: Vec<usize> = (0..cloud.points.len()).collect();
+    let key = |i: usize| cloud.points[i].to_array().map(f32::to_bits);
+    order.sort_by_key(|&i| (key(i), i));
+    order.dedup_by_key(|i| key(*i));
+    order.sort_unstable();
+    PointCloud {
+        points: order.iter().map(|&i| cloud.points[i]).collect(),
+        normals: cloud
+            .normals
+            .as_ref()
+            .map(|n| order.iter().map(|&i| n[i]).collect()),
+    }
+}
+
+/// Fits a cubic B-spline coefficient volume on `grid` whose zero set passes through `cloud`.
+pub fn reconstruct(
+    cloud: &PointCloud,
+    grid: Grid,
+    options: &PointsOptions,
+) -> Result<(CoefficientVolume, PointsReport), PointsError> {
+    let cloud = dedup(cloud);
+    let points = &cloud.points;
+    if points.len() < 10 {
+        return Err(PointsError::TooFew(points.len()));
+    }
+    if let Some(normals) = &cloud.normals {
+        if normals.len() != points.len() {
+            return Err(PointsError::NormalCount {
+                points: points.len(),
+                normals: normals.len(),
+            });
+        }
+        if let Some(i) = normals
+            .iter()
+            .position(|n| !(n.is_finite() && n.length_squared() > 1e-12))
+        {
+            return Err(PointsError::BadNormal(i));
+        }
+    }
+    if options.method == Method::RbfCubic && 2 * points.len() > MAX_CUBIC_CENTRES {
+        return Err(PointsError::TooManyForCubic {
+            points: points.len(),
+            max: MAX_CUBIC_CENTRES,
+        });
+    }
+    let spacing = mean_spacing(points);
+    if spacing.is_nan() || spacing <= 0.0 {
+        return Err(PointsError::NoSpread);
+    }
+    let mut report = PointsReport {
+        method: options.method.name(),
+        points: points.len(),
+        spacing,
+        ..Default::default()
+    };
+    let t = Instant::now();
+    let normals: Vec<Vec3> = match &cloud.normals {
+        Some(n) => n.iter().map(|v| v.normalize()).collect(),
+        None => {
+            report.normals_estimated = true;
+            estimate_normals(points, spacing)
+        }
+    };
+    report.seconds_normals = t.elapsed().as_secs_f64();
+    let tangent = tangent::TangentField::new(points, &normals, spacing, options.band);
+    let offset = OFFSET_SPACINGS * spacing;
+    report.offset = offset;
+    let t = Instant::now();
+    let samples = match options.method {
+        Method::Spline => band::sample_band(&grid, points, &tangent, options.band, &|_, t| t),
+        Method::RbfWendland => {
+            let support = options
+                .support
+                .unwrap_or_else(|| default_support(spacing, &grid));
+            let (kept, kept_normals, kept_spacing) =
+                thin(points, &normals, spacing, support / SUPPORT_SPACINGS);
+            let offset = OFFSET_SPACINGS * kept_spacing;
+            report.offset = offset;
+            let (centres, values) = constraints(&kept, &kept_normals, offset);
+            let values = residuals(&centres, &values, &tangent);
+            let fit = wendland::fit(&centres, &values, support);
+            report.centres = centres.len();
+            report.support = support;
+            report.iterations = fit.iterations;
+            report.residual = fit.residual;
+            report.matrix_entries = fit.entries;
+            report.seconds_solve = t.elapsed().as_secs_f64();
+            band::sample_band(&grid, points, &tangent, options.band, &|x, t| {
+                t + fit.value(x)
+            })
+        }
+        Method::RbfCubic => {
+            let (centres, values) = constraints(points, &normals, offset);
+            let fit = cubic::fit(&centres, &values).ok_or(PointsError::Singular)?;
+            report.centres = centres.len();
+            report.seconds_solve = t.elapsed().as_secs_f64();
+            band::sample_band(&grid, points, &tangent, options.band, &|x, _| fit.value(x))
+        }
+    };
+    report.bricks = samples.stored_count();
+    let t = Instant::now();
+    let (volume, _) = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?;
+    report.seconds_fit = t.elapsed().as_secs_f64();
+    Ok((volume, report))
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// `n` points spread evenly (Fibonacci lattice) on a sphere of radius `r` at the origin.
+    pub fn sphere_points(n: usize, r: f32) -> Vec<Vec3> {
+        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        (0..n)
+            .map(|i| {
+                let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+                let rho = (1.0 - y * y).sqrt();
+                let phi = golden * i as f32;
+                Vec3::new(rho * phi.cos(), y, rho * phi.sin()) * r
+            })
+            .collect()
+    }
+
+    /// Largest |distance from the origin − r| over the zero crossings along node rows.
+    fn radius_error(volume: &CoefficientVolume, r: f32) -> f32 {
+        let mut worst = 0.0f32;
+        for k in 0..24 {
+            let dir = sphere_points(24, 1.0)[k];
+            // Bisection along the ray: inside at the centre, outside at 1.5 r.
+            let (mut a, mut b) = (0.0f32, 1.5 * r);
+            assert!(volume.value(Vec3::ZERO) < 0.0);
+            assert!(volume.value(dir * b) > 0.0);
+            for _ in 0..40 {
+                let m = 0.5 * (a + b);
+                if volume.value(dir * m) < 0.0 {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            worst = worst.max((a - r).abs());
+        }
+        worst
+    }
+
+    fn sphere(n: usize, method: Method, with_normals: bool) -> (f32, PointsReport, f32) {
+        let points = sphere_points(n, 1.0);
+        let normals = with_normals.then(|| points.clone());
+        let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::splat(1.0), 48).unwrap();
+        let options = PointsOptions {
+            method,
+            band: 4.0 * grid.spacing,
+            support: None,
+        };
+        let cloud = PointCloud { points, normals };
+        let (volume, report) = reconstruct(&cloud, grid, &options).unwrap();
+        (radius_error(&volume, 1.0), report, grid.spacing)
+    }
+
+    #[test]
+    fn every_method_finds_the_sphere() {
+        for (method, n) in [
+            (Method::Spline, 4000),
+            (Method::RbfWendland, 4000),
+            (Method::RbfWendland, 16000),
+            (Method::RbfCubic, 1000),
+        ] {
+            let (err, report, h) = sphere(n, method, true);
+            eprintln!("{method:?}: {}", err / h);
+            assert!(
+                err < 0.1 * h,
+                "{method:?}: radius off by {err} (h = {h}), {report:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn estimated_normals_give_the_same_sphere() {
+        let (err, report, h) = sphere(4000, Method::Spline, false);
+        assert!(report.normals_estimated);
+        assert!(err < 0.1 * h, "radius off by {err} (h = {h})");
+    }
+
+    #[test]
+    fn cubic_refuses_large_clouds() {
+        let cloud = PointCloud {
+            points: sphere_points(MAX_CUBIC_CENTRES, 1.0),
+            normals: None,
+        };
+        let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::splat(1.0), 16).unwrap();
+        let options = PointsOptions {
+            method: Method::RbfCubic,
+            band: 0.5,
+            support: None,
+        };
+        let err = reconstruct(&cloud, grid, &options).unwrap_err();
+        assert!(matches!(err, PointsError::TooManyForCubic { .. }), "{err}");
+    }
+}

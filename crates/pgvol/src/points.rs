@@ -1,0 +1,396 @@
+//! Point clouds → coefficient volumes: the readers for point files, the options with their
+//! defaults, the memory estimate and the call into `pgvol-points`.
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+use glam::Vec3;
+use pgvol_format::PgvFile;
+use pgvol_points::{Method, PointCloud, PointsReport};
+
+use crate::encode::{BAND_KEY, ENCODE_BAND};
+use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::grid::GridSpec;
+use crate::progress::{self, Progress};
+
+pub use pgvol_points::{Method as PointsMethod, MAX_CUBIC_CENTRES};
+
+/// How a point cloud becomes a coefficient volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointsOptions {
+    /// The grid around the points' box (default 128 nodes per axis).
+    pub grid: GridSpec,
+    /// The field through the points (default `Spline`, see `docs/points.md` for the
+    /// measurements behind it).
+    pub method: Method,
+    /// Node values kept within this many grid spacings of the points (default
+    /// [`ENCODE_BAND`]), clamped beyond.
+    pub band: f32,
+    /// Wendland support radius in the cloud's units (default 3 point spacings, at least 2
+    /// grid spacings).
+    pub support: Option<f32>,
+}
+
+impl Default for PointsOptions {
+    fn default() -> Self {
+        Self {
+            grid: GridSpec::default(),
+            method: Method::Spline,
+            band: ENCODE_BAND,
+            support: None,
+        }
+    }
+}
+
+/// A reconstructed field ready to write, with what the reconstruction did.
+#[derive(Clone, Debug)]
+pub struct Reconstructed {
+    /// Header and coefficients.
+    pub file: PgvFile,
+    /// Points, spacing, whether normals were estimated, the solve.
+    pub report: PointsReport,
+}
+
+/// The point-cloud file name extensions read as text (one point per line).
+pub const POINT_TEXT_EXTENSIONS: [&str; 4] = ["xyz", "csv", "txt", "pts"];
+
+/// Reads a point cloud: PLY (the vertices, with nx, ny, nz when present; faces ignored) or
+/// text (`.xyz`, `.csv`, `.txt`, `.pts`: see [`read_cloud_text`]).
+pub fn read_point_cloud(path: &Path) -> Result<PointCloud> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let is_text = POINT_TEXT_EXTENSIONS.contains(&ext.as_str());
+    if ext != "ply" && !is_text {
+        return Err(Error::file(
+            ErrorKind::InputFile,
+            path,
+            format!(
+                "cannot tell the point format from the extension '{ext}': use .ply or one of \
+                 .{}",
+                POINT_TEXT_EXTENSIONS.join(", .")
+            ),
+        ));
+    }
+    let bytes = pgvol_core::read_input(path).reading()?;
+    if is_text {
+        return read_cloud_text(bytes.as_slice(), path);
+    }
+    let (points, normals) = pgvol_mesh::read_ply_points(&bytes, path).reading()?;
+    Ok(PointCloud { points, normals })
+}
+
+/// Parses a text point cloud: per line `x y z` or `x y z nx ny nz` (commas, semicolons,
+/// spaces or tabs between), every line alike. Blank lines and lines starting with `#` are
+/// skipped, and so is a first line in which no field is a number (a header); a UTF-8
+/// byte-order mark is ignored. Coordinates must be finite and below
+/// [`MAX_COORDINATE`](pgvol_mesh::MAX_COORDINATE) in magnitude, normals finite; `name` labels
+/// errors.
+pub fn read_cloud_text(r: impl Read, name: &Path) -> Result<PointCloud> {
+    let fail = |message: String| Error::new(ErrorKind::InputFile, message).at(name);
+    let mut cloud = PointCloud::default();
+    let mut normals = Vec::new();
+    let mut columns = None;
+    let mut seen_data = false;
+    for (n, line) in BufReader::new(r).lines().enumerate() {
+        let line = line.map_err(|e| fail(format!("line {} is not text: {e}", n + 1)))?;
+        let line = line.trim_start_matches('\u{feff}').trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let numbers: Vec<Option<f32>> = line
+            .split([',', ';', ' ', '\t'])
+            .filter(|f| !f.is_empty())
+            .map(|f| f.parse::<f32>().ok())
+            .collect();
+        let first = !seen_data;
+        seen_data = true;
+        if first && numbers.iter().all(Option::is_none) {
+            continue;
+        }
+        let values: Option<Vec<f32>> = numbers.iter().copied().collect();
+        let values = match values {
+            Some(v) if (v.len() == 3 || v.len() == 6) && columns.is_none_or(|c| c == v.len()) => v,
+            _ => {
+                let want = match columns {
+                    Some(3) => "three numbers x y z",
+                    Some(_) => "six numbers x y z nx ny nz",
+                    None => "three numbers x y z or six x y z nx ny nz",
+                };
+                return Err(fail(format!(
+                    "line {}: expected {want} like the lines before, got '{line}'",
+                    n + 1
+                )));
+            }
+        };
+        columns = Some(values.len());
+        let p = Vec3::new(values[0], values[1], values[2]);
+        if !p.is_finite() || p.abs().max_element() >= pgvol_mesh::MAX_COORDINATE {
+            return Err(fail(format!(
+                "line {}: coordinates must be finite and below {:e} in magnitude, got '{line}'",
+                n + 1,
+                pgvol_mesh::MAX_COORDINATE
+            )));
+        }
+        cloud.points.push(p);
+        if values.len() == 6 {
+            let normal = Vec3::new(values[3], values[4], values[5]);
+            if !normal.is_finite() {
+                return Err(fail(format!(
+                    "line {}: the normal is not finite: '{line}'",
+                    n + 1
+                )));
+            }
+            normals.push(normal);
+        }
+    }
+    if cloud.points.is_empty() {
+        return Err(fail("no points".into()));
+    }
+    cloud.normals = (columns == Some(6)).then_some(normals);
+    Ok(cloud)
+}
+
+/// Bytes per stored node brick while sampling and fitting: the samples, the coefficients and
+/// the local prefilter's halo, as for a sparse encode.
+const BYTES_PER_BRICK: u64 = crate::memory::BYTES_PER_BAND_BRICK;
+
+/// Bytes per point: the point, normal, index, neighbour lists and constraints.
+const BYTES_PER_POINT: u64 = 200;
+
+/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid`.
+pub fn points_bytes(
+    points: usize,
+    spacing: f32,
+    grid: &pgvol_core::Grid,
+    options: &PointsOptions,
+) -> u64 {
+    let area = points as f64 * f64::from(spacing).powi(2);
+    let bricks = crate::memory::band_bricks(area, grid.spacing, options.band);
+    let mut bytes =
+        bricks.saturating_mul(BYTES_PER_BRICK) + (points as u64).saturating_mul(BYTES_PER_POINT);
+    match options.method {
+        Method::Spline => {}
+        Method::RbfWendland => {
+            let support = options
+                .support
+                .unwrap_or_else(|| pgvol_points::default_support(spacing, grid));
+            // Clouds denser than a third of the support are thinned to one point per cell of
+            // that size; two centres per kept point, each row seeing both layers of a sheet
+            // within the support.
+            let kept_spacing = f64::from(spacing.max(support / pgvol_points::SUPPORT_SPACINGS));
+            let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
+            let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
+            let entries = 2.0 * kept * per_row;
+            bytes += (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
+        }
+        Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
+    }
+    bytes
+}
+
+/// Fits a coefficient volume whose zero set passes through `cloud` (normals estimated and
+/// oriented when it has none; see `report.normals_estimated`).
+pub fn points(
+    cloud: &PointCloud,
+    options: &PointsOptions,
+    progress: &dyn Progress,
+) -> Result<Reconstructed> {
+    if !(options.band.is_finite() && options.band >= crate::encode::MIN_BAND) {
+        return Err(Error::parameter(format!(
+            "the band must be at least {} grid spacings, got {}",
+            crate::encode::MIN_BAND,
+            options.band
+        )));
+    }
+    if let Some(r) = options.support {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(Error::parameter(format!(
+                "the support radius must be a positive length, got {r}"
+            )));
+        }
+    }
+    if cloud.points.is_empty() {
+        return Err(Error::new(ErrorKind::InputFile, "the cloud has no points"));
+    }
+    let (lo, hi) = pgvol_points::index::bounds(&cloud.points);
+    let grid = options.grid.grid_for_box(lo, hi)?;
+    fit_on_grid(cloud, grid, options, (lo, hi), progress)
+}
+
+/// The reconstruction of `cloud` on `grid`; `bounds` is the box recorded as the source's.
+fn fit_on_grid(
+    cloud: &PointCloud,
+    grid: pgvol_core::Grid,
+    options: &PointsOptions,
+    (lo, hi): (Vec3, Vec3),
+    progress: &dyn Progress,
+) -> Result<Reconstructed> {
+    let spacing = pgvol_points::mean_spacing(&cloud.points);
+    let [nx, ny, nz] = grid.dims;
+    crate::memory::check_memory(
+        &format!(
+            "fitting {} points by {} on a {nx} x {ny} x {nz} grid",
+            cloud.points.len(),
+            options.method.name()
+        ),
+        points_bytes(cloud.points.len(), spacing, &grid, options),
+        "lower the resolution or thin the cloud",
+    )?;
+    let fit_options = pgvol_points::PointsOptions {
+        method: options.method,
+        band: options.band * grid.spacing,
+        support: options.support,
+    };
+    let (volume, report) = progress::stage(progress, "fit", |_| {
+        pgvol_points::reconstruct(cloud, grid, &fit_options)
+    })?
+    .map_err(|e| {
+        let kind = match e {
+            pgvol_points::PointsError::TooManyForCubic { .. } => ErrorKind::ResourceLimit,
+            pgvol_points::PointsError::Field(_) => ErrorKind::Internal,
+            _ => ErrorKind::InputFile,
+        };
+        Error::new(kind, e.to_string()).caused_by(e)
+    })?;
+    let mut header = pgvol_format::header_for(&volume, options.method.name(), None);
+    header.source_bounds = Some([lo.to_array(), hi.to_array()]);
+    header
+        .metadata
+        .insert(BAND_KEY.into(), format!("{}", fit_options.band));
+    header
+        .metadata
+        .insert("points".into(), report.points.to_string());
+    header.metadata.insert(
+        "normals".into(),
+        if report.normals_estimated {
+            "estimated"
+        } else {
+            "given"
+        }
+        .into(),
+    );
+    Ok(Reconstructed {
+        file: PgvFile { header, volume },
+        report,
+    })
+}
+
+/// Reads a stack of planar contours: the JSON or Common Layer Interface (ASCII or binary)
+/// layer files `pgvol slice` writes, by extension.
+pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let layers = match ext.as_str() {
+        "json" => pgvol_ops::read_slice_json(path).reading()?,
+        "cli" => {
+            let bytes = pgvol_core::read_input(path).reading()?;
+            pgvol_ops::read_cli(&bytes, path).reading()?
+        }
+        _ => {
+            return Err(Error::file(
+                ErrorKind::InputFile,
+                path,
+                format!(
+                    "cannot tell the contour format from the extension '{ext}': use .json or                      .cli, as `pgvol slice` writes them"
+                ),
+            ))
+        }
+    };
+    if layers.iter().all(|l| l.loops.is_empty()) {
+        return Err(Error::file(
+            ErrorKind::InputFile,
+            path,
+            "no closed contours",
+        ));
+    }
+    Ok(layers)
+}
+
+/// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`:
+/// the loops (value 0, normals in the plane) and caps half a layer beyond wherever a layer's
+/// region is not covered by its neighbour, so tops, bottoms, ends of branches and the overhang
+/// of leaning parts close. Holes and several loops per plane are allowed.
+pub fn contours(
+    layers: &[pgvol_ops::Layer],
+    axis: pgvol_ops::Axis,
+    options: &PointsOptions,
+    progress: &dyn Progress,
+) -> Result<Reconstructed> {
+    let a = match axis {
+        pgvol_ops::Axis::X => 0,
+        pgvol_ops::Axis::Y => 1,
+        pgvol_ops::Axis::Z => 2,
+    };
+    let mut planes: Vec<pgvol_points::contours::ContourPlane> = layers
+        .iter()
+        .filter(|l| !l.loops.is_empty())
+        .map(|l| pgvol_points::contours::ContourPlane {
+            height: l.height,
+            loops: l.loops.iter().map(|lp| lp.points.clone()).collect(),
+        })
+        .collect();
+    if planes.is_empty() {
+        return Err(Error::new(ErrorKind::InputFile, "no closed contours"));
+    }
+    planes.sort_by(|x, y| x.height.total_cmp(&y.height));
+    // The box of the loops, grown by the caps' half layers.
+    let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
+    let (lo, hi) = pgvol_points::index::bounds(&outline.points);
+    let grid = options.grid.grid_for_box(lo, hi)?;
+    // Samples at half the grid spacing: every cell the surface crosses holds several.
+    let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
+    fit_on_grid(&cloud, grid, options, (lo, hi), progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_clouds_with_and_without_normals() {
+        let name = Path::new("c.xyz");
+        let cloud = read_cloud_text("x y z\n0 0 0\n1,2,3\n".as_bytes(), name).unwrap();
+        assert_eq!(cloud.points, vec![Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0)]);
+        assert!(cloud.normals.is_none());
+        let cloud =
+            read_cloud_text("\u{feff}0 0 0 0 0 1\n# c\n1 1 1 1 0 0\n".as_bytes(), name).unwrap();
+        assert_eq!(cloud.normals.unwrap()[1], Vec3::X);
+        for bad in [
+            "0 0 0\n1 1 1 0 0 1\n",
+            "0 0\n",
+            "0 0 nan\n",
+            "",
+            "0 0 0 0 inf 0\n",
+        ] {
+            let e = read_cloud_text(bad.as_bytes(), name).unwrap_err();
+            assert!(e.to_string().starts_with("c.xyz: "), "{e}");
+        }
+    }
+
+    #[test]
+    fn ply_points_with_normals_and_faces_ignored() {
+        let ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+                   property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+                   end_header\n0 0 0 0 0 1\n1 2 3 0 1 0\n";
+        let (points, normals) =
+            pgvol_mesh::read_ply_points(ply.as_bytes(), Path::new("p.ply")).unwrap();
+        assert_eq!(points[1], Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(normals.unwrap()[1], Vec3::Y);
+        let bare = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                    property float z\nend_header\n0 0 1e9\n";
+        let e = pgvol_mesh::read_ply_points(bare.as_bytes(), Path::new("p.ply")).unwrap_err();
+        assert!(e.to_string().starts_with("p.ply: "), "{e}");
+    }
+
+    #[test]
+    fn unknown_extension_is_refused_by_name() {
+        let e = read_point_cloud(Path::new("cloud.bin")).unwrap_err();
+        assert!(e.to_string().contains(".ply"), "{e}");
+    }
+}
