@@ -60,6 +60,7 @@
 
 mod decode;
 mod distance;
+pub mod distributed;
 mod encode;
 mod error;
 mod eval;
