@@ -15,7 +15,7 @@ pub mod volume;
 
 pub use basis::Basis;
 pub use fit::{
-    fit, interp_sparse_layers, sparse_reach, wls_band, ClosestFn, ClosestPoint, FitMethod,
+    fit, interp_sparse_groups, sparse_reach, wls_band, ClosestFn, ClosestPoint, FitMethod,
     FitOptions, FitReport, LayerBricks, SignedDistance, SPARSE_GROUP,
 };
 pub use kernel::{Jet, Kernel};

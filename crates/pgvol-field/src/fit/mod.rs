@@ -134,20 +134,22 @@ pub fn interp_sparse(
 /// Coefficient bricks of one slab of a sparse interpolation, for fitting a grid in parts.
 pub type LayerBricks = Vec<([usize; 3], Box<pgvol_core::sparse::BrickValues>)>;
 
-/// The stored coefficient bricks [`interp_sparse`] gives for the z layers of groups `layers`
-/// (groups of [`SPARSE_GROUP`]³ grid bricks), bit for bit and in its order, from samples that
-/// hold the whole grid's bricks within [`sparse_reach`] grid bricks of those layers (others
-/// may be absent). With the report `interp_sparse` gives, less its timings and sign check.
+/// The stored coefficient bricks [`interp_sparse`] gives for the groups (of [`SPARSE_GROUP`]³
+/// grid bricks) whose y and z group indices lie in `gy` and `gz`, bit for bit and in its
+/// order, from samples that hold the whole grid's bricks within [`sparse_reach`] grid bricks
+/// of those groups (others may be absent). With the report `interp_sparse` gives, less its timings and sign check.
 /// Unstored bricks take the samples' sides, as in `interp_sparse`. Pseudo-Gaussians have no
 /// local fit and are refused.
-pub fn interp_sparse_layers(
+pub fn interp_sparse_groups(
     grid: Grid,
     basis: Basis,
     samples: &SparseGrid,
-    layers: std::ops::Range<usize>,
+    gy: std::ops::Range<usize>,
+    gz: std::ops::Range<usize>,
 ) -> Result<(LayerBricks, FitReport), FieldError> {
     crate::volume::check_sparse(&grid, basis, samples)?;
-    let in_layers = |b: [usize; 3]| layers.contains(&(b[2] / SPARSE_GROUP));
+    let in_layers =
+        |b: [usize; 3]| gy.contains(&(b[1] / SPARSE_GROUP)) && gz.contains(&(b[2] / SPARSE_GROUP));
     let (bricks, mut report) =
         match basis {
             Basis::Trilinear => (
@@ -159,11 +161,11 @@ pub fn interp_sparse_layers(
                 report::report("none", None),
             ),
             Basis::Bspline2 => (
-                sparse_interp::prefilter_layers(samples, QUADRATIC_POLE, layers),
+                sparse_interp::prefilter_groups(samples, QUADRATIC_POLE, gy, gz),
                 report::report("prefilter", None),
             ),
             Basis::Bspline3 => (
-                sparse_interp::prefilter_layers(samples, CUBIC_POLE, layers),
+                sparse_interp::prefilter_groups(samples, CUBIC_POLE, gy, gz),
                 report::report("prefilter", None),
             ),
             Basis::Pg { .. } => return Err(FieldError::BadFit(
@@ -176,7 +178,7 @@ pub fn interp_sparse_layers(
     Ok((bricks, report))
 }
 
-/// Grid bricks of samples needed around a layer of groups by [`interp_sparse_layers`].
+/// Grid bricks of samples needed around a box of groups by [`interp_sparse_groups`].
 pub fn sparse_reach(basis: Basis) -> usize {
     match basis {
         Basis::Bspline2 => sparse_interp::layer_reach(QUADRATIC_POLE),

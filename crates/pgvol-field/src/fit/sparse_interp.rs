@@ -63,21 +63,22 @@ const DROP_TOLERANCE: f32 = 1e-5;
 /// follow from the samples within its bricks' box plus the halo.
 pub const SPARSE_GROUP: usize = GROUP;
 
-/// The coefficient bricks [`prefilter_sparse`] computes for the groups whose z index (in
-/// groups) lies in `layers`, in the order it stores them. `samples` must hold every brick
-/// within [`layer_reach`] grid bricks of those layers as the whole grid's samples do; then
-/// the bricks are bit for bit the ones of the whole grid, since each group is filtered alone
-/// from its own window.
-pub(crate) fn prefilter_layers(
+/// The coefficient bricks [`prefilter_sparse`] computes for the groups whose y and z indices
+/// (in groups) lie in `gy` and `gz`, in the order it stores them. `samples` must hold every
+/// brick within [`layer_reach`] grid bricks of those groups as the whole grid's samples do;
+/// then the bricks are bit for bit the ones of the whole grid, since each group is filtered
+/// alone from its own window.
+pub(crate) fn prefilter_groups(
     samples: &SparseGrid,
     z: f64,
-    layers: std::ops::Range<usize>,
+    gy: std::ops::Range<usize>,
+    gz: std::ops::Range<usize>,
 ) -> Vec<([usize; 3], Box<BrickValues>)> {
     let bricks = output_bricks(samples, GROUP);
     let group_of = |b: &[usize; 3]| b.map(|c| c / GROUP);
     let groups: Vec<&[[usize; 3]]> = bricks
         .chunk_by(|a, b| group_of(a) == group_of(b))
-        .filter(|g| layers.contains(&(g[0][2] / GROUP)))
+        .filter(|g| gy.contains(&(g[0][1] / GROUP)) && gz.contains(&(g[0][2] / GROUP)))
         .collect();
     let computed: Vec<Vec<([usize; 3], Box<BrickValues>)>> = groups
         .par_iter()

@@ -222,36 +222,38 @@ impl MeshSdf {
         width: f32,
         progress: &(dyn Fn(f64) + Sync),
     ) -> SparseSampled {
-        let bz = grid.dims[2].div_ceil(BRICK_EDGE);
-        self.sample_sparse_layers(grid, width, 0..bz, progress)
+        let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
+        self.sample_sparse_rows(grid, width, 0..by, 0..bz, progress)
     }
 
-    /// [`MeshSdf::sample_sparse`] restricted to the layers `layers` of grid bricks along z
-    /// (every brick of each layer), without the sign fallback: every brick it holds, stored
-    /// or absent, is the one the whole grid's sampling gives, since each row of grid bricks is
-    /// sampled alone from the mesh and the grid. Bricks of other layers are left absent and
-    /// outside. The count of sign contradictions among its layers is
+    /// [`MeshSdf::sample_sparse`] restricted to the rows of grid bricks along x whose y and z
+    /// brick indices lie in `ys` and `zs`, without the sign fallback: every brick it holds,
+    /// stored or absent, is the one the whole grid's sampling gives, since each row of grid
+    /// bricks is sampled alone from the mesh and the grid. Bricks of other rows are left
+    /// absent and outside. The count of sign contradictions among its bricks is
     /// [`sparse_sign_contradictions_in`](crate::consistency::sparse_sign_contradictions_in).
-    pub fn sample_sparse_layers(
+    pub fn sample_sparse_rows(
         &self,
         grid: &Grid,
         width: f32,
-        layers: std::ops::Range<usize>,
+        ys: std::ops::Range<usize>,
+        zs: std::ops::Range<usize>,
         progress: &(dyn Fn(f64) + Sync),
     ) -> SparseSampled {
         let plan = self.band_plan(grid, width);
         let clamp = plan.clamp;
         let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
-        let layers = layers.start.min(bz)..layers.end.min(bz);
+        let ys = ys.start.min(by)..ys.end.min(by);
+        let zs = zs.start.min(bz)..zs.end.min(bz);
         let per = BRICK_EDGE / BRICK;
         let done = AtomicUsize::new(0);
-        let total = by * layers.len();
+        let total = ys.len() * zs.len();
         // One task per row of grid bricks: the sampler's rows of small bricks it covers, one
         // after another so each carries its winding number along x, then cut into grid bricks.
         let rows: Vec<GridRow> = (0..total)
             .into_par_iter()
             .map_init(row::Scratch::default, |scratch, r| {
-                let (gj, gk) = (r % by, layers.start + r / by);
+                let (gj, gk) = (ys.start + r % ys.len(), zs.start + r / ys.len());
                 let mut pieces = Vec::new();
                 for dk in 0..per {
                     for dj in 0..per {

@@ -1,5 +1,6 @@
-//! Encoding in parts: the grid cut into slabs of layers of fitting groups along z, each
-//! sampled and fitted alone, and the file assembled from their coefficient bricks.
+//! Encoding in parts: the grid cut into boxes of fitting groups (slabs along z, and rows of
+//! groups along y when there are more parts than slabs), each sampled and fitted alone, and
+//! the file assembled from their coefficient bricks.
 
 use std::ops::Range;
 
@@ -13,18 +14,30 @@ use crate::encode::{encoded_file, EncodeOptions, Encoded};
 use crate::error::{Error, ErrorKind, Result};
 use crate::Timings;
 
+/// One part of an encode: the fitting groups (each [`SPARSE_GROUP`]³ grid bricks) whose y and
+/// z group indices lie in `gy` and `gz`, with every group along x.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GroupBox {
+    /// Group indices along y.
+    pub gy: Range<usize>,
+    /// Group indices along z.
+    pub gz: Range<usize>,
+}
+
 /// How an encode is cut into parts.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodePlan {
     /// The grid of the whole encode.
     pub grid: Grid,
-    /// Per part, its z layers of fitting groups (each [`SPARSE_GROUP`] grid bricks thick).
-    pub parts: Vec<Range<usize>>,
+    /// The parts in assembly order: z slabs, each cut along y when there are more parts than
+    /// z layers of groups.
+    pub parts: Vec<GroupBox>,
 }
 
-/// Layers of fitting groups along z in `grid`.
-fn group_layers(grid: &Grid) -> usize {
-    grid.dims[2].div_ceil(BRICK_EDGE).div_ceil(SPARSE_GROUP)
+/// Fitting groups along each axis of `grid`.
+fn group_counts(grid: &Grid) -> [usize; 3] {
+    grid.dims
+        .map(|n| n.div_ceil(BRICK_EDGE).div_ceil(SPARSE_GROUP))
 }
 
 /// Refuses what cannot be encoded in parts: fits other than `Interp` and pseudo-Gaussians
@@ -46,21 +59,64 @@ fn check_parts_options(options: &EncodeOptions) -> Result<()> {
     Ok(())
 }
 
-/// Cuts the encode of `mesh` by `options` into at most `parts` slabs of equal numbers of
-/// layers of fitting groups (fewer when the grid has fewer layers).
+/// Cuts the encode of `mesh` by `options` into about `parts` boxes of fitting groups: z slabs
+/// of equal numbers of group layers, each cut into rows along y when `parts` exceeds the
+/// layers (at most one part per group column, so fewer on small grids).
 pub fn plan_encode(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> Result<EncodePlan> {
     check_parts_options(options)?;
     let grid = options.grid.grid_for(mesh)?;
-    Ok(EncodePlan {
-        grid,
-        parts: split(group_layers(&grid), parts)?,
-    })
+    let [_, ny, nz] = group_counts(&grid);
+    let slabs = split(nz, parts)?;
+    let per_slab = parts.div_ceil(slabs.len());
+    let mut out = Vec::new();
+    for gz in slabs {
+        for gy in split(ny, per_slab)? {
+            out.push(GroupBox { gy, gz: gz.clone() });
+        }
+    }
+    Ok(EncodePlan { grid, parts: out })
+}
+
+/// Estimated peak bytes of one part's encode, [`EncodeJob`] included: the mesh's distance
+/// queries, the sampler's flags over the whole grid, and the band bricks of the surface in the
+/// part's box and the fit's reach around it, each at the single-process encode's per-brick
+/// figure (samples, coefficients and their neighbours).
+pub fn part_encode_bytes(mesh: &Mesh, options: &EncodeOptions, part: &GroupBox) -> Result<u64> {
+    use crate::memory::{
+        band_bricks, BYTES_PER_BAND_BRICK, BYTES_PER_PLAN_NODE, BYTES_PER_TRIANGLE,
+    };
+    let grid = options.grid.grid_for(mesh)?;
+    let reach = pgvol_field::sparse_reach(options.basis);
+    let brick = (BRICK_EDGE as f32) * grid.spacing;
+    let margin = options.band * grid.spacing;
+    let span = |r: &Range<usize>, a: usize| {
+        let lo = grid.origin[a] + brick * (r.start * SPARSE_GROUP).saturating_sub(reach) as f32;
+        let hi = grid.origin[a] + brick * (r.end * SPARSE_GROUP + reach) as f32;
+        (lo - margin, hi + margin)
+    };
+    let (y0, y1) = span(&part.gy, 1);
+    let (z0, z1) = span(&part.gz, 2);
+    let area: f64 = mesh
+        .triangles
+        .iter()
+        .filter_map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+            (hi.y >= y0 && lo.y <= y1 && hi.z >= z0 && lo.z <= z1)
+                .then(|| 0.5 * (b - a).cross(c - a).length() as f64)
+        })
+        .sum();
+    let plan = (grid.len() as f64 * BYTES_PER_PLAN_NODE) as u64;
+    Ok(band_bricks(area, grid.spacing, options.band)
+        .saturating_mul(BYTES_PER_BAND_BRICK)
+        .saturating_add(plan)
+        .saturating_add((mesh.triangles.len() as u64).saturating_mul(BYTES_PER_TRIANGLE)))
 }
 
 /// One part's result: its coefficient bricks and what the assembly needs to decide.
 #[derive(Clone, Debug)]
 pub struct EncodedPart {
-    /// The coefficient bricks and sides of the part's layers, as [`Slab`] bytes.
+    /// The coefficient bricks and sides of the part's box, as [`Slab`] bytes.
     pub bricks: Vec<u8>,
     /// Pairs of neighbouring nodes in the part whose signs contradict their distances; with
     /// an automatic sign that chose the pseudonormal, any contradiction in any part means the
@@ -68,7 +124,7 @@ pub struct EncodedPart {
     pub contradictions: usize,
     /// Whether the samples were signed by the pseudonormal chosen by `Auto`.
     pub may_fall_back: bool,
-    /// Nodes whose distance was computed exactly.
+    /// Nodes of the part's stored sample bricks within the band.
     pub exact_nodes: usize,
 }
 
@@ -78,6 +134,8 @@ pub struct EncodeJob {
     sdf: MeshSdf,
     grid: Grid,
     options: EncodeOptions,
+    /// The mesh, kept for the memory estimates of its parts.
+    mesh: Mesh,
 }
 
 impl EncodeJob {
@@ -89,6 +147,7 @@ impl EncodeJob {
             sdf: crate::distance::mesh_sdf(mesh, options.sign)?,
             grid,
             options: *options,
+            mesh: mesh.clone(),
         })
     }
 
@@ -97,45 +156,69 @@ impl EncodeJob {
         self.grid
     }
 
-    /// Samples and fits the group layers `layers`: the distances of their grid bricks and of
-    /// the bricks around them the fit reads, then their coefficient bricks, bit for bit those
-    /// of [`encode`](crate::encode()) on the whole grid. `winding` signs by the winding number
+    /// [`part_encode_bytes`] of `part`.
+    pub fn part_bytes(&self, part: &GroupBox) -> u64 {
+        part_encode_bytes(&self.mesh, &self.options, part).unwrap_or(u64::MAX)
+    }
+
+    /// Samples and fits the groups of `part`: the distances of their grid bricks and of the
+    /// bricks around them the fit reads, then their coefficient bricks, bit for bit those of
+    /// [`encode`](crate::encode()) on the whole grid. `winding` signs by the winding number
     /// where `Auto` had chosen the pseudonormal (after a part found contradictions); once set
     /// in a process it stays set for this job. Calling it again gives the same bytes.
-    pub fn encode_part(&self, layers: Range<usize>, winding: bool) -> Result<EncodedPart> {
-        let total = group_layers(&self.grid);
-        if layers.start >= layers.end || layers.end > total {
+    pub fn encode_part(&self, part: &GroupBox, winding: bool) -> Result<EncodedPart> {
+        let [_, ny, nz] = group_counts(&self.grid);
+        let inside = |r: &Range<usize>, n: usize| r.start < r.end && r.end <= n;
+        if !(inside(&part.gy, ny) && inside(&part.gz, nz)) {
             return Err(Error::parameter(format!(
-                "group layers {}..{} are not within the grid's 0..{total}",
-                layers.start, layers.end
+                "groups y {:?}, z {:?} are not within the grid's 0..{ny}, 0..{nz}",
+                part.gy, part.gz
             )));
         }
         if winding {
             self.sdf.fall_back_to_winding();
         }
+        crate::memory::check_memory(
+            &format!("encoding groups y {:?}, z {:?}", part.gy, part.gz),
+            self.part_bytes(part),
+            "use more parts",
+        )?;
         let may_fall_back =
             self.options.sign == SignMode::Auto && self.sdf.sign_mode() == SignMode::Pseudonormal;
-        let bz = self.grid.dims[2].div_ceil(BRICK_EDGE);
-        let owned = layers.start * SPARSE_GROUP..(layers.end * SPARSE_GROUP).min(bz);
+        let counts = self.grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
+        let owned = |r: &Range<usize>, a: usize| {
+            r.start * SPARSE_GROUP..(r.end * SPARSE_GROUP).min(counts[a])
+        };
+        let (oy, oz) = (owned(&part.gy, 1), owned(&part.gz, 2));
         let reach = pgvol_field::sparse_reach(self.options.basis);
-        let sampled_layers = owned.start.saturating_sub(reach)..(owned.end + reach).min(bz);
-        let sampled =
-            self.sdf
-                .sample_sparse_layers(&self.grid, self.options.band, sampled_layers, &|_| {});
-        let contradictions =
-            pgvol_sdf::sparse_sign_contradictions_in(&self.grid, &sampled.values, owned.clone());
-        let (bricks, _) = pgvol_field::interp_sparse_layers(
+        let around = |r: &Range<usize>, a: usize| {
+            r.start.saturating_sub(reach)..(r.end + reach).min(counts[a])
+        };
+        let sampled = self.sdf.sample_sparse_rows(
+            &self.grid,
+            self.options.band,
+            around(&oy, 1),
+            around(&oz, 2),
+            &|_| {},
+        );
+        let contradictions = pgvol_sdf::sparse_sign_contradictions_in(
+            &self.grid,
+            &sampled.values,
+            oy.clone(),
+            oz.clone(),
+        );
+        let (bricks, _) = pgvol_field::interp_sparse_groups(
             self.grid,
             self.options.basis,
             &sampled.values,
-            layers,
+            part.gy.clone(),
+            part.gz.clone(),
         )
         .map_err(|e| Error::new(ErrorKind::Internal, format!("cannot fit a part: {e}")))?;
-        let counts = sampled.values.brick_counts();
-        let full = [0..counts[0], 0..counts[1], owned.clone()];
-        let mut slab = Slab::cut(self.grid, self.options.basis, &sampled.values, full);
+        let owned_box = [0..counts[0], oy, oz];
+        let exact_nodes = exact_in(&sampled.values, &owned_box, self.options.band, &self.grid);
+        let mut slab = Slab::cut(self.grid, self.options.basis, &sampled.values, owned_box);
         slab.stored = bricks;
-        let exact_nodes = exact_in(&sampled.values, &owned, self.options.band, &self.grid);
         Ok(EncodedPart {
             bricks: slab.to_bytes(),
             contradictions,
@@ -145,13 +228,12 @@ impl EncodeJob {
     }
 }
 
-/// Nodes of the stored sample bricks of layers `owned` within the band (an approximation of
-/// the sampler's count, which also counts nodes it had to compute beyond the band).
-fn exact_in(values: &SparseGrid, owned: &Range<usize>, band: f32, grid: &Grid) -> usize {
+/// Nodes of the stored sample bricks of the box `owned` within the band.
+fn exact_in(values: &SparseGrid, owned: &[Range<usize>; 3], band: f32, grid: &Grid) -> usize {
     let clamp = band * grid.spacing;
     values
         .stored()
-        .filter(|(b, _)| owned.contains(&b[2]))
+        .filter(|(b, _)| (0..3).all(|a| owned[a].contains(&b[a])))
         .map(|(_, v)| v.iter().filter(|x| x.abs() < clamp).count())
         .sum()
 }
@@ -164,14 +246,17 @@ pub fn needs_winding(parts: &[EncodedPart]) -> bool {
 }
 
 /// The encoded file of `mesh` by `options` from its parts' coefficient bricks, given in the
-/// order of the plan's parts (which must tile the grid's layers): the same file, bit for bit,
-/// as [`encode`](crate::encode()) gives.
+/// order of the plan's parts (which must tile the grid): the same file, bit for bit, as
+/// [`encode`](crate::encode()) gives. The fit report is the single-process one less its
+/// timings and its sign check, which needs neighbouring parts' coefficients.
 pub fn assemble_encode(mesh: &Mesh, options: &EncodeOptions, parts: &[&[u8]]) -> Result<Encoded> {
     check_parts_options(options)?;
     let grid = options.grid.grid_for(mesh)?;
-    let bz = grid.dims[2].div_ceil(BRICK_EDGE);
+    let counts = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
     let mut coeffs: Option<SparseGrid> = None;
-    let mut next = 0;
+    // The boxes must tile the grid in plan order: each starts where the previous left off
+    // along y, or at y = 0 of the next slab where the previous reached the end of y.
+    let (mut next_y, mut next_z, mut slab_end) = (counts[1], 0, 0);
     for bytes in parts {
         let slab = Slab::from_bytes(bytes)?;
         if slab.grid != grid || slab.basis != options.basis {
@@ -179,26 +264,36 @@ pub fn assemble_encode(mesh: &Mesh, options: &EncodeOptions, parts: &[&[u8]]) ->
                 "a part was encoded on another grid or basis than the options give",
             ));
         }
-        if slab.bricks[2].start != next {
+        let [bx, by, bz] = slab.bricks.clone();
+        if next_y == counts[1] {
+            (next_y, next_z) = (0, slab_end);
+        }
+        let fits = bx == (0..counts[0])
+            && by.start == next_y
+            && bz.start == next_z
+            && (next_y == 0 || bz.end == slab_end);
+        if !fits {
             return Err(Error::parameter(format!(
-                "the parts do not tile the grid: a part starts at brick layer {} where {next} \
-                 was expected",
-                slab.bricks[2].start
+                "the parts do not tile the grid: a part covers bricks y {by:?}, z {bz:?} where \
+                 y from {next_y}, z from {next_z} was expected"
             )));
         }
-        next = slab.bricks[2].end;
+        (next_y, slab_end) = (by.end, bz.end);
         let values = coeffs.get_or_insert_with(|| SparseGrid::new(grid.dims, slab.background));
         slab.apply(values);
     }
-    let Some(mut coeffs) = coeffs.filter(|_| next == bz) else {
+    let done = next_y == counts[1] && slab_end == counts[2];
+    let Some(mut coeffs) = coeffs.filter(|_| done) else {
         return Err(Error::parameter(format!(
-            "the parts cover brick layers 0..{next} of the grid's 0..{bz}"
+            "the parts do not tile the grid: they end at bricks y {next_y}, z {slab_end} of {}, \
+             {}",
+            counts[1], counts[2]
         )));
     };
     coeffs.compact_tiles();
     // The report interp_sparse gives, from no samples: it depends only on the basis.
     let empty = SparseGrid::new(grid.dims, coeffs.background());
-    let (_, fit) = pgvol_field::interp_sparse_layers(grid, options.basis, &empty, 0..0)
+    let (_, fit) = pgvol_field::interp_sparse_groups(grid, options.basis, &empty, 0..0, 0..0)
         .map_err(|e| Error::new(ErrorKind::Internal, format!("{e}")))?;
     let volume = CoefficientVolume::from_sparse(grid, options.basis, coeffs).map_err(|e| {
         Error::new(

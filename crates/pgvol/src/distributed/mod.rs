@@ -28,7 +28,8 @@ pub use decode_parts::{
     weld_parts, PART_HALO_BRICKS,
 };
 pub use encode_parts::{
-    assemble_encode, needs_winding, plan_encode, EncodeJob, EncodePlan, EncodedPart,
+    assemble_encode, needs_winding, part_encode_bytes, plan_encode, EncodeJob, EncodePlan,
+    EncodedPart, GroupBox,
 };
 pub use slab::Slab;
 
