@@ -12,6 +12,14 @@ use pgvol_tests::load_shared;
 /// decides it.
 fn encode_in_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> pgvol::Encoded {
     let plan = plan_encode(mesh, options, parts).unwrap();
+    if parts == 8 {
+        // More parts than z layers of groups: the slabs are cut along y too.
+        assert!(
+            plan.parts.iter().any(|p| p.gy.start > 0),
+            "{:?}",
+            plan.parts
+        );
+    }
     let job = EncodeJob::new(mesh, options).unwrap();
     let run = |winding| -> Vec<_> {
         plan.parts

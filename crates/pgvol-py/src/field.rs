@@ -72,11 +72,11 @@ impl Grid {
 #[pyclass(frozen, get_all, module = "pgvol")]
 pub(crate) struct Layer {
     /// Position of the plane along the slicing axis.
-    height: f32,
+    pub(crate) height: f32,
     /// One (M, 2) float32 array of layer coordinates per closed loop.
-    loops: Vec<Py<PyArray2<f32>>>,
+    pub(crate) loops: Vec<Py<PyArray2<f32>>>,
     /// Per loop: a hole (clockwise) rather than an outer boundary (counter-clockwise).
-    holes: Vec<bool>,
+    pub(crate) holes: Vec<bool>,
 }
 
 impl Layer {

@@ -3,8 +3,9 @@
 //! as `bytes`, meshes as NumPy arrays, plans as lists of `(start, end)`.
 
 use std::ops::Range;
+use std::path::PathBuf;
 
-use numpy::PyArray2;
+use numpy::{PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
@@ -343,6 +344,40 @@ pub(crate) fn slice_part(
         .collect())
 }
 
+/// Writes layers to an SVG, Common Layer Interface (`binary` for its binary form) or JSON
+/// file by extension, atomically; `units_mm` is millimetres per model unit (CLI headers).
+#[pyfunction]
+#[pyo3(signature = (path, layers, *, binary=false, units_mm=1.0))]
+pub(crate) fn write_layers(
+    py: Python<'_>,
+    path: PathBuf,
+    layers: Vec<PyRef<'_, Layer>>,
+    binary: bool,
+    units_mm: f32,
+) -> PyResult<()> {
+    let mut out = Vec::with_capacity(layers.len());
+    for layer in &layers {
+        let mut loops = Vec::with_capacity(layer.loops.len());
+        for (points, &hole) in layer.loops.iter().zip(&layer.holes) {
+            let array = points.bind(py).readonly();
+            let view = array.as_array();
+            if view.ncols() != 2 {
+                return Err(errors::parameter(py, "a loop must be an (M, 2) array"));
+            }
+            let points = view.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+            loops.push(pgvol::ops::Loop { points, hole });
+        }
+        out.push(pgvol::Layer {
+            height: layer.height,
+            loops,
+        });
+    }
+    quiet(py, || {
+        let format = pgvol::LayerFormat::from_path(&path, binary)?;
+        pgvol::write_layers(&path, &out, format, units_mm)
+    })
+}
+
 /// Registers the classes and functions of this module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<EncodeJob>()?;
@@ -356,5 +391,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_slice, m)?)?;
     m.add_function(wrap_pyfunction!(slice_part_bricks, m)?)?;
     m.add_function(wrap_pyfunction!(slice_part, m)?)?;
+    m.add_function(wrap_pyfunction!(write_layers, m)?)?;
     Ok(())
 }

@@ -221,3 +221,131 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
     names = [f"pgvol-slice-{key}-{s}-{e}" for s, e in plan]
     return [layer for part in _run(client, _slice_part, calls, names, retries) for layer in part]
 
+
+_EXAMPLES = """examples:
+  python -m pgvol.distributed encode part.stl -o part.pgv --res 2048 --scheduler tcp://10.0.0.5:8786
+  python -m pgvol.distributed encode part.stl -o part.pgv --res 1024 --local 2
+  python -m pgvol.distributed decode part.pgv -o part.ply --scheduler tcp://10.0.0.5:8786
+  python -m pgvol.distributed slice part.pgv -o layers.json --layer-height 0.2 --local 2
+"""
+
+
+def _connect(scheduler: str | None, local: int | None):
+    """A client of the scheduler at ``scheduler``, of a new LocalCluster of ``local`` worker
+    processes, or None (parts in this process); with what closes it."""
+    if scheduler is None and local is None:
+        return None, []
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        client = Client(scheduler)
+        return client, [client]
+    cluster = LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    client = Client(cluster)
+    return client, [client, cluster]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The command-line front end: ``python -m pgvol.distributed encode|decode|slice``."""
+    import argparse
+    import json
+    import sys
+    import time
+
+    parser = argparse.ArgumentParser(
+        prog="python -m pgvol.distributed",
+        description="Run pgvol's encode, decode or slice in parts on a Dask cluster "
+                    "(--scheduler), on a new local cluster (--local N) or in this process.",
+        epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def common(p):
+        where = p.add_mutually_exclusive_group()
+        where.add_argument("--scheduler", metavar="ADDRESS",
+                           help="a running Dask scheduler, e.g. tcp://HOST:8786")
+        where.add_argument("--local", type=int, metavar="N",
+                           help="start a LocalCluster of N single-threaded worker processes")
+        p.add_argument("--parts", type=int, default=None,
+                       help="number of parts (default: 4 per worker thread, 1 in process)")
+        p.add_argument("-o", "--output", required=True, help="the file to write")
+        p.add_argument("--json", action="store_true", help="print a JSON report")
+
+    enc = sub.add_parser("encode", help="mesh -> .pgv, the file of `pgvol encode` bit for bit",
+                         epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    enc.add_argument("input", help="a mesh file (OBJ, glTF/GLB, STL, PLY)")
+    size = enc.add_mutually_exclusive_group()
+    size.add_argument("--res", type=int, help=f"nodes per axis (default {_pgvol.DEFAULT_RES})")
+    size.add_argument("--voxel", type=float, help="grid spacing in mesh units")
+    enc.add_argument("--band", type=float, default=_pgvol.ENCODE_BAND,
+                     help="exact distances within this many spacings (default %(default)s)")
+    enc.add_argument("--basis", default="bspline3", choices=["bspline3", "bspline2", "trilinear"],
+                     help="basis (default %(default)s)")
+    enc.add_argument("--sign", default="auto",
+                     choices=["auto", "winding", "pseudonormal", "parity"],
+                     help="inside/outside test (default %(default)s)")
+    common(enc)
+
+    dec = sub.add_parser("decode", help=".pgv -> mesh by marching cubes on the file's grid",
+                         epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    dec.add_argument("input", help="a .pgv file")
+    dec.add_argument("--iso", type=float, default=0.0, help="level set (default 0)")
+    dec.add_argument("--min-component", type=float, default=None,
+                     help="remove pieces enclosing less than this volume (default 2 cells)")
+    common(dec)
+
+    sli = sub.add_parser("slice", help=".pgv -> layers (.svg, .cli or .json)",
+                         epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sli.add_argument("input", help="a .pgv file")
+    sli.add_argument("--layer-height", type=float, required=True, help="distance between layers")
+    sli.add_argument("--axis", default="z", choices=["x", "y", "z"], help="(default z)")
+    common(sli)
+
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    client, closers = _connect(args.scheduler, args.local)
+    try:
+        report: dict[str, Any] = {"command": args.command, "input": args.input,
+                                  "output": args.output, "workers": worker_count(client)}
+        if args.command == "encode":
+            field = encode(args.input, res=args.res, voxel=args.voxel, band=args.band,
+                           basis=args.basis, sign=args.sign, client=client, parts=args.parts,
+                           output=args.output)
+            report["grid"] = list(field.grid.dims)
+        elif args.command == "decode":
+            vertices, faces = decode(args.input, client=client, parts=args.parts, iso=args.iso,
+                                     min_component=args.min_component)
+            _pgvol.write_mesh(Path(args.output), vertices, faces)
+            report.update(vertices=len(vertices), triangles=len(faces))
+        else:
+            layers = slice(args.input, args.layer_height, axis=args.axis, client=client,
+                           parts=args.parts)
+            _pgvol.write_layers(Path(args.output), layers)
+            report["layers"] = len(layers)
+    except (_pgvol_errors(), ValueError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    finally:
+        for c in closers:
+            c.close()
+    report["seconds"] = round(time.perf_counter() - start, 3)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        print(f"wrote {args.output} in {report['seconds']} s on {report['workers']} worker "
+              f"thread(s)")
+    return 0
+
+
+def _pgvol_errors():
+    from ._errors import PgvolError
+
+    return PgvolError
+
+
+if __name__ == "__main__":
+    # Run from the importable module, so that tasks refer to its functions by name instead of
+    # being pickled with this script's globals.
+    from pgvol.distributed import main as _main
+
+    raise SystemExit(_main())

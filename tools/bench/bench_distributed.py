@@ -1,0 +1,264 @@
+"""Distributed encode on a Dask LocalCluster against the single-process sparse encode, and the
+weak-scaling figures that predict larger clusters and grids.
+
+    .venv/bin/python tools/bench/bench_distributed.py [--res 2048] [--workers 2]
+        [--meshes stanford-bunny,rocker-arm-1m] [--worker-budget 1.2e9] [--json OUT.json]
+        [--work DIR] [--skip-single]
+
+(.venv is the test command's environment: it has the pgvol package, dask and distributed.)
+Per mesh ("NAME-1m" is NAME subdivided at its edge midpoints until it has 1M triangles or more):
+  * single process: `pgvol encode MESH -o single.pgv --res N` under /usr/bin/time -v (wall
+    clock and peak RSS of the whole process);
+  * distributed: pgvol.distributed.encode on a LocalCluster of --workers single-threaded worker
+    processes, with the fewest parts (from 4 per worker up) whose largest estimated part fits
+    --worker-budget; wall clock from the call to the written file, each worker's peak resident
+    memory over the encode (VmHWM, reset before), the client's; the file compared byte for byte
+    with the single-process one.
+  * weak scaling: tasks in the graph, bytes shipped per task (the mesh once per worker, each
+    task's returned bricks), scheduler overhead per task (1000 no-op tasks), per-task times from
+    Dask's task stream split into the whole-grid part (the band plan, measured on a part with
+    no surface) and the surface part; and from them, predicted times and memory per worker for
+    8, 64 and 512 workers at 4096^3 and 8192^3.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import common  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+TIME = "/usr/bin/time"
+TARGET_TRIANGLES = 1_000_000
+
+
+def reset_peak() -> int:
+    """Resets this process's peak resident size (Linux clear_refs) and returns its size."""
+    with open("/proc/self/clear_refs", "w") as f:
+        f.write("5")
+    return peak_rss()
+
+
+def peak_rss() -> int:
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def noop(x):
+    return x
+
+
+def mesh_arrays(name: str, work: Path):
+    """(vertices, faces, path) of a shared mesh, or of one subdivided to 1M triangles."""
+    import pgvol
+
+    if name.endswith("-1m"):
+        import trimesh
+
+        v, f = pgvol.read_mesh(common.mesh_file(name[:-3]))
+        while len(f) < TARGET_TRIANGLES:
+            v, f = trimesh.remesh.subdivide(v, f)
+        v, f = np.asarray(v, np.float32), np.asarray(f, np.int32)
+        path = work / f"{name}.ply"
+        pgvol.write_mesh(path, v, f)
+        v, f = pgvol.read_mesh(path)
+        return v, f, path
+    path = common.mesh_file(name)
+    v, f = pgvol.read_mesh(path)
+    return v, f, path
+
+
+def single_process(path: Path, res: int, out: Path, timeout: float) -> dict:
+    argv = [TIME, "-v", str(common.pgvol_bin()), "encode", str(path), "-o", str(out),
+            "--res", str(res), "--force"]
+    start = time.perf_counter()
+    r = subprocess.run(argv, capture_output=True, text=True, timeout=timeout)
+    seconds = time.perf_counter() - start
+    if r.returncode != 0:
+        return {"status": "failed", "note": r.stderr.strip().splitlines()[-1:]}
+    m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", r.stderr)
+    return {"status": "ok", "s": seconds, "rss": int(m.group(1)) * 1024 if m else None}
+
+
+def choose_parts(mesh, res: int, workers: int, budget: float) -> tuple[int, list[dict]]:
+    from pgvol import distributed
+
+    parts = 4 * workers
+    while True:
+        plan = distributed.plan_encode(mesh, parts=parts, res=res)
+        if max(p["bytes"] for p in plan) <= budget or len(plan) < parts:
+            return parts, plan
+        parts *= 2
+
+
+def scheduler_overhead(client, n: int = 1000) -> float:
+    start = time.perf_counter()
+    client.gather(client.map(noop, range(n), pure=False))
+    return (time.perf_counter() - start) / n
+
+
+def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Path,
+             skip_single: bool, timeout: float) -> dict:
+    import pgvol
+    from pgvol import distributed
+
+    v, f, path = mesh_arrays(name, work)
+    row: dict = {"mesh": name, "triangles": int(len(f)), "res": res, "workers": workers}
+    single_out = work / f"{name}-{res}-single.pgv"
+    if not skip_single:
+        row["single"] = single_process(path, res, single_out, timeout)
+    parts, plan = choose_parts((v, f), res, workers, budget)
+    row.update(parts=len(plan), estimate_max_part=max(p["bytes"] for p in plan))
+    out = work / f"{name}-{res}-dist.pgv"
+    client.run(lambda: __import__("pgvol.distributed"))
+    client.get_task_stream()  # starts recording
+    base = client.run(reset_peak)
+    client_base = reset_peak()
+    start = time.perf_counter()
+    distributed.encode((v, f), res=res, client=client, parts=parts, output=out)
+    row["s"] = time.perf_counter() - start
+    peaks = client.run(peak_rss)
+    row["worker_peak"] = max(peaks.values())
+    row["worker_growth"] = max(peaks[w] - base[w] for w in peaks)
+    row["client_peak_growth"] = peak_rss() - client_base
+    stream = [t for t in client.get_task_stream()
+              if str(t.get("key", "")).startswith("pgvol-encode")]
+    durations = [sum(s["stop"] - s["start"] for s in t["startstops"]
+                     if s["action"] == "compute") for t in stream]
+    row["task_seconds"] = {"n": len(durations), "sum": float(np.sum(durations)),
+                           "max": float(np.max(durations)) if durations else 0.0}
+    row["file_bytes"] = out.stat().st_size
+    if single_out.exists():
+        row["identical"] = out.read_bytes() == single_out.read_bytes()
+    # Bytes per task: the mesh goes once to each worker; each task returns its bricks.
+    # The whole-grid work of a task (the band plan: a pass over the triangles and flags over
+    # the grid), as the time of the part with the least surface, at R and R/2: a + b N^3.
+    for key, n in (("plan_task_s", res), ("plan_task_half_s", res // 2)):
+        job = distributed.EncodeJob(v, f, res=n)
+        least = min(distributed.plan_encode((v, f), parts=len(plan), res=n),
+                    key=lambda p: p["bytes"])
+        t0 = time.perf_counter()
+        r = job.encode_part(*least["y"], *least["z"])
+        row[key] = time.perf_counter() - t0
+        del job
+    row["mesh_bytes"] = int(v.nbytes + f.nbytes)
+    row["returned_bytes_per_task"] = (row["file_bytes"] * 1.0) / len(plan)
+    row["smallest_part_returned"] = len(r["bricks"])
+    return row
+
+
+def predict(row: dict, overhead: float) -> list[dict]:
+    """Weak scaling on paper, from one measured run at resolution R with P parts:
+    - a task's time = plan(N) + surface work / P, plan(N) = a + b N^3 (a pass over the
+      triangles and flags over the whole grid, measured as the task with the least surface at
+      R and R/2) and surface work ~ N^2 (band bricks);
+    - tasks: enough parts that the largest fits the worker budget, at least 4 per worker;
+    - time = tasks x (task time + overhead) / workers + assembly on the client (~ N^2,
+      taken as the measured wall clock less the tasks' share);
+    - memory per worker = mesh + plan flags (3 bytes per 64 nodes) + the largest part's band."""
+    R, P, W = row["res"], row["parts"], row["workers"]
+    plan_s = row["plan_task_s"]
+    # plan(N) = a + b N^3 through the two measurements (a: the pass over the triangles).
+    b = max(plan_s - row["plan_task_half_s"], 0.0) / (R ** 3 * 7 / 8)
+    a = max(plan_s - b * R ** 3, 0.0)
+    surface = max(row["task_seconds"]["sum"] - P * plan_s, 0.0)
+    tasks_wall = row["task_seconds"]["sum"] / W
+    assembly = max(row["s"] - tasks_wall, 0.0)
+    out = []
+    for n in (4096, 8192):
+        k3, k2 = (n / R) ** 3, (n / R) ** 2
+        plan_bytes = n ** 3 * 3 / 64
+        mesh_bytes = row["triangles"] * 400
+        band_total = (row["estimate_max_part"] - R ** 3 * 3 / 64 - mesh_bytes) * P * k2
+        for workers in (8, 64, 512):
+            tasks = max(4 * workers, P)
+            time_s = tasks * (a + b * n ** 3 + surface * k2 / tasks + overhead) / workers \
+                + assembly * k2
+            out.append({"res": n, "workers": workers, "tasks": tasks,
+                        "predicted_s": time_s,
+                        "worker_bytes": mesh_bytes + plan_bytes + band_total / tasks,
+                        "returned_bytes_per_task": row["file_bytes"] * k2 / tasks,
+                        "mesh_bytes_per_worker": row["mesh_bytes"]})
+    return out
+
+
+def gb(x) -> str:
+    return "n/a" if x is None else f"{x / 1e9:.2f} GB"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--res", type=int, default=2048)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--meshes", default="stanford-bunny,rocker-arm-1m")
+    ap.add_argument("--worker-budget", type=float, default=1.2e9,
+                    help="largest estimated part, bytes (default 1.2e9, under the 1.5 GB target)")
+    ap.add_argument("--json", type=Path)
+    ap.add_argument("--work", type=Path)
+    ap.add_argument("--skip-single", action="store_true")
+    ap.add_argument("--timeout", type=float, default=3600)
+    args = ap.parse_args()
+
+    from dask.distributed import Client, LocalCluster
+
+    work = args.work or Path(tempfile.mkdtemp(prefix="pgvol-bench-dist-"))
+    work.mkdir(parents=True, exist_ok=True)
+    rows = []
+    with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=40, memory_limit=0) as cluster, \
+            Client(cluster) as client:
+        overhead = scheduler_overhead(client)
+        for name in args.meshes.split(","):
+            row = run_mesh(client, name, args.res, args.workers, args.worker_budget, work,
+                           args.skip_single, args.timeout)
+            row["overhead_per_task_s"] = overhead
+            row["predictions"] = predict(row, overhead)
+            rows.append(row)
+            print(json.dumps(row, indent=1), file=sys.stderr, flush=True)
+
+    print(common.markdown_table(
+        ["mesh", "triangles", "grid", "single s", "single RSS", f"{args.workers} workers s",
+         "parts", "peak per worker", "growth per worker", "estimate (largest part)",
+         "client growth", "identical .pgv"],
+        [[r["mesh"], r["triangles"], f"{r['res']}³",
+          f"{r['single']['s']:.1f}" if r.get("single", {}).get("status") == "ok" else "n/a",
+          gb(r.get("single", {}).get("rss")), f"{r['s']:.1f}", r["parts"], gb(r["worker_peak"]),
+          gb(r["worker_growth"]), gb(r["estimate_max_part"]), gb(r["client_peak_growth"]),
+          r.get("identical", "n/a")] for r in rows]))
+    print()
+    print(common.markdown_table(
+        ["mesh", "tasks", "task s (sum / max)", "whole-grid part of a task s",
+         "mesh shipped per worker", "bricks returned per task", "scheduler overhead per task"],
+        [[r["mesh"], r["task_seconds"]["n"],
+          f"{r['task_seconds']['sum']:.1f} / {r['task_seconds']['max']:.1f}",
+          f"{r['plan_task_s']:.2f} (at {r['res'] // 2}³: {r['plan_task_half_s']:.2f})",
+          f"{r['mesh_bytes'] / 1e6:.1f} MB",
+          f"{r['returned_bytes_per_task'] / 1e6:.2f} MB",
+          f"{r['overhead_per_task_s'] * 1e3:.2f} ms"] for r in rows]))
+    print()
+    print(common.markdown_table(
+        ["mesh", "grid", "workers", "tasks", "predicted s", "memory per worker",
+         "bricks returned per task"],
+        [[r["mesh"], f"{p['res']}³", p["workers"], p["tasks"], f"{p['predicted_s']:.0f}",
+          gb(p["worker_bytes"]), f"{p['returned_bytes_per_task'] / 1e6:.2f} MB"]
+         for r in rows for p in r["predictions"]]))
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
