@@ -4,6 +4,7 @@ weak-scaling figures that predict larger clusters and grids.
     .venv/bin/python tools/bench/bench_distributed.py [--res 2048] [--workers 2]
         [--meshes stanford-bunny,rocker-arm-1m] [--worker-budget 1.2e9] [--json OUT.json]
         [--work DIR] [--skip-single]
+    .venv/bin/python tools/bench/bench_distributed.py --identity [--res 256] [--parts 8]
 
 (.venv is the test command's environment: it has the pgvol package, dask and distributed.)
 Per mesh ("NAME-1m" is NAME subdivided at its edge midpoints until it has 1M triangles or more):
@@ -19,6 +20,8 @@ Per mesh ("NAME-1m" is NAME subdivided at its edge midpoints until it has 1M tri
     Dask's task stream split into the whole-grid part (the band plan, measured on a part with
     no surface) and the surface part; and from them, predicted times and memory per worker for
     8, 64 and 512 workers at 4096^3 and 8192^3.
+With --identity: per shared mesh, encode, decode and slice in --parts parts against the
+single-process calls (bytes, triangles, boundary edges, layers).
 """
 
 from __future__ import annotations
@@ -195,6 +198,51 @@ def predict(row: dict, overhead: float) -> list[dict]:
     return out
 
 
+SHARED = ["stanford-bunny", "spot", "cow", "fandisk", "rocker-arm", "teapot", "suzanne"]
+
+
+def identity(res: int, parts: int) -> None:
+    """Per shared mesh: encode, decode and slice in `parts` parts (in this process: the same
+    part functions the tasks run) against the single-process calls; every decoded piece kept,
+    so the comparison covers specks too."""
+    import pgvol
+    import trimesh
+    from pgvol import distributed
+
+    def triangles(f, ids):
+        tri = ids[np.asarray(f, np.int64)]
+        first = np.argmin(tri, axis=1)
+        tri = tri[np.arange(len(tri))[:, None], (first[:, None] + np.arange(3)) % 3]
+        return tri[np.lexsort(tri.T[::-1])]
+
+    rows = []
+    for name in SHARED:
+        mesh = pgvol.read_mesh(common.mesh_file(name))
+        whole = pgvol.Field.from_mesh(*mesh, res=res)
+        same_file = distributed.encode(mesh, res=res, parts=parts).to_bytes() == whole.to_bytes()
+        v, f = whole.to_mesh(method="mc", min_component=0.0)
+        dv, df = distributed.decode(whole, parts=parts, min_component=0.0)
+        bits = [np.ascontiguousarray(x, np.float32).view(np.uint32).reshape(-1, 3)
+                for x in (dv, v)]
+        _, ids = np.unique(np.concatenate(bits), axis=0, return_inverse=True)
+        ids = ids.ravel()
+        a = triangles(df, ids[:len(bits[0])])
+        b = triangles(f, ids[len(bits[0]):])
+        same_mesh = a.shape == b.shape and np.array_equal(a, b)
+        out = trimesh.Trimesh(dv, df, process=False)
+        boundary = len(trimesh.grouping.group_rows(out.edges_sorted, require_count=1))
+        h = 2.7 * whole.grid.spacing
+        layers, got = whole.slice(h), distributed.slice(whole, h, parts=parts)
+        same_layers = len(layers) == len(got) and all(
+            x.height == y.height and x.holes == y.holes
+            and all(np.array_equal(p, q) for p, q in zip(x.loops, y.loops))
+            for x, y in zip(layers, got))
+        rows.append([name, len(f), same_file, same_mesh, boundary, len(layers), same_layers])
+    print(common.markdown_table(
+        ["mesh", "triangles (decoded)", f"identical .pgv ({parts} parts)",
+         "identical triangles", "boundary edges", "layers", "identical layers"], rows))
+
+
 def gb(x) -> str:
     return "n/a" if x is None else f"{x / 1e9:.2f} GB"
 
@@ -210,7 +258,14 @@ def main() -> int:
     ap.add_argument("--work", type=Path)
     ap.add_argument("--skip-single", action="store_true")
     ap.add_argument("--timeout", type=float, default=3600)
+    ap.add_argument("--identity", action="store_true",
+                    help="only compare encode, decode and slice in --parts parts with the "
+                         "single-process calls on the seven shared meshes at --res")
+    ap.add_argument("--parts", type=int, default=8)
     args = ap.parse_args()
+    if args.identity:
+        identity(args.res, args.parts)
+        return 0
 
     from dask.distributed import Client, LocalCluster
 
