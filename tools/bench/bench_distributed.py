@@ -273,7 +273,7 @@ def main() -> int:
     work.mkdir(parents=True, exist_ok=True)
     rows = []
     with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=40, memory_limit=0) as cluster, \
+                      dashboard_address=":0", silence_logs=40, memory_limit=0) as cluster, \
             Client(cluster) as client:
         overhead = scheduler_overhead(client)
         for name in args.meshes.split(","):

@@ -34,7 +34,7 @@ SLACK_BYTES = 64 << 20
 
 def new_cluster() -> LocalCluster:
     return LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                        dashboard_address=None, silence_logs=40)
+                        dashboard_address=":0", silence_logs=40)
 
 
 @pytest.fixture(scope="module")

@@ -241,7 +241,7 @@ def _connect(scheduler: str | None, local: int | None):
         client = Client(scheduler)
         return client, [client]
     cluster = LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=":0")
     client = Client(cluster)
     return client, [client, cluster]
 
