@@ -2,7 +2,7 @@
 weak-scaling figures that predict larger clusters and grids.
 
     .venv/bin/python tools/bench/bench_distributed.py [--res 2048] [--workers 2]
-        [--meshes stanford-bunny,rocker-arm-1m] [--worker-budget 1.2e9] [--json OUT.json]
+        [--meshes stanford-bunny,rocker-arm-1m] [--worker-budget 1.1e9] [--json OUT.json]
         [--work DIR] [--skip-single]
     .venv/bin/python tools/bench/bench_distributed.py --identity [--res 256] [--parts 8]
 
@@ -252,8 +252,9 @@ def main() -> int:
     ap.add_argument("--res", type=int, default=2048)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--meshes", default="stanford-bunny,rocker-arm-1m")
-    ap.add_argument("--worker-budget", type=float, default=1.2e9,
-                    help="largest estimated part, bytes (default 1.2e9, under the 1.5 GB target)")
+    ap.add_argument("--worker-budget", type=float, default=1.1e9,
+                    help="largest estimated part, bytes (default 1.1e9: the measured growth "
+                         "ran up to 1.17x the estimate, and the target is 1.5 GB per worker)")
     ap.add_argument("--json", type=Path)
     ap.add_argument("--work", type=Path)
     ap.add_argument("--skip-single", action="store_true")
