@@ -17,9 +17,9 @@ Per mesh ("NAME-1m" is NAME subdivided at its edge midpoints until it has 1M tri
     with the single-process one.
   * weak scaling: tasks in the graph, bytes shipped per task (the mesh once per worker, each
     task's returned bricks), scheduler overhead per task (1000 no-op tasks), per-task times from
-    Dask's task stream split into the whole-grid part (the band plan, measured on a part with
-    no surface) and the surface part; and from them, predicted times and memory per worker for
-    8, 64 and 512 workers at 4096^3 and 8192^3.
+    Dask's task stream split into the surface-free part (the band plan over the part's box,
+    measured on the part with the least surface) and the surface part; and from them, predicted
+    times and memory per worker for 8, 64 and 512 workers at 4096^3 and 8192^3.
 With --identity: per shared mesh, encode, decode and slice in --parts parts against the
 single-process calls (bytes, triangles, boundary edges, layers).
 """
@@ -124,7 +124,9 @@ def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Pat
     if not skip_single:
         row["single"] = single_process(path, res, single_out, timeout)
     parts, plan = choose_parts((v, f), res, workers, budget)
-    row.update(parts=len(plan), estimate_max_part=max(p["bytes"] for p in plan))
+    largest = max(plan, key=lambda p: p["bytes"])
+    row.update(parts=len(plan), estimate_max_part=largest["bytes"],
+               max_part_plan_nodes=part_plan_nodes(res, largest["y"], largest["z"]))
     out = work / f"{name}-{res}-dist.pgv"
     client.run(lambda: __import__("pgvol.distributed"))
     client.get_task_stream()  # starts recording
@@ -147,15 +149,17 @@ def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Pat
     if single_out.exists():
         row["identical"] = out.read_bytes() == single_out.read_bytes()
     # Bytes per task: the mesh goes once to each worker; each task returns its bricks.
-    # The whole-grid work of a task (the band plan: a pass over the triangles and flags over
-    # the grid), as the time of the part with the least surface, at R and R/2: a + b N^3.
-    for key, n in (("plan_task_s", res), ("plan_task_half_s", res // 2)):
+    # The surface-free work of a task (the band plan: a pass over the triangles, flags and
+    # far-region signs over the part's box), as the time of the part with the least surface,
+    # at R and R/2, with the nodes its plan covers: a + c x nodes.
+    for key, n in (("", res), ("_half", res // 2)):
         job = distributed.EncodeJob(v, f, res=n)
         least = min(distributed.plan_encode((v, f), parts=len(plan), res=n),
                     key=lambda p: p["bytes"])
         t0 = time.perf_counter()
         r = job.encode_part(*least["y"], *least["z"])
-        row[key] = time.perf_counter() - t0
+        row[f"plan_task{key}_s"] = time.perf_counter() - t0
+        row[f"least_part_plan_nodes{key}"] = part_plan_nodes(n, least["y"], least["z"])
         del job
     row["mesh_bytes"] = int(v.nbytes + f.nbytes)
     row["returned_bytes_per_task"] = (row["file_bytes"] * 1.0) / len(plan)
@@ -163,42 +167,95 @@ def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Pat
     return row
 
 
-def predict(row: dict, overhead: float) -> list[dict]:
+# The geometry of a part's band plan (crates/pgvol/src/distributed/encode_parts.rs and
+# pgvol-sdf's sampling): fitting groups of 64 nodes, and the plan covers a part's groups
+# widened by one group on each side (the fit's 2-brick reach, rounded out to whole region
+# tiles of 64 nodes) along y and z, and the whole grid along x, at 3 bytes per 64 nodes.
+GROUP_NODES = 64
+PLAN_BYTES_PER_NODE = 3 / 64
+BYTES_PER_TRIANGLE = 500  # JOB_BYTES_PER_TRIANGLE
+
+
+def part_plan_nodes(res: int, y: tuple[int, int], z: tuple[int, int]) -> int:
+    """Nodes the band plan of the part of groups `y`, `z` covers on a res^3 grid."""
+    groups = -(-res // GROUP_NODES)
+
+    def span(r):
+        lo, hi = max(r[0] - 1, 0), min(r[1] + 1, groups)
+        return min(hi * GROUP_NODES, res) - lo * GROUP_NODES
+
+    return res * span(y) * span(z)
+
+
+def largest_part(res: int, tasks: int) -> tuple[tuple[int, int], tuple[int, int]]:
+    """The groups of the thickest interior part plan_encode cuts a res^3 grid into for `tasks`
+    parts: z slabs, each cut along y when there are more parts than slabs."""
+    groups = -(-res // GROUP_NODES)
+    slabs = min(tasks, groups)
+    per_slab = min(-(-tasks // slabs), groups)
+    gz, gy = -(-groups // slabs), -(-groups // per_slab)
+    mid = lambda g: (min(1, groups - g), min(1, groups - g) + g)  # noqa: E731
+    return mid(gy), mid(gz)
+
+
+def predict_memory(row: dict, n: int, tasks: int) -> dict:
+    """Memory per worker at n^3 with `tasks` parts: the mesh's distance queries, the largest
+    part's plan flags, and its band: the measured run's band per part (its largest part's
+    estimate less the other two terms) times its parts, scaled by area ((n/R)^2) and shared by
+    the tasks."""
+    R, P = row["res"], row["parts"]
+    mesh_bytes = row["triangles"] * BYTES_PER_TRIANGLE
+    band_at_r = row["estimate_max_part"] - row["max_part_plan_nodes"] * PLAN_BYTES_PER_NODE \
+        - mesh_bytes
+    y, z = largest_part(n, tasks)
+    plan_nodes = part_plan_nodes(n, y, z)
+    band = max(band_at_r, 0.0) * P * (n / R) ** 2 / tasks
+    return {"plan_nodes": plan_nodes, "mesh_bytes": mesh_bytes,
+            "plan_bytes": plan_nodes * PLAN_BYTES_PER_NODE, "band_bytes": band,
+            "worker_bytes": mesh_bytes + plan_nodes * PLAN_BYTES_PER_NODE + band}
+
+
+def tasks_for(row: dict, n: int, workers: int, budget: float) -> int:
+    """The tasks predict() assumes at n^3 on `workers` workers."""
+    most = (-(-n // GROUP_NODES)) ** 2
+    tasks = min(max(4 * workers, row["parts"]), most)
+    while tasks < most and predict_memory(row, n, tasks)["worker_bytes"] > budget:
+        tasks = min(2 * tasks, most)
+    return tasks
+
+
+def predict(row: dict, overhead: float, budget: float) -> list[dict]:
     """Weak scaling on paper, from one measured run at resolution R with P parts:
-    - a task's time = plan(N) + surface work / P, plan(N) = a + b N^3 (a pass over the
-      triangles and flags over the whole grid, measured as the task with the least surface at
-      R and R/2) and surface work ~ N^2 (band bricks);
-    - tasks: enough parts that the largest fits the worker budget, at least 4 per worker;
+    - a task's time = a + c x (its plan's nodes) + surface work / tasks: a is the pass over
+      the triangles, c the plan's flags and far-region signs per node (both from the task with
+      the least surface at R and R/2, whose plans cover different node counts), and the
+      surface work ~ N^2 (band bricks);
+    - tasks: from 4 per worker (and at least the measured P), doubled until the predicted
+      memory per worker fits `budget` or every part is one column of groups;
     - time = tasks x (task time + overhead) / workers + assembly on the client (~ N^2,
       taken as the measured wall clock less the tasks' share);
-    - memory per worker = mesh + plan flags (3 bytes per 64 nodes) + the largest part's band."""
+    - memory per worker: predict_memory."""
     R, P, W = row["res"], row["parts"], row["workers"]
-    plan_s = row["plan_task_s"]
-    # plan(N) = a + b N^3 through the two measurements (a: the pass over the triangles).
-    b = max(plan_s - row["plan_task_half_s"], 0.0) / (R ** 3 * 7 / 8)
-    a = max(plan_s - b * R ** 3, 0.0)
+    plan_s, half_s = row["plan_task_s"], row["plan_task_half_s"]
+    nodes, half_nodes = row["least_part_plan_nodes"], row["least_part_plan_nodes_half"]
+    c = max(plan_s - half_s, 0.0) / max(nodes - half_nodes, 1)
+    a = max(plan_s - c * nodes, 0.0)
     surface = max(row["task_seconds"]["sum"] - P * plan_s, 0.0)
     tasks_wall = row["task_seconds"]["sum"] / W
     assembly = max(row["s"] - tasks_wall, 0.0)
     out = []
     for n in (4096, 8192):
-        k3, k2 = (n / R) ** 3, (n / R) ** 2
-        plan_bytes = n ** 3 * 3 / 64
-        mesh_bytes = row["triangles"] * 400
-        band_total = (row["estimate_max_part"] - R ** 3 * 3 / 64 - mesh_bytes) * P * k2
+        k2 = (n / R) ** 2
         for workers in (8, 64, 512):
-            tasks = max(4 * workers, P)
-            time_s = tasks * (a + b * n ** 3 + surface * k2 / tasks + overhead) / workers \
-                + assembly * k2
+            tasks = tasks_for(row, n, workers, budget)
+            memory = predict_memory(row, n, tasks)
+            time_s = tasks * (a + c * memory["plan_nodes"] + surface * k2 / tasks + overhead) \
+                / workers + assembly * k2
             out.append({"res": n, "workers": workers, "tasks": tasks,
-                        "predicted_s": time_s,
-                        "worker_bytes": mesh_bytes + plan_bytes + band_total / tasks,
+                        "predicted_s": time_s, **memory,
                         "returned_bytes_per_task": row["file_bytes"] * k2 / tasks,
                         "mesh_bytes_per_worker": row["mesh_bytes"]})
     return out
-
-
-SHARED = ["stanford-bunny", "spot", "cow", "fandisk", "rocker-arm", "teapot", "suzanne"]
 
 
 def identity(res: int, parts: int) -> None:
@@ -281,7 +338,7 @@ def main() -> int:
             row = run_mesh(client, name, args.res, args.workers, args.worker_budget, work,
                            args.skip_single, args.timeout)
             row["overhead_per_task_s"] = overhead
-            row["predictions"] = predict(row, overhead)
+            row["predictions"] = predict(row, overhead, args.worker_budget)
             rows.append(row)
             print(json.dumps(row, indent=1), file=sys.stderr, flush=True)
 
@@ -296,7 +353,7 @@ def main() -> int:
           r.get("identical", "n/a")] for r in rows]))
     print()
     print(common.markdown_table(
-        ["mesh", "tasks", "task s (sum / max)", "whole-grid part of a task s",
+        ["mesh", "tasks", "task s (sum / max)", "surface-free part of a task s",
          "mesh shipped per worker", "bricks returned per task", "scheduler overhead per task"],
         [[r["mesh"], r["task_seconds"]["n"],
           f"{r['task_seconds']['sum']:.1f} / {r['task_seconds']['max']:.1f}",
@@ -307,9 +364,11 @@ def main() -> int:
     print()
     print(common.markdown_table(
         ["mesh", "grid", "workers", "tasks", "predicted s", "memory per worker",
-         "bricks returned per task"],
+         "(mesh + plan + band)", "bricks returned per task"],
         [[r["mesh"], f"{p['res']}³", p["workers"], p["tasks"], f"{p['predicted_s']:.0f}",
-          gb(p["worker_bytes"]), f"{p['returned_bytes_per_task'] / 1e6:.2f} MB"]
+          gb(p["worker_bytes"]),
+          " + ".join(f"{p[k] / 1e9:.2f}" for k in ("mesh_bytes", "plan_bytes", "band_bytes")),
+          f"{p['returned_bytes_per_task'] / 1e6:.2f} MB"]
          for r in rows for p in r["predictions"]]))
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))

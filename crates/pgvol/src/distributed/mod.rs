@@ -29,7 +29,7 @@ pub use decode_parts::{
 };
 pub use encode_parts::{
     assemble_encode, needs_winding, part_encode_bytes, plan_encode, EncodeJob, EncodePlan,
-    EncodedPart, GroupBox,
+    EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
 };
 pub use slab::Slab;
 
