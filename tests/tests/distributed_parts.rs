@@ -2,8 +2,9 @@
 //! meshes: the same file bytes, the same triangles and the same layers whatever the split.
 
 use pgvol::distributed::{
-    assemble_encode, decode_part, decode_part_bricks, needs_winding, plan_decode, plan_encode,
-    plan_slice, slice_part, slice_part_bricks, weld_parts, EncodeJob,
+    assemble_encode, decode_part, decode_part_bricks, needs_winding, part_encode_bytes,
+    plan_decode, plan_encode, plan_encode_bytes, plan_slice, slice_part, slice_part_bricks,
+    weld_parts, EncodeJob,
 };
 use pgvol::{Basis, DecodeOptions, EncodeOptions, GridSpec, Mesh, Silent, StorageOptions};
 use pgvol_tests::load_shared;
@@ -135,5 +136,26 @@ fn decoding_and_slicing_in_parts_match_the_whole() {
             got.extend(slice_part(&bricks, shape.bounds, &settings, range).unwrap());
         }
         assert_eq!(got, layers, "{parts} parts");
+    }
+}
+
+#[test]
+fn a_plans_estimates_in_one_pass_are_each_parts_own() {
+    let mesh = load_shared("stanford-bunny");
+    let options = EncodeOptions {
+        grid: GridSpec::Res(300),
+        ..EncodeOptions::default()
+    };
+    for parts in [1, 3, 40] {
+        let plan = plan_encode(&mesh, &options, parts).unwrap();
+        let each: Vec<u64> = plan
+            .parts
+            .iter()
+            .map(|p| part_encode_bytes(&mesh, &options, p).unwrap())
+            .collect();
+        assert_eq!(plan_encode_bytes(&mesh, &options, &plan).unwrap(), each);
+        // Parts with and without surface: the figures depend on the part.
+        let (least, most) = (each.iter().min().unwrap(), each.iter().max().unwrap());
+        assert!(parts == 1 || least < most, "{parts} parts: {each:?}");
     }
 }

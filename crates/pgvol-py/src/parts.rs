@@ -72,13 +72,13 @@ pub(crate) fn plan_encode(
     let mesh = mesh(py, vertices, faces)?;
     quiet(py, || {
         let plan = parts::plan_encode(&mesh, &options, parts)?;
-        plan.parts
+        let bytes = parts::plan_encode_bytes(&mesh, &options, &plan)?;
+        Ok(plan
+            .parts
             .iter()
-            .map(|p| {
-                let bytes = parts::part_encode_bytes(&mesh, &options, p)?;
-                Ok((p.gy.start, p.gy.end, p.gz.start, p.gz.end, bytes))
-            })
-            .collect()
+            .zip(bytes)
+            .map(|(p, bytes)| (p.gy.start, p.gy.end, p.gz.start, p.gz.end, bytes))
+            .collect())
     })
 }
 

@@ -28,8 +28,8 @@ pub use decode_parts::{
     weld_parts, PART_HALO_BRICKS,
 };
 pub use encode_parts::{
-    assemble_encode, needs_winding, part_encode_bytes, plan_encode, EncodeJob, EncodePlan,
-    EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
+    assemble_encode, needs_winding, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob,
+    EncodePlan, EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
 };
 pub use slab::Slab;
 
