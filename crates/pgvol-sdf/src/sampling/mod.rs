@@ -42,6 +42,11 @@ pub const DENSE_BRICK: usize = 8;
 /// [`MeshSdf::sample_sparse_rows`] samples the rows of grid bricks `ys`, `zs` of `grid`: the
 /// rows widened to whole [`REGION_TILE`] tiles. Its flags take about 3 bits per brick.
 pub fn plan_bricks(grid: &Grid, ys: std::ops::Range<usize>, zs: std::ops::Range<usize>) -> usize {
+    plan_box(grid, ys, zs).len()
+}
+
+/// The box of sampling bricks [`plan_bricks`] counts.
+fn plan_box(grid: &Grid, ys: std::ops::Range<usize>, zs: std::ops::Range<usize>) -> BrickBox {
     let per = BRICK_EDGE / BRICK;
     let bricks = grid.dims.map(|n| n.div_ceil(BRICK));
     BrickBox::tiles_around(
@@ -49,7 +54,6 @@ pub fn plan_bricks(grid: &Grid, ys: std::ops::Range<usize>, zs: std::ops::Range<
         ys.start * per..ys.end * per,
         zs.start * per..zs.end * per,
     )
-    .len()
 }
 
 /// Where exact distances are computed.
@@ -266,13 +270,7 @@ impl MeshSdf {
         let ys = ys.start.min(by)..ys.end.min(by);
         let zs = zs.start.min(bz)..zs.end.min(bz);
         let per = BRICK_EDGE / BRICK;
-        let bricks = grid.dims.map(|n| n.div_ceil(BRICK));
-        let flags = BrickBox::tiles_around(
-            bricks,
-            ys.start * per..ys.end * per,
-            zs.start * per..zs.end * per,
-        );
-        let plan = self.band_plan(grid, width, flags);
+        let plan = self.band_plan(grid, width, plan_box(grid, ys.clone(), zs.clone()));
         let clamp = plan.clamp;
         let done = AtomicUsize::new(0);
         let total = ys.len() * zs.len();
