@@ -16,7 +16,8 @@ pub mod volume;
 
 pub use basis::Basis;
 pub use fit::{
-    fit, wls_band, ClosestFn, ClosestPoint, FitMethod, FitOptions, FitReport, SignedDistance,
+    fit, interp_sparse_groups, sparse_reach, wls_band, ClosestFn, ClosestPoint, FitMethod,
+    FitOptions, FitReport, LayerBricks, SignedDistance, SPARSE_GROUP,
 };
 pub use kernel::{Jet, Kernel};
 pub use pgvol_core::grid::{Grid, MAX_GRID_NODES};

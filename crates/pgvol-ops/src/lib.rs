@@ -57,7 +57,7 @@ pub use repair::{
 };
 pub use simplify::simplify_loops;
 pub use slice::{
-    layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,
-    MAX_LAYER_NODES,
+    layer_heights, slice, slice_volume, slice_volume_range, volume_bounds, Axis, Layer, Loop,
+    SliceOptions, MAX_LAYERS, MAX_LAYER_NODES,
 };
 pub use write::{read_slice_json, write_slice_json, write_svg};

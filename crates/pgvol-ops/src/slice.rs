@@ -35,7 +35,7 @@ pub enum Axis {
 
 impl Axis {
     /// Indices of (axis, u, v) in a `Vec3`.
-    fn indices(self) -> [usize; 3] {
+    pub fn indices(self) -> [usize; 3] {
         match self {
             Axis::X => [0, 1, 2],
             Axis::Y => [1, 2, 0],
@@ -158,13 +158,30 @@ pub fn slice_volume(
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
 ) -> Result<Vec<Layer>, OpsError> {
+    slice_volume_range(volume, bounds, options, 0..usize::MAX)
+}
+
+/// The layers of [`slice_volume`] numbered `range` (from 0 at the first plane), each the same
+/// as in the whole slicing: every layer is computed alone from its own plane, so layers can be
+/// sliced in parts and concatenated. A layer needs only the coefficients within the basis
+/// support of its plane.
+pub fn slice_volume_range(
+    volume: &CoefficientVolume,
+    bounds: (Vec3, Vec3),
+    options: &SliceOptions,
+    range: std::ops::Range<usize>,
+) -> Result<Vec<Layer>, OpsError> {
     let profile = match volume.basis {
         Basis::Trilinear => Profile::Linear,
         Basis::Bspline2 => Profile::Quadratic,
         Basis::Bspline3 => Profile::Cubic,
-        Basis::Pg { .. } => return slice(&|p| volume.value(p), bounds, options),
+        Basis::Pg { .. } => {
+            let field = &|p| volume.value(p);
+            let axis = options.axis;
+            return slice_layers(bounds, options, range, &|h| PointField { field, axis, h });
+        }
     };
-    slice_layers(bounds, options, &|h| {
+    slice_layers(bounds, options, range, &|h| {
         CollapsedPlane::new(volume, profile, options.axis, h)
     })
 }
@@ -297,7 +314,11 @@ pub fn slice(
     options: &SliceOptions,
 ) -> Result<Vec<Layer>, OpsError> {
     let axis = options.axis;
-    slice_layers(bounds, options, &|h| PointField { field, axis, h })
+    slice_layers(bounds, options, 0..usize::MAX, &|h| PointField {
+        field,
+        axis,
+        h,
+    })
 }
 
 /// The field on one layer plane.
@@ -330,6 +351,7 @@ impl LayerField for PointField<'_> {
 fn slice_layers<G: LayerField>(
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
+    range: std::ops::Range<usize>,
     layer_field: &(dyn Fn(f32) -> G + Sync),
 ) -> Result<Vec<Layer>, OpsError> {
     if !(bounds.0.is_finite() && bounds.1.is_finite() && bounds.0.cmple(bounds.1).all()) {
@@ -355,7 +377,9 @@ fn slice_layers<G: LayerField>(
         (bounds.0[iv], bounds.1[iv]),
         res,
     )?;
-    let heights = layer_heights(bounds, options)?;
+    let mut heights = layer_heights(bounds, options)?;
+    heights.truncate(range.end);
+    heights.drain(..range.start.min(heights.len()));
     Ok(heights
         .into_par_iter()
         .map(|h| {

@@ -72,15 +72,56 @@ impl Grid {
 #[pyclass(frozen, get_all, module = "pgvol")]
 pub(crate) struct Layer {
     /// Position of the plane along the slicing axis.
-    height: f32,
+    pub(crate) height: f32,
     /// One (M, 2) float32 array of layer coordinates per closed loop.
-    loops: Vec<Py<PyArray2<f32>>>,
+    pub(crate) loops: Vec<Py<PyArray2<f32>>>,
     /// Per loop: a hole (clockwise) rather than an outer boundary (counter-clockwise).
-    holes: Vec<bool>,
+    pub(crate) holes: Vec<bool>,
+}
+
+impl Layer {
+    /// The library's layer with its loops as NumPy arrays.
+    pub(crate) fn from_layer(py: Python<'_>, layer: pgvol::Layer) -> Layer {
+        let holes = layer.loops.iter().map(|l| l.hole).collect();
+        let loops = layer
+            .loops
+            .into_iter()
+            .map(|l| arrays::points2(py, l.points).unbind())
+            .collect();
+        Layer {
+            height: layer.height,
+            loops,
+            holes,
+        }
+    }
 }
 
 #[pymethods]
 impl Layer {
+    /// A layer from its height, its loops ((M, 2) float32 arrays) and which loops are holes.
+    #[new]
+    fn new(height: f32, loops: Vec<Py<PyArray2<f32>>>, holes: Vec<bool>) -> PyResult<Layer> {
+        if loops.len() != holes.len() {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "loops and holes must have the same length",
+            ));
+        }
+        Ok(Layer {
+            height,
+            loops,
+            holes,
+        })
+    }
+
+    /// Pickles as its height, loops and holes.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        let me = slf.borrow();
+        let loops: Vec<&Py<PyArray2<f32>>> = me.loops.iter().collect();
+        let args = (me.height, loops, me.holes.clone()).into_pyobject(py)?;
+        PyTuple::new(py, [py.get_type::<Layer>().into_any(), args.into_any()])
+    }
+
     fn __repr__(&self) -> String {
         format!("Layer(height={}, loops={})", self.height, self.loops.len())
     }
@@ -96,13 +137,18 @@ pub(crate) struct Field {
 }
 
 impl Field {
-    fn from_file(file: pgvol::PgvFile, derived: bool) -> Self {
+    pub(crate) fn from_file(file: pgvol::PgvFile, derived: bool) -> Self {
         let header = file.header.clone();
         Self {
             shape: pgvol::Shape::from_file(file),
             header,
             derived,
         }
+    }
+
+    /// The field and what is known of its shape.
+    pub(crate) fn shape(&self) -> &pgvol::Shape {
+        &self.shape
     }
 
     fn file(&self) -> pgvol::PgvFile {
@@ -144,7 +190,11 @@ impl Field {
 const _: () = assert!(pgvol::ENCODE_BAND == 4.0);
 
 /// The grid choice of `res` and `voxel`.
-fn grid_spec(py: Python<'_>, res: Option<usize>, voxel: Option<f32>) -> PyResult<pgvol::GridSpec> {
+pub(crate) fn grid_spec(
+    py: Python<'_>,
+    res: Option<usize>,
+    voxel: Option<f32>,
+) -> PyResult<pgvol::GridSpec> {
     match (res, voxel) {
         (Some(_), Some(_)) => Err(errors::parameter(py, "give res or voxel, not both")),
         (None, Some(h)) if !(h.is_finite() && h > 0.0) => Err(errors::parameter(
@@ -554,22 +604,10 @@ impl Field {
             tolerance,
         };
         let layers = run(py, progress, |p| pgvol::slice(&self.shape, &settings, p))?;
-        layers
+        Ok(layers
             .into_iter()
-            .map(|layer| {
-                let holes = layer.loops.iter().map(|l| l.hole).collect();
-                let loops = layer
-                    .loops
-                    .into_iter()
-                    .map(|l| arrays::points2(py, l.points).unbind())
-                    .collect();
-                Ok(Layer {
-                    height: layer.height,
-                    loops,
-                    holes,
-                })
-            })
-            .collect()
+            .map(|l| Layer::from_layer(py, l))
+            .collect())
     }
 
     /// The grid of the coefficients.

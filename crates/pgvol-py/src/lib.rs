@@ -12,6 +12,7 @@ mod arrays;
 mod errors;
 mod field;
 mod names;
+mod parts;
 mod progress;
 
 use std::path::PathBuf;
@@ -131,6 +132,7 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(set_memory_limit, m)?)?;
     m.add_function(wrap_pyfunction!(memory_limit, m)?)?;
+    parts::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_RES", pgvol::DEFAULT_RES)?;
     m.add("MIN_RES", pgvol::MIN_RES)?;

@@ -47,13 +47,33 @@ pub fn sign_contradictions(grid: &Grid, values: &[f32]) -> usize {
 /// As [`sign_contradictions`] on a sparse grid, without visiting the nodes of absent bricks:
 /// inside such a brick all values are equal, so only its faces can hold a contradiction.
 pub fn sparse_sign_contradictions(grid: &Grid, values: &SparseGrid) -> usize {
+    sparse_sign_contradictions_in(grid, values, 0..usize::MAX, 0..usize::MAX)
+}
+
+/// The part of [`sparse_sign_contradictions`] counted from the bricks whose y and z brick
+/// indices lie in `ys` and `zs` (each pair is counted from its lower brick), which needs the
+/// bricks one past them in y and z too. Summed over boxes that tile the grid, it is the whole
+/// grid's count.
+pub fn sparse_sign_contradictions_in(
+    grid: &Grid,
+    values: &SparseGrid,
+    ys: std::ops::Range<usize>,
+    zs: std::ops::Range<usize>,
+) -> usize {
     let dims = grid.dims;
     if values.dims() != dims {
         return 0;
     }
     let limit = grid.spacing * (1.0 + SLACK);
     let broken = |a: f32, b: f32| (a < 0.0) != (b < 0.0) && a.abs() + b.abs() > limit;
-    let bricks: Vec<[usize; 3]> = values.all_bricks().collect();
+    let [bx, by, bz] = values.brick_counts();
+    let ys = ys.start.min(by)..ys.end.min(by);
+    let bricks: Vec<[usize; 3]> = (zs.start.min(bz)..zs.end.min(bz))
+        .flat_map(|k| {
+            ys.clone()
+                .flat_map(move |j| (0..bx).map(move |i| [i, j, k]))
+        })
+        .collect();
     bricks
         .par_iter()
         .map(|&b| {

@@ -19,6 +19,7 @@ mod wide;
 pub mod winding;
 
 pub use bvh::{Bvh, Closest};
+pub use consistency::sparse_sign_contradictions_in;
 pub use grid::{Grid, GridError};
 pub use pgvol_core::grid;
 pub use sdf::{MeshSdf, SdfError, SignMode};

@@ -147,7 +147,7 @@ impl MeshSdf {
 
     /// Switches a pseudonormal sign chosen by `Auto` to the winding number; returns whether it
     /// did. The mesh is closed, so it has no rims and nothing else changes.
-    pub(crate) fn fall_back_to_winding(&self) -> bool {
+    pub fn fall_back_to_winding(&self) -> bool {
         if self.auto_chose_pseudonormal && self.sign_mode() == SignMode::Pseudonormal {
             self.mode.store(SignMode::Winding as u8, Ordering::Relaxed);
             return true;

@@ -111,7 +111,23 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     }
     let mut timings = Timings::default();
     let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
-    let (volume, fit) = (fitted.volume, fitted.report);
+    let file = encoded_file(mesh, fitted.volume, &fitted.report, fitted.band);
+    Ok(Encoded {
+        file,
+        fit: fitted.report,
+        timings,
+    })
+}
+
+/// The file of `volume` fitted to `mesh`: its header records the fit and the band (in grid
+/// spacings) within which the samples were exact distances.
+pub(crate) fn encoded_file(
+    mesh: &Mesh,
+    volume: CoefficientVolume,
+    fit: &FitReport,
+    band: Option<f32>,
+) -> PgvFile {
+    let spacing = volume.grid.spacing;
     let mut header = pgvol_format::header_for(&volume, fit.method.as_str(), Some(mesh));
     header
         .metadata
@@ -119,16 +135,12 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     header
         .metadata
         .insert("fit_solver".into(), fit.solver.clone());
-    if let Some(band) = fitted.band {
+    if let Some(band) = band {
         header
             .metadata
-            .insert(BAND_KEY.into(), format!("{}", band * grid.spacing));
+            .insert(BAND_KEY.into(), format!("{}", band * spacing));
     }
-    Ok(Encoded {
-        file: PgvFile { header, volume },
-        fit,
-        timings,
-    })
+    PgvFile { header, volume }
 }
 
 /// A fitted volume, its report and the band of exact node distances it was fitted to.

@@ -62,6 +62,7 @@ mod blend;
 mod csg;
 mod decode;
 mod distance;
+pub mod distributed;
 mod encode;
 mod error;
 mod eval;

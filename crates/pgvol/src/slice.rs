@@ -42,6 +42,15 @@ pub fn slice(
     settings: &SliceSettings,
     progress: &dyn Progress,
 ) -> Result<Vec<Layer>> {
+    let options = slice_options(shape, settings)?;
+    let layers = progress::stage(progress, "slice", |_| {
+        pgvol_ops::slice_volume(&shape.volume, shape.bounds, &options)
+    })?;
+    Ok(layers?)
+}
+
+/// The stage's options for slicing `shape` by `settings`.
+pub(crate) fn slice_options(shape: &Shape, settings: &SliceSettings) -> Result<SliceOptions> {
     if !(settings.layer_height.is_finite() && settings.layer_height > 0.0) {
         return Err(Error::parameter(format!(
             "the layer height must be a positive number, got {}",
@@ -54,10 +63,7 @@ pub fn slice(
     if let Some(t) = settings.tolerance {
         options.tolerance = t;
     }
-    let layers = progress::stage(progress, "slice", |_| {
-        pgvol_ops::slice_volume(&shape.volume, shape.bounds, &options)
-    })?;
-    Ok(layers?)
+    Ok(options)
 }
 
 /// Layer file formats.

@@ -30,6 +30,7 @@ pub use node_values::node_values;
 pub use options::{FitMethod, FitOptions};
 pub use report::{FitReport, FitStages};
 pub use sign_check::spurious_sign_changes;
+pub use sparse_interp::SPARSE_GROUP;
 pub use sparse_node_values::{brick_node_values, node_values_sparse};
 pub use wls::wls_band;
 
@@ -128,6 +129,61 @@ pub fn interp_sparse(
     report.stages.check = t.elapsed().as_secs_f64();
     report.seconds = start.elapsed().as_secs_f64();
     Ok((volume, report))
+}
+
+/// Coefficient bricks of one slab of a sparse interpolation, for fitting a grid in parts.
+pub type LayerBricks = Vec<([usize; 3], Box<pgvol_core::sparse::BrickValues>)>;
+
+/// The stored coefficient bricks [`interp_sparse`] gives for the groups (of [`SPARSE_GROUP`]³
+/// grid bricks) whose y and z group indices lie in `gy` and `gz`, bit for bit and in its
+/// order, from samples that hold the whole grid's bricks within [`sparse_reach`] grid bricks
+/// of those groups (others may be absent). With the report `interp_sparse` gives, less its timings and sign check.
+/// Unstored bricks take the samples' sides, as in `interp_sparse`. Pseudo-Gaussians have no
+/// local fit and are refused.
+pub fn interp_sparse_groups(
+    grid: Grid,
+    basis: Basis,
+    samples: &SparseGrid,
+    gy: std::ops::Range<usize>,
+    gz: std::ops::Range<usize>,
+) -> Result<(LayerBricks, FitReport), FieldError> {
+    crate::volume::check_sparse(&grid, basis, samples)?;
+    let in_layers =
+        |b: [usize; 3]| gy.contains(&(b[1] / SPARSE_GROUP)) && gz.contains(&(b[2] / SPARSE_GROUP));
+    let (bricks, mut report) =
+        match basis {
+            Basis::Trilinear => (
+                samples
+                    .stored()
+                    .filter(|(b, _)| in_layers(*b))
+                    .map(|(b, v)| (b, Box::new(*v)))
+                    .collect(),
+                report::report("none", None),
+            ),
+            Basis::Bspline2 => (
+                sparse_interp::prefilter_groups(samples, QUADRATIC_POLE, gy, gz),
+                report::report("prefilter", None),
+            ),
+            Basis::Bspline3 => (
+                sparse_interp::prefilter_groups(samples, CUBIC_POLE, gy, gz),
+                report::report("prefilter", None),
+            ),
+            Basis::Pg { .. } => return Err(FieldError::BadFit(
+                "pseudo-Gaussian coefficients come from a global solve and cannot be fitted in \
+                 parts; use a B-spline or trilinear basis"
+                    .into(),
+            )),
+        };
+    report.method = FitMethod::Interp.name().to_string();
+    Ok((bricks, report))
+}
+
+/// Grid bricks of samples needed around a box of groups by [`interp_sparse_groups`].
+pub fn sparse_reach(basis: Basis) -> usize {
+    match basis {
+        Basis::Bspline2 => sparse_interp::layer_reach(QUADRATIC_POLE),
+        _ => sparse_interp::layer_reach(CUBIC_POLE),
+    }
 }
 
 // Here rather than in `volume`, which the fits build on: pseudo-Gaussians interpolate by a fit.

@@ -59,6 +59,43 @@ pub(crate) fn prefilter_sparse(samples: &SparseGrid, z: f64) -> SparseGrid {
 /// below the file's quantisation step (h/512 at a clamp of 4 h is 5·10⁻⁴ of the clamp).
 const DROP_TOLERANCE: f32 = 1e-5;
 
+/// Bricks per edge of the groups [`prefilter_sparse`] filters together; a group's coefficients
+/// follow from the samples within its bricks' box plus the halo.
+pub const SPARSE_GROUP: usize = GROUP;
+
+/// The coefficient bricks [`prefilter_sparse`] computes for the groups whose y and z indices
+/// (in groups) lie in `gy` and `gz`, in the order it stores them. `samples` must hold every
+/// brick within [`layer_reach`] grid bricks of those groups as the whole grid's samples do;
+/// then the bricks are bit for bit the ones of the whole grid, since each group is filtered
+/// alone from its own window.
+pub(crate) fn prefilter_groups(
+    samples: &SparseGrid,
+    z: f64,
+    gy: std::ops::Range<usize>,
+    gz: std::ops::Range<usize>,
+) -> Vec<([usize; 3], Box<BrickValues>)> {
+    let bricks = output_bricks(samples, GROUP);
+    let group_of = |b: &[usize; 3]| b.map(|c| c / GROUP);
+    let groups: Vec<&[[usize; 3]]> = bricks
+        .chunk_by(|a, b| group_of(a) == group_of(b))
+        .filter(|g| gy.contains(&(g[0][1] / GROUP)) && gz.contains(&(g[0][2] / GROUP)))
+        .collect();
+    let computed: Vec<Vec<([usize; 3], Box<BrickValues>)>> = groups
+        .par_iter()
+        .map_init(Scratch::default, |scratch, group| {
+            filter_group(samples, z, halo(z), group, DROP_TOLERANCE, scratch)
+        })
+        .collect();
+    computed.into_iter().flatten().collect()
+}
+
+/// Grid bricks around a layer of groups whose samples its coefficients read: the halo (12
+/// nodes for the cubic) rounded up to bricks, plus the one brick of neighbours that decides
+/// which bricks get coefficients.
+pub fn layer_reach(z: f64) -> usize {
+    halo(z).div_ceil(BRICK_EDGE).max(1)
+}
+
 /// [`prefilter_sparse`] with a given halo, group edge and drop tolerance.
 fn prefilter_sparse_with(
     samples: &SparseGrid,

@@ -68,6 +68,10 @@ class Grid:
 class Layer:
     """The closed contours of one layer plane."""
 
+    def __new__(
+        cls, height: float, loops: List[npt.NDArray[np.float32]], holes: List[bool]
+    ) -> "Layer": ...
+
     @property
     def height(self) -> float:
         """Position of the plane along the slicing axis."""
@@ -239,3 +243,92 @@ def set_memory_limit(limit: Optional[int]) -> None:
 
 def memory_limit() -> Optional[int]:
     """The memory limit in force, in bytes."""
+
+# Jobs in parts, for pgvol.distributed (see docs/distributed.md).
+
+class EncodeJob:
+    """The distance queries of a mesh for encoding any of its parts."""
+
+    def __new__(
+        cls,
+        vertices: _Points,
+        faces: Any,
+        *,
+        res: Optional[int] = None,
+        voxel: Optional[float] = None,
+        band: float = 4.0,
+        basis: str = "bspline3",
+        sign: str = "auto",
+    ) -> "EncodeJob": ...
+    def encode_part(
+        self, y0: int, y1: int, z0: int, z1: int, *, winding: bool = False
+    ) -> Dict[str, Any]: ...
+    def part_bytes(self, y0: int, y1: int, z0: int, z1: int) -> int: ...
+
+def plan_encode(
+    vertices: _Points,
+    faces: Any,
+    parts: int,
+    *,
+    res: Optional[int] = None,
+    voxel: Optional[float] = None,
+    band: float = 4.0,
+    basis: str = "bspline3",
+    sign: str = "auto",
+) -> List[Tuple[int, int, int, int, int]]: ...
+def needs_winding(contradictions: List[int], may_fall_back: List[bool]) -> bool: ...
+def assemble_encode(
+    vertices: _Points,
+    faces: Any,
+    bricks: List[bytes],
+    *,
+    res: Optional[int] = None,
+    voxel: Optional[float] = None,
+    band: float = 4.0,
+    basis: str = "bspline3",
+    sign: str = "auto",
+) -> Field: ...
+def plan_decode(field: Field, parts: int) -> List[Tuple[int, int]]: ...
+def decode_part_bricks(field: Field, start: int, end: int) -> bytes: ...
+def decode_part(
+    bricks: bytes, start: int, end: int, *, iso: float = 0.0
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
+def weld_parts(
+    pieces: List[Any], spacing: float, *, iso: float = 0.0, min_component: Optional[float] = None
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
+def plan_slice(
+    field: Field,
+    parts: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> List[Tuple[int, int]]: ...
+def slice_part_bricks(
+    field: Field,
+    start: int,
+    end: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> bytes: ...
+def slice_part(
+    bricks: bytes,
+    bounds: Tuple[_Vec3, _Vec3],
+    start: int,
+    end: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> List[Layer]: ...
+def write_layers(
+    path: _PathLike, layers: List[Layer], *, binary: bool = False, units_mm: float = 1.0
+) -> None: ...

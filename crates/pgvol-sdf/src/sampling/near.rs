@@ -1,7 +1,9 @@
 //! Which bricks need exact distances in a narrow band, and the signs of the others where one
-//! winding number decides a whole region.
+//! winding number decides a whole region, over a box of the grid's sampling bricks: the whole
+//! grid, or the rows one part of a distributed encode samples.
 
 use glam::Vec3A;
+use rayon::prelude::*;
 
 use super::flags::{Bits, RegionSigns};
 use super::BRICK;
@@ -11,37 +13,101 @@ use crate::{grid::Grid, sdf::MeshSdf};
 /// that sign.
 pub(super) const REGION_SIGN_MARGIN: f32 = 0.3;
 
+/// Sampling bricks per edge of the tiles the far regions are flooded in (64 nodes, one fitting
+/// group). Regions stop at tile faces so that a tile's signs depend on the tile alone: a box
+/// made of whole tiles gets the flags the whole grid gets, whichever box it is. A tile costs
+/// one winding number per region of it (about one per tile away from the surface).
+pub const REGION_TILE: usize = 16;
+
+/// A box of sampling bricks: every brick along x, and ranges along y and z.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct BrickBox {
+    pub(super) lo: [usize; 3],
+    pub(super) size: [usize; 3],
+}
+
+impl BrickBox {
+    /// The whole grid of `bricks` bricks.
+    pub(super) fn all(bricks: [usize; 3]) -> Self {
+        Self {
+            lo: [0; 3],
+            size: bricks,
+        }
+    }
+
+    /// The bricks of rows `js`, `ks` (sampling bricks) widened to whole region tiles, within
+    /// the grid's `bricks`.
+    pub(super) fn tiles_around(
+        bricks: [usize; 3],
+        js: std::ops::Range<usize>,
+        ks: std::ops::Range<usize>,
+    ) -> Self {
+        let widen = |r: std::ops::Range<usize>, n: usize| {
+            if r.start >= r.end.min(n) {
+                return (0, 0);
+            }
+            let lo = r.start / REGION_TILE * REGION_TILE;
+            (lo, (r.end.div_ceil(REGION_TILE) * REGION_TILE).min(n) - lo)
+        };
+        let (j0, nj) = widen(js, bricks[1]);
+        let (k0, nk) = widen(ks, bricks[2]);
+        Self {
+            lo: [0, j0, k0],
+            size: [bricks[0], nj, nk],
+        }
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.size.iter().product()
+    }
+
+    /// Flat index (x fastest) of grid brick `b`, which must lie in the box.
+    #[inline]
+    pub(super) fn index(&self, b: [usize; 3]) -> usize {
+        let [i, j, k] = [0, 1, 2].map(|a| b[a] - self.lo[a]);
+        i + self.size[0] * (j + self.size[1] * k)
+    }
+}
+
 impl MeshSdf {
-    /// Which bricks lie within `reach` of some triangle's bounding box: the only ones that can
-    /// hold band nodes (the way OpenVDB finds its narrow band). A brick's cell runs up to the
-    /// next brick, so no triangle meets the cells of the others, nor a segment between two
-    /// neighbouring ones.
+    /// Which bricks of `area` lie within `reach` of some triangle's bounding box: the only ones
+    /// that can hold band nodes (the way OpenVDB finds its narrow band). A brick's cell runs up
+    /// to the next brick, so no triangle meets the cells of the others, nor a segment between
+    /// two neighbouring ones. Each brick's flag depends on the triangles alone, so any box gets
+    /// the whole grid's flags; triangles whose inflated bounds miss the box cost one test.
     pub(super) fn bricks_near_triangles(
         &self,
         grid: &Grid,
         bricks: [usize; 3],
         reach: f32,
+        area: &BrickBox,
     ) -> Bits {
         // A little more than `reach`, so rounding in the cell arithmetic cannot miss a cell.
         let reach = reach + 0.01 * grid.spacing;
-        let mut near = Bits::new(bricks[0] * bricks[1] * bricks[2]);
+        let mut near = Bits::new(area.len());
+        if area.len() == 0 {
+            return near;
+        }
         let span = grid.spacing * BRICK as f32;
         let cell = |x: f32, axis: usize| -> usize {
             ((x - grid.origin[axis]) / span)
                 .floor()
                 .clamp(0.0, (bricks[axis] - 1) as f32) as usize
         };
+        let hi_of = |a: usize| area.lo[a] + area.size[a] - 1;
         for t in &self.bvh().tris {
             let lo = t[0].min(t[1]).min(t[2]) - Vec3A::splat(reach);
             let hi = t[0].max(t[1]).max(t[2]) + Vec3A::splat(reach);
             // Brick b spans nodes b·BRICK ..= b·BRICK + BRICK − 1, i.e. up to the next brick.
+            let (j0, j1) = (cell(lo.y, 1).max(area.lo[1]), cell(hi.y, 1).min(hi_of(1)));
+            let (k0, k1) = (cell(lo.z, 2).max(area.lo[2]), cell(hi.z, 2).min(hi_of(2)));
+            if j0 > j1 || k0 > k1 {
+                continue;
+            }
             let (i0, i1) = (cell(lo.x, 0), cell(hi.x, 0));
-            let (j0, j1) = (cell(lo.y, 1), cell(hi.y, 1));
-            let (k0, k1) = (cell(lo.z, 2), cell(hi.z, 2));
             for k in k0..=k1 {
                 for j in j0..=j1 {
-                    let row = bricks[0] * (j + bricks[1] * k);
-                    near.set_range(row + i0..=row + i1);
+                    near.set_range(area.index([i0, j, k])..=area.index([i1, j, k]));
                 }
             }
         }
@@ -51,31 +117,76 @@ impl MeshSdf {
     /// For meshes without rim edges (closed and consistently oriented) the winding number is an
     /// integer away from the surface, so the sign is constant over each connected region of
     /// bricks away from the surface (6-connected; the near bricks cover the whole surface, so a
-    /// path between such bricks never crosses it): one winding number per region. `None` per
-    /// brick for near bricks and regions whose winding number is unclear; `None` overall for
-    /// meshes with rims.
+    /// path between such bricks never crosses it): one winding number per region, the regions
+    /// cut at the faces of [`REGION_TILE`] tiles (in parallel, and alike in any box of whole
+    /// tiles). `None` per brick for near bricks and regions whose winding number is unclear;
+    /// `None` overall for meshes with rims. `area` must be made of whole tiles.
     pub(super) fn region_signs(
         &self,
         grid: &Grid,
-        bricks: [usize; 3],
         near: &Bits,
+        area: &BrickBox,
     ) -> Option<RegionSigns> {
         if !self.rims().is_empty() {
             return None;
         }
-        let len = bricks[0] * bricks[1] * bricks[2];
+        let tiles = area.size.map(|n| n.div_ceil(REGION_TILE));
+        let tile_signs: Vec<(BrickBox, RegionSigns)> = (0..tiles.iter().product::<usize>())
+            .into_par_iter()
+            .map(|t| {
+                let at = [
+                    t % tiles[0],
+                    (t / tiles[0]) % tiles[1],
+                    t / (tiles[0] * tiles[1]),
+                ];
+                let tile = BrickBox {
+                    lo: [0, 1, 2].map(|a| area.lo[a] + at[a] * REGION_TILE),
+                    size: [0, 1, 2].map(|a| REGION_TILE.min(area.size[a] - at[a] * REGION_TILE)),
+                };
+                let signs = self.tile_region_signs(grid, near, area, &tile);
+                (tile, signs)
+            })
+            .collect();
+        let mut sign = RegionSigns::new(area.len());
+        for (tile, signs) in &tile_signs {
+            for k in 0..tile.size[2] {
+                for j in 0..tile.size[1] {
+                    for i in 0..tile.size[0] {
+                        let b = [tile.lo[0] + i, tile.lo[1] + j, tile.lo[2] + k];
+                        sign.set(area.index(b), signs.get(tile.index(b)));
+                    }
+                }
+            }
+        }
+        Some(sign)
+    }
+
+    /// The signs of the far regions of one tile, flooded within it, indexed in the tile.
+    fn tile_region_signs(
+        &self,
+        grid: &Grid,
+        near: &Bits,
+        area: &BrickBox,
+        tile: &BrickBox,
+    ) -> RegionSigns {
+        let len = tile.len();
+        let [sx, sy, sz] = tile.size;
         let mut sign = RegionSigns::new(len);
         let mut seen = Bits::new(len);
         let mut queue = std::collections::VecDeque::new();
         let span = grid.spacing * BRICK as f32;
+        let is_near = |b: usize| {
+            let [i, j, k] = [b % sx, (b / sx) % sy, b / (sx * sy)];
+            near.get(area.index([tile.lo[0] + i, tile.lo[1] + j, tile.lo[2] + k]))
+        };
         for start in 0..len {
-            if near.get(start) || seen.get(start) {
+            if seen.get(start) || is_near(start) {
                 continue;
             }
             let at = [
-                start % bricks[0],
-                (start / bricks[0]) % bricks[1],
-                start / (bricks[0] * bricks[1]),
+                tile.lo[0] + start % sx,
+                tile.lo[1] + (start / sx) % sy,
+                tile.lo[2] + start / (sx * sy),
             ];
             let centre = grid.origin
                 + (glam::Vec3::new(at[0] as f32, at[1] as f32, at[2] as f32) + 0.5) * span;
@@ -85,13 +196,9 @@ impl MeshSdf {
             queue.push_back(start);
             while let Some(b) = queue.pop_front() {
                 sign.set(b, region_sign);
-                let (i, j, k) = (
-                    b % bricks[0],
-                    (b / bricks[0]) % bricks[1],
-                    b / (bricks[0] * bricks[1]),
-                );
+                let (i, j, k) = (b % sx, (b / sx) % sy, b / (sx * sy));
                 let mut visit = |n: usize| {
-                    if !near.get(n) && !seen.get(n) {
+                    if !seen.get(n) && !is_near(n) {
                         seen.set(n);
                         queue.push_back(n);
                     }
@@ -99,23 +206,23 @@ impl MeshSdf {
                 if i > 0 {
                     visit(b - 1);
                 }
-                if i + 1 < bricks[0] {
+                if i + 1 < sx {
                     visit(b + 1);
                 }
                 if j > 0 {
-                    visit(b - bricks[0]);
+                    visit(b - sx);
                 }
-                if j + 1 < bricks[1] {
-                    visit(b + bricks[0]);
+                if j + 1 < sy {
+                    visit(b + sx);
                 }
                 if k > 0 {
-                    visit(b - bricks[0] * bricks[1]);
+                    visit(b - sx * sy);
                 }
-                if k + 1 < bricks[2] {
-                    visit(b + bricks[0] * bricks[1]);
+                if k + 1 < sz {
+                    visit(b + sx * sy);
                 }
             }
         }
-        Some(sign)
+        sign
     }
 }

@@ -74,7 +74,7 @@ impl MeshSdf {
         let mut carry = WindingCarry::default();
         let mut previous_far = false;
         for bi in 0..plan.bricks[0] {
-            let b = bi + plan.bricks[0] * row;
+            let b = plan.flags.index([bi, bj, bk]);
             let brick = Brick::new(
                 grid,
                 [bi * size, j0, k0],

@@ -1,0 +1,351 @@
+"""pgvol jobs split into parts that run as Dask tasks, with the single-process results.
+
+Each function takes an optional ``client`` (a ``distributed.Client``). With one, the parts run
+as tasks on its cluster; without one, the same part functions run one after another in this
+process, so a machine without a cluster runs the same code path.
+
+    >>> from dask.distributed import Client, LocalCluster
+    >>> from pgvol import distributed
+    >>> client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    >>> field = distributed.encode("part.stl", res=1024, client=client, output="part.pgv")
+    >>> vertices, faces = distributed.decode("part.pgv", client=client)
+    >>> layers = distributed.slice("part.pgv", 0.2, client=client)
+
+- ``encode`` ships the mesh once to every worker (scattered with ``broadcast=True``), where
+  the first task of a job builds the mesh's distance queries and keeps them for the job's
+  other tasks. Each task samples and fits one box of fitting groups (8^3 bricks of 8^3 nodes)
+  and returns its coefficient bricks; this process assembles the file, bit for bit the file
+  of ``Field.from_mesh``.
+- ``decode`` sends each task the coefficient bricks around its slab of cells; the tasks'
+  triangles are the single-process triangles, welded here at the seams.
+- ``slice`` sends each task the bricks around its range of layers.
+
+Tasks are pure functions of their arguments, keyed by them: a task that fails is retried
+(``retries``) and a task lost with its worker is run again by the scheduler, with the same
+result. See docs/distributed.md in the repository.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import threading
+import uuid
+from collections import OrderedDict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import _pgvol
+from ._pgvol import EncodeJob, Field, Layer
+
+__all__ = ["encode", "decode", "slice", "plan_encode", "worker_count", "EncodeJob"]
+
+# Retries of a failed task before the job fails: a worker lost with its tasks does not count
+# (the scheduler reruns them), only an exception raised by the task.
+RETRIES = 2
+
+# Parts per worker thread when none are asked for: several per thread keep every thread busy
+# while parts of unequal surface finish at different times.
+PARTS_PER_THREAD = 4
+
+
+def worker_count(client: Any) -> int:
+    """Worker threads of ``client``'s cluster (1 without a client)."""
+    if client is None:
+        return 1
+    info = client.scheduler_info()
+    return max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()))
+
+
+def _parts(parts: int | None, client: Any) -> int:
+    if parts is None:
+        return 1 if client is None else PARTS_PER_THREAD * worker_count(client)
+    if int(parts) < 1:
+        raise ValueError(f"parts must be at least 1, got {parts}")
+    return int(parts)
+
+
+def _mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of a path, a (vertices, faces) pair or a trimesh-like object."""
+    if isinstance(mesh, (str, os.PathLike)):
+        return _pgvol.read_mesh(Path(mesh))
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        vertices, faces = mesh.vertices, mesh.faces
+    else:
+        vertices, faces = mesh
+    return np.ascontiguousarray(vertices), np.ascontiguousarray(faces)
+
+
+def _job_key(vertices: np.ndarray, faces: np.ndarray, options: dict) -> str:
+    """A name for one encode: the mesh's bytes and the options."""
+    h = hashlib.sha256()
+    for a in (vertices, faces):
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(repr(sorted(options.items())).encode())
+    return h.hexdigest()[:24]
+
+
+# Per process, the distance queries of the encodes seen last (about 400 bytes per triangle
+# each), so the tasks of one encode on one worker build them once. Two are kept so that a new
+# job starting while the last one's tasks finish does not evict it.
+_JOBS: OrderedDict[str, EncodeJob] = OrderedDict()
+_JOBS_KEPT = 2
+_JOBS_LOCK = threading.Lock()
+
+
+def _job(key: str, mesh: tuple[np.ndarray, np.ndarray], options: dict) -> EncodeJob:
+    with _JOBS_LOCK:
+        job = _JOBS.get(key)
+        if job is None:
+            job = EncodeJob(mesh[0], mesh[1], **options)
+            _JOBS[key] = job
+            while len(_JOBS) > _JOBS_KEPT:
+                _JOBS.popitem(last=False)
+        _JOBS.move_to_end(key)
+        return job
+
+
+def _encode_part(job_key: str, mesh, options: dict, part: tuple, winding: bool) -> dict:
+    """Task: the coefficient bricks of one box of fitting groups."""
+    y0, y1, z0, z1 = part
+    return _job(job_key, mesh, options).encode_part(y0, y1, z0, z1, winding=winding)
+
+
+def _run(client: Any, function, calls: list[tuple], names: list[str], retries: int) -> list:
+    """``function(*call)`` for every call, as tasks named ``names`` or here in order."""
+    if client is None:
+        return [function(*call) for call in calls]
+    futures = [
+        client.submit(function, *call, key=name, pure=False, retries=retries)
+        for call, name in zip(calls, names)
+    ]
+    return client.gather(futures)
+
+
+def plan_encode(mesh: Any, *, parts: int = 1, res: int | None = None,
+                voxel: float | None = None, band: float = 4.0, basis: str = "bspline3",
+                sign: str = "auto") -> list[dict]:
+    """The parts of an encode: per part the fitting groups along y and z it covers and its
+    estimated peak memory in bytes on a worker."""
+    vertices, faces = _mesh_arrays(mesh)
+    plan = _pgvol.plan_encode(vertices, faces, parts, res=res, voxel=voxel, band=band,
+                              basis=basis, sign=sign)
+    return [{"y": (y0, y1), "z": (z0, z1), "bytes": b} for y0, y1, z0, z1, b in plan]
+
+
+def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, band: float = 4.0,
+           basis: str = "bspline3", sign: str = "auto", client: Any = None,
+           parts: int | None = None, output: str | os.PathLike | None = None,
+           retries: int = RETRIES) -> Field:
+    """Encodes a mesh (a path, a (vertices, faces) pair or a trimesh) in parts: the same field,
+    bit for bit, as ``Field.from_mesh`` with the interp fit. ``parts`` defaults to four per
+    worker thread (one without a client); ``output`` saves the field as a ``.pgv``."""
+    vertices, faces = _mesh_arrays(mesh)
+    options = {"res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign}
+    plan = _pgvol.plan_encode(vertices, faces, _parts(parts, client), **options)
+    key = _job_key(vertices, faces, options)
+    shipped: Any = (vertices, faces)
+    if client is not None:
+        # Once to every worker, not once per task.
+        [shipped] = client.scatter([shipped], broadcast=True, hash=False)
+
+    def run(winding: bool) -> list[dict]:
+        boxes = [p[:4] for p in plan]
+        calls = [(key, shipped, options, box, winding) for box in boxes]
+        names = [f"pgvol-encode-{key}-{'-'.join(map(str, box))}-{int(winding)}"
+                 for box in boxes]
+        return _run(client, _encode_part, calls, names, retries)
+
+    results = run(False)
+    if _pgvol.needs_winding([r["contradictions"] for r in results],
+                            [r["may_fall_back"] for r in results]):
+        results = run(True)
+    field = _pgvol.assemble_encode(vertices, faces, [r["bricks"] for r in results], **options)
+    if output is not None:
+        field.save(output)
+    return field
+
+
+def _field(source: Any) -> Field:
+    return source if isinstance(source, Field) else Field.load(Path(source))
+
+
+def _scatter(client: Any, items: list) -> list:
+    """Items to hand to tasks: scattered to the cluster (each once) or as they are."""
+    return items if client is None else client.scatter(items, hash=False)
+
+
+def _decode_part(bricks: bytes, cells: tuple[int, int], iso: float):
+    """Task: the triangles of one slab of cells."""
+    return _pgvol.decode_part(bricks, cells[0], cells[1], iso=iso)
+
+
+def decode(source: Any, *, client: Any = None, parts: int | None = None, iso: float = 0.0,
+           min_component: float | None = None,
+           retries: int = RETRIES) -> tuple[np.ndarray, np.ndarray]:
+    """Contours a field (a ``Field`` or a ``.pgv`` path) in parts by marching cubes on its own
+    grid: (vertices, faces), the triangles of ``Field.to_mesh(method="mc")``, in another
+    order, welded at the seams."""
+    field = _field(source)
+    plan = _pgvol.plan_decode(field, _parts(parts, client))
+    key = uuid.uuid4().hex
+    bricks = _scatter(client, [_pgvol.decode_part_bricks(field, s, e) for s, e in plan])
+    calls = [(b, cells, iso) for b, cells in zip(bricks, plan)]
+    names = [f"pgvol-decode-{key}-{s}-{e}" for s, e in plan]
+    pieces = _run(client, _decode_part, calls, names, retries)
+    return _pgvol.weld_parts(pieces, field.grid.spacing, iso=iso, min_component=min_component)
+
+
+def _slice_part(bricks: bytes, bounds, layers: tuple[int, int], layer_height: float,
+                settings: dict) -> list[Layer]:
+    """Task: the layers of one range."""
+    return _pgvol.slice_part(bricks, bounds, layers[0], layers[1], layer_height, **settings)
+
+
+def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | None = None,
+          resolution: float | None = None, tolerance: float | None = None, client: Any = None,
+          parts: int | None = None, retries: int = RETRIES) -> list[Layer]:
+    """Slices a field (a ``Field`` or a ``.pgv`` path) in parts: the layers of
+    ``Field.slice`` with the same arguments."""
+    field = _field(source)
+    settings = {"axis": axis, "first": first, "resolution": resolution, "tolerance": tolerance}
+    plan = _pgvol.plan_slice(field, _parts(parts, client), layer_height, **settings)
+    key = uuid.uuid4().hex
+    bricks = _scatter(client, [
+        _pgvol.slice_part_bricks(field, s, e, layer_height, **settings) for s, e in plan
+    ])
+    calls = [(b, field.bounds, layers, layer_height, settings) for b, layers in zip(bricks, plan)]
+    names = [f"pgvol-slice-{key}-{s}-{e}" for s, e in plan]
+    return [layer for part in _run(client, _slice_part, calls, names, retries) for layer in part]
+
+
+_EXAMPLES = """examples:
+  python -m pgvol.distributed encode part.stl -o part.pgv --res 2048 --scheduler tcp://10.0.0.5:8786
+  python -m pgvol.distributed encode part.stl -o part.pgv --res 1024 --local 2
+  python -m pgvol.distributed decode part.pgv -o part.ply --scheduler tcp://10.0.0.5:8786
+  python -m pgvol.distributed slice part.pgv -o layers.json --layer-height 0.2 --local 2
+"""
+
+
+def _connect(scheduler: str | None, local: int | None):
+    """A client of the scheduler at ``scheduler``, of a new LocalCluster of ``local`` worker
+    processes, or None (parts in this process); with what closes it."""
+    if scheduler is None and local is None:
+        return None, []
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        client = Client(scheduler)
+        return client, [client]
+    cluster = LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
+                           dashboard_address=":0")
+    client = Client(cluster)
+    return client, [client, cluster]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The command-line front end: ``python -m pgvol.distributed encode|decode|slice``."""
+    import argparse
+    import json
+    import sys
+    import time
+
+    parser = argparse.ArgumentParser(
+        prog="python -m pgvol.distributed",
+        description="Run pgvol's encode, decode or slice in parts on a Dask cluster "
+                    "(--scheduler), on a new local cluster (--local N) or in this process.",
+        epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def common(p):
+        where = p.add_mutually_exclusive_group()
+        where.add_argument("--scheduler", metavar="ADDRESS",
+                           help="a running Dask scheduler, e.g. tcp://HOST:8786")
+        where.add_argument("--local", type=int, metavar="N",
+                           help="start a LocalCluster of N single-threaded worker processes")
+        p.add_argument("--parts", type=int, default=None,
+                       help="number of parts (default: 4 per worker thread, 1 in process)")
+        p.add_argument("-o", "--output", required=True, help="the file to write")
+        p.add_argument("--json", action="store_true", help="print a JSON report")
+
+    enc = sub.add_parser("encode", help="mesh -> .pgv, the file of `pgvol encode` bit for bit",
+                         epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    enc.add_argument("input", help="a mesh file (OBJ, glTF/GLB, STL, PLY)")
+    size = enc.add_mutually_exclusive_group()
+    size.add_argument("--res", type=int, help=f"nodes per axis (default {_pgvol.DEFAULT_RES})")
+    size.add_argument("--voxel", type=float, help="grid spacing in mesh units")
+    enc.add_argument("--band", type=float, default=_pgvol.ENCODE_BAND,
+                     help="exact distances within this many spacings (default %(default)s)")
+    enc.add_argument("--basis", default="bspline3", choices=["bspline3", "bspline2", "trilinear"],
+                     help="basis (default %(default)s)")
+    enc.add_argument("--sign", default="auto",
+                     choices=["auto", "winding", "pseudonormal", "parity"],
+                     help="inside/outside test (default %(default)s)")
+    common(enc)
+
+    dec = sub.add_parser("decode", help=".pgv -> mesh by marching cubes on the file's grid",
+                         epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    dec.add_argument("input", help="a .pgv file")
+    dec.add_argument("--iso", type=float, default=0.0, help="level set (default 0)")
+    dec.add_argument("--min-component", type=float, default=None,
+                     help="remove pieces enclosing less than this volume (default 2 cells)")
+    common(dec)
+
+    sli = sub.add_parser("slice", help=".pgv -> layers (.svg, .cli or .json)",
+                         epilog=_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sli.add_argument("input", help="a .pgv file")
+    sli.add_argument("--layer-height", type=float, required=True, help="distance between layers")
+    sli.add_argument("--axis", default="z", choices=["x", "y", "z"], help="(default z)")
+    common(sli)
+
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    client, closers = _connect(args.scheduler, args.local)
+    try:
+        report: dict[str, Any] = {"command": args.command, "input": args.input,
+                                  "output": args.output, "workers": worker_count(client)}
+        if args.command == "encode":
+            field = encode(args.input, res=args.res, voxel=args.voxel, band=args.band,
+                           basis=args.basis, sign=args.sign, client=client, parts=args.parts,
+                           output=args.output)
+            report["grid"] = list(field.grid.dims)
+        elif args.command == "decode":
+            vertices, faces = decode(args.input, client=client, parts=args.parts, iso=args.iso,
+                                     min_component=args.min_component)
+            _pgvol.write_mesh(Path(args.output), vertices, faces)
+            report.update(vertices=len(vertices), triangles=len(faces))
+        else:
+            layers = slice(args.input, args.layer_height, axis=args.axis, client=client,
+                           parts=args.parts)
+            _pgvol.write_layers(Path(args.output), layers)
+            report["layers"] = len(layers)
+    except (_pgvol_errors(), ValueError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    finally:
+        for c in closers:
+            c.close()
+    report["seconds"] = round(time.perf_counter() - start, 3)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        print(f"wrote {args.output} in {report['seconds']} s on {report['workers']} worker "
+              f"thread(s)")
+    return 0
+
+
+def _pgvol_errors():
+    from ._errors import PgvolError
+
+    return PgvolError
+
+
+if __name__ == "__main__":
+    # Run from the importable module, so that tasks refer to its functions by name instead of
+    # being pickled with this script's globals.
+    from pgvol.distributed import main as _main
+
+    raise SystemExit(_main())

@@ -1,0 +1,396 @@
+//! The library's jobs in parts (`pgvol::distributed`) for the Python module
+//! `pgvol.distributed`, which runs them as Dask tasks or in the calling process. Bricks cross
+//! as `bytes`, meshes as NumPy arrays, plans as lists of `(start, end)`.
+
+use std::ops::Range;
+use std::path::PathBuf;
+
+use numpy::{PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use pgvol::distributed as parts;
+
+use crate::arrays;
+use crate::errors;
+use crate::field::{grid_spec, Field, Layer};
+use crate::names;
+use crate::progress::quiet;
+
+/// The encode options of the keyword arguments every encode call takes.
+fn encode_options(
+    py: Python<'_>,
+    res: Option<usize>,
+    voxel: Option<f32>,
+    band: f32,
+    basis: &str,
+    sign: &str,
+) -> PyResult<pgvol::EncodeOptions> {
+    Ok(pgvol::EncodeOptions {
+        grid: grid_spec(py, res, voxel)?,
+        basis: names::basis(py, basis)?,
+        fit: pgvol::FitMethod::Interp,
+        band,
+        sign: names::sign(py, sign)?,
+    })
+}
+
+/// A checked, cleaned mesh from arrays.
+fn mesh(
+    py: Python<'_>,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+) -> PyResult<pgvol::Mesh> {
+    let positions = arrays::points(vertices, "vertices")?;
+    let triangles = arrays::faces(faces)?;
+    quiet(py, || Ok(pgvol::mesh_from_parts(positions, triangles)?.0))
+}
+
+/// A part of an encode: groups `y0..y1`, `z0..z1` and the estimated peak bytes.
+type PlannedPart = (usize, usize, usize, usize, u64);
+
+fn pairs(ranges: Vec<Range<usize>>) -> Vec<(usize, usize)> {
+    ranges.into_iter().map(|r| (r.start, r.end)).collect()
+}
+
+/// The parts of an encode as `(y0, y1, z0, z1, bytes)`: the fitting groups along y and z it
+/// covers, and its estimated peak bytes.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, parts, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+pub(crate) fn plan_encode(
+    py: Python<'_>,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+    parts: usize,
+    res: Option<usize>,
+    voxel: Option<f32>,
+    band: f32,
+    basis: &str,
+    sign: &str,
+) -> PyResult<Vec<PlannedPart>> {
+    let options = encode_options(py, res, voxel, band, basis, sign)?;
+    let mesh = mesh(py, vertices, faces)?;
+    quiet(py, || {
+        let plan = parts::plan_encode(&mesh, &options, parts)?;
+        let bytes = parts::plan_encode_bytes(&mesh, &options, &plan)?;
+        Ok(plan
+            .parts
+            .iter()
+            .zip(bytes)
+            .map(|(p, bytes)| (p.gy.start, p.gy.end, p.gz.start, p.gz.end, bytes))
+            .collect())
+    })
+}
+
+/// The distance query of a mesh for encoding any of its parts; build one per process.
+#[pyclass(frozen, module = "pgvol.distributed")]
+pub(crate) struct EncodeJob {
+    job: parts::EncodeJob,
+}
+
+#[pymethods]
+impl EncodeJob {
+    #[new]
+    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+    fn new(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        res: Option<usize>,
+        voxel: Option<f32>,
+        band: f32,
+        basis: &str,
+        sign: &str,
+    ) -> PyResult<EncodeJob> {
+        let options = encode_options(py, res, voxel, band, basis, sign)?;
+        let mesh = mesh(py, vertices, faces)?;
+        let job = quiet(py, || parts::EncodeJob::new(&mesh, &options))?;
+        Ok(EncodeJob { job })
+    }
+
+    /// Samples and fits the fitting groups `y0..y1` along y and `z0..z1` along z: a dict with
+    /// `bricks` (bytes), `contradictions`, `may_fall_back` and `exact_nodes`.
+    #[pyo3(signature = (y0, y1, z0, z1, *, winding=false))]
+    fn encode_part<'py>(
+        &self,
+        py: Python<'py>,
+        y0: usize,
+        y1: usize,
+        z0: usize,
+        z1: usize,
+        winding: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let part = parts::GroupBox {
+            gy: y0..y1,
+            gz: z0..z1,
+        };
+        let part = quiet(py, || self.job.encode_part(&part, winding))?;
+        let out = PyDict::new(py);
+        out.set_item("bricks", PyBytes::new(py, &part.bricks))?;
+        out.set_item("contradictions", part.contradictions)?;
+        out.set_item("may_fall_back", part.may_fall_back)?;
+        out.set_item("exact_nodes", part.exact_nodes)?;
+        Ok(out)
+    }
+
+    /// Estimated peak bytes of encoding the groups `y0..y1`, `z0..z1` in a fresh process.
+    fn part_bytes(&self, y0: usize, y1: usize, z0: usize, z1: usize) -> u64 {
+        self.job.part_bytes(&parts::GroupBox {
+            gy: y0..y1,
+            gz: z0..z1,
+        })
+    }
+}
+
+/// Whether parts with these contradiction counts and pseudonormal flags must be encoded again
+/// with the winding number.
+#[pyfunction]
+pub(crate) fn needs_winding(contradictions: Vec<usize>, may_fall_back: Vec<bool>) -> bool {
+    let results: Vec<parts::EncodedPart> = contradictions
+        .into_iter()
+        .zip(may_fall_back)
+        .map(|(contradictions, may_fall_back)| parts::EncodedPart {
+            bricks: Vec::new(),
+            contradictions,
+            may_fall_back,
+            exact_nodes: 0,
+        })
+        .collect();
+    parts::needs_winding(&results)
+}
+
+/// The field of a mesh from its parts' bricks, in plan order.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, bricks, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+pub(crate) fn assemble_encode(
+    py: Python<'_>,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+    bricks: Vec<Vec<u8>>,
+    res: Option<usize>,
+    voxel: Option<f32>,
+    band: f32,
+    basis: &str,
+    sign: &str,
+) -> PyResult<Field> {
+    let options = encode_options(py, res, voxel, band, basis, sign)?;
+    let mesh = mesh(py, vertices, faces)?;
+    let encoded = quiet(py, || {
+        let slices: Vec<&[u8]> = bricks.iter().map(Vec::as_slice).collect();
+        parts::assemble_encode(&mesh, &options, &slices)
+    })?;
+    Ok(Field::from_file(encoded.file, false))
+}
+
+/// The z cells of each part of contouring `field`.
+#[pyfunction]
+pub(crate) fn plan_decode(
+    py: Python<'_>,
+    field: &Field,
+    parts: usize,
+) -> PyResult<Vec<(usize, usize)>> {
+    parts::plan_decode(&field.shape().volume, parts)
+        .map(pairs)
+        .map_err(|e| errors::to_py(py, e))
+}
+
+/// The coefficient bricks around the z cells `start..end` of `field`.
+#[pyfunction]
+pub(crate) fn decode_part_bricks<'py>(
+    py: Python<'py>,
+    field: &Field,
+    start: usize,
+    end: usize,
+) -> Bound<'py, PyBytes> {
+    let bytes = py.detach(|| parts::decode_part_bricks(&field.shape().volume, start..end));
+    PyBytes::new(py, &bytes)
+}
+
+/// The triangles of the z cells `start..end`: (vertices, faces).
+#[pyfunction]
+#[pyo3(signature = (bricks, start, end, *, iso=0.0))]
+#[allow(clippy::type_complexity)]
+pub(crate) fn decode_part<'py>(
+    py: Python<'py>,
+    bricks: Vec<u8>,
+    start: usize,
+    end: usize,
+    iso: f32,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+    let options = pgvol::DecodeOptions {
+        iso,
+        ..Default::default()
+    };
+    let mesh = quiet(py, || parts::decode_part(&bricks, start..end, &options))?;
+    let n = mesh.positions.len();
+    Ok((
+        arrays::vec3s(py, mesh.positions),
+        arrays::triangles(py, mesh.triangles, n)?,
+    ))
+}
+
+/// The mesh of the parts' pieces ((vertices, faces) pairs): seams welded, small pieces removed.
+#[pyfunction]
+#[pyo3(signature = (pieces, spacing, *, iso=0.0, min_component=None))]
+#[allow(clippy::type_complexity)]
+pub(crate) fn weld_parts<'py>(
+    py: Python<'py>,
+    pieces: Vec<Bound<'py, PyAny>>,
+    spacing: f32,
+    iso: f32,
+    min_component: Option<f32>,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+    let meshes = pieces
+        .iter()
+        .map(|p| {
+            let (v, f) = arrays::mesh_parts(p, "piece")?;
+            Ok(pgvol::Mesh::new(v, f))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let options = pgvol::DecodeOptions {
+        iso,
+        min_component,
+        ..Default::default()
+    };
+    let mesh = quiet(py, || {
+        parts::weld_parts(meshes, spacing, &options, &pgvol::Silent)
+    })?;
+    let n = mesh.positions.len();
+    Ok((
+        arrays::vec3s(py, mesh.positions),
+        arrays::triangles(py, mesh.triangles, n)?,
+    ))
+}
+
+/// Slice settings from the keywords of `Field.slice`.
+fn slice_settings(
+    py: Python<'_>,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<pgvol::SliceSettings> {
+    Ok(pgvol::SliceSettings {
+        axis: names::axis(py, axis)?,
+        layer_height,
+        first,
+        resolution,
+        tolerance,
+    })
+}
+
+/// The layer numbers of each part of slicing `field`.
+#[pyfunction]
+#[pyo3(signature = (field, parts, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+pub(crate) fn plan_slice(
+    py: Python<'_>,
+    field: &Field,
+    parts: usize,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Vec<(usize, usize)>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    quiet(py, || parts::plan_slice(field.shape(), &settings, parts)).map(pairs)
+}
+
+/// The coefficient bricks the layers `start..end` read.
+#[pyfunction]
+#[pyo3(signature = (field, start, end, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+pub(crate) fn slice_part_bricks<'py>(
+    py: Python<'py>,
+    field: &Field,
+    start: usize,
+    end: usize,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let bytes = quiet(py, || {
+        parts::slice_part_bricks(field.shape(), &settings, start..end)
+    })?;
+    Ok(PyBytes::new(py, &bytes))
+}
+
+/// The layers `start..end` from their bricks; `bounds` is the field's.
+#[pyfunction]
+#[pyo3(signature = (bricks, bounds, start, end, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+pub(crate) fn slice_part(
+    py: Python<'_>,
+    bricks: Vec<u8>,
+    bounds: ((f32, f32, f32), (f32, f32, f32)),
+    start: usize,
+    end: usize,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Vec<Layer>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let bounds = (glam::Vec3::from(bounds.0), glam::Vec3::from(bounds.1));
+    let layers = quiet(py, || {
+        parts::slice_part(&bricks, bounds, &settings, start..end)
+    })?;
+    Ok(layers
+        .into_iter()
+        .map(|l| Layer::from_layer(py, l))
+        .collect())
+}
+
+/// Writes layers to an SVG, Common Layer Interface (`binary` for its binary form) or JSON
+/// file by extension, atomically; `units_mm` is millimetres per model unit (CLI headers).
+#[pyfunction]
+#[pyo3(signature = (path, layers, *, binary=false, units_mm=1.0))]
+pub(crate) fn write_layers(
+    py: Python<'_>,
+    path: PathBuf,
+    layers: Vec<PyRef<'_, Layer>>,
+    binary: bool,
+    units_mm: f32,
+) -> PyResult<()> {
+    let mut out = Vec::with_capacity(layers.len());
+    for layer in &layers {
+        let mut loops = Vec::with_capacity(layer.loops.len());
+        for (points, &hole) in layer.loops.iter().zip(&layer.holes) {
+            let array = points.bind(py).readonly();
+            let view = array.as_array();
+            if view.ncols() != 2 {
+                return Err(errors::parameter(py, "a loop must be an (M, 2) array"));
+            }
+            let points = view.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+            loops.push(pgvol::ops::Loop { points, hole });
+        }
+        out.push(pgvol::Layer {
+            height: layer.height,
+            loops,
+        });
+    }
+    quiet(py, || {
+        let format = pgvol::LayerFormat::from_path(&path, binary)?;
+        pgvol::write_layers(&path, &out, format, units_mm)
+    })
+}
+
+/// Registers the classes and functions of this module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<EncodeJob>()?;
+    m.add_function(wrap_pyfunction!(plan_encode, m)?)?;
+    m.add_function(wrap_pyfunction!(needs_winding, m)?)?;
+    m.add_function(wrap_pyfunction!(assemble_encode, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_decode, m)?)?;
+    m.add_function(wrap_pyfunction!(decode_part_bricks, m)?)?;
+    m.add_function(wrap_pyfunction!(decode_part, m)?)?;
+    m.add_function(wrap_pyfunction!(weld_parts, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_slice, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_part_bricks, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_part, m)?)?;
+    m.add_function(wrap_pyfunction!(write_layers, m)?)?;
+    Ok(())
+}

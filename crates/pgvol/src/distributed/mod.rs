@@ -1,0 +1,53 @@
+//! Jobs in parts for a distributed engine (the Python package's `pgvol.distributed` runs them
+//! on Dask): each part is a slab of the grid that a worker computes alone from global inputs
+//! (the mesh, the options, or the coefficient bricks around the slab), so a part can run
+//! anywhere, any number of times, and the assembled result is the single-process one.
+//!
+//! - encode: [`plan_encode`] cuts the grid into slabs of fitting groups along z; an
+//!   [`EncodeJob`] (built once per process) samples and fits one slab
+//!   ([`EncodeJob::encode_part`]), reading the distances of the two bricks around it that the
+//!   local fit's halo needs; [`assemble_encode`] builds the file from the slabs' coefficient
+//!   bricks, bit for bit the file of [`encode`](crate::encode()).
+//! - decode: [`plan_decode`] cuts the cells into slabs along z; [`decode_part_bricks`] gives
+//!   the coefficient bricks around one, [`decode_part`] its triangles, and [`weld_parts`]
+//!   merges the seams.
+//! - slice: [`plan_slice`] cuts the layers into ranges; [`slice_part_bricks`] and
+//!   [`slice_part`] compute one range.
+//!
+//! Bricks travel as [`Slab`] bytes: the grid, basis, sides of absent bricks as runs, and the
+//! stored bricks, compressed with zstd.
+
+mod decode_parts;
+mod encode_parts;
+mod slab;
+
+use std::ops::Range;
+
+pub use decode_parts::{
+    decode_part, decode_part_bricks, plan_decode, plan_slice, slice_part, slice_part_bricks,
+    weld_parts, PART_HALO_BRICKS,
+};
+pub use encode_parts::{
+    assemble_encode, needs_winding, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob,
+    EncodePlan, EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
+};
+pub use slab::Slab;
+
+use crate::error::{Error, Result};
+
+/// `0..n` cut into at most `parts` contiguous ranges whose lengths differ by at most one.
+pub fn split(n: usize, parts: usize) -> Result<Vec<Range<usize>>> {
+    if parts == 0 {
+        return Err(Error::parameter("the number of parts must be at least 1"));
+    }
+    let parts = parts.min(n.max(1));
+    let (base, extra) = (n / parts, n % parts);
+    let mut out = Vec::with_capacity(parts);
+    let mut start = 0;
+    for p in 0..parts {
+        let len = base + usize::from(p < extra);
+        out.push(start..start + len);
+        start += len;
+    }
+    Ok(out)
+}
