@@ -11,9 +11,9 @@ normals and the output's, and the mean depth-buffer difference over 14 views (%)
         [--quick] [--png OUT.png] [--json OUT.json] [-- extra pgvol encode arguments]
 
 Methods: pgvol, dense, vdb, perturb, draco (all by default). Perturbation bytes are given twice:
-"perturb-list" counts the function list as 15 float32 numbers per function (centre, scale, ten
-coefficients, factor) plus the base quadric, "perturb-pgv" is the resampled .pgv file at
---resample 128 that the mesh is contoured from. --quick runs two points per method (a check that
+"perturb-list" is the size of the function-list .pgv file `pgvol perturb` writes by default
+(encoding perturbation-f64), "perturb-pgv" the size of the coefficient volume it writes with
+--resample 128; both contour to the same mesh, which `pgvol decode` makes from the list. --quick runs two points per method (a check that
 everything runs, not a measurement).
 
 The open bunny is measured with its holes capped (tools/meshcap.py), since OpenVDB's sign needs a
@@ -45,9 +45,6 @@ PERTURB_RESAMPLE = 128
 DRACO_KEEP = [0.01, 0.02, 0.05, 0.1, 0.25, 0.5, 1.0]
 DRACO_BITS = 14
 SAMPLES = 200_000
-# Float32 numbers per stored perturbation (centre 3, scale 1, coefficients 10, factor 1) and for
-# the base quadric (centre 3, scale 1, coefficients 10).
-PERTURB_NUMBERS, BASE_NUMBERS = 15, 14
 
 
 def run(args) -> str:
@@ -74,13 +71,16 @@ def chamfer(pgvol, mesh, reference) -> tuple:
 def perturb_points(pgvol, mesh: Path, work: Path, budgets) -> dict:
     points = {"perturb-list": [], "perturb-pgv": []}
     for n in budgets:
-        pgv, out = work / "p.pgv", work / "p.obj"
-        report = json.loads(run([pgvol, "perturb", mesh, "-o", pgv, "--max-functions", n,
-                                 "--resample", PERTURB_RESAMPLE, "--json"]))
-        run([pgvol, "decode", pgv, "-o", out, "--min-component", 0, "-q"])
-        functions = report["perturbation"]["functions"]
+        listed, pgv, out = work / "p-list.pgv", work / "p.pgv", work / "p.obj"
+        report = json.loads(run([pgvol, "perturb", mesh, "-o", listed, "--max-functions", n,
+                                 "--json"]))
+        run([pgvol, "perturb", mesh, "-o", pgv, "--max-functions", n,
+             "--resample", PERTURB_RESAMPLE, "-q"])
+        # The list records the default 128-node grid, so its decode is that of the volume.
+        run([pgvol, "decode", listed, "-o", out, "--min-component", 0, "-q"])
+        functions = report["perturbation"]["functions"] + report["cleanup"]["bumps"]
         m = chamfer(pgvol, out, mesh)
-        points["perturb-list"].append((functions, 4 * (PERTURB_NUMBERS * functions + BASE_NUMBERS), *m))
+        points["perturb-list"].append((functions, listed.stat().st_size, *m))
         points["perturb-pgv"].append((functions, pgv.stat().st_size, *m))
     return points
 

@@ -18,6 +18,7 @@ use std::path::Path;
 
 use crate::error::{err, FormatError};
 use crate::header::{PgvHeader, ENCODING_DENSE_F32};
+use crate::perturbation::ENCODING_PERTURBATION;
 use crate::sparse_params::ENCODING_SPARSE;
 
 pub const MAGIC: &[u8; 8] = b"PGVOL\0\r\n";
@@ -138,7 +139,9 @@ pub(crate) fn parse_container<'a>(
     }
     let header: PgvHeader = serde_json::from_slice(header_bytes)
         .map_err(|e| err(path, format!("header is not valid: {e}")))?;
-    if header.encoding != ENCODING_DENSE_F32 && header.encoding != ENCODING_SPARSE {
+    if ![ENCODING_DENSE_F32, ENCODING_SPARSE, ENCODING_PERTURBATION]
+        .contains(&header.encoding.as_str())
+    {
         return Err(err(
             path,
             format!("unknown coefficient encoding '{}'", header.encoding),

@@ -10,6 +10,7 @@ mod fixed_step;
 pub mod grid_files;
 mod header;
 pub mod nrrd;
+pub mod perturbation;
 pub mod pgv;
 pub mod sparse;
 mod sparse_params;
@@ -18,6 +19,10 @@ pub mod threemf;
 pub use error::FormatError;
 pub use fixed_step::{FixedScale, FIXED_KNEE, FIXED_RATIO, FIXED_STEP, FREE_TOLERANCE};
 pub use header::{header_for, PgvFile, PgvHeader};
+pub use perturbation::{
+    decode_perturbation, encode_perturbation, is_perturbation, write_perturbation,
+    ENCODING_PERTURBATION,
+};
 pub use pgv::{decode_pgv, encode_pgv, read_pgv, write_pgv};
 pub use sparse::{
     encode_pgv_with, pgv_info, read_brick, write_pgv_with, Brick, Compression, EncodeOptions,

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use crate::container::{container, parse_container};
 use crate::dense_alloc::zeroed;
 use crate::error::err;
+use crate::perturbation::is_perturbation;
 use crate::sparse::payload_read::decode_payload;
 
 pub use crate::container::{MAGIC, VERSION};
@@ -45,6 +46,13 @@ pub fn read_pgv(path: &Path) -> Result<PgvFile, FormatError> {
 /// Decodes a `.pgv` file from bytes, in either encoding; `path` names the file in errors.
 pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
     let c = parse_container(bytes, path, true)?;
+    if is_perturbation(&c.header) {
+        return Err(err(
+            path,
+            "holds a perturbation field (its function list), not a coefficient volume; \
+             read it with pgvol's field reader, which resamples it",
+        ));
+    }
     let coeffs = if c.header.encoding == ENCODING_DENSE_F32 {
         let dense = dense_coeffs(c.payload, path)?;
         SparseGrid::from_dense(c.header.grid.dims, &dense, Background::clamp(0.0))

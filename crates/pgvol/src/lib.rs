@@ -109,9 +109,17 @@ pub use mesh_io::{
     mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
 };
 pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
-pub use perturb::{perturb, perturbation_mesh, resample, Perturbed, RESAMPLE_BAND, SOURCE_KEY};
-pub use pgv_io::{pgv_info, read_pgv, read_pgv_bytes, read_pgv_from, recorded_band};
-pub use pgvol_field::perturb::{PerturbOptions, PerturbReport, PerturbationField, StopReason};
+pub use perturb::{
+    perturb, perturbation_header, perturbation_mesh, resample, resample_onto, write_perturbation,
+    Perturbed, CHECK_MARGIN, CHECK_RES, RESAMPLE_BAND, SOURCE_KEY,
+};
+pub use pgv_io::{
+    pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes, read_pgv_from,
+    recorded_band, FieldSource,
+};
+pub use pgvol_field::perturb::{
+    Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason,
+};
 pub use points::{
     contours, points, points_bytes, read_cloud_text, read_layers, read_point_cloud, PointsMethod,
     PointsOptions, Reconstructed, MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,

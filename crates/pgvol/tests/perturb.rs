@@ -46,6 +46,55 @@ fn a_resampled_field_reads_back_and_contours_closed() {
 }
 
 #[test]
+fn a_stored_function_list_decodes_as_the_field_in_memory() {
+    let mesh = bumpy();
+    let options = PerturbOptions {
+        max_functions: 60,
+        tolerance: 1e-3,
+    };
+    let built = pgvol::perturb(&mesh, &options, &Silent).unwrap();
+    let header = pgvol::perturbation_header(&built.field, &mesh, GridSpec::Res(40)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bumpy.pgv");
+    pgvol::write_perturbation(&path, &header, &built.field).unwrap();
+    let stored = std::fs::read(&path).unwrap();
+    // The list, read back, is the field bit for bit.
+    match pgvol::read_field_source(&path).unwrap() {
+        pgvol::FieldSource::Perturbation { header: h, field } => {
+            assert_eq!(h, header);
+            assert_eq!(field.base(), built.field.base());
+            assert_eq!(field.terms(), built.field.terms());
+        }
+        other => panic!("read as a volume: {:?}", other.header()),
+    }
+    // Decoding the file gives the mesh of the field resampled in memory.
+    let from_file = pgvol::read_pgv(&path).unwrap();
+    assert_eq!(from_file.header.encoding, "perturbation-f64");
+    let in_memory = pgvol::resample(&built.field, &mesh, GridSpec::Res(40), &Silent).unwrap();
+    assert_eq!(from_file.volume, in_memory.volume);
+    let a = pgvol::perturbation_mesh(&from_file, &Silent).unwrap();
+    let b = pgvol::perturbation_mesh(&in_memory, &Silent).unwrap();
+    assert!(!a.triangles.is_empty());
+    assert_eq!(a.positions, b.positions);
+    assert_eq!(a.triangles, b.triangles);
+    // Truncated or corrupted, the file is refused with its name.
+    let name = Path::new("bumpy.pgv");
+    let e = pgvol::read_pgv_bytes(&stored[..stored.len() - 100], name).unwrap_err();
+    assert!(
+        e.to_string().contains("bumpy.pgv") && e.to_string().contains("truncated"),
+        "{e}"
+    );
+    let mut bad = stored.clone();
+    let at = bad.len() - 200;
+    bad[at] ^= 4;
+    let e = pgvol::read_pgv_bytes(&bad, name).unwrap_err();
+    assert!(
+        e.to_string().contains("bumpy.pgv") && e.to_string().contains("checksum"),
+        "{e}"
+    );
+}
+
+#[test]
 fn bad_options_are_refused_with_the_figure() {
     let mesh = bumpy();
     let bad = PerturbOptions {

@@ -361,17 +361,36 @@ pub fn info(a: InfoArgs) -> Result<()> {
         g.origin.y,
         g.origin.z
     );
-    outln!("encoding      {} ({:?})", h.encoding, parts.precision);
+    let list = pgvol::format::is_perturbation(h);
+    if list {
+        outln!(
+            "encoding      {} (a perturbation field's function list, resampled on the grid above when read)",
+            h.encoding
+        );
+    } else {
+        outln!("encoding      {} ({:?})", h.encoding, parts.precision);
+    }
     if let (Some(stored), Some(total)) = (parts.bricks_stored, parts.bricks_total) {
         outln!("bricks        {stored} of {total} stored");
     }
     outln!(
-        "bytes         header {}, index {}, coefficients {}",
+        "bytes         header {}, index {}, {} {}",
         parts.bytes_header,
         parts.bytes_index,
+        if list {
+            "function list"
+        } else {
+            "coefficients"
+        },
         parts.bytes_payload
     );
-    outln!("coefficients  {} in [{}, {}]", count, range[0], range[1]);
+    outln!(
+        "coefficients  {} in [{}, {}]{}",
+        count,
+        range[0],
+        range[1],
+        if list { " (resampled)" } else { "" }
+    );
     if let Some([lo, hi]) = h.source_bounds {
         outln!("source box    {lo:?} .. {hi:?}");
     }

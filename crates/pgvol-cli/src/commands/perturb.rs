@@ -14,14 +14,17 @@ use crate::progress::Bars;
 
 #[derive(Args)]
 #[command(
-    after_help = "Example: pgvol perturb cow.obj -o cow.pgv --max-functions 2038 --resample 128"
+    after_help = "Examples:\n  pgvol perturb cow.obj -o cow.pgv --max-functions 2038   (the function list)\n  \
+                  pgvol perturb cow.obj -o cow-128.pgv --resample 128   (a coefficient volume)\n  \
+                  pgvol perturb cow.obj -o cow-perturb.obj   (the contoured zero set)"
 )]
 pub struct PerturbArgs {
     /// Input mesh (.obj, .gltf, .glb, .stl, .ply).
     pub input: PathArg,
-    /// Output: a .pgv file (the field resampled into a cubic B-spline coefficient volume, which
-    /// decode, slice, eval, offset and shell read) or a mesh (.glb, .gltf, .obj, .stl, .ply: the
-    /// contoured zero set, every piece kept).
+    /// Output: a .pgv file (the function list, encoding perturbation-f64, or with --resample a
+    /// cubic B-spline coefficient volume; decode, slice, eval, offset, shell and info read
+    /// either) or a mesh (.glb, .gltf, .obj, .stl, .ply: the contoured zero set, every piece
+    /// kept).
     #[arg(short, long)]
     pub output: PathArg,
     /// Most perturbation functions added.
@@ -32,11 +35,12 @@ pub struct PerturbArgs {
     /// set (first-order estimate |M| / |∇M|).
     #[arg(long, default_value_t = pgvol::PerturbOptions::default().tolerance as f32, value_parser = non_negative)]
     pub tolerance: f32,
-    /// Nodes per axis of the grid the field is resampled on (a cube 1.1 × the mesh's longest
-    /// extent).
-    #[arg(long, value_name = "RES", default_value_t = pgvol::DEFAULT_RES as u32,
+    /// Write a coefficient volume resampled on RES nodes per axis (a cube 1.1 × the mesh's
+    /// longest extent) instead of the function list; for a mesh output, the grid it is
+    /// contoured on. Without it the list records, and a mesh output uses, 128.
+    #[arg(long, value_name = "RES",
           value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
-    pub resample: u32,
+    pub resample: Option<u32>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -48,6 +52,8 @@ struct Report<'a> {
     input_triangles: usize,
     input_components: usize,
     perturbation: &'a pgvol::PerturbReport,
+    /// The pass clearing stray pieces on the check grid.
+    cleanup: pgvol::Cleanup,
     grid: pgvol::Grid,
     /// Bytes of the .pgv file, or triangles, vertices and components of the mesh written.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -77,26 +83,38 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     let perturbed = pgvol::perturb(&mesh, &options, &bars).map_err(|e| at_input(e, &a.input))?;
     let built = start.elapsed().as_secs_f64() - read;
     let t = Instant::now();
-    let file = pgvol::resample(
-        &perturbed.field,
-        &mesh,
-        pgvol::GridSpec::Res(a.resample as usize),
-        &bars,
-    )
-    .map_err(|e| at_input(e, &a.input))?;
+    let res = a.resample.unwrap_or(pgvol::DEFAULT_RES as u32);
+    let spec = pgvol::GridSpec::Res(res as usize);
+    let header = pgvol::perturbation_header(&perturbed.field, &mesh, spec)
+        .map_err(|e| at_input(e, &a.input))?;
+    let list = to_pgv && a.resample.is_none();
+    let file = if list {
+        None
+    } else {
+        Some(
+            pgvol::resample(&perturbed.field, &mesh, spec, &bars)
+                .map_err(|e| at_input(e, &a.input))?,
+        )
+    };
     let resampled = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let (mut bytes, mut triangles, mut components) = (None, None, None);
     let mut contour = 0.0;
+    match &file {
+        None => pgvol::write_perturbation(&a.output, &header, &perturbed.field)?,
+        Some(file) if to_pgv => {
+            pgvol::write_pgv(&a.output, file, &pgvol::StorageOptions::default())?;
+        }
+        Some(file) => {
+            let out = pgvol::perturbation_mesh(file, &bars)?;
+            contour = t.elapsed().as_secs_f64();
+            pgvol::write_mesh(&a.output, &out)?;
+            triangles = Some(out.triangles.len());
+            components = Some(out.stats().components);
+        }
+    }
     if to_pgv {
-        pgvol::write_pgv(&a.output, &file, &pgvol::StorageOptions::default())?;
         bytes = Some(std::fs::metadata(&a.output)?.len());
-    } else {
-        let out = pgvol::perturbation_mesh(&file, &bars)?;
-        contour = t.elapsed().as_secs_f64();
-        pgvol::write_mesh(&a.output, &out)?;
-        triangles = Some(out.triangles.len());
-        components = Some(out.stats().components);
     }
     let write = t.elapsed().as_secs_f64() - contour;
     let total = start.elapsed().as_secs_f64();
@@ -107,7 +125,8 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         input_triangles: mesh.triangles.len(),
         input_components: mesh.stats().components,
         perturbation: r,
-        grid: file.volume.grid,
+        cleanup: perturbed.cleanup,
+        grid: header.grid,
         bytes,
         triangles,
         components,
@@ -130,7 +149,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
             "{} -> {}: {} functions in {:.2} s (stopped: {:?})",
             a.input.display(),
             a.output.display(),
-            r.functions,
+            perturbed.field.terms().len(),
             r.seconds,
             r.stop
         );
@@ -142,10 +161,13 @@ pub fn run(a: PerturbArgs) -> Result<()> {
             100.0 * r.max / r.diagonal
         );
         match (bytes, triangles) {
-            (Some(b), _) => outln!("resampled at {}^3: {} bytes", a.resample, b),
+            (Some(b), _) if list => {
+                outln!("function list: {b} bytes (resampled at {res}^3 when read)")
+            }
+            (Some(b), _) => outln!("resampled at {res}^3: {b} bytes"),
             (_, Some(t)) => outln!(
                 "contoured at {}^3: {} triangles, {} components (input {})",
-                a.resample,
+                res,
                 t,
                 components.unwrap_or(0),
                 report.input_components

@@ -44,6 +44,8 @@ pub enum PerturbationError {
     Factor(usize, f64),
     #[error("the {0} has a non-finite coefficient, centre or a scale that is not positive")]
     NotFinite(String),
+    #[error("perturbation {0} reaches beyond the range of single precision")]
+    TooLarge(usize),
 }
 
 fn check_quadric(q: &Quadric, what: impl Fn() -> String) -> Result<(), PerturbationError> {
@@ -74,7 +76,12 @@ impl PerturbationField {
                 .ok_or(PerturbationError::Unbounded(i))?;
             // Rounded outward so that f32 boxes still hold every point where Q > 0.
             let pad = 1e-6 * (hi - lo).max_element().max(1e-30);
-            boxes.push(((lo - pad).as_vec3(), (hi + pad).as_vec3()));
+            let (lo, hi) = ((lo - pad).as_vec3(), (hi + pad).as_vec3());
+            // A box beyond f32 cannot be queried (the tree's centres would be NaN).
+            if !(lo.is_finite() && hi.is_finite()) {
+                return Err(PerturbationError::TooLarge(i));
+            }
+            boxes.push((lo, hi));
         }
         let tree = BoxTree::build(&boxes);
         Ok(Self {

@@ -4,6 +4,7 @@
 
 mod box_tree;
 mod build;
+mod cleanup;
 mod field;
 mod point_grid;
 pub mod quadric;
@@ -14,6 +15,7 @@ pub use build::{
     build, PerturbError, PerturbOptions, PerturbReport, StopReason, MAX_PEAK_RATIO, MAX_REACH,
     POINTS_PER_TERM, PROBE_EDGES, RADIUS_EDGES, TRIAL_RADII,
 };
+pub use cleanup::{clear_points, Cleanup};
 pub use field::{Perturbation, PerturbationError, PerturbationField};
 pub use quadric::Quadric;
 pub use resample::sample_band;
