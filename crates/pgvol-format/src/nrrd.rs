@@ -415,7 +415,17 @@ pub fn decode_coefficients_nrrd(bytes: &[u8], path: &Path) -> Result<PgvFile, Fo
         serde_json::from_value(v).map_err(|e| err(path, format!("{k}: {e}")))
     }
     if let Some(v) = parse("pgvol_source_bounds")? {
-        header.source_bounds = typed(path, "pgvol_source_bounds", v)?;
+        let bounds: Option<[[f32; 3]; 2]> = typed(path, "pgvol_source_bounds", v)?;
+        // A decimal beyond f32's range parses as infinity, which a .pgv header cannot hold.
+        if bounds.is_some_and(|b| b.iter().flatten().any(|c| !c.is_finite())) {
+            return Err(err(
+                path,
+                "pgvol_source_bounds holds a coordinate beyond single precision; \
+                 give finite bounds or drop the key"
+                    .to_string(),
+            ));
+        }
+        header.source_bounds = bounds;
     }
     if let Some(v) = parse("pgvol_source_hash")? {
         header.source_hash = typed(path, "pgvol_source_hash", v)?;
@@ -470,6 +480,24 @@ mod tests {
             // And through .pgv bytes.
             assert_eq!(crate::pgv::encode_pgv(&back), crate::pgv::encode_pgv(&f));
         }
+    }
+
+    #[test]
+    fn source_bounds_beyond_single_precision_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.nrrd");
+        write_coefficients_nrrd(&p, &sample_file(Basis::Bspline3)).unwrap();
+        let text = std::fs::read(&p).unwrap();
+        let good = b"[[0.1,0.2,0.3],[1.0,2.0,3.0]]";
+        let at = text.windows(good.len()).position(|w| w == good).unwrap();
+        let mut bad = text[..at].to_vec();
+        bad.extend_from_slice(b"[[0.1,0.2,0.3],[1.0,2.0,3e39]]");
+        bad.extend_from_slice(&text[at + good.len()..]);
+        let e = decode_coefficients_nrrd(&bad, &p).unwrap_err().to_string();
+        assert!(
+            e.contains("pgvol_source_bounds") && e.contains("single precision"),
+            "{e}"
+        );
     }
 
     #[test]
