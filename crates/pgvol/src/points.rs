@@ -343,9 +343,53 @@ pub fn contours(
     let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
     let (lo, hi) = pgvol_points::index::bounds(&outline.points);
     let grid = options.grid.grid_for_box(lo, hi)?;
-    // Samples at half the grid spacing: every cell the surface crosses holds several.
-    let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
-    fit_on_grid(&cloud, grid, options, (lo, hi), progress)
+    if options.method != Method::Spline {
+        // Samples at half the grid spacing: every cell the surface crosses holds several.
+        let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
+        return fit_on_grid(&cloud, grid, options, (lo, hi), progress);
+    }
+    let [nx, ny, nz] = grid.dims;
+    crate::memory::check_memory(
+        &format!(
+            "fitting {} contour planes on a {nx} x {ny} x {nz} grid",
+            planes.len()
+        ),
+        stack_bytes(planes.len(), &grid),
+        "lower the resolution",
+    )?;
+    let band = options.band * grid.spacing;
+    let (volume, report) = progress::stage(progress, "fit", |_| {
+        pgvol_points::reconstruct_stack(&planes, a, grid, band)
+    })?
+    .map_err(|e| {
+        let kind = match e {
+            pgvol_points::PointsError::Field(_) => ErrorKind::Internal,
+            _ => ErrorKind::InputFile,
+        };
+        Error::new(kind, e.to_string()).caused_by(e)
+    })?;
+    let mut header = pgvol_format::header_for(&volume, "contours", None);
+    header.source_bounds = Some([lo.to_array(), hi.to_array()]);
+    header.metadata.insert(BAND_KEY.into(), format!("{band}"));
+    header
+        .metadata
+        .insert("contour planes".into(), planes.len().to_string());
+    Ok(Reconstructed {
+        file: PgvFile { header, volume },
+        report,
+    })
+}
+
+/// Estimated peak bytes of the distance interpolation of `planes` contour planes on `grid`
+/// (stacked along z; the grid is a cube): one 2D distance per node column and plane, the fitted
+/// samples of every column along the axis, and every brick of samples and coefficients in the
+/// worst case.
+pub fn stack_bytes(planes: usize, grid: &pgvol_core::Grid) -> u64 {
+    let [nx, ny, nz] = grid.dims.map(|d| d as u64);
+    let columns = nx * ny;
+    let per_column = (planes as u64 + 6) * 4 + nz * 4 + 64;
+    let bricks = nx.div_ceil(8) * ny.div_ceil(8) * nz.div_ceil(8);
+    columns * per_column + bricks * crate::memory::BYTES_PER_BAND_BRICK
 }
 
 #[cfg(test)]

@@ -148,7 +148,9 @@ pub struct ContoursArgs {
     pub axis: super::ops::AxisArg,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// How the field through the contour points is built.
+    /// How the field between the planes is built: spline (default) interpolates each plane's
+    /// 2D signed distance across the planes by a cubic spline along the axis; the RBF methods
+    /// fit points along the loops and over the caps.
     #[arg(long, value_enum, default_value_t)]
     pub method: PointsMethodArg,
     /// Contouring method for mesh outputs.
