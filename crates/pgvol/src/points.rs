@@ -312,10 +312,12 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
     Ok(layers)
 }
 
-/// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`:
-/// the loops (value 0, normals in the plane) and caps half a layer beyond wherever a layer's
-/// region is not covered by its neighbour, so tops, bottoms, ends of branches and the overhang
-/// of leaning parts close. Holes and several loops per plane are allowed.
+/// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`.
+/// `Method::Spline` (the default): each plane's exact 2D signed distance, fitted across the
+/// planes by a cubic B-spline along the axis, the solid closed half a layer (at least 2 grid
+/// spacings) beyond the outermost planes; the RBF methods fit points along the loops and caps
+/// over the parts of a layer its neighbour does not cover. Holes and several loops per plane
+/// are allowed (even-odd). See `docs/points.md` for the measurements and the limits.
 pub fn contours(
     layers: &[pgvol_ops::Layer],
     axis: pgvol_ops::Axis,
