@@ -20,6 +20,7 @@ mod error;
 mod polygon;
 mod simplify;
 mod slice;
+mod svg_read;
 mod write;
 
 pub use cli_file::{write_cli, write_cli_with, CliEncoding};
@@ -33,4 +34,5 @@ pub use slice::{
     layer_heights, slice, slice_volume, volume_bounds, Axis, Layer, Loop, SliceOptions, MAX_LAYERS,
     MAX_LAYER_NODES,
 };
+pub use svg_read::read_svg;
 pub use write::{read_slice_json, write_slice_json, write_svg};

@@ -278,7 +278,7 @@ fn fit_on_grid(
     })
 }
 
-/// Reads a stack of planar contours: the JSON or Common Layer Interface (ASCII or binary)
+/// Reads a stack of planar contours: the JSON, Common Layer Interface (ASCII or binary) or SVG
 /// layer files `pgvol slice` writes, by extension.
 pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
     let ext = path
@@ -292,12 +292,20 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
             let bytes = pgvol_core::read_input(path).reading()?;
             pgvol_ops::read_cli(&bytes, path).reading()?
         }
+        "svg" => {
+            let bytes = pgvol_core::read_input(path).reading()?;
+            let text = String::from_utf8(bytes).map_err(|_| {
+                Error::file(ErrorKind::InputFile, path, "the SVG file is not UTF-8 text")
+            })?;
+            pgvol_ops::read_svg(&text, path).reading()?
+        }
         _ => {
             return Err(Error::file(
                 ErrorKind::InputFile,
                 path,
                 format!(
-                    "cannot tell the contour format from the extension '{ext}': use .json or                      .cli, as `pgvol slice` writes them"
+                    "cannot tell the contour format from the extension '{ext}': use .json, .cli or \
+                     .svg, as `pgvol slice` writes them"
                 ),
             ))
         }

@@ -137,8 +137,8 @@ pub fn run(a: PointsArgs) -> Result<()> {
 #[derive(Args)]
 #[command(after_help = "Example: pgvol contours scan.json -o scan.glb --res 192")]
 pub struct ContoursArgs {
-    /// A stack of closed planar contours: the .json or .cli (ASCII or binary) layer files
-    /// `pgvol slice` writes.
+    /// A stack of closed planar contours: the .json, .cli (ASCII or binary) or .svg layer
+    /// files `pgvol slice` writes.
     pub input: PathArg,
     /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
