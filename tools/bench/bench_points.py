@@ -245,6 +245,7 @@ def contour_table(exe, meshes, res, work) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--meshes", default=DEFAULT_MESHES)
+    ap.add_argument("--contour-meshes", default="spot,fandisk,cow")
     ap.add_argument("--points", type=int, default=100_000)
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--quick", action="store_true")
@@ -266,7 +267,8 @@ def main(argv=None) -> int:
         print(f"\n### rbf-wendland and scipy RBFInterpolator ({meshes[0]}, {RBF_RES}^3)\n")
         print(rbf_table(exe, meshes[0], sizes, big, RBF_RES, work))
         print(f"\n### Contours, 20 and 40 layers ({args.res}^3)\n")
-        print(contour_table(exe, meshes, args.res, work))
+        contour_meshes = meshes if args.quick else args.contour_meshes.split(",")
+        print(contour_table(exe, contour_meshes, args.res, work))
     return 0
 
 

@@ -48,7 +48,7 @@ def test_points_from_ply_with_normals_and_text_without(name, pgvol, reference_me
     check_solid(out, mesh)
 
 
-@pytest.mark.parametrize("ext", [".cli", ".json"])
+@pytest.mark.parametrize("ext", [".cli", ".json", ".svg"])
 def test_contours_rebuild_a_sliced_mesh(ext, pgvol, reference_mesh, mesh_path, work_dir):
     mesh = reference_mesh("spot")
     height = float(mesh.bounds[1][2] - mesh.bounds[0][2])

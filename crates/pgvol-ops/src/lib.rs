@@ -34,6 +34,7 @@ mod polygon;
 mod repair;
 mod simplify;
 mod slice;
+mod svg_read;
 mod write;
 
 pub use blend::{
@@ -60,4 +61,5 @@ pub use slice::{
     layer_heights, slice, slice_volume, slice_volume_range, volume_bounds, Axis, Layer, Loop,
     SliceOptions, MAX_LAYERS, MAX_LAYER_NODES,
 };
+pub use svg_read::read_svg;
 pub use write::{read_slice_json, write_slice_json, write_svg};

@@ -37,7 +37,9 @@ pub(crate) fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
 /// An SVG of the layers side by side in a near-square grid of equal tiles, bottom layer first,
 /// left to right then top to bottom. Each layer is one `<g id="layer-i" data-height="z">` with a
 /// `<title>` and one even-odd filled path, so holes show as holes. The v axis points up, as in
-/// the layer coordinates, so counter-clockwise loops look counter-clockwise.
+/// the layer coordinates, so counter-clockwise loops look counter-clockwise. The root carries
+/// `data-u-offset` and `data-v-offset`: a point (x, y) of a layer's path is at
+/// u = x + u-offset, v = v-offset − y in layer coordinates ([`read_svg`](crate::read_svg)).
 pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
     let [u0, v0, u1, v1] = extent(layers).unwrap_or([0.0, 0.0, 1.0, 1.0]);
     let size = (u1 - u0).max(v1 - v0).max(f32::MIN_POSITIVE);
@@ -50,11 +52,13 @@ pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
         writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#)?;
         writeln!(
             w,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {} {}" width="{}" height="{}">"#,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {} {}" width="{}" height="{}" data-u-offset="{}" data-v-offset="{}">"#,
             tw * columns as f32,
             th * rows as f32,
             (1024 * columns / columns.max(rows)).max(64),
             (1024 * rows / columns.max(rows)).max(64),
+            u0 - pad,
+            v1 + pad,
         )?;
         for (i, layer) in layers.iter().enumerate() {
             let (c, r) = (i % columns, i / columns);

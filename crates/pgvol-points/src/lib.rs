@@ -21,6 +21,7 @@ pub mod contours;
 pub mod cubic;
 pub mod index;
 pub mod normals;
+pub mod stack;
 pub mod tangent;
 pub mod wendland;
 
@@ -293,6 +294,33 @@ pub fn reconstruct(
         }
     };
     report.bricks = samples.stored_count();
+    let t = Instant::now();
+    let (volume, _) = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?;
+    report.seconds_fit = t.elapsed().as_secs_f64();
+    Ok((volume, report))
+}
+
+/// Fits a cubic B-spline coefficient volume on `grid` through a stack of contour planes
+/// (sorted by height) along `axis` by distance interpolation ([`stack`]); `band` in mesh units.
+pub fn reconstruct_stack(
+    planes: &[contours::ContourPlane],
+    axis: usize,
+    grid: Grid,
+    band: f32,
+) -> Result<(CoefficientVolume, PointsReport), PointsError> {
+    let points = planes.iter().flat_map(|p| &p.loops).map(Vec::len).sum();
+    if points < 3 {
+        return Err(PointsError::TooFew(points));
+    }
+    let t = Instant::now();
+    let samples = stack::stack_samples(planes, axis % 3, &grid, band);
+    let mut report = PointsReport {
+        method: Method::Spline.name(),
+        points,
+        bricks: samples.stored_count(),
+        seconds_solve: t.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
     let t = Instant::now();
     let (volume, _) = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?;
     report.seconds_fit = t.elapsed().as_secs_f64();

@@ -278,7 +278,7 @@ fn fit_on_grid(
     })
 }
 
-/// Reads a stack of planar contours: the JSON or Common Layer Interface (ASCII or binary)
+/// Reads a stack of planar contours: the JSON, Common Layer Interface (ASCII or binary) or SVG
 /// layer files `pgvol slice` writes, by extension.
 pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
     let ext = path
@@ -292,12 +292,20 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
             let bytes = pgvol_core::read_input(path).reading()?;
             pgvol_ops::read_cli(&bytes, path).reading()?
         }
+        "svg" => {
+            let bytes = pgvol_core::read_input(path).reading()?;
+            let text = String::from_utf8(bytes).map_err(|_| {
+                Error::file(ErrorKind::InputFile, path, "the SVG file is not UTF-8 text")
+            })?;
+            pgvol_ops::read_svg(&text, path).reading()?
+        }
         _ => {
             return Err(Error::file(
                 ErrorKind::InputFile,
                 path,
                 format!(
-                    "cannot tell the contour format from the extension '{ext}': use .json or                      .cli, as `pgvol slice` writes them"
+                    "cannot tell the contour format from the extension '{ext}': use .json, .cli or \
+                     .svg, as `pgvol slice` writes them"
                 ),
             ))
         }
@@ -312,10 +320,12 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
     Ok(layers)
 }
 
-/// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`:
-/// the loops (value 0, normals in the plane) and caps half a layer beyond wherever a layer's
-/// region is not covered by its neighbour, so tops, bottoms, ends of branches and the overhang
-/// of leaning parts close. Holes and several loops per plane are allowed.
+/// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`.
+/// `Method::Spline` (the default): each plane's exact 2D signed distance, fitted across the
+/// planes by a cubic B-spline along the axis, the solid closed half a layer (at least 2 grid
+/// spacings) beyond the outermost planes; the RBF methods fit points along the loops and caps
+/// over the parts of a layer its neighbour does not cover. Holes and several loops per plane
+/// are allowed (even-odd). See `docs/points.md` for the measurements and the limits.
 pub fn contours(
     layers: &[pgvol_ops::Layer],
     axis: pgvol_ops::Axis,
@@ -343,9 +353,53 @@ pub fn contours(
     let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
     let (lo, hi) = pgvol_points::index::bounds(&outline.points);
     let grid = options.grid.grid_for_box(lo, hi)?;
-    // Samples at half the grid spacing: every cell the surface crosses holds several.
-    let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
-    fit_on_grid(&cloud, grid, options, (lo, hi), progress)
+    if options.method != Method::Spline {
+        // Samples at half the grid spacing: every cell the surface crosses holds several.
+        let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
+        return fit_on_grid(&cloud, grid, options, (lo, hi), progress);
+    }
+    let [nx, ny, nz] = grid.dims;
+    crate::memory::check_memory(
+        &format!(
+            "fitting {} contour planes on a {nx} x {ny} x {nz} grid",
+            planes.len()
+        ),
+        stack_bytes(planes.len(), &grid),
+        "lower the resolution",
+    )?;
+    let band = options.band * grid.spacing;
+    let (volume, report) = progress::stage(progress, "fit", |_| {
+        pgvol_points::reconstruct_stack(&planes, a, grid, band)
+    })?
+    .map_err(|e| {
+        let kind = match e {
+            pgvol_points::PointsError::Field(_) => ErrorKind::Internal,
+            _ => ErrorKind::InputFile,
+        };
+        Error::new(kind, e.to_string()).caused_by(e)
+    })?;
+    let mut header = pgvol_format::header_for(&volume, "contours", None);
+    header.source_bounds = Some([lo.to_array(), hi.to_array()]);
+    header.metadata.insert(BAND_KEY.into(), format!("{band}"));
+    header
+        .metadata
+        .insert("contour planes".into(), planes.len().to_string());
+    Ok(Reconstructed {
+        file: PgvFile { header, volume },
+        report,
+    })
+}
+
+/// Estimated peak bytes of the distance interpolation of `planes` contour planes on `grid`
+/// (stacked along z; the grid is a cube): one 2D distance per node column and plane, the fitted
+/// samples of every column along the axis, and every brick of samples and coefficients in the
+/// worst case.
+pub fn stack_bytes(planes: usize, grid: &pgvol_core::Grid) -> u64 {
+    let [nx, ny, nz] = grid.dims.map(|d| d as u64);
+    let columns = nx * ny;
+    let per_column = (planes as u64 + 6) * 4 + nz * 4 + 64;
+    let bricks = nx.div_ceil(8) * ny.div_ceil(8) * nz.div_ceil(8);
+    columns * per_column + bricks * crate::memory::BYTES_PER_BAND_BRICK
 }
 
 #[cfg(test)]

@@ -137,8 +137,8 @@ pub fn run(a: PointsArgs) -> Result<()> {
 #[derive(Args)]
 #[command(after_help = "Example: pgvol contours scan.json -o scan.glb --res 192")]
 pub struct ContoursArgs {
-    /// A stack of closed planar contours: the .json or .cli (ASCII or binary) layer files
-    /// `pgvol slice` writes.
+    /// A stack of closed planar contours: the .json, .cli (ASCII or binary) or .svg layer
+    /// files `pgvol slice` writes.
     pub input: PathArg,
     /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
@@ -148,7 +148,9 @@ pub struct ContoursArgs {
     pub axis: super::ops::AxisArg,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// How the field through the contour points is built.
+    /// How the field between the planes is built: spline (default) interpolates each plane's
+    /// 2D signed distance across the planes by a cubic spline along the axis; the RBF methods
+    /// fit points along the loops and over the caps.
     #[arg(long, value_enum, default_value_t)]
     pub method: PointsMethodArg,
     /// Contouring method for mesh outputs.
