@@ -81,18 +81,23 @@ struct Header {
     body_start: usize,
 }
 
-pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
-    let err = |problem: String| MeshError::new(name, problem);
-    let header = parse_header(bytes).map_err(err)?;
-    let body = &bytes[header.body_start..];
-    let mut values: Box<dyn Values> = match header.encoding {
+/// A reader of the body's values in the file's encoding.
+fn body_values(encoding: Encoding, body: &[u8]) -> Box<dyn Values + '_> {
+    match encoding {
         Encoding::Ascii => Box::new(AsciiValues { body, pos: 0 }),
         enc => Box::new(BinaryValues {
             body,
             pos: 0,
             big_endian: enc == Encoding::BigEndian,
         }),
-    };
+    }
+}
+
+pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
+    let err = |problem: String| MeshError::new(name, problem);
+    let header = parse_header(bytes).map_err(err)?;
+    let body = &bytes[header.body_start..];
+    let mut values = body_values(header.encoding, body);
 
     let mut mesh = Mesh::default();
     let mut saw_vertices = false;
@@ -128,14 +133,7 @@ pub(crate) fn read_points(
     let err = |problem: String| MeshError::new(name, problem);
     let header = parse_header(bytes).map_err(err)?;
     let body = &bytes[header.body_start..];
-    let mut values: Box<dyn Values> = match header.encoding {
-        Encoding::Ascii => Box::new(AsciiValues { body, pos: 0 }),
-        enc => Box::new(BinaryValues {
-            body,
-            pos: 0,
-            big_endian: enc == Encoding::BigEndian,
-        }),
-    };
+    let mut values = body_values(header.encoding, body);
     let (mut points, mut normals) = (Vec::new(), Vec::new());
     for element in &header.elements {
         if element.name == "vertex" {
