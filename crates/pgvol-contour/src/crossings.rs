@@ -11,7 +11,9 @@ use crate::blocks::{
     box_nodes, local_node, origin, Blocks, BoxMasks, BLOCK, BLOCK_NODES, BLOCK_SHIFT, INACTIVE,
 };
 use crate::place::onto_edge;
+use crate::samples::CROSSINGS_PART;
 use crate::samples::{box_index, BoxValues, Samples, BOX_NODES};
+use pgvol_core::progress::tick;
 
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).
 pub(crate) type Refine<'r> = dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + 'r;
@@ -172,11 +174,12 @@ impl Crossings {
 /// are read once each; the order does not depend on the number of threads.
 pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Crossings {
     let counts = samples.dims.map(|n| n.div_ceil(BLOCK));
-    let vertices: Vec<BlockVertices> = samples
-        .nodes
-        .candidates(samples.iso)
+    let candidates = samples.nodes.candidates(samples.iso);
+    let counter = samples.counter(0.0, CROSSINGS_PART, candidates.len());
+    let vertices: Vec<BlockVertices> = candidates
         .par_iter()
         .filter_map(|&id| {
+            tick(counter.as_ref());
             let o = origin(counts, id);
             let nodes = box_nodes(samples.dims, o);
             let mut values = Box::new([0.0; BOX_NODES]);

@@ -29,7 +29,9 @@ use crate::project::project;
 use crate::qef::Qef;
 use crate::quads::split_quad;
 use crate::samples::Samples;
+use crate::samples::CROSSINGS_PART;
 use crate::table::case_table;
+use pgvol_core::progress::tick;
 
 /// Fraction of the cell kept clear at each face when clamping, so vertices of neighbouring cells
 /// never coincide and every quad projects along its edge onto four distinct open quadrants.
@@ -96,9 +98,14 @@ pub(crate) fn dual_contour(
     placement: Placement,
 ) -> Mesh {
     let verts = crossings;
-    let parts: Vec<CellVertices> = (0..crossings.blocks.active.len())
+    let blocks = crossings.blocks.active.len();
+    let counter = samples.counter(CROSSINGS_PART, 1.0, blocks);
+    let parts: Vec<CellVertices> = (0..blocks)
         .into_par_iter()
-        .map(|slot| block_vertices(samples, verts, field, placement, slot))
+        .map(|slot| {
+            tick(counter.as_ref());
+            block_vertices(samples, verts, field, placement, slot)
+        })
         .collect();
 
     // Each (crossing, ring slot) is written by exactly one cell, so the links can be stored in

@@ -68,5 +68,9 @@ pub use dual_methods::{dual_contour, surface_nets};
 pub use dual_options::{DualContourOptions, DEFAULT_FEATURE_OFFSET, DEFAULT_SINGULAR_THRESHOLD};
 pub use field::Field;
 pub use marching::{marching_cubes, marching_cubes_on_field, marching_cubes_with};
+pub use pgvol_core::progress::Report;
 pub use quality::min_angle_histogram;
-pub use volume::{contour_field, contour_sampled, contour_volume, resampled_grid, Method};
+pub use volume::{
+    contour_field, contour_field_reporting, contour_sampled, contour_volume,
+    contour_volume_reporting, resampled_grid, Method,
+};

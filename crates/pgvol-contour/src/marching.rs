@@ -10,7 +10,9 @@ use crate::extract::{block_triangles, Part, EXTRA_FLAG};
 use crate::field::Field;
 use crate::place;
 use crate::root::cubic_edge_root;
+use crate::samples::CROSSINGS_PART;
 use crate::samples::{DenseNodes, Samples};
+use pgvol_core::progress::tick;
 
 /// Extracts the surface `value == iso` of a grid of samples, placing each vertex on its grid edge
 /// by linear interpolation of the two node values.
@@ -63,9 +65,14 @@ pub fn marching_cubes_with(
 /// [`marching_cubes_with`] on any source of samples.
 pub(crate) fn marching_cubes_samples(samples: &Samples, refine: &Refine) -> Mesh {
     let crossings = all_crossings(samples, Place::Position(refine), EXTRA_FLAG);
-    let parts: Vec<Part> = (0..crossings.blocks.active.len())
+    let blocks = crossings.blocks.active.len();
+    let counter = samples.counter(CROSSINGS_PART, 1.0, blocks);
+    let parts: Vec<Part> = (0..blocks)
         .into_par_iter()
-        .map(|slot| block_triangles(&crossings, samples.iso, slot))
+        .map(|slot| {
+            tick(counter.as_ref());
+            block_triangles(&crossings, samples.iso, slot)
+        })
         .collect();
     assemble(crossings.positions, parts)
 }

@@ -8,6 +8,7 @@
 use glam::Vec3;
 
 use crate::blocks::{scan_active, Rows, BLOCK};
+use pgvol_core::progress::{Counter, Span};
 
 /// Nodes per box edge: a block's own nodes and the first layer of the next block.
 pub(crate) const BOX: usize = BLOCK + 1;
@@ -145,6 +146,10 @@ impl Nodes for PaddedNodes<'_> {
     }
 }
 
+/// The part of a contouring's progress spent finding edge crossings; placing vertices and
+/// triangles takes the rest.
+pub(crate) const CROSSINGS_PART: f64 = 0.85;
+
 /// A grid of node values being contoured: node `(i, j, k)` at `origin + spacing * (i, j, k)`.
 #[derive(Clone, Copy)]
 pub(crate) struct Samples<'a> {
@@ -153,6 +158,8 @@ pub(crate) struct Samples<'a> {
     pub origin: Vec3,
     pub spacing: f32,
     pub iso: f32,
+    /// Where the contouring's fraction done goes, if anywhere.
+    pub progress: Option<Span<'a>>,
 }
 
 impl<'a> Samples<'a> {
@@ -181,7 +188,21 @@ impl<'a> Samples<'a> {
             origin,
             spacing,
             iso,
+            progress: None,
         })
+    }
+
+    /// These samples, reporting the contouring's progress through `span`.
+    pub fn reporting(self, span: Option<Span<'a>>) -> Self {
+        Self {
+            progress: span,
+            ..self
+        }
+    }
+
+    /// Counts `total` items of the part `[a, b]` of the contouring's progress.
+    pub fn counter(&self, a: f64, b: f64, total: usize) -> Option<Counter<'a>> {
+        self.progress.map(|s| s.part(a, b).counter(total))
     }
 
     /// Flat index of a node (x fastest), a key only: no array is indexed by it.

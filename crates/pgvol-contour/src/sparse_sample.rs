@@ -17,6 +17,8 @@ use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{CoefficientVolume, Grid};
 use rayon::prelude::*;
 
+use pgvol_core::progress::{tick, Span};
+
 use crate::cubic_eval::bspline3_value_gradient;
 
 use crate::blocks::BLOCK;
@@ -61,13 +63,19 @@ impl VolumeNodes {
     /// The field of `volume` on `grid`, padded with `iso + spacing`: bricks are sorted into
     /// evaluated and bounded ones in one parallel pass, then the contour blocks whose box may
     /// hold both sides are found from the bricks' sides.
-    pub fn new(volume: &CoefficientVolume, grid: &Grid, iso: f32) -> Self {
+    ///
+    /// Rows of bricks done are reported through `span`.
+    pub fn new(volume: &CoefficientVolume, grid: &Grid, iso: f32, span: Option<Span>) -> Self {
         let sampler = Sampler::new(volume, grid, iso);
         let brick_counts = sampler.brick_counts;
         let [bx, by, bz] = brick_counts;
+        let counter = span.map(|s| s.counter(by * bz));
         let rows: Vec<Row> = (0..by * bz)
             .into_par_iter()
-            .map(|r| sampler.row(r))
+            .map(|r| {
+                tick(counter.as_ref());
+                sampler.row(r)
+            })
             .collect();
         let mut exact = SparseGrid::new(grid.dims, Background::clamp(0.0));
         let mut sides = Vec::with_capacity(bx * by * bz);
@@ -407,7 +415,7 @@ mod tests {
             for iso in [0.0, 0.1, -0.05] {
                 let full = v.sample(&v.grid);
                 let full = PaddedNodes::new(&full, v.grid.dims, iso + v.grid.spacing);
-                let sparse = VolumeNodes::new(&v, &v.grid, iso);
+                let sparse = VolumeNodes::new(&v, &v.grid, iso, None);
                 let candidates = sparse.candidates(iso);
                 let active = full.candidates(iso);
                 assert!(active.iter().all(|id| candidates.binary_search(id).is_ok()));

@@ -12,6 +12,7 @@ use crate::field::Field;
 use crate::marching::marching_cubes_samples;
 use crate::root::{cubic_edge_root, edge_root, root_from_thirds};
 use crate::samples::{DenseNodes, Nodes, PaddedNodes, Samples};
+use pgvol_core::progress::{Report, Span};
 
 /// How the mesh is extracted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -54,9 +55,26 @@ pub fn contour_volume(
     iso: f32,
     method: Method,
 ) -> pgvol_core::Mesh {
-    let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso);
-    contour_nodes(volume, &padded(grid), &nodes, iso, method)
+    contour_volume_reporting(volume, grid, iso, method, &|_| {})
 }
+
+/// [`contour_volume`], reporting the fraction done to `report`.
+pub fn contour_volume_reporting(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    iso: f32,
+    method: Method,
+    report: Report,
+) -> pgvol_core::Mesh {
+    let span = Span::whole(report);
+    let sampling = Some(span.part(0.0, SAMPLING_PART));
+    let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso, sampling);
+    let rest = Some(span.part(SAMPLING_PART, 1.0));
+    contour_nodes(volume, &padded(grid), &nodes, iso, method, rest)
+}
+
+/// The part of [`contour_volume_reporting`]'s progress spent evaluating the field at nodes.
+const SAMPLING_PART: f64 = 0.4;
 
 /// [`contour_volume`] from given samples of `volume` on `grid`.
 #[cfg(test)]
@@ -68,7 +86,7 @@ pub(crate) fn contour_samples(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
-    contour_nodes(volume, &padded(grid), &nodes, iso, method)
+    contour_nodes(volume, &padded(grid), &nodes, iso, method, None)
 }
 
 /// `grid` with one more node layer on every side: the grid of the padded samples.
@@ -96,6 +114,19 @@ pub fn contour_field(
     method: Method,
     options: &DualContourOptions,
 ) -> pgvol_core::Mesh {
+    contour_field_reporting(field, grid, inner, iso, method, options, &|_| {})
+}
+
+/// [`contour_field`], reporting the fraction done to `report`.
+pub fn contour_field_reporting(
+    field: &dyn Field,
+    grid: &Grid,
+    inner: &[f32],
+    iso: f32,
+    method: Method,
+    options: &DualContourOptions,
+    report: Report,
+) -> pgvol_core::Mesh {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
     if nodes != Some(inner.len()) || !(grid.spacing.is_finite() && grid.spacing > 0.0) {
         return pgvol_core::Mesh::default();
@@ -106,6 +137,7 @@ pub fn contour_field(
     let Some(samples) = Samples::checked(&nodes, padded.origin, padded.spacing, iso) else {
         return pgvol_core::Mesh::default();
     };
+    let samples = samples.reporting(Some(Span::whole(report)));
     let (lo, hi) = (grid.origin, grid.max_corner());
     let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
     let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
@@ -145,7 +177,7 @@ pub fn contour_sampled(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = DenseNodes::new(values, grid.dims);
-    contour_nodes(volume, grid, &nodes, iso, method)
+    contour_nodes(volume, grid, &nodes, iso, method, None)
 }
 
 /// [`contour_sampled`] with the samples from any source.
@@ -155,10 +187,12 @@ fn contour_nodes(
     nodes: &dyn Nodes,
     iso: f32,
     method: Method,
+    span: Option<Span>,
 ) -> pgvol_core::Mesh {
     let Some(samples) = Samples::checked(nodes, grid.origin, grid.spacing, iso) else {
         return pgvol_core::Mesh::default();
     };
+    let samples = samples.reporting(span);
     let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
     let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
     let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {

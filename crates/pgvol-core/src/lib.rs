@@ -10,6 +10,7 @@ pub mod file_error;
 pub mod grid;
 pub mod input;
 pub mod mesh;
+pub mod progress;
 pub mod sparse;
 
 pub use atomic::write_atomic;

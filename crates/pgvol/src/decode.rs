@@ -99,8 +99,9 @@ pub fn decode(
     }
     let grid = target_grid(volume, options.res)?;
     crate::memory::check_contour(volume, &grid)?;
-    let mut mesh = progress::stage(progress, "contour", |_| {
-        pgvol_contour::contour_volume(volume, &grid, options.iso, options.method)
+    let mut mesh = progress::stage(progress, "contour", |update| {
+        let (iso, method) = (options.iso, options.method);
+        pgvol_contour::contour_volume_reporting(volume, &grid, iso, method, update)
     })?;
     remove_specks(&mut mesh, options.min_component, grid.spacing, progress);
     if mesh.triangles.is_empty() {

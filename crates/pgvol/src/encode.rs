@@ -186,19 +186,22 @@ pub(crate) fn fit_volume(
             let surface = ClosestFn(|p: Vec3, reach: f32| {
                 sdf.bvh().closest(p, reach * reach).map(|c| c.point)
             });
-            progress::stage(progress, "fit", |_| {
-                pgvol_field::wls_band(grid, options.basis, &sampled.values, &surface, &fit_options)
+            progress::stage(progress, "fit", |update| {
+                let values = &sampled.values;
+                let basis = options.basis;
+                pgvol_field::wls_band_reporting(grid, basis, values, &surface, &fit_options, update)
             })?
         }
         FitMethod::Iso { .. } => {
             timings.sdf = start.elapsed().as_secs_f64();
-            progress::stage(progress, "fit", |_| {
-                pgvol_field::fit(
+            progress::stage(progress, "fit", |update| {
+                pgvol_field::fit_reporting(
                     grid,
                     options.basis,
                     options.fit,
                     &MeshDistance(&sdf),
                     &fit_options,
+                    update,
                 )
             })?
         }

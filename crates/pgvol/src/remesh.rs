@@ -139,8 +139,9 @@ fn contour_exact(
         feature_offset: 0.0,
         ..DualContourOptions::default()
     };
-    let out = progress::stage(progress, "contour", |_| {
-        pgvol_contour::contour_field(&field, grid, &sampled.values, 0.0, method, &options)
+    let out = progress::stage(progress, "contour", |update| {
+        let values = &sampled.values;
+        pgvol_contour::contour_field_reporting(&field, grid, values, 0.0, method, &options, update)
     })?;
     timings.contour = start.elapsed().as_secs_f64();
     Ok(out)

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use pgvol::glam::Vec3;
 use pgvol::mesh::{shapes, MeshFormat};
 use pgvol::{
-    Basis, DecodeOptions, EncodeOptions, ErrorKind, FitMethod, GridSpec, Mesh, Progress,
+    Basis, DecodeOptions, EncodeOptions, ErrorKind, FitMethod, GridSpec, Mesh, Method, Progress,
     RemeshField, RemeshOptions, SdfOptions, Shape, ShellKind, ShellSide, Silent, StorageOptions,
 };
 
@@ -442,6 +442,8 @@ fn grids_beyond_the_node_limit_are_resource_errors() {
 struct Recorder {
     stages: Mutex<Vec<String>>,
     updates: Mutex<Vec<f64>>,
+    /// Each update with the stage it came in.
+    staged: Mutex<Vec<(String, f64)>>,
     finished: Mutex<usize>,
     cancel_in: Option<&'static str>,
 }
@@ -457,6 +459,29 @@ impl Recorder {
     fn stages(&self) -> Vec<String> {
         self.stages.lock().unwrap().clone()
     }
+
+    /// The fractions reported while `stage` ran.
+    fn fractions_of(&self, stage: &str) -> Vec<f64> {
+        self.staged
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|(s, _)| s == stage)
+            .map(|&(_, f)| f)
+            .collect()
+    }
+}
+
+/// Asserts that `stage` of `recorder` reported several fractions, rising, ending near 1.
+fn assert_fractions_rise_to_one(recorder: &Recorder, stage: &str, what: &str) {
+    let f = recorder.fractions_of(stage);
+    assert!(f.len() >= 5, "{what}: {stage} reported {f:?}");
+    assert!(
+        f.windows(2).all(|w| w[0] <= w[1]),
+        "{what}: {stage} went back: {f:?}"
+    );
+    assert!(f.iter().all(|f| (0.0..=1.0).contains(f)), "{what}: {f:?}");
+    assert!(*f.last().unwrap() > 0.99, "{what}: {stage} ended at {f:?}");
 }
 
 impl Progress for Recorder {
@@ -465,6 +490,14 @@ impl Progress for Recorder {
     }
     fn update(&self, done: f64) {
         self.updates.lock().unwrap().push(done);
+        let stage = self
+            .stages
+            .lock()
+            .unwrap()
+            .last()
+            .cloned()
+            .unwrap_or_default();
+        self.staged.lock().unwrap().push((stage, done));
     }
     fn finish(&self) {
         *self.finished.lock().unwrap() += 1;
@@ -533,6 +566,48 @@ fn remesh_and_decode_report_their_stages() {
     )
     .unwrap();
     assert_eq!(recorder.stages(), ["contour"]);
+}
+
+#[test]
+fn contouring_and_the_solving_fits_report_rising_fractions() {
+    // Updates come from the worker threads and may overtake each other; on one thread they
+    // arrive in order, so the check can ask for rising fractions.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        for fit in [FitMethod::Wls, FitMethod::Iso { z_step: None }] {
+            let recorder = Recorder::default();
+            let options = EncodeOptions {
+                fit,
+                ..encode_options(20)
+            };
+            pgvol::encode(&sphere(), &options, &recorder).unwrap();
+            assert_fractions_rise_to_one(&recorder, "fit", &format!("{fit:?}"));
+        }
+        let recorder = Recorder::default();
+        let options = RemeshOptions {
+            grid: GridSpec::Res(40),
+            ..RemeshOptions::default()
+        };
+        pgvol::remesh(&sphere(), &options, &recorder).unwrap();
+        assert_fractions_rise_to_one(&recorder, "contour", "remesh");
+        for method in [
+            Method::MarchingCubes,
+            Method::SurfaceNets,
+            Method::DualContouring,
+        ] {
+            let recorder = Recorder::default();
+            let options = DecodeOptions {
+                method,
+                res: Some(48),
+                ..DecodeOptions::default()
+            };
+            pgvol::decode(&encoded(32).file.volume, &options, &recorder).unwrap();
+            assert_fractions_rise_to_one(&recorder, "contour", &format!("decode {method:?}"));
+        }
+    });
 }
 
 #[test]

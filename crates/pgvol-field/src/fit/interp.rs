@@ -101,6 +101,7 @@ pub(crate) fn fit_nodes(
                 &b,
                 0.0,
                 options,
+                None,
             );
             return (to_f32(x), report("cgls", Some(out)));
         }

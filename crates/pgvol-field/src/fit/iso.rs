@@ -3,6 +3,7 @@
 //! exactly; a square, non-symmetric system solved by CGLS. `z_step` may be searched for.
 
 use glam::Vec3;
+use pgvol_core::progress::Span;
 use pgvol_core::Grid;
 
 use super::golden::golden_section;
@@ -22,8 +23,18 @@ pub(crate) fn fit(
     sdf: &dyn SignedDistance,
     z_step: Option<f32>,
     options: &FitOptions,
+    span: Option<Span>,
 ) -> Result<(Vec<f32>, FitReport), FieldError> {
     let warm = super::interp::warm_start(grid, basis, &nodes.distance, options);
+    // Every solve of the search and the final one take an equal part of the progress.
+    let solves = match z_step {
+        Some(_) => 1,
+        None => options.z_step_evaluations.max(3) + 1,
+    };
+    let part = |i: usize| {
+        let i = i.min(solves - 1) as f64;
+        span.map(|s| s.part(i / solves as f64, (i + 1.0) / solves as f64))
+    };
     let z = match z_step {
         Some(z) if z.is_finite() && z > 0.0 && z <= 2.0 => z,
         Some(z) => {
@@ -31,9 +42,10 @@ pub(crate) fn fit(
                 "iso z_step must be in (0, 2] spacings, got {z}"
             )))
         }
-        None => search(grid, basis, nodes, sdf, &warm, options),
+        None => search(grid, basis, nodes, sdf, &warm, options, &part),
     };
-    let (c, outcome) = solve_step(grid, basis, nodes, sdf, z, &warm, options);
+    let last = part(solves - 1);
+    let (c, outcome) = solve_step(grid, basis, nodes, sdf, z, &warm, options, last);
     let mut rep = report("cgls", Some(outcome));
     rep.z_step = Some(z);
     Ok((to_f32(c), rep))
@@ -69,6 +81,7 @@ fn points(
     (pts, tgt)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn solve_step(
     grid: &Grid,
     basis: Basis,
@@ -77,6 +90,7 @@ fn solve_step(
     z: f32,
     warm: &[f64],
     options: &FitOptions,
+    span: Option<Span>,
 ) -> (Vec<f64>, super::solve::SolveOutcome) {
     let (pts, tgt) = points(grid, basis, nodes, sdf, z);
     weighted_solve(
@@ -90,18 +104,20 @@ fn solve_step(
         warm,
         0.0,
         options,
+        span,
     )
 }
 
 /// Golden-section search of `z_step` in [0.05, 1] spacings for the smallest RMS of `f − SDF` at
 /// the cell centres within two spacings of the surface and at the nodes' nearest surface points.
-fn search(
+fn search<'a>(
     grid: &Grid,
     basis: Basis,
     nodes: &NodeSdf,
     sdf: &dyn SignedDistance,
     warm: &[f64],
     options: &FitOptions,
+    part: &dyn Fn(usize) -> Option<Span<'a>>,
 ) -> f32 {
     let k = grid.spacing;
     let [nx, ny, nz] = grid.dims;
@@ -130,8 +146,10 @@ fn search(
         points: &check,
         sqrt_weights: None,
     };
+    let solved = std::cell::Cell::new(0);
     let cost = |z: f32| {
-        let (c, _) = solve_step(grid, basis, nodes, sdf, z, warm, options);
+        let span = part(solved.replace(solved.get() + 1));
+        let (c, _) = solve_step(grid, basis, nodes, sdf, z, warm, options, span);
         let f = op.forward(&c);
         let e: f64 = f.iter().zip(&want).map(|(f, w)| (f - w) * (f - w)).sum();
         let e = (e / want.len().max(1) as f64).sqrt();

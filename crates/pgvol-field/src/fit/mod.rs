@@ -32,10 +32,11 @@ pub use report::{FitReport, FitStages};
 pub use sign_check::spurious_sign_changes;
 pub use sparse_interp::SPARSE_GROUP;
 pub use sparse_node_values::{brick_node_values, node_values_sparse};
-pub use wls::wls_band;
+pub use wls::{wls_band, wls_band_reporting};
 
 use std::time::Instant;
 
+use pgvol_core::progress::{Report, Span};
 use pgvol_core::{Grid, SparseGrid};
 
 use crate::basis::Basis;
@@ -51,13 +52,32 @@ pub fn fit(
     sdf: &dyn SignedDistance,
     options: &FitOptions,
 ) -> Result<(CoefficientVolume, FitReport), FieldError> {
+    fit_reporting(grid, basis, method, sdf, options, &|_| {})
+}
+
+/// [`fit`], reporting the fraction done to `report` (sampling the distance at the nodes takes
+/// the first tenth).
+pub fn fit_reporting(
+    grid: Grid,
+    basis: Basis,
+    method: FitMethod,
+    sdf: &dyn SignedDistance,
+    options: &FitOptions,
+    report: Report,
+) -> Result<(CoefficientVolume, FitReport), FieldError> {
     let start = Instant::now();
+    let span = Span::whole(report);
     let nodes = NodeSdf::sample(&grid, sdf);
+    span.report(0.1);
+    let span = Some(span.part(0.1, 1.0));
     check_inputs(&grid, basis, &nodes.distance)?;
     let (coeffs, mut report) = match method {
         FitMethod::Interp => interp::fit_nodes(&grid, basis, &nodes.distance, options),
-        FitMethod::Iso { z_step } => iso::fit(&grid, basis, &nodes, sdf, z_step, options)?,
-        FitMethod::Wls => wls::fit(&grid, basis, &nodes.distance, &SurfaceOf(sdf), options),
+        FitMethod::Iso { z_step } => iso::fit(&grid, basis, &nodes, sdf, z_step, options, span)?,
+        FitMethod::Wls => {
+            let surface = SurfaceOf(sdf);
+            wls::fit(&grid, basis, &nodes.distance, &surface, options, span)
+        }
     };
     let volume = CoefficientVolume::new(grid, basis, coeffs)?;
     report.spurious_sign_changes = spurious_sign_changes(&volume, &nodes.distance);

@@ -2,6 +2,8 @@
 //! definite systems, CGLS for everything else (least squares, with optional damping).
 
 pub use super::vector::dot;
+use pgvol_core::progress::Span;
+
 use super::vector::{axpy, axpy_norm_sq, xpby};
 
 /// How a solve ended.
@@ -78,8 +80,8 @@ pub fn cgls(
 /// normal-equation residual lies in directions that barely change the fit.
 #[allow(clippy::too_many_arguments)]
 pub fn cgls_with_stall(
-    mut forward: impl FnMut(&[f64]) -> Vec<f64>,
-    mut adjoint: impl FnMut(&[f64]) -> Vec<f64>,
+    forward: impl FnMut(&[f64]) -> Vec<f64>,
+    adjoint: impl FnMut(&[f64]) -> Vec<f64>,
     b: &[f64],
     cols: usize,
     damping: f64,
@@ -87,6 +89,46 @@ pub fn cgls_with_stall(
     stall: f64,
     max_iterations: usize,
 ) -> (Vec<f64>, SolveOutcome) {
+    let limits = Limits {
+        tol,
+        stall,
+        max_iterations,
+    };
+    cgls_reporting(forward, adjoint, b, cols, damping, limits, None)
+}
+
+/// When an iterative solve stops: see [`cgls_with_stall`].
+#[derive(Clone, Copy, Debug)]
+pub struct Limits {
+    pub tol: f64,
+    pub stall: f64,
+    pub max_iterations: usize,
+}
+
+/// The fraction of a solve done after `it` iterations: the larger of the iterations used and
+/// the decades of residual gained towards `tol`, since either may end it.
+fn fraction_done(it: usize, max_iterations: usize, gained: f64, tol: f64) -> f64 {
+    let by_iterations = it as f64 / max_iterations.max(1) as f64;
+    let by_residual = gained.max(1.0).ln() / (1.0 / tol.clamp(1e-300, 0.5)).ln();
+    by_iterations.max(by_residual).min(1.0)
+}
+
+/// [`cgls_with_stall`] reporting the fraction done through `span` after each iteration.
+pub fn cgls_reporting(
+    mut forward: impl FnMut(&[f64]) -> Vec<f64>,
+    mut adjoint: impl FnMut(&[f64]) -> Vec<f64>,
+    b: &[f64],
+    cols: usize,
+    damping: f64,
+    limits: Limits,
+    span: Option<Span>,
+) -> (Vec<f64>, SolveOutcome) {
+    let Limits {
+        tol,
+        stall,
+        max_iterations,
+    } = limits;
+    let mut shown = 0.0f64;
     let l2 = damping * damping;
     // ‖r‖² comes out of the update of r, so the stopping test needs no pass of its own.
     let mut rr = dot(b, b);
@@ -124,6 +166,17 @@ pub fn cgls_with_stall(
         gamma = gamma_new;
         xpby(&mut p, &s, beta);
         it += 1;
+        if let Some(span) = &span {
+            let gained = (bn / rr.sqrt()).max(s0 / gamma.sqrt());
+            let f = fraction_done(it, max_iterations, gained, tol).max(shown);
+            if f >= shown + 0.005 {
+                shown = f;
+                span.report(f);
+            }
+        }
+    }
+    if let Some(span) = &span {
+        span.report(1.0);
     }
     let converged = done(rr, gamma, gain, total_gain);
     let residual = rr.sqrt() / bn;

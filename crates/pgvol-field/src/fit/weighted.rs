@@ -1,6 +1,7 @@
 //! The damped, weighted least-squares solve shared by the collocation fits.
 
 use glam::Vec3;
+use pgvol_core::progress::Span;
 use pgvol_core::Grid;
 
 use super::options::FitOptions;
@@ -23,6 +24,7 @@ pub(crate) fn weighted_solve(
     warm: &[f64],
     damping: f64,
     options: &FitOptions,
+    span: Option<Span>,
 ) -> (Vec<f64>, solve::SolveOutcome) {
     let Rows {
         points,
@@ -58,15 +60,12 @@ pub(crate) fn weighted_solve(
         }
         g
     };
-    let (y, outcome) = solve::cgls(
-        fwd,
-        adj,
-        &b,
-        op.cols(),
-        damping,
-        options.tolerance,
-        options.max_iterations,
-    );
+    let limits = solve::Limits {
+        tol: options.tolerance,
+        stall: 0.0,
+        max_iterations: options.max_iterations,
+    };
+    let (y, outcome) = solve::cgls_reporting(fwd, adj, &b, op.cols(), damping, limits, span);
     let c = warm
         .iter()
         .zip(y.iter().zip(&scale))

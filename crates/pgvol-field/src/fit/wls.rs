@@ -10,6 +10,7 @@
 use std::cell::RefCell;
 use std::time::Instant;
 
+use pgvol_core::progress::{Report, Span};
 use pgvol_core::Grid;
 
 use super::band_operator::{BandOperator, RowStencils};
@@ -32,9 +33,22 @@ pub fn wls_band(
     surface: &dyn ClosestPoint,
     options: &FitOptions,
 ) -> Result<(CoefficientVolume, FitReport), FieldError> {
+    wls_band_reporting(grid, basis, samples, surface, options, &|_| {})
+}
+
+/// [`wls_band`], reporting the fraction done to `report`.
+pub fn wls_band_reporting(
+    grid: Grid,
+    basis: Basis,
+    samples: &[f32],
+    surface: &dyn ClosestPoint,
+    options: &FitOptions,
+    report: Report,
+) -> Result<(CoefficientVolume, FitReport), FieldError> {
     let start = Instant::now();
     check_inputs(&grid, basis, samples)?;
-    let (coeffs, mut report) = fit(&grid, basis, samples, surface, options);
+    let span = Some(Span::whole(report));
+    let (coeffs, mut report) = fit(&grid, basis, samples, surface, options, span);
     let volume = CoefficientVolume::new(grid, basis, coeffs)?;
     let t = Instant::now();
     report.spurious_sign_changes = spurious_sign_changes(&volume, samples);
@@ -44,22 +58,29 @@ pub fn wls_band(
     Ok((volume, report))
 }
 
+/// Progress after the warm start and after the projection rows; the solve takes the rest.
+const WARM_PART: f64 = 0.05;
+const ROWS_PART: f64 = 0.15;
+
 pub(crate) fn fit(
     grid: &Grid,
     basis: Basis,
     samples: &[f32],
     surface: &dyn ClosestPoint,
     options: &FitOptions,
+    span: Option<Span>,
 ) -> (Vec<f32>, FitReport) {
     let t = Instant::now();
     // The coefficients outside the band keep these values, so they must interpolate even
     // where the node system is indefinite.
     let warm = super::interp::fit_nodes(grid, basis, samples, options).0;
     let warm_start = t.elapsed().as_secs_f64();
+    span.inspect(|s| s.report(WARM_PART));
 
     let t = Instant::now();
     let rows = projection_rows(grid, samples, surface, options);
     let projections = t.elapsed().as_secs_f64();
+    span.inspect(|s| s.report(ROWS_PART));
 
     let t = Instant::now();
     let sqrt_w: Vec<f64> = rows.weights.iter().map(|&w| (w as f64).sqrt()).collect();
@@ -98,15 +119,19 @@ pub(crate) fn fit(
         (warm, None)
     } else {
         let op = RefCell::new(op);
-        let (y, outcome) = solve::cgls_with_stall(
+        let limits = solve::Limits {
+            tol: options.tolerance,
+            stall: options.stall,
+            max_iterations: options.max_iterations,
+        };
+        let (y, outcome) = solve::cgls_reporting(
             |y| op.borrow_mut().forward(y),
             |r| op.borrow_mut().adjoint(r),
             &b,
             unknowns,
             options.damping,
-            options.tolerance,
-            options.stall,
-            options.max_iterations,
+            limits,
+            span.map(|s| s.part(ROWS_PART, 1.0)),
         );
         let op = op.into_inner();
         let mut c = warm;
