@@ -358,6 +358,8 @@ pub fn contours(
         let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
         return fit_on_grid(&cloud, grid, options, (lo, hi), progress);
     }
+    let heights: Vec<f32> = planes.iter().map(|p| p.height).collect();
+    let grid = planes_on_nodes(grid, &heights, a, (lo, hi))?;
     let [nx, ny, nz] = grid.dims;
     crate::memory::check_memory(
         &format!(
@@ -388,6 +390,47 @@ pub fn contours(
         file: PgvFile { header, volume },
         report,
     })
+}
+
+/// Evenly spaced planes whose distance is within this fraction of a whole number of grid
+/// spacings get a grid with that spacing, aligned so they fall on nodes.
+pub const SNAP_SPACING: f32 = 0.1;
+
+/// `grid` with its spacing moved by at most [`SNAP_SPACING`] and its origin along `axis`
+/// shifted so that evenly spaced planes at `heights` lie on nodes (the node count follows, the
+/// cube stays centred on `bounds` otherwise). A cubic B-spline along the axis can then take
+/// every plane's value exactly even when the planes are less than two spacings apart, where
+/// a least-squares fit between nodes would smooth single-plane features (the tips of horns)
+/// away. Unevenly spaced planes keep `grid`.
+fn planes_on_nodes(
+    grid: pgvol_core::Grid,
+    heights: &[f32],
+    axis: usize,
+    bounds: (Vec3, Vec3),
+) -> Result<pgvol_core::Grid> {
+    let gaps: Vec<f32> = heights.windows(2).map(|w| w[1] - w[0]).collect();
+    let Some(&first) = gaps.first() else {
+        return Ok(grid);
+    };
+    let mean = gaps.iter().sum::<f32>() / gaps.len() as f32;
+    let uneven = gaps.iter().any(|g| (g - mean).abs() > 1e-3 * mean);
+    if mean.is_nan() || mean <= 0.0 || first <= 0.0 || uneven {
+        return Ok(grid);
+    }
+    let steps = (mean / grid.spacing).round().max(1.0);
+    let spacing = mean / steps;
+    if (spacing - grid.spacing).abs() > SNAP_SPACING * grid.spacing {
+        return Ok(grid);
+    }
+    let mut snapped = pgvol_core::Grid::cube_voxel(bounds.0, bounds.1, spacing)?;
+    // Down along the axis by less than a spacing onto the first plane, one node more on top.
+    let offset = (heights[0] - snapped.origin[axis]) / spacing;
+    let fraction = offset - offset.floor();
+    if fraction > 0.0 {
+        snapped.origin[axis] -= (1.0 - fraction) * spacing;
+        snapped.dims[axis] += 1;
+    }
+    Ok(snapped)
 }
 
 /// Estimated peak bytes of the distance interpolation of `planes` contour planes on `grid`
