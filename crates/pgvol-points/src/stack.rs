@@ -1,8 +1,12 @@
 //! Contour stacks by distance interpolation: on every plane the exact 2D signed distance of its
-//! loops at the grid's node columns, joined across the planes by a natural cubic spline (C2)
-//! along the stacking axis, clamped to the band and sampled brick by brick. At the planes the
-//! field is the 2D distance itself, so slicing the result there gives the input loops back;
-//! between them the cubic follows a smoothly varying cross-section better than a linear blend.
+//! loops at the grid's node columns, corrected so the plane's cubic spline passes through the
+//! loops ([`plane_fit`](crate::plane_fit)), joined across the planes by a cubic B-spline along
+//! the stacking axis fitted to the planes' values and the natural cubic spline (C2) through
+//! them, clamped to the band and sampled brick by brick. At the planes the field is the plane's
+//! values, so slicing the result there gives the input loops back; between them the cubic
+//! follows a smoothly varying cross-section better than a linear blend. Matched regions of
+//! neighbouring planes that barely overlap are also interpolated in a frame moving with them
+//! ([`bridge`](crate::bridge)), so leaning parts stay joined.
 //!
 //! Tops and bottoms close half a layer beyond the outermost planes (at least a grid spacing):
 //! three virtual planes continue the stack (at ½, 1 and 2 layers out) with the distance to the

@@ -321,11 +321,13 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
 }
 
 /// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`.
-/// `Method::Spline` (the default): each plane's exact 2D signed distance, fitted across the
-/// planes by a cubic B-spline along the axis, the solid closed half a layer (at least 2 grid
-/// spacings) beyond the outermost planes; the RBF methods fit points along the loops and caps
-/// over the parts of a layer its neighbour does not cover. Holes and several loops per plane
-/// are allowed (even-odd). See `docs/points.md` for the measurements and the limits.
+/// `Method::Spline` (the default): each plane's exact 2D signed distance, corrected so the
+/// plane's spline passes through its loops, fitted across the planes by a cubic B-spline along
+/// the axis (evenly spaced planes are put on nodes, see [`SNAP_SPACING`]), leaning regions
+/// bridged, the solid closed half a layer (at least 2 grid spacings) beyond the outermost
+/// planes; the RBF methods fit points along the loops and caps over the parts of a layer its
+/// neighbour does not cover. Holes and several loops per plane are allowed (even-odd). See
+/// `docs/points.md` for the measurements and the limits.
 pub fn contours(
     layers: &[pgvol_ops::Layer],
     axis: pgvol_ops::Axis,
