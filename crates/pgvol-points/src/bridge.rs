@@ -86,11 +86,17 @@ struct Region {
 
 /// The outer regions of a plane: loops inside no other loop, each with the loops inside it.
 fn regions(plane: &ContourPlane) -> Vec<Region> {
+    let boxes: Vec<([f32; 2], [f32; 2])> = plane.loops.iter().map(|lp| bounds(lp)).collect();
+    // Loop i lies inside loop j when its first point does (loops do not cross); the boxes spare
+    // the even-odd test for most pairs of a plane with many loops.
     let inside_of = |i: usize, j: usize| {
+        let (lo, hi) = boxes[j];
         i != j
-            && plane.loops[i]
-                .first()
-                .is_some_and(|&p| inside_loop(&plane.loops[j], p))
+            && plane.loops[i].first().is_some_and(|&p| {
+                (lo[0]..=hi[0]).contains(&p[0])
+                    && (lo[1]..=hi[1]).contains(&p[1])
+                    && inside_loop(&plane.loops[j], p)
+            })
     };
     let n = plane.loops.len();
     (0..n)
@@ -111,15 +117,7 @@ fn regions(plane: &ContourPlane) -> Vec<Region> {
                 cx += f64::from(a[0] + b[0]) * cross;
                 cy += f64::from(a[1] + b[1]) * cross;
             }
-            let (lo, hi) = outer.iter().fold(
-                ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]),
-                |(lo, hi), p| {
-                    (
-                        [lo[0].min(p[0]), lo[1].min(p[1])],
-                        [hi[0].max(p[0]), hi[1].max(p[1])],
-                    )
-                },
-            );
+            let (lo, hi) = boxes[i];
             let centroid = if area.abs() > 0.0 {
                 [(cx / (3.0 * area)) as f32, (cy / (3.0 * area)) as f32]
             } else {
@@ -197,6 +195,19 @@ pub fn find_bridges(planes: &[ContourPlane], lattice: &Lattice, reach: f32) -> V
         }
     }
     bridges
+}
+
+/// The box of a loop's points.
+fn bounds(lp: &[[f32; 2]]) -> ([f32; 2], [f32; 2]) {
+    lp.iter().fold(
+        ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    )
 }
 
 fn distance(a: [f32; 2], b: [f32; 2]) -> f32 {
