@@ -488,6 +488,29 @@ mod tests {
     }
 
     #[test]
+    fn evenly_spaced_planes_are_put_on_nodes() {
+        let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        let grid = pgvol_core::Grid::cube_res(lo, hi, 64).unwrap();
+        // 0.94 grid spacings apart: snapped, every plane on a node, the box still covered.
+        let gap = 0.94 * grid.spacing;
+        let heights: Vec<f32> = (0..30).map(|k| -0.8 + 0.013 + gap * k as f32).collect();
+        let snapped = planes_on_nodes(grid, &heights, 2, (lo, hi)).unwrap();
+        assert!((snapped.spacing - gap).abs() < 1e-6);
+        for h in &heights {
+            let k = (h - snapped.origin.z) / snapped.spacing;
+            assert!((k - k.round()).abs() < 1e-3, "{h}: node {k}");
+        }
+        assert!(snapped.origin.cmple(grid.origin + Vec3::splat(1e-5)).all());
+        assert!(snapped.max_corner().cmpge(hi).all());
+        // 1.5 spacings apart (a third from a whole number) or uneven: left alone.
+        let wide: Vec<f32> = (0..10).map(|k| 1.5 * grid.spacing * k as f32).collect();
+        assert_eq!(planes_on_nodes(grid, &wide, 2, (lo, hi)).unwrap(), grid);
+        let mut uneven = heights.clone();
+        uneven[3] += 0.3 * gap;
+        assert_eq!(planes_on_nodes(grid, &uneven, 2, (lo, hi)).unwrap(), grid);
+    }
+
+    #[test]
     fn unknown_extension_is_refused_by_name() {
         let e = read_point_cloud(Path::new("cloud.bin")).unwrap_err();
         assert!(e.to_string().contains(".ply"), "{e}");
