@@ -105,7 +105,13 @@ fn path_loops(d: &str, u_offset: f32, v_offset: f32) -> Result<Vec<Loop>, String
                 let (Some(x), Some(y)) = (number(x), number(y)) else {
                     return Err(format!("'{token}' needs two finite coordinates"));
                 };
-                current.push([x + u_offset, v_offset - y]);
+                let (u, v) = (x + u_offset, v_offset - y);
+                if !(u.is_finite() && v.is_finite()) {
+                    return Err(format!(
+                        "'{token}' is beyond single precision once the offsets are added"
+                    ));
+                }
+                current.push([u, v]);
             }
             "Z" | "z" if rest.is_empty() => {
                 if current.len() >= 3 {
@@ -203,6 +209,10 @@ mod tests {
             (
                 "<svg data-u-offset=\"0\" data-v-offset=\"0\"><g data-height=\"1\"><path d=\"M0 0 L1 \"/></g></svg>",
                 "two finite coordinates",
+            ),
+            (
+                "<svg data-u-offset=\"3e38\" data-v-offset=\"0\"><g data-height=\"1\"><path d=\"M3e38 0 L1 0 L1 1 Z\"/></g></svg>",
+                "beyond single precision",
             ),
         ] {
             let e = read_svg(bad, name).unwrap_err().to_string();

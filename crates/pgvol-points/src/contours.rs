@@ -96,7 +96,7 @@ fn signed_area(lp: &[[f32; 2]]) -> f32 {
 }
 
 /// Even-odd test of `p` against one loop.
-fn inside_loop(lp: &[[f32; 2]], p: [f32; 2]) -> bool {
+pub(crate) fn inside_loop(lp: &[[f32; 2]], p: [f32; 2]) -> bool {
     let mut inside = false;
     for k in 0..lp.len() {
         let (a, b) = (lp[k], lp[(k + 1) % lp.len()]);
@@ -111,7 +111,7 @@ fn inside_loop(lp: &[[f32; 2]], p: [f32; 2]) -> bool {
 }
 
 /// Even-odd test against every loop of a plane: holes and islands alike.
-fn inside_region(plane: &ContourPlane, p: [f32; 2]) -> bool {
+pub(crate) fn inside_region(plane: &ContourPlane, p: [f32; 2]) -> bool {
     plane.loops.iter().filter(|lp| inside_loop(lp, p)).count() % 2 == 1
 }
 

@@ -17,10 +17,12 @@
 //! zero says nothing of the side, and spurious surfaces appear.
 
 pub mod band;
+pub mod bridge;
 pub mod contours;
 pub mod cubic;
 pub mod index;
 pub mod normals;
+pub mod plane_fit;
 pub mod stack;
 pub mod tangent;
 pub mod wendland;

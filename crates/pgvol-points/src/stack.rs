@@ -1,8 +1,12 @@
 //! Contour stacks by distance interpolation: on every plane the exact 2D signed distance of its
-//! loops at the grid's node columns, joined across the planes by a natural cubic spline (C2)
-//! along the stacking axis, clamped to the band and sampled brick by brick. At the planes the
-//! field is the 2D distance itself, so slicing the result there gives the input loops back;
-//! between them the cubic follows a smoothly varying cross-section better than a linear blend.
+//! loops at the grid's node columns, corrected so the plane's cubic spline passes through the
+//! loops ([`plane_fit`](crate::plane_fit)), joined across the planes by a cubic B-spline along
+//! the stacking axis fitted to the planes' values and the natural cubic spline (C2) through
+//! them, clamped to the band and sampled brick by brick. At the planes the field is the plane's
+//! values, so slicing the result there gives the input loops back; between them the cubic
+//! follows a smoothly varying cross-section better than a linear blend. Matched regions of
+//! neighbouring planes that barely overlap are also interpolated in a frame moving with them
+//! ([`bridge`](crate::bridge)), so leaning parts stay joined.
 //!
 //! Tops and bottoms close half a layer beyond the outermost planes (at least a grid spacing):
 //! three virtual planes continue the stack (at ½, 1 and 2 layers out) with the distance to the
@@ -12,7 +16,9 @@ use pgvol_core::sparse::{brick_offset, Background, BRICK_EDGE, BRICK_NODES};
 use pgvol_core::{Grid, SparseGrid};
 use rayon::prelude::*;
 
+use crate::bridge::{find_bridges, Bridge};
 use crate::contours::ContourPlane;
+use crate::plane_fit::{pass_through_loops, Lattice};
 
 /// The 2D distances are exact within this many layer distances of the loops (at least the
 /// band) and clamped beyond: the cubic across the planes sees true distances wherever its
@@ -33,15 +39,35 @@ pub fn stack_samples(planes: &[ContourPlane], axis: usize, grid: &Grid, band: f3
     let reach = (DISTANCE_LAYERS * max_gap)
         .max(band)
         .max(2.0 * grid.spacing);
-    let fields: Vec<Vec<f32>> = planes
-        .par_iter()
-        .map(|p| plane_distance(p, grid, ua, va, reach))
-        .collect();
+    let lattice = Lattice {
+        origin: [grid.origin[ua], grid.origin[va]],
+        spacing: grid.spacing,
+        dims: [nu, nv],
+    };
     // Knot heights: the planes plus three virtual planes beyond either end.
     // The caps lie half a layer out, and at least a grid spacing: the cubic cannot turn from
     // the outermost plane's values to the cap's within less than a node.
     let end_gap = |g: Option<&f32>| g.copied().unwrap_or(0.0).max(2.0 * grid.spacing);
     let (g_lo, g_hi) = (end_gap(gaps.first()), end_gap(gaps.last()));
+    let last = planes.len() - 1;
+    let fields: Vec<Vec<f32>> = planes
+        .par_iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut values = plane_distance(p, &lattice, reach);
+            // The outermost planes are no deeper than their cap; limited before the fit
+            // through the loops, which the limit would otherwise undo near them.
+            let floor = match (k == 0, k == last) {
+                (true, true) => -0.5 * g_lo.min(g_hi),
+                (true, false) => -0.5 * g_lo,
+                (false, true) => -0.5 * g_hi,
+                (false, false) => f32::NEG_INFINITY,
+            };
+            values.iter_mut().for_each(|v| *v = v.max(floor));
+            pass_through_loops(&mut values, p, &lattice);
+            values
+        })
+        .collect();
     let (h_lo, h_hi) = (planes[0].height, planes[planes.len() - 1].height);
     let mut knots: Vec<f32> = [2.0, 1.0, 0.5].iter().map(|s| h_lo - s * g_lo).collect();
     knots.extend(planes.iter().map(|p| p.height));
@@ -51,6 +77,7 @@ pub fn stack_samples(planes: &[ContourPlane], axis: usize, grid: &Grid, band: f3
         spacing: grid.spacing,
         count: grid.dims[axis],
     };
+    let bridges = find_bridges(planes, &lattice, reach);
     let columns: Vec<Column> = (0..nu * nv)
         .into_par_iter()
         .map(|c| {
@@ -68,12 +95,15 @@ pub fn stack_samples(planes: &[ContourPlane], axis: usize, grid: &Grid, band: f3
                 .map(|&s| end(d_lo, g_lo, s))
                 .collect();
             values.extend(fields.iter().map(|f| f[c]));
-            // The outermost planes are no deeper than their cap.
-            let first = 3;
-            let last = values.len() - 1;
-            values[first] = values[first].max(-0.5 * g_lo);
-            values[last] = values[last].max(-0.5 * g_hi);
             values.extend([0.0, 0.5, 1.5].iter().map(|&s| end(d_hi, g_hi, s)));
+            let extra = bridged_knots(&bridges, c % nu, c / nu, &knots, &values, nodes);
+            if extra.is_empty() {
+                return Column::new(&knots, values, band, nodes);
+            }
+            let mut merged: Vec<(f32, f32)> = knots.iter().copied().zip(values).collect();
+            merged.extend(extra);
+            merged.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (knots, values): (Vec<f32>, Vec<f32>) = merged.into_iter().unzip();
             Column::new(&knots, values, band, nodes)
         })
         .collect();
@@ -145,11 +175,11 @@ enum Fill {
     Side(bool),
 }
 
-/// The 2D signed distance of a plane's loops at the node columns (u fastest), exact within
-/// `reach` of a loop and ±`reach` beyond; negative inside by the even-odd rule.
-fn plane_distance(plane: &ContourPlane, grid: &Grid, ua: usize, va: usize, reach: f32) -> Vec<f32> {
-    let (nu, nv) = (grid.dims[ua], grid.dims[va]);
-    let (ou, ov, h) = (grid.origin[ua], grid.origin[va], grid.spacing);
+/// The 2D signed distance of a plane's loops at the nodes of `lattice` (u fastest), exact
+/// within `reach` of a loop and ±`reach` beyond; negative inside by the even-odd rule.
+pub(crate) fn plane_distance(plane: &ContourPlane, lattice: &Lattice, reach: f32) -> Vec<f32> {
+    let [nu, nv] = lattice.dims;
+    let ([ou, ov], h) = (lattice.origin, lattice.spacing);
     let mut sq = vec![reach * reach; nu * nv];
     let to_index = |x: f32, o: f32, n: usize| ((x - o) / h).clamp(0.0, (n - 1) as f32);
     for lp in &plane.loops {
@@ -199,6 +229,44 @@ fn plane_distance(plane: &ContourPlane, grid: &Grid, ua: usize, va: usize, reach
         }
     }
     sq
+}
+
+/// Knots that the bridges between matched regions add to node column (i, j): at the node
+/// heights between the pair's planes (none when they are a node apart or less: a knot between
+/// nodes there would keep the column from taking the planes' values exactly), the smaller of the sheared
+/// interpolation and the linear one between the planes. A reach beyond the pair both are
+/// the clamped distance, as is the column's natural spline, so the columns a bridge covers
+/// join the others without a step (unless another region lies that close).
+fn bridged_knots(
+    bridges: &[Bridge],
+    i: usize,
+    j: usize,
+    knots: &[f32],
+    values: &[f32],
+    nodes: Nodes,
+) -> Vec<(f32, f32)> {
+    let mut extra = Vec::new();
+    for b in bridges.iter().filter(|b| b.covers(i, j)) {
+        // The planes sit after the three virtual planes below the stack.
+        let (h0, h1) = (knots[b.lower + 3], knots[b.lower + 4]);
+        let to_node = |h: f32| (h - nodes.origin) / nodes.spacing;
+        let fractions = (to_node(h0).ceil() as i64..=to_node(h1).floor() as i64)
+            .map(|k| (nodes.origin + nodes.spacing * k as f32 - h0) / (h1 - h0))
+            .filter(|t| (0.15..=0.85).contains(t));
+        for t in fractions {
+            let h = h0 + t * (h1 - h0);
+            // The pair by the sheared interpolation, anything else near it linearly: the
+            // natural spline would round the pair's ends into stubs beyond the moved regions.
+            let (v0, v1) = (values[b.lower + 3], values[b.lower + 4]);
+            let sheared = b.value(i, j, t).min((1.0 - t) * v0 + t * v1);
+            // Two pairs bridging the same gap here: the union of both.
+            match extra.iter_mut().find(|(at, _)| *at == h) {
+                Some((_, v)) => *v = f32::min(*v, sheared),
+                None => extra.push((h, sheared)),
+            }
+        }
+    }
+    extra
 }
 
 /// The node heights along the stacking axis.
@@ -456,7 +524,12 @@ mod tests {
             height: 0.0,
             loops: vec![circle],
         };
-        let d = plane_distance(&plane, &grid, 0, 1, 1.0);
+        let lattice = Lattice {
+            origin: [grid.origin.x, grid.origin.y],
+            spacing: grid.spacing,
+            dims: [grid.dims[0], grid.dims[1]],
+        };
+        let d = plane_distance(&plane, &lattice, 1.0);
         for (c, v) in d.iter().enumerate() {
             let n = grid.dims[0];
             let p = [
@@ -528,21 +601,48 @@ mod tests {
     }
 
     #[test]
-    fn a_leaning_part_whose_layers_do_not_overlap_splits_into_pieces() {
-        // Distance interpolation joins neighbouring layers only where their regions overlap
-        // or nearly do: these two discs are 0.5 apart, so each closes halfway to the other.
-        let planes = [
-            ContourPlane {
-                height: 0.0,
+    fn a_leaning_part_whose_layers_do_not_overlap_stays_one_piece() {
+        // Discs of radius 0.5 whose centres move 1.5 per layer: neighbouring layers share no
+        // point, so distance interpolation alone closes each halfway to the next.
+        let planes: Vec<ContourPlane> = (0..3)
+            .map(|k| ContourPlane {
+                height: k as f32,
+                loops: vec![disc([1.5 * k as f32, 0.0], 0.5)],
+            })
+            .collect();
+        let v = fit(&planes, -1.5, 3.5);
+        // Between the layers the cross-section is the disc moved along: inside within 0.3 of
+        // its centre line, outside beyond 0.7.
+        for step in 0..=16 {
+            let z = step as f32 / 8.0;
+            let c = 1.5 * z;
+            assert!(at(&v, c, 0.0, z) < 0.0, "centre at {z}");
+            assert!(
+                at(&v, c, 0.3, z) < 0.0 && at(&v, c, -0.3, z) < 0.0,
+                "inside at {z}"
+            );
+            assert!(
+                at(&v, c, 0.7, z) > 0.0 && at(&v, c, -0.7, z) > 0.0,
+                "outside at {z}"
+            );
+        }
+        // Overlapping neighbours are left to the distance interpolation: a straight cylinder
+        // keeps its radius between the layers.
+        let straight: Vec<ContourPlane> = (0..3)
+            .map(|k| ContourPlane {
+                height: k as f32,
                 loops: vec![disc([0.0, 0.0], 0.5)],
-            },
-            ContourPlane {
-                height: 1.0,
-                loops: vec![disc([1.5, 0.0], 0.5)],
-            },
-        ];
-        let v = fit(&planes, -1.5, 2.5);
-        assert!(at(&v, 0.0, 0.0, 0.0) < 0.0 && at(&v, 1.5, 0.0, 1.0) < 0.0);
-        assert!(at(&v, 0.75, 0.0, 0.5) > 0.0);
+            })
+            .collect();
+        assert!(find_bridges(&straight, &lattice(-1.5, 3.5), 2.0).is_empty());
+    }
+
+    fn lattice(lo: f32, hi: f32) -> Lattice {
+        let grid = Grid::cube_res(glam::Vec3::splat(lo), glam::Vec3::splat(hi), 64).unwrap();
+        Lattice {
+            origin: [grid.origin.x, grid.origin.y],
+            spacing: grid.spacing,
+            dims: [grid.dims[0], grid.dims[1]],
+        }
     }
 }

@@ -321,11 +321,13 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
 }
 
 /// Fits a coefficient volume through a stack of closed planar contours stacked along `axis`.
-/// `Method::Spline` (the default): each plane's exact 2D signed distance, fitted across the
-/// planes by a cubic B-spline along the axis, the solid closed half a layer (at least 2 grid
-/// spacings) beyond the outermost planes; the RBF methods fit points along the loops and caps
-/// over the parts of a layer its neighbour does not cover. Holes and several loops per plane
-/// are allowed (even-odd). See `docs/points.md` for the measurements and the limits.
+/// `Method::Spline` (the default): each plane's exact 2D signed distance, corrected so the
+/// plane's spline passes through its loops, fitted across the planes by a cubic B-spline along
+/// the axis (evenly spaced planes are put on nodes, see [`SNAP_SPACING`]), leaning regions
+/// bridged, the solid closed half a layer (at least 2 grid spacings) beyond the outermost
+/// planes; the RBF methods fit points along the loops and caps over the parts of a layer its
+/// neighbour does not cover. Holes and several loops per plane are allowed (even-odd). See
+/// `docs/points.md` for the measurements and the limits.
 pub fn contours(
     layers: &[pgvol_ops::Layer],
     axis: pgvol_ops::Axis,
@@ -358,6 +360,8 @@ pub fn contours(
         let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
         return fit_on_grid(&cloud, grid, options, (lo, hi), progress);
     }
+    let heights: Vec<f32> = planes.iter().map(|p| p.height).collect();
+    let grid = planes_on_nodes(grid, &heights, a, (lo, hi))?;
     let [nx, ny, nz] = grid.dims;
     crate::memory::check_memory(
         &format!(
@@ -388,6 +392,47 @@ pub fn contours(
         file: PgvFile { header, volume },
         report,
     })
+}
+
+/// Evenly spaced planes whose distance is within this fraction of a whole number of grid
+/// spacings get a grid with that spacing, aligned so they fall on nodes.
+pub const SNAP_SPACING: f32 = 0.1;
+
+/// `grid` with its spacing moved by at most [`SNAP_SPACING`] and its origin along `axis`
+/// shifted so that evenly spaced planes at `heights` lie on nodes (the node count follows, the
+/// cube stays centred on `bounds` otherwise). A cubic B-spline along the axis can then take
+/// every plane's value exactly even when the planes are less than two spacings apart, where
+/// a least-squares fit between nodes would smooth single-plane features (the tips of horns)
+/// away. Unevenly spaced planes keep `grid`.
+fn planes_on_nodes(
+    grid: pgvol_core::Grid,
+    heights: &[f32],
+    axis: usize,
+    bounds: (Vec3, Vec3),
+) -> Result<pgvol_core::Grid> {
+    let gaps: Vec<f32> = heights.windows(2).map(|w| w[1] - w[0]).collect();
+    let Some(&first) = gaps.first() else {
+        return Ok(grid);
+    };
+    let mean = gaps.iter().sum::<f32>() / gaps.len() as f32;
+    let uneven = gaps.iter().any(|g| (g - mean).abs() > 1e-3 * mean);
+    if mean.is_nan() || mean <= 0.0 || first <= 0.0 || uneven {
+        return Ok(grid);
+    }
+    let steps = (mean / grid.spacing).round().max(1.0);
+    let spacing = mean / steps;
+    if (spacing - grid.spacing).abs() > SNAP_SPACING * grid.spacing {
+        return Ok(grid);
+    }
+    let mut snapped = pgvol_core::Grid::cube_voxel(bounds.0, bounds.1, spacing)?;
+    // Down along the axis by less than a spacing onto the first plane, one node more on top.
+    let offset = (heights[0] - snapped.origin[axis]) / spacing;
+    let fraction = offset - offset.floor();
+    if fraction > 0.0 {
+        snapped.origin[axis] -= (1.0 - fraction) * spacing;
+        snapped.dims[axis] += 1;
+    }
+    Ok(snapped)
 }
 
 /// Estimated peak bytes of the distance interpolation of `planes` contour planes on `grid`
@@ -440,6 +485,29 @@ mod tests {
                     property float z\nend_header\n0 0 1e9\n";
         let e = pgvol_mesh::read_ply_points(bare.as_bytes(), Path::new("p.ply")).unwrap_err();
         assert!(e.to_string().starts_with("p.ply: "), "{e}");
+    }
+
+    #[test]
+    fn evenly_spaced_planes_are_put_on_nodes() {
+        let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        let grid = pgvol_core::Grid::cube_res(lo, hi, 64).unwrap();
+        // 0.94 grid spacings apart: snapped, every plane on a node, the box still covered.
+        let gap = 0.94 * grid.spacing;
+        let heights: Vec<f32> = (0..30).map(|k| -0.8 + 0.013 + gap * k as f32).collect();
+        let snapped = planes_on_nodes(grid, &heights, 2, (lo, hi)).unwrap();
+        assert!((snapped.spacing - gap).abs() < 1e-6);
+        for h in &heights {
+            let k = (h - snapped.origin.z) / snapped.spacing;
+            assert!((k - k.round()).abs() < 1e-3, "{h}: node {k}");
+        }
+        assert!(snapped.origin.cmple(grid.origin + Vec3::splat(1e-5)).all());
+        assert!(snapped.max_corner().cmpge(hi).all());
+        // 1.5 spacings apart (a third from a whole number) or uneven: left alone.
+        let wide: Vec<f32> = (0..10).map(|k| 1.5 * grid.spacing * k as f32).collect();
+        assert_eq!(planes_on_nodes(grid, &wide, 2, (lo, hi)).unwrap(), grid);
+        let mut uneven = heights.clone();
+        uneven[3] += 0.3 * gap;
+        assert_eq!(planes_on_nodes(grid, &uneven, 2, (lo, hi)).unwrap(), grid);
     }
 
     #[test]

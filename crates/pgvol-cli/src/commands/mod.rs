@@ -63,11 +63,14 @@ pub enum Command {
     /// through them is fitted into a cubic B-spline coefficient volume on the usual grid around
     /// the points. Clouds without normals get estimated, consistently oriented ones.
     Points(points::PointsArgs),
-    /// Rebuilds a solid from a stack of closed planar contours (JSON or CLI layer files).
+    /// Rebuilds a solid from a stack of closed planar contours (JSON, CLI or SVG layer files).
     ///
-    /// The loops are constraints with in-plane normals; caps close the stack half a layer
-    /// beyond wherever a layer is not covered by its neighbour, so branching, holes and leaning
-    /// parts are handled. Slicing the result at the input planes gives back the contours.
+    /// Each plane's 2D signed distance, held to pass through its loops, is interpolated across
+    /// the planes by a cubic spline along the axis; the solid closes half a layer beyond the
+    /// outermost planes, and regions of neighbouring layers that do not overlap (a leaning
+    /// part) are joined in a frame moving with them; branching and holes are handled. Evenly
+    /// spaced planes are put on grid nodes (the spacing moves by at most 10 %). Slicing the
+    /// result at the input planes gives back the contours.
     Contours(points::ContoursArgs),
     /// Offsets a shape by a distance (positive outward, negative inward).
     Offset(ops::OffsetArgs),
