@@ -172,7 +172,11 @@ pub fn points_bytes(
     let mut bytes =
         bricks.saturating_mul(BYTES_PER_BRICK) + (points as u64).saturating_mul(BYTES_PER_POINT);
     match options.method {
-        Method::Spline => {}
+        Method::Tangent => {}
+        // The least-squares fit over the band's bricks, two constraints per point.
+        Method::Spline => {
+            bytes += pgvol_points::spline_fit::fit_bytes(bricks, 2 * points as u64);
+        }
         Method::RbfWendland => {
             let support = options
                 .support
@@ -183,7 +187,9 @@ pub fn points_bytes(
             let kept_spacing = f64::from(spacing.max(support / pgvol_points::SUPPORT_SPACINGS));
             let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
             let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
-            let entries = 2.0 * kept * per_row;
+            // The coarser levels add a quarter as many rows as the level below them, each
+            // seeing as many centres: at most a third more in all.
+            let entries = 2.0 * kept * per_row * 4.0 / 3.0;
             bytes += (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
         }
         Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
