@@ -21,7 +21,7 @@ pub enum PointsMethodArg {
     /// by the cubic B-spline volume: no system to solve.
     Tangent,
     /// Compactly supported Wendland RBFs (sparse system, conjugate gradients) correcting the
-    /// tangent-plane distance so the field interpolates the points exactly.
+    /// spline fit so the field interpolates the points exactly.
     RbfWendland,
     /// Global cubic RBFs r³ with a linear term (dense solve): at most
     /// 2000 points.
