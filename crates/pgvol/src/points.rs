@@ -243,7 +243,11 @@ fn fit_on_grid(
             options.method.name()
         ),
         points_bytes(cloud.points.len(), spacing, &grid, options),
-        "lower the resolution or thin the cloud",
+        if options.method == Method::Tangent {
+            "lower the resolution or thin the cloud"
+        } else {
+            "lower the resolution, thin the cloud, or use --method tangent (no system to solve)"
+        },
     )?;
     let fit_options = pgvol_points::PointsOptions {
         method: options.method,
