@@ -417,19 +417,21 @@ pub(crate) mod tests {
         (radius_error(&volume, 1.0), report, grid.spacing)
     }
 
+    /// Bounds in grid spacings: about 3× the measured errors (docs/points.md), the tangent
+    /// planes' blend and the B-spline interpolation of its samples being the loosest.
     #[test]
     fn every_method_finds_the_sphere() {
-        for (method, n) in [
-            (Method::Spline, 4000),
-            (Method::Tangent, 4000),
-            (Method::RbfWendland, 4000),
-            (Method::RbfWendland, 16000),
-            (Method::RbfCubic, 1000),
+        for (method, n, bound) in [
+            (Method::Spline, 4000, 0.01),
+            (Method::Tangent, 4000, 0.1),
+            (Method::RbfWendland, 4000, 0.02),
+            (Method::RbfWendland, 16000, 0.02),
+            (Method::RbfCubic, 1000, 0.02),
         ] {
             let (err, report, h) = sphere(n, method, true);
             eprintln!("{method:?}: {}", err / h);
             assert!(
-                err < 0.1 * h,
+                err < bound * h,
                 "{method:?}: radius off by {err} (h = {h}), {report:?}"
             );
         }
