@@ -326,9 +326,7 @@ pub fn reconstruct(
         report.residual = fit.residual;
         report.matrix_entries = fit.entries;
         report.support = support;
-        let samples = band::sample_band(&grid, points, &tangent, options.band, &|x, _| {
-            base(x) + fit.value(x)
-        });
+        let samples = band::resample(&grid, &samples, options.band, &|x| base(x) + fit.value(x));
         report.seconds_solve += t.elapsed().as_secs_f64();
         let t = Instant::now();
         volume = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?.0;
