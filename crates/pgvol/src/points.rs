@@ -187,10 +187,13 @@ pub fn points_bytes(
             let kept_spacing = f64::from(spacing.max(support / pgvol_points::SUPPORT_SPACINGS));
             let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
             let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
-            // The coarser levels add a quarter as many rows as the level below them, each
-            // seeing as many centres: at most a third more in all.
-            let entries = 2.0 * kept * per_row * 4.0 / 3.0;
-            bytes += (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
+            let entries = 2.0 * kept * per_row;
+            let matrix = (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
+            // The spline fit it corrects comes first, and its memory is freed before.
+            bytes += matrix.max(pgvol_points::spline_fit::fit_bytes(
+                bricks,
+                2 * points as u64,
+            ));
         }
         Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
     }
