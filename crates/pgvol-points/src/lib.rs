@@ -106,11 +106,12 @@ pub struct PointsReport {
     pub spacing: f32,
     /// Off-surface offset ε.
     pub offset: f32,
-    /// RBF centres (0 for the spline method).
+    /// RBF centres, or the constraints of the least-squares fit (`spline`; 0 for `tangent`).
     pub centres: usize,
     /// Wendland support radius (0 otherwise).
     pub support: f32,
-    /// Conjugate-gradient iterations and final relative residual (Wendland).
+    /// Conjugate-gradient iterations and final relative residual (Wendland, or the
+    /// least-squares fit).
     pub iterations: usize,
     pub residual: f64,
     /// Stored matrix entries (Wendland).
@@ -288,7 +289,9 @@ pub fn reconstruct(
             report.seconds_solve = t.elapsed().as_secs_f64();
             band::sample_band(&grid, points, &tangent, options.band, &|x, _| fit.value(x))
         }
-        _ => band::sample_band(&grid, points, &tangent, options.band, &|_, t| t),
+        Method::Spline | Method::Tangent | Method::RbfWendland => {
+            band::sample_band(&grid, points, &tangent, options.band, &|_, t| t)
+        }
     };
     report.bricks = samples.stored_count();
     let t = Instant::now();
