@@ -115,8 +115,13 @@ pub fn run(a: PointsArgs) -> Result<()> {
     }
     if !a.out.quiet {
         let solve = if r.centres > 0 {
+            let unit = if r.method == "spline" {
+                "constraints"
+            } else {
+                "centres"
+            };
             format!(
-                ", {} centres, {} iterations, residual {:.1e}",
+                ", {} {unit}, {} iterations, residual {:.1e}",
                 r.centres, r.iterations, r.residual
             )
         } else {
