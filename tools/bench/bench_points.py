@@ -5,20 +5,24 @@ Usage (normally through tools/bench/run.sh points):
 
 Three tables, each row one mesh:
   1. Points with normals (N area-uniform samples, default 100k, triangle normals):
-     pgvol points --method spline and rbf-wendland at --res (default 128), against Open3D's
+     pgvol points --method spline, tangent and rbf-wendland at --res (default 128), against Open3D's
      screened Poisson reconstruction, its depth chosen so its triangle count is nearest
      pgvol's. Wall time, peak RSS (both whole processes, /usr/bin/time -v), triangles,
      watertightness and Chamfer-L1 to the true mesh (pgvol compare, % of the diagonal).
-  2. rbf-wendland against scipy's RBFInterpolator (thin-plate spline, the same on- and
-     off-surface constraints, the field sampled on a 64³ grid and contoured by scikit-image
-     marching cubes) at 2k and 5k points (its dense solve and evaluation grow as n³ and
-     n · nodes); pgvol alone at 1M points on the same grid.
+  2. rbf-wendland (and spline) against scipy's RBFInterpolator (thin-plate spline, the same
+     on- and off-surface constraints, the field sampled on a 64³ grid and contoured by
+     scikit-image marching cubes) at 2 500, 5 000, 10 000 and 20 000 points. scipy's dense
+     solve is over the constraints (two per point), (2n)² doubles and about (2n)³ operations:
+     up to DENSE_MAX points it runs dense, above with `neighbors=` (a thin-plate fit to the
+     nearest constraints of each evaluation point; 20 000 points dense would need 12.8 GB).
+     pgvol alone at 1M points.
   3. Contours: the mesh sliced into 20 and 40 layers (pgvol slice, JSON), rebuilt by
      pgvol contours, against rasterising each layer, interpolating linearly between the
      layers and marching cubes (numpy and scikit-image), at the same grid; plus how far the
      input contours are from the rebuilt surface's slices at the same planes.
 Peers run in a child process of this script (`--peer ...`) so their time and memory are
 measured the same way as pgvol's. --quick: one mesh, 20k points, 64³, for a check.
+--tables points,rbf,contours picks the tables (default all three).
 """
 
 from __future__ import annotations
@@ -38,7 +42,11 @@ from bench_scale import timed  # noqa: E402
 DEFAULT_MESHES = "spot,fandisk"
 # scipy evaluates its global RBF at every node: a coarser grid keeps it within minutes.
 RBF_RES = 64
+DENSE_MAX = 5_000
+SCIPY_NEIGHBOURS = 64
 TIMEOUT = 600.0
+# scipy's fits at 10k and 20k points take minutes.
+SCIPY_TIMEOUT = 900.0
 
 
 def sample(mesh, n: int, seed: int = 1):
@@ -89,7 +97,7 @@ def contour_to(values, g, out: Path) -> None:
     trimesh.Trimesh(verts + g.origin, faces[:, ::-1], process=True).export(out)
 
 
-def peer_scipy(cloud: Path, out: Path, res: int) -> None:
+def peer_scipy(cloud: Path, out: Path, res: int, neighbors: int | None = None) -> None:
     from scipy.interpolate import RBFInterpolator
 
     data = np.loadtxt(cloud, dtype=np.float64)
@@ -101,7 +109,7 @@ def peer_scipy(cloud: Path, out: Path, res: int) -> None:
     side = np.where(np.arange(len(p)) % 2 == 0, 1.0, -1.0)
     centres = np.vstack([p, p + eps * side[:, None] * n])
     values = np.concatenate([np.zeros(len(p)), eps * side])
-    rbf = RBFInterpolator(centres, values, kernel="thin_plate_spline")
+    rbf = RBFInterpolator(centres, values, kernel="thin_plate_spline", neighbors=neighbors)
     g, (x, y, z) = grid_nodes(lo, hi, res)
     X, Y, Z = np.meshgrid(x, y, z, indexing="ij")
     field = rbf(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])).reshape(X.shape)
@@ -143,8 +151,8 @@ def peer_slices(layers_json: Path, out: Path, res: int) -> None:
 
 # ---- the tables ----
 
-def run_case(argv) -> dict:
-    return timed([str(a) for a in argv], TIMEOUT)
+def run_case(argv, timeout: float = TIMEOUT) -> dict:
+    return timed([str(a) for a in argv], timeout)
 
 
 def cell(run: dict, key: str, fmt: str) -> str:
@@ -159,7 +167,7 @@ def points_table(exe, meshes, n, res, work) -> str:
         cloud = work / f"{name}-{n}.xyz"
         write_xyz(cloud, *sample(mesh, n))
         results = {}
-        for method in ["spline", "rbf-wendland"]:
+        for method in ["spline", "tangent", "rbf-wendland"]:
             out = work / f"{name}-{method}.glb"
             run = run_case([exe, "points", cloud, "-o", out, "--method", method, "--res", res, "--json"])
             if run["status"] == "ok":
@@ -182,7 +190,8 @@ def points_table(exe, meshes, n, res, work) -> str:
         if best and best.get("status") == "ok":
             best["chamfer"] = chamfer(exe, best["out"], src)
         results["poisson"] = best or {"status": "failed"}
-        for label, r in [("pgvol spline", results["spline"]), ("pgvol rbf-wendland", results["rbf-wendland"]),
+        for label, r in [("pgvol spline", results["spline"]), ("pgvol tangent", results["tangent"]),
+                         ("pgvol rbf-wendland", results["rbf-wendland"]),
                          (f"Open3D Poisson (depth {results['poisson'].get('depth', '?')})", results["poisson"])]:
             rows.append([name, label, cell(r, "seconds", ".2f"), cell(r, "rss_mib", ".0f"), r.get("tris", "n/a"),
                          r.get("watertight", "n/a"), cell(r, "chamfer", ".4f")])
@@ -190,27 +199,36 @@ def points_table(exe, meshes, n, res, work) -> str:
                                   "Chamfer-L1 (%)"], rows)
 
 
-def rbf_table(exe, name, sizes, big, res, work) -> str:
+def rbf_table(exe, name, sizes, alone, res, work) -> str:
     src = common.mesh_file(name)
     mesh = common.load_mesh(src)
     rows = []
-    for n in sizes + [big]:
+    for n in sizes + alone:
         cloud = work / f"{name}-rbf-{n}.xyz"
         write_xyz(cloud, *sample(mesh, n, seed=2))
-        out = work / f"rbf-{n}.glb"
-        ours = run_case([exe, "points", cloud, "-o", out, "--method", "rbf-wendland", "--res", res, "--json"])
-        if ours["status"] == "ok":
-            ours["chamfer"] = chamfer(exe, out, src)
+        ours = {}
+        for method in ["rbf-wendland", "spline"]:
+            out = work / f"rbf-{n}-{method}.glb"
+            run = run_case([exe, "points", cloud, "-o", out, "--method", method, "--res", res, "--json"])
+            if run["status"] == "ok":
+                run["chamfer"] = chamfer(exe, out, src)
+            ours[method] = run
         theirs = {"status": "n/a"}
-        if n != big:
+        if n in sizes:
             out = work / f"scipy-{n}.ply"
-            theirs = run_case([sys.executable, __file__, "--peer", "scipy", cloud, out, res])
+            kind = "scipy" if n <= DENSE_MAX else "scipy-local"
+            theirs = run_case([sys.executable, __file__, "--peer", kind, cloud, out, res], SCIPY_TIMEOUT)
+            theirs["mode"] = "dense" if n <= DENSE_MAX else f"{SCIPY_NEIGHBOURS} neighbours"
             if theirs["status"] == "ok":
                 theirs["chamfer"] = chamfer(exe, out, src)
-        rows.append([n, cell(ours, "seconds", ".2f"), cell(ours, "rss_mib", ".0f"), cell(ours, "chamfer", ".4f"),
-                     cell(theirs, "seconds", ".2f"), cell(theirs, "rss_mib", ".0f"), cell(theirs, "chamfer", ".4f")])
-    return common.markdown_table(["points", "pgvol time (s)", "pgvol RSS (MiB)", "pgvol Chamfer-L1 (%)",
-                                  "scipy time (s)", "scipy RSS (MiB)", "scipy Chamfer-L1 (%)"], rows)
+        w = ours["rbf-wendland"]
+        rows.append([n, 2 * n, cell(w, "seconds", ".2f"), cell(w, "rss_mib", ".0f"), cell(w, "chamfer", ".4f"),
+                     cell(ours["spline"], "seconds", ".2f"), cell(ours["spline"], "chamfer", ".4f"),
+                     theirs.get("mode", "n/a"), cell(theirs, "seconds", ".2f"), cell(theirs, "rss_mib", ".0f"),
+                     cell(theirs, "chamfer", ".4f")])
+    return common.markdown_table(["points", "constraints", "rbf-wendland time (s)", "rbf-wendland RSS (MiB)",
+                                  "rbf-wendland Chamfer-L1 (%)", "spline time (s)", "spline Chamfer-L1 (%)",
+                                  "scipy solve", "scipy time (s)", "scipy RSS (MiB)", "scipy Chamfer-L1 (%)"], rows)
 
 
 def contour_table(exe, meshes, res, work) -> str:
@@ -249,26 +267,37 @@ def main(argv=None) -> int:
     ap.add_argument("--points", type=int, default=100_000)
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--tables", default="points,rbf,contours")
     ap.add_argument("--peer", nargs=4, metavar=("KIND", "IN", "OUT", "ARG"))
     args = ap.parse_args(argv)
     if args.peer:
         kind, src, out, arg = args.peer
-        {"poisson": peer_poisson, "scipy": peer_scipy, "slices": peer_slices}[kind](Path(src), Path(out), int(arg))
+        peers = {
+            "poisson": peer_poisson,
+            "scipy": peer_scipy,
+            "scipy-local": lambda c, o, r: peer_scipy(c, o, r, SCIPY_NEIGHBOURS),
+            "slices": peer_slices,
+        }
+        peers[kind](Path(src), Path(out), int(arg))
         return 0
     exe = common.pgvol_bin()
     meshes = args.meshes.split(",")
-    sizes, big = [2_000, 5_000], 1_000_000
+    sizes, alone = [2_500, 5_000, 10_000, 20_000], [1_000_000]
     if args.quick:
-        meshes, args.points, args.res, sizes, big = meshes[:1], 20_000, 64, [1_000], 50_000
+        meshes, args.points, args.res, sizes, alone = meshes[:1], 20_000, 64, [1_000], [50_000]
+    tables = args.tables.split(",")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
-        print(f"### Points with normals ({args.points} samples, {args.res}^3)\n")
-        print(points_table(exe, meshes, args.points, args.res, work))
-        print(f"\n### rbf-wendland and scipy RBFInterpolator ({meshes[0]}, {RBF_RES}^3)\n")
-        print(rbf_table(exe, meshes[0], sizes, big, RBF_RES, work))
-        print(f"\n### Contours, 20 and 40 layers ({args.res}^3)\n")
-        contour_meshes = meshes if args.quick else args.contour_meshes.split(",")
-        print(contour_table(exe, contour_meshes, args.res, work))
+        if "points" in tables:
+            print(f"### Points with normals ({args.points} samples, {args.res}^3)\n")
+            print(points_table(exe, meshes, args.points, args.res, work))
+        if "rbf" in tables:
+            print(f"\n### rbf-wendland and scipy RBFInterpolator ({meshes[0]}, {RBF_RES}^3)\n")
+            print(rbf_table(exe, meshes[0], sizes, alone, RBF_RES, work))
+        if "contours" in tables:
+            print(f"\n### Contours, 20 and 40 layers ({args.res}^3)\n")
+            contour_meshes = meshes if args.quick else args.contour_meshes.split(",")
+            print(contour_table(exe, contour_meshes, args.res, work))
     return 0
 
 

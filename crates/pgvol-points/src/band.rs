@@ -64,6 +64,39 @@ pub fn sample_band(
     values
 }
 
+/// `samples` (from [`sample_band`]) with `field(x)`, clamped to ±`band`, at every node of
+/// their stored bricks: a refined field defined over those bricks replaces the first, without
+/// repeating its neighbour queries. The unstored bricks keep their side.
+pub fn resample(
+    grid: &Grid,
+    samples: &SparseGrid,
+    band: f32,
+    field: &(dyn Fn(Vec3) -> f32 + Sync),
+) -> SparseGrid {
+    let bricks: Vec<([usize; 3], Box<[f32; BRICK_NODES]>)> =
+        samples.stored().map(|(b, v)| (b, Box::new(*v))).collect();
+    let bricks: Vec<([usize; 3], Box<[f32; BRICK_NODES]>)> = bricks
+        .into_par_iter()
+        .map(|(b, mut brick)| {
+            let (lo, n) = samples.brick_extent(b);
+            for k in 0..n[2] {
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        let x = grid.point(lo[0] + i, lo[1] + j, lo[2] + k);
+                        brick[brick_offset([i, j, k])] = field(x).clamp(-band, band);
+                    }
+                }
+            }
+            (b, brick)
+        })
+        .collect();
+    let mut out = samples.clone();
+    for (b, brick) in bricks {
+        out.insert(b, brick);
+    }
+    out
+}
+
 /// Fills the unset (NaN) nodes of a brick with ±`band` from the side of a set 6-neighbour,
 /// sweep after sweep; a brick with no set node asks `side` for its first node.
 fn spread_sides(brick: &mut [f32; BRICK_NODES], band: f32, side: impl Fn(usize) -> f32) {

@@ -2,6 +2,7 @@
 //! points near the query. Points on a surface fill few cells of a box, so cells are kept in a
 //! hash map rather than a dense array (1M surface points would otherwise need ~10⁷ cells).
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -9,7 +10,7 @@ use glam::Vec3;
 
 /// Points bucketed by cell of side `cell`.
 pub struct PointIndex<'a> {
-    points: &'a [Vec3],
+    points: Cow<'a, [Vec3]>,
     cell: f32,
     /// Point indices sorted by cell.
     order: Vec<u32>,
@@ -40,8 +41,9 @@ impl Hasher for CellHasher {
 }
 
 impl<'a> PointIndex<'a> {
-    /// Buckets `points` into cells of side `cell` (> 0).
-    pub fn new(points: &'a [Vec3], cell: f32) -> Self {
+    /// Buckets `points` (borrowed or owned) into cells of side `cell` (> 0).
+    pub fn new(points: impl Into<Cow<'a, [Vec3]>>, cell: f32) -> Self {
+        let points = points.into();
         let cell = if cell.is_finite() && cell > 0.0 {
             cell
         } else {
@@ -70,8 +72,8 @@ impl<'a> PointIndex<'a> {
     }
 
     /// The indexed points.
-    pub fn points(&self) -> &'a [Vec3] {
-        self.points
+    pub fn points(&self) -> &[Vec3] {
+        &self.points
     }
 
     /// Calls `f(index, squared distance)` for every point within `r` of `p`.

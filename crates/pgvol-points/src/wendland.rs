@@ -45,7 +45,16 @@ pub const BYTES_PER_ENTRY: u64 = 8;
 
 /// Interpolates `values` at `centres` with support radius `radius`.
 pub fn fit<'a>(centres: &'a [Vec3], values: &[f32], radius: f32) -> WendlandFit<'a> {
-    let index = PointIndex::new(centres, radius);
+    fit_index(PointIndex::new(centres, radius), values, radius)
+}
+
+/// As [`fit`], keeping the centres.
+pub fn fit_owned(centres: Vec<Vec3>, values: &[f32], radius: f32) -> WendlandFit<'static> {
+    fit_index(PointIndex::new(centres, radius), values, radius)
+}
+
+fn fit_index<'a>(index: PointIndex<'a>, values: &[f32], radius: f32) -> WendlandFit<'a> {
+    let centres = index.points();
     let rows: Vec<Vec<(u32, f32)>> = centres
         .par_iter()
         .map(|&c| {
@@ -115,6 +124,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 impl WendlandFit<'_> {
+    /// Number of centres.
+    pub fn centres(&self) -> usize {
+        self.index.points().len()
+    }
+
     /// The interpolant at `x`.
     pub fn value(&self, x: Vec3) -> f32 {
         let mut sum = 0.0;

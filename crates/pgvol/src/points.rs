@@ -172,7 +172,11 @@ pub fn points_bytes(
     let mut bytes =
         bricks.saturating_mul(BYTES_PER_BRICK) + (points as u64).saturating_mul(BYTES_PER_POINT);
     match options.method {
-        Method::Spline => {}
+        Method::Tangent => {}
+        // The least-squares fit over the band's bricks, two constraints per point.
+        Method::Spline => {
+            bytes += pgvol_points::spline_fit::fit_bytes(bricks, 2 * points as u64);
+        }
         Method::RbfWendland => {
             let support = options
                 .support
@@ -184,7 +188,12 @@ pub fn points_bytes(
             let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
             let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
             let entries = 2.0 * kept * per_row;
-            bytes += (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
+            let matrix = (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
+            // The spline fit it corrects comes first, and its memory is freed before.
+            bytes += matrix.max(pgvol_points::spline_fit::fit_bytes(
+                bricks,
+                2 * points as u64,
+            ));
         }
         Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
     }
@@ -237,7 +246,11 @@ fn fit_on_grid(
             options.method.name()
         ),
         points_bytes(cloud.points.len(), spacing, &grid, options),
-        "lower the resolution or thin the cloud",
+        if options.method == Method::Tangent {
+            "lower the resolution or thin the cloud"
+        } else {
+            "lower the resolution, thin the cloud, or use --method tangent (no system to solve)"
+        },
     )?;
     let fit_options = pgvol_points::PointsOptions {
         method: options.method,

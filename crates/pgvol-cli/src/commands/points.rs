@@ -12,12 +12,16 @@ use crate::progress::Bars;
 /// The field through the points.
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
 pub enum PointsMethodArg {
-    /// Blended tangent-plane distance of the nearest points fitted straight into the cubic
-    /// B-spline volume: no system to solve.
+    /// Cubic B-spline coefficients fitted directly to the points and their off-surface
+    /// constraints by weighted least squares, with a smoothness term (sparse, conjugate
+    /// gradients).
     #[default]
     Spline,
+    /// Blended tangent-plane distance of the nearest points at the grid nodes, interpolated
+    /// by the cubic B-spline volume: no system to solve.
+    Tangent,
     /// Compactly supported Wendland RBFs (sparse system, conjugate gradients) correcting the
-    /// tangent-plane distance so the field interpolates the points exactly.
+    /// spline fit so the field interpolates the points exactly.
     RbfWendland,
     /// Global cubic RBFs r³ with a linear term (dense solve): at most
     /// 2000 points.
@@ -28,6 +32,7 @@ impl From<PointsMethodArg> for pgvol::PointsMethod {
     fn from(m: PointsMethodArg) -> Self {
         match m {
             PointsMethodArg::Spline => pgvol::PointsMethod::Spline,
+            PointsMethodArg::Tangent => pgvol::PointsMethod::Tangent,
             PointsMethodArg::RbfWendland => pgvol::PointsMethod::RbfWendland,
             PointsMethodArg::RbfCubic => pgvol::PointsMethod::RbfCubic,
         }
@@ -110,8 +115,13 @@ pub fn run(a: PointsArgs) -> Result<()> {
     }
     if !a.out.quiet {
         let solve = if r.centres > 0 {
+            let unit = if r.method == "spline" {
+                "constraints"
+            } else {
+                "centres"
+            };
             format!(
-                ", {} centres, {} iterations, residual {:.1e}",
+                ", {} {unit}, {} iterations, residual {:.1e}",
                 r.centres, r.iterations, r.residual
             )
         } else {
