@@ -52,8 +52,10 @@ struct Report<'a> {
     input_triangles: usize,
     input_components: usize,
     perturbation: &'a pgvol::PerturbReport,
-    /// The pass clearing stray pieces on the check grid.
+    /// The pass clearing wrong nodes of the check grid away from the surface.
     cleanup: pgvol::Cleanup,
+    /// The passes removing the stray pieces left on the check grid.
+    strays: pgvol::Strays,
     grid: pgvol::Grid,
     /// Bytes of the .pgv file, or triangles, vertices and components of the mesh written.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -80,11 +82,13 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         tolerance: a.tolerance as f64,
     };
     let bars = Bars::new(quiet);
-    let perturbed = pgvol::perturb(&mesh, &options, &bars).map_err(|e| at_input(e, &a.input))?;
-    let built = start.elapsed().as_secs_f64() - read;
-    let t = Instant::now();
     let res = a.resample.unwrap_or(pgvol::DEFAULT_RES as u32);
     let spec = pgvol::GridSpec::Res(res as usize);
+    // Checked on the grid the output is contoured or resampled on (the list records it).
+    let perturbed =
+        pgvol::perturb_on(&mesh, &options, spec, &bars).map_err(|e| at_input(e, &a.input))?;
+    let built = start.elapsed().as_secs_f64() - read;
+    let t = Instant::now();
     let header = pgvol::perturbation_header(&perturbed.field, &mesh, spec)
         .map_err(|e| at_input(e, &a.input))?;
     let list = to_pgv && a.resample.is_none();
@@ -126,6 +130,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         input_components: mesh.stats().components,
         perturbation: r,
         cleanup: perturbed.cleanup,
+        strays: perturbed.strays,
         grid: header.grid,
         bytes,
         triangles,

@@ -9,6 +9,7 @@ mod field;
 mod point_grid;
 pub mod quadric;
 mod resample;
+mod strays;
 
 pub use box_tree::BoxTree;
 pub use build::{
@@ -19,3 +20,6 @@ pub use cleanup::{clear_points, Cleanup};
 pub use field::{Perturbation, PerturbationError, PerturbationField};
 pub use quadric::Quadric;
 pub use resample::sample_band;
+pub use strays::{
+    clear_strays, stray_nodes, Strays, STRAY_AGAINST_RADIUS, STRAY_MIN_MARGIN, STRAY_MIN_RADIUS,
+};
