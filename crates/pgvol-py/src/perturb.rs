@@ -12,20 +12,22 @@ use crate::progress::run;
 
 /// Converts the mesh (vertices, faces) by the perturbation method: a base quadric fitted to the
 /// vertices, then up to `max_functions` local bumps until every vertex is within `tolerance` of
-/// the bounding-box diagonal, checked on the cube grid of `res` nodes per axis so that the
+/// the bounding-box diagonal, each refined by up to `descent_steps` steps of descent on its
+/// coefficients (the paper's optimisation step), checked on the cube grid of `res` nodes per axis so that the
 /// field contoured there has the mesh's pieces and no stray ones. Returns the field resampled
 /// on that grid (a cubic B-spline coefficient volume, metadata `source = perturbation`) and the
 /// report as a dict: "perturbation" (the loop), "cleanup" and "strays" (the checks). With
 /// `list_path`, the function list itself is also written there (a `.pgv` file, encoding
 /// `perturbation-f64`, resampled on the same grid when read).
 #[pyfunction]
-#[pyo3(signature = (vertices, faces, *, max_functions=2000, tolerance=0.001, res=128, list_path=None, progress=None))]
+#[pyo3(signature = (vertices, faces, *, max_functions=2000, tolerance=0.001, descent_steps=20, res=128, list_path=None, progress=None))]
 pub(crate) fn perturb<'py>(
     py: Python<'py>,
     vertices: &Bound<'py, PyAny>,
     faces: &Bound<'py, PyAny>,
     max_functions: usize,
     tolerance: f64,
+    descent_steps: usize,
     res: usize,
     list_path: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
@@ -35,6 +37,7 @@ pub(crate) fn perturb<'py>(
     let options = pgvol::PerturbOptions {
         max_functions,
         tolerance,
+        descent_steps,
     };
     let spec = pgvol::GridSpec::Res(res);
     let (file, report) = run(py, progress, |p| {
@@ -60,3 +63,4 @@ pub(crate) fn perturb<'py>(
 
 // Python signatures show literal defaults only; these are the library's.
 const _: () = assert!(pgvol::DEFAULT_RES == 128);
+const _: () = assert!(pgvol::DESCENT_STEPS == 20);

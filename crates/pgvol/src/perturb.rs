@@ -214,6 +214,18 @@ fn sign_points(mesh: &Mesh, progress: &dyn Progress) -> Result<Vec<(Vec3, f32)>>
         .collect())
 }
 
+/// How a resampled perturbation field is stored: bit-exact binary32 coefficients. The stray
+/// pass leaves nodes as close as [`pgvol_field::perturb::STRAY_MIN_MARGIN`] spacings to the
+/// zero set on their right side, and the default fixed-point storage (steps up to 1 % of the
+/// spacing) turned such a node over on fandisk, a one-node piece; binary32 takes the same four
+/// bytes per coefficient before compression.
+pub fn resampled_storage() -> crate::StorageOptions {
+    crate::StorageOptions {
+        precision: Some(pgvol_format::Precision::F32),
+        ..Default::default()
+    }
+}
+
 /// How far from the surface the resampled nodes hold the field's distance estimate, in grid
 /// spacings: the encode band, so offsets and shells reach as far as on an encoded mesh.
 pub const RESAMPLE_BAND: f32 = ENCODE_BAND;

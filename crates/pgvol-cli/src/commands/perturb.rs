@@ -35,6 +35,10 @@ pub struct PerturbArgs {
     /// set (first-order estimate |M| / |∇M|).
     #[arg(long, default_value_t = pgvol::PerturbOptions::default().tolerance as f32, value_parser = non_negative)]
     pub tolerance: f32,
+    /// Most descent steps on each perturbation's coefficients after its ten-point solve (the
+    /// paper's optimisation step); 0 keeps the solved quadric.
+    #[arg(long, default_value_t = pgvol::PerturbOptions::default().descent_steps as u32)]
+    pub descent_steps: u32,
     /// Write a coefficient volume resampled on RES nodes per axis (a cube 1.1 × the mesh's
     /// longest extent) instead of the function list; for a mesh output, the grid it is
     /// contoured on. Without it the list records, and a mesh output uses, 128.
@@ -80,6 +84,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     let options = pgvol::PerturbOptions {
         max_functions: a.max_functions as usize,
         tolerance: a.tolerance as f64,
+        descent_steps: a.descent_steps as usize,
     };
     let bars = Bars::new(quiet);
     let res = a.resample.unwrap_or(pgvol::DEFAULT_RES as u32);
@@ -107,7 +112,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     match &file {
         None => pgvol::write_perturbation(&a.output, &header, &perturbed.field)?,
         Some(file) if to_pgv => {
-            pgvol::write_pgv(&a.output, file, &pgvol::StorageOptions::default())?;
+            pgvol::write_pgv(&a.output, file, &pgvol::resampled_storage())?;
         }
         Some(file) => {
             let out = pgvol::perturbation_mesh(file, &bars)?;
