@@ -3,8 +3,9 @@ stray blob or pocket), is watertight and manifold, on the default grid, as the s
 list decoded, and resampled on another grid. Pieces are counted by trimesh, manifoldness by
 manifold3d.
 
-Spot at a budget of 100 functions left 3 to 5 stray pieces on these three outputs before the
-stray pass (docs/perturbation.md)."""
+Spot at a budget of 100 functions, with the loop run without its descent (`--descent-steps 0`),
+left 5, 5 and 3 stray pieces on these three outputs before the stray pass (docs/perturbation.md);
+the default loop's output on the default grid is checked as well."""
 
 from __future__ import annotations
 
@@ -23,12 +24,18 @@ def pieces(mesh) -> int:
 
 @pytest.fixture(scope="module")
 def outputs(pgvol, mesh_path, work_dir):
-    """{kind: (mesh path, perturb report)} for the three outputs of spot at BUDGET."""
+    """{kind: (mesh path, perturb report)} for the outputs of spot at BUDGET."""
     folder = work_dir / "perturb"
     folder.mkdir(parents=True, exist_ok=True)
     src = mesh_path(MESH)
-    budget = ["--max-functions", BUDGET, "--json", "-q"]
+    default_loop = ["--max-functions", BUDGET, "--json", "-q"]
+    budget = [*default_loop, "--descent-steps", 0]
     out = {}
+    descent = folder / "descent.obj"
+    out["default loop"] = (
+        descent,
+        helpers.run_json([pgvol, "perturb", src, "-o", descent, *default_loop]),
+    )
     grid = folder / "default.obj"
     out["default grid"] = (grid, helpers.run_json([pgvol, "perturb", src, "-o", grid, *budget]))
     listed = folder / "list.pgv"
@@ -44,7 +51,10 @@ def outputs(pgvol, mesh_path, work_dir):
     return out
 
 
-@pytest.mark.parametrize("kind", ["default grid", "list decoded", f"resampled at {OTHER_RES}"])
+STRAY_KINDS = ["default grid", "list decoded", f"resampled at {OTHER_RES}"]
+
+
+@pytest.mark.parametrize("kind", STRAY_KINDS + ["default loop"])
 def test_perturb_output_has_the_inputs_pieces(kind, outputs, reference_mesh):
     path, report = outputs[kind]
     mesh = helpers.load_output(path)
@@ -60,7 +70,8 @@ def test_perturb_output_has_the_inputs_pieces(kind, outputs, reference_mesh):
 
 
 def test_the_stray_pass_found_and_removed_pieces(outputs):
-    # The budget is one that leaves pieces to the pass, so the checks above can fail.
-    for kind, (_, report) in outputs.items():
+    # The budget and loop leave pieces to the pass, so the checks above can fail.
+    for kind in STRAY_KINDS:
+        report = outputs[kind][1]
         strays = report.get("strays", {})
         assert strays.get("pieces", 0) > 0 and strays.get("pieces_left") == 0, f"{kind}: {strays}"
