@@ -244,13 +244,15 @@ def perturb(
     *,
     max_functions: int = 2000,
     tolerance: float = 0.001,
+    descent_steps: int = 20,
     res: int = 128,
     list_path: Optional[_PathLike] = None,
     progress: Optional[_Progress] = None,
 ) -> Tuple[Field, Dict[str, Any]]:
     """Converts a mesh by the perturbation method (docs/perturbation.md): a base quadric plus up
     to ``max_functions`` local bumps, until every vertex is within ``tolerance`` of the
-    bounding-box diagonal, checked on the cube grid of ``res`` nodes per axis so that its
+    bounding-box diagonal, each refined by up to ``descent_steps`` descent steps on its
+    coefficients (the paper's optimisation step), checked on the cube grid of ``res`` nodes per axis so that its
     contour there has the mesh's pieces and no stray ones. Returns the field resampled on that
     grid (metadata ``source = perturbation``) and the report: "perturbation" (the loop),
     "cleanup" and "strays" (the checks). With ``list_path``, also writes the function list
