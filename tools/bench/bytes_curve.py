@@ -78,7 +78,8 @@ def perturb_points(pgvol, mesh: Path, work: Path, budgets) -> dict:
              "--resample", PERTURB_RESAMPLE, "-q"])
         # The list records the default 128-node grid, so its decode is that of the volume.
         run([pgvol, "decode", listed, "-o", out, "--min-component", 0, "-q"])
-        functions = report["perturbation"]["functions"] + report["cleanup"]["bumps"]
+        functions = (report["perturbation"]["functions"] + report["cleanup"]["bumps"]
+                     + report["strays"]["nodes"])
         m = chamfer(pgvol, out, mesh)
         points["perturb-list"].append((functions, listed.stat().st_size, *m))
         points["perturb-pgv"].append((functions, pgv.stat().st_size, *m))

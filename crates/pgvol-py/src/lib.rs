@@ -13,6 +13,7 @@ mod errors;
 mod field;
 mod names;
 mod parts;
+mod perturb;
 mod progress;
 
 use std::path::PathBuf;
@@ -77,7 +78,10 @@ fn compare<'py>(
 }
 
 /// A JSON value as Python dicts, lists, numbers, strings, booleans and None.
-fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn json_to_py<'py>(
+    py: Python<'py>,
+    value: &serde_json::Value,
+) -> PyResult<Bound<'py, PyAny>> {
     use serde_json::Value;
     Ok(match value {
         Value::Null => py.None().into_bound(py),
@@ -130,6 +134,7 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(perturb::perturb, m)?)?;
     m.add_function(wrap_pyfunction!(set_memory_limit, m)?)?;
     m.add_function(wrap_pyfunction!(memory_limit, m)?)?;
     parts::register(m)?;

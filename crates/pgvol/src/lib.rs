@@ -110,15 +110,16 @@ pub use mesh_io::{
 };
 pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
 pub use perturb::{
-    perturb, perturbation_header, perturbation_mesh, resample, resample_onto, write_perturbation,
-    Perturbed, CHECK_MARGIN, CHECK_RES, RESAMPLE_BAND, SOURCE_KEY,
+    perturb, perturb_on, perturbation_header, perturbation_mesh, resample, resample_onto,
+    resampled_storage, write_perturbation, Perturbed, CHECK_MARGIN, CHECK_RES, RESAMPLE_BAND,
+    SOURCE_KEY, STRAY_ROUNDS,
 };
 pub use pgv_io::{
     pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes, read_pgv_from,
     recorded_band, FieldSource,
 };
 pub use pgvol_field::perturb::{
-    Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason,
+    Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason, Strays, DESCENT_STEPS,
 };
 pub use points::{
     contours, points, points_bytes, read_cloud_text, read_layers, read_point_cloud, PointsMethod,

@@ -23,6 +23,7 @@ fn a_resampled_field_reads_back_and_contours_closed() {
     let options = PerturbOptions {
         max_functions: 200,
         tolerance: 1e-3,
+        ..Default::default()
     };
     let built = pgvol::perturb(&mesh, &options, &Silent).unwrap();
     assert!(built.report.functions > 0);
@@ -51,6 +52,7 @@ fn a_stored_function_list_decodes_as_the_field_in_memory() {
     let options = PerturbOptions {
         max_functions: 60,
         tolerance: 1e-3,
+        ..Default::default()
     };
     let built = pgvol::perturb(&mesh, &options, &Silent).unwrap();
     let header = pgvol::perturbation_header(&built.field, &mesh, GridSpec::Res(40)).unwrap();
@@ -100,6 +102,7 @@ fn bad_options_are_refused_with_the_figure() {
     let bad = PerturbOptions {
         max_functions: 10,
         tolerance: -1.0,
+        ..Default::default()
     };
     let e = pgvol::perturb(&mesh, &bad, &Silent).unwrap_err();
     assert!(e.to_string().contains("-1"), "{e}");

@@ -35,6 +35,10 @@ pub struct PerturbArgs {
     /// set (first-order estimate |M| / |∇M|).
     #[arg(long, default_value_t = pgvol::PerturbOptions::default().tolerance as f32, value_parser = non_negative)]
     pub tolerance: f32,
+    /// Most descent steps on each perturbation's coefficients after its ten-point solve (the
+    /// paper's optimisation step); 0 keeps the solved quadric.
+    #[arg(long, default_value_t = pgvol::PerturbOptions::default().descent_steps as u32)]
+    pub descent_steps: u32,
     /// Write a coefficient volume resampled on RES nodes per axis (a cube 1.1 × the mesh's
     /// longest extent) instead of the function list; for a mesh output, the grid it is
     /// contoured on. Without it the list records, and a mesh output uses, 128.
@@ -52,8 +56,10 @@ struct Report<'a> {
     input_triangles: usize,
     input_components: usize,
     perturbation: &'a pgvol::PerturbReport,
-    /// The pass clearing stray pieces on the check grid.
+    /// The pass clearing wrong nodes of the check grid away from the surface.
     cleanup: pgvol::Cleanup,
+    /// The passes removing the stray pieces left on the check grid.
+    strays: pgvol::Strays,
     grid: pgvol::Grid,
     /// Bytes of the .pgv file, or triangles, vertices and components of the mesh written.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -78,13 +84,16 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     let options = pgvol::PerturbOptions {
         max_functions: a.max_functions as usize,
         tolerance: a.tolerance as f64,
+        descent_steps: a.descent_steps as usize,
     };
     let bars = Bars::new(quiet);
-    let perturbed = pgvol::perturb(&mesh, &options, &bars).map_err(|e| at_input(e, &a.input))?;
-    let built = start.elapsed().as_secs_f64() - read;
-    let t = Instant::now();
     let res = a.resample.unwrap_or(pgvol::DEFAULT_RES as u32);
     let spec = pgvol::GridSpec::Res(res as usize);
+    // Checked on the grid the output is contoured or resampled on (the list records it).
+    let perturbed =
+        pgvol::perturb_on(&mesh, &options, spec, &bars).map_err(|e| at_input(e, &a.input))?;
+    let built = start.elapsed().as_secs_f64() - read;
+    let t = Instant::now();
     let header = pgvol::perturbation_header(&perturbed.field, &mesh, spec)
         .map_err(|e| at_input(e, &a.input))?;
     let list = to_pgv && a.resample.is_none();
@@ -103,7 +112,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     match &file {
         None => pgvol::write_perturbation(&a.output, &header, &perturbed.field)?,
         Some(file) if to_pgv => {
-            pgvol::write_pgv(&a.output, file, &pgvol::StorageOptions::default())?;
+            pgvol::write_pgv(&a.output, file, &pgvol::resampled_storage())?;
         }
         Some(file) => {
             let out = pgvol::perturbation_mesh(file, &bars)?;
@@ -126,6 +135,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         input_components: mesh.stats().components,
         perturbation: r,
         cleanup: perturbed.cleanup,
+        strays: perturbed.strays,
         grid: header.grid,
         bytes,
         triangles,

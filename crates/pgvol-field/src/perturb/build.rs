@@ -24,6 +24,7 @@ use glam::{DVec3, Vec3};
 use pgvol_core::Mesh;
 use serde::Serialize;
 
+use super::descent::refine;
 use super::field::{Perturbation, PerturbationField};
 use super::point_grid::PointGrid;
 use super::quadric::{self, monomials, Quadric, TERMS};
@@ -62,13 +63,20 @@ pub struct PerturbOptions {
     /// Stop once every vertex's deviation estimate is within this fraction of the bounding-box
     /// diagonal (default 0.001, 0.1 %).
     pub tolerance: f64,
+    /// Most descent steps on each chosen perturbation's coefficients (the paper's optimisation
+    /// step; 0 keeps the solved quadric as it is). Default [`DESCENT_STEPS`].
+    pub descent_steps: usize,
 }
+
+/// Default descent steps per perturbation.
+pub const DESCENT_STEPS: usize = 20;
 
 impl Default for PerturbOptions {
     fn default() -> Self {
         Self {
             max_functions: 2000,
             tolerance: 1e-3,
+            descent_steps: DESCENT_STEPS,
         }
     }
 }
@@ -120,6 +128,10 @@ pub struct PerturbReport {
     pub seeds_set_aside: usize,
     /// Perturbations whose ten-point system was solved exactly.
     pub exact_solves: usize,
+    /// Descent steps taken on the chosen perturbations' coefficients (the paper's optimisation).
+    pub descent_steps: usize,
+    /// Trial radii refused at the seeds, and seeds left without a bump, by reason.
+    pub refusals: Refusals,
     pub stop: StopReason,
     pub seconds: f64,
 }
@@ -201,8 +213,8 @@ fn deviation(v: f64, g: DVec3) -> f64 {
 }
 
 /// The loop's state at the vertices and probes.
-struct State {
-    points: Vec<DVec3>,
+pub(crate) struct State {
+    pub(crate) points: Vec<DVec3>,
     value: Vec<f64>,
     gradient: Vec<DVec3>,
     /// Probes: points of known side, `P ± δn` along the vertex normals and the caller's sign
@@ -224,16 +236,41 @@ impl State {
     }
 }
 
-/// A perturbation tried at a seed, with its effect.
-struct Trial {
-    term: Perturbation,
-    gain: f64,
-    vertices: Vec<(u32, f64, DVec3)>,
+/// A perturbation tried at a seed, with its effect: the functional's decrease, the vertices'
+/// new values and gradients and the probes' new values.
+pub(crate) struct Trial {
+    pub(crate) term: Perturbation,
+    pub(crate) gain: f64,
+    pub(crate) vertices: Vec<(u32, f64, DVec3)>,
     probes: Vec<(u32, f64)>,
 }
 
-fn evaluate(state: &State, term: Perturbation) -> Option<Trial> {
-    let (lo, hi) = term.quadric.positive_box()?;
+/// Why a trial perturbation was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Refusal {
+    /// It is not a bounded bump.
+    Unbounded,
+    /// It puts more probes on the wrong side.
+    Probes,
+}
+
+/// How many trial perturbations were refused, and why, over the whole loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Refusals {
+    /// Fewer than ten vertices of the seed's sign within the trial radius.
+    pub too_few_points: usize,
+    /// No solve (exact or pulled toward the prior) gave a local bump.
+    pub not_local: usize,
+    /// Seeds whose best bump (after the descent) did not lower the functional.
+    pub no_gain: usize,
+    /// The bump put more probes on the wrong side.
+    pub probes: usize,
+}
+
+/// `term`'s effect on the state (its gain may be negative: the descent may still make it
+/// positive), or why it is refused: it puts more probes on the wrong side, or it is no bump.
+pub(crate) fn evaluate(state: &State, term: Perturbation) -> Result<Trial, Refusal> {
+    let (lo, hi) = term.quadric.positive_box().ok_or(Refusal::Unbounded)?;
     let inside = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
     let (mut gain, mut vertices) = (0.0, Vec::new());
     state
@@ -266,7 +303,10 @@ fn evaluate(state: &State, term: Perturbation) -> Option<Trial> {
                 probes.push((i, v));
             }
         });
-    (gain > 0.0 && newly_wrong <= 0).then_some(Trial {
+    if newly_wrong > 0 {
+        return Err(Refusal::Probes);
+    }
+    Ok(Trial {
         term,
         gain,
         vertices,
@@ -314,13 +354,13 @@ fn pick_points(state: &State, seed: usize, radius: f64) -> Option<Vec<usize>> {
 }
 
 /// The perturbation through `chosen` around `seed`, or `None` when no pull keeps it a local
-/// bump. Returns whether the exact ten-point solve was used.
+/// bump. Returns whether the exact ten-point solve was used, and the largest right-hand side.
 fn solve_term(
     state: &State,
     seed: usize,
     chosen: &[usize],
     radius: f64,
-) -> Option<(Perturbation, bool)> {
+) -> Option<(Perturbation, bool, f64)> {
     let centre = state.points[seed];
     let mut rows = [[0.0; TERMS]; TERMS];
     let mut targets = [0.0; TERMS];
@@ -345,12 +385,12 @@ fn solve_term(
         ok.then_some(Perturbation { quadric, factor })
     };
     if let Some(term) = quadric::interpolate(&rows, &targets).and_then(local) {
-        return Some((term, true));
+        return Some((term, true, highest));
     }
     LAMBDAS
         .iter()
         .find_map(|&l| quadric::least_squares(&rows, &targets, &prior, l).and_then(local))
-        .map(|t| (t, false))
+        .map(|t| (t, false, highest))
 }
 
 /// Converts `mesh` into a perturbation field. `sign_points` are points off the surface with
@@ -435,7 +475,8 @@ pub fn build(
     let limit = options.tolerance * diagonal;
     let mut set_aside = vec![false; n];
     let mut history = Vec::new();
-    let (mut trials, mut seeds_set_aside, mut exact_solves) = (0, 0, 0);
+    let (mut trials, mut seeds_set_aside, mut exact_solves, mut descent_steps) = (0, 0, 0, 0);
+    let mut refusals = Refusals::default();
     let stop = loop {
         let added = terms.len() - clearing_terms;
         if added >= options.max_functions {
@@ -452,25 +493,44 @@ pub fn build(
             _ if max_of(&dev) <= limit => break StopReason::Tolerance,
             _ => break StopReason::NoImprovement,
         };
-        let mut best: Option<(Trial, bool)> = None;
+        let mut best: Option<(Trial, bool, f64)> = None;
         if state.value[seed] != 0.0 {
             for k in 0..TRIAL_RADII {
                 let radius = RADIUS_EDGES * edge * f64::from(1u32 << k);
                 let Some(chosen) = pick_points(&state, seed, radius) else {
+                    refusals.too_few_points += 1;
                     continue;
                 };
-                let Some((term, exact)) = solve_term(&state, seed, &chosen, radius) else {
+                let Some((term, exact, highest)) = solve_term(&state, seed, &chosen, radius) else {
+                    refusals.not_local += 1;
                     continue;
                 };
                 trials += 1;
-                if let Some(trial) = evaluate(&state, term) {
-                    if best.as_ref().is_none_or(|(b, _)| trial.gain > b.gain) {
-                        best = Some((trial, exact));
+                match evaluate(&state, term) {
+                    Ok(trial) => {
+                        if best.as_ref().is_none_or(|(b, _, _)| trial.gain > b.gain) {
+                            best = Some((trial, exact, highest));
+                        }
                     }
+                    Err(Refusal::Unbounded) => refusals.not_local += 1,
+                    Err(Refusal::Probes) => refusals.probes += 1,
                 }
             }
         }
-        let Some((trial, exact)) = best else {
+        // The paper's optimisation step, then its acceptance rule: the functional must fall.
+        let best = best.map(|(trial, exact, highest)| {
+            let (trial, steps) = refine(
+                &state,
+                trial,
+                MAX_PEAK_RATIO * highest,
+                options.descent_steps,
+            );
+            descent_steps += steps;
+            (trial, exact)
+        });
+        let tried = best.is_some();
+        let Some((trial, exact)) = best.filter(|(t, _)| t.gain > 0.0) else {
+            refusals.no_gain += tried as usize;
             set_aside[seed] = true;
             seeds_set_aside += 1;
             continue;
@@ -518,6 +578,8 @@ pub fn build(
         trials,
         seeds_set_aside,
         exact_solves,
+        descent_steps,
+        refusals,
         stop,
         seconds: start.elapsed().as_secs_f64(),
     };

@@ -13,6 +13,7 @@ __all__ = [
     "read_mesh",
     "write_mesh",
     "compare",
+    "perturb",
     "set_memory_limit",
     "memory_limit",
     "__version__",
@@ -236,6 +237,26 @@ def compare(
     degrees, the deviation of a's vertices and vertex normals from b ("vertex_deviation"), the
     mean depth-buffer difference over 14 views ("depth_buffer", "depth_buffer_pct"), and the
     topology statistics of both ("a", "b")."""
+
+def perturb(
+    vertices: _Points,
+    faces: _Faces,
+    *,
+    max_functions: int = 2000,
+    tolerance: float = 0.001,
+    descent_steps: int = 20,
+    res: int = 128,
+    list_path: Optional[_PathLike] = None,
+    progress: Optional[_Progress] = None,
+) -> Tuple[Field, Dict[str, Any]]:
+    """Converts a mesh by the perturbation method (docs/perturbation.md): a base quadric plus up
+    to ``max_functions`` local bumps, until every vertex is within ``tolerance`` of the
+    bounding-box diagonal, each refined by up to ``descent_steps`` descent steps on its
+    coefficients (the paper's optimisation step), checked on the cube grid of ``res`` nodes per axis so that its
+    contour there has the mesh's pieces and no stray ones. Returns the field resampled on that
+    grid (metadata ``source = perturbation``) and the report: "perturbation" (the loop),
+    "cleanup" and "strays" (the checks). With ``list_path``, also writes the function list
+    there (a .pgv file that reads back as the same field)."""
 
 def set_memory_limit(limit: Optional[int]) -> None:
     """Sets the largest estimated peak memory in bytes a call may start with; None restores the

@@ -303,6 +303,7 @@ pub fn perturbation() -> (PerturbationField, Spec) {
     let options = PerturbOptions {
         max_functions: 300,
         tolerance: 1e-3,
+        ..Default::default()
     };
     let built = pgvol::perturb(&bumpy_mesh().0, &options, &Silent).unwrap();
     assert!(built.field.terms().len() > 50, "{:?}", built.report.stop);
