@@ -38,6 +38,7 @@ pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
         origin: volume.grid.origin,
         spacing,
         dims,
+        offset: volume.grid.offset,
     })
 }
 
@@ -55,7 +56,16 @@ pub fn contour_volume(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso);
-    contour_nodes(volume, &padded(grid), &nodes, iso, method)
+    in_frame_of(
+        grid,
+        contour_nodes(volume, &padded(grid), &nodes, iso, method),
+    )
+}
+
+/// `mesh`, contoured in `grid`'s local coordinates, placed in the grid's world frame.
+fn in_frame_of(grid: &Grid, mut mesh: pgvol_core::Mesh) -> pgvol_core::Mesh {
+    mesh.offset = grid.offset;
+    mesh
 }
 
 /// [`contour_volume`] from given samples of `volume` on `grid`.
@@ -77,6 +87,7 @@ fn padded(grid: &Grid) -> Grid {
         origin: grid.origin - Vec3::splat(grid.spacing),
         spacing: grid.spacing,
         dims: grid.dims.map(|n| n + 2),
+        offset: grid.offset,
     }
 }
 
@@ -115,7 +126,7 @@ pub fn contour_field(
             crate::place::lerp_crossing(a, va, b, vb, iso)
         }
     };
-    match method {
+    let mesh = match method {
         Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
             let place = |a, va, b, vb, axis| {
@@ -125,7 +136,8 @@ pub fn contour_field(
             dual_contour_with(&samples, field, options, &place)
         }
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
-    }
+    };
+    in_frame_of(grid, mesh)
 }
 
 /// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
@@ -145,7 +157,7 @@ pub fn contour_sampled(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = DenseNodes::new(values, grid.dims);
-    contour_nodes(volume, grid, &nodes, iso, method)
+    in_frame_of(grid, contour_nodes(volume, grid, &nodes, iso, method))
 }
 
 /// [`contour_sampled`] with the samples from any source.
@@ -216,6 +228,7 @@ mod tests {
             origin: Vec3::splat(-1.0),
             spacing: 2.0 / 19.0,
             dims: [20, 20, 20],
+            offset: Default::default(),
         };
         let mut samples = Vec::with_capacity(grid.len());
         for k in 0..20 {
@@ -305,6 +318,7 @@ mod tests {
             origin: Vec3::splat(-1.0),
             spacing: 2.0 / 23.0,
             dims: [24, 24, 24],
+            offset: Default::default(),
         };
         let mut samples = Vec::with_capacity(grid.len());
         for k in 0..24 {
@@ -349,6 +363,7 @@ mod tests {
             origin: Vec3::ZERO,
             spacing: 0.1,
             dims: [4, 4, 4],
+            offset: Default::default(),
         };
         let options = DualContourOptions::default();
         let mesh = contour_field(

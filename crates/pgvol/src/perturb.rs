@@ -57,6 +57,7 @@ pub fn perturb(
     options: &PerturbOptions,
     progress: &dyn Progress,
 ) -> Result<Perturbed> {
+    crate::frame::require_near(mesh.offset, "the perturbation field")?;
     validate(options)?;
     let signs = sign_points(mesh, progress)?;
     progress::check(progress)?;
