@@ -40,12 +40,12 @@ def mesh_source(name: str, work: Path) -> Path:
 def write_obj(path: Path, vertices, faces) -> None:
     with open(path, "w") as f:
         for p in np.asarray(vertices, np.float64):
-            f.write("v %r %r %r\n" % tuple(p))
+            f.write("v %r %r %r\n" % tuple(float(c) for c in p))
         for t in np.asarray(faces):
             f.write("f %d %d %d\n" % tuple(t + 1))
 
 
-def chamfer_pct(a: trimesh.Trimesh, b: trimesh.Trimesh, count: int = 50_000) -> float:
+def chamfer_pct(a: trimesh.Trimesh, b: trimesh.Trimesh, count: int = 20_000) -> float:
     """Chamfer-L1 (mean of the two mean closest-point distances) in % of b's diagonal."""
     rng_a, _ = trimesh.sample.sample_surface(a, count, seed=1)
     rng_b, _ = trimesh.sample.sample_surface(b, count, seed=2)
@@ -60,7 +60,7 @@ def measure(pgvol: Path, source: Path, out: Path, shift: np.ndarray) -> dict:
     got = common.load_mesh(out)
     ref.apply_translation(-shift)
     got.apply_translation(-shift)
-    compare, _ = common.run_json([pgvol, "compare", source, out, "--json", "--samples", 50_000])
+    compare, _ = common.run_json([pgvol, "compare", source, out, "--json", "--samples", 100_000])
     return {
         "volume": got.volume / ref.volume - 1.0,
         "chamfer": chamfer_pct(got, ref),

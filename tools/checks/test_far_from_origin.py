@@ -22,7 +22,7 @@ def write_cube(path, shift):
     v = np.asarray(box.vertices, dtype=np.float64) + 0.5 + shift
     with open(path, "w") as f:
         for p in v:
-            f.write("v %r %r %r\n" % tuple(p))
+            f.write("v %r %r %r\n" % tuple(float(c) for c in p))
         for t in box.faces:
             f.write("f %d %d %d\n" % tuple(t + 1))
 
