@@ -69,7 +69,14 @@ fn check_writable(mesh: &Mesh, format: MeshFormat, name: &Path) -> Result<(), Me
     if let Some(p) = problem(mesh, "mesh") {
         return Err(MeshError::new(name, format!("refusing to write: {p}")));
     }
-    // Every other writer keeps the offset in f64 (text, doubles or a node translation).
+    check_precision(mesh, format, name)
+}
+
+/// Refuses `format` for `mesh` when it cannot hold the mesh's positions: STL's f32 world
+/// coordinates far from the origin. Every other writer keeps the frame offset in f64 (text,
+/// doubles or a node translation). A mesh of the same frame and size (the input of a remesh,
+/// say) gives the answer before any work.
+pub fn check_precision(mesh: &Mesh, format: MeshFormat, name: &Path) -> Result<(), MeshError> {
     if format == MeshFormat::Stl {
         if let Some((step, relative)) = crate::f32_rounding_loss(mesh) {
             return Err(MeshError::new(

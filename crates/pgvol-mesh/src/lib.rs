@@ -18,7 +18,7 @@ mod validate;
 
 pub use clean::{clean, read_clean, CleanReport};
 pub use format::MeshFormat;
-pub use io::{read, read_bytes, read_ply_points, write, write_to};
+pub use io::{check_precision, read, read_bytes, read_ply_points, write, write_to};
 pub use normals::{face_normal, vertex_normals};
 pub use pgvol_core::{write_atomic, FileError, Mesh, MeshStats};
 pub use validate::{

@@ -110,8 +110,8 @@ pub use lattice::{
 };
 pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{
-    mesh_format, mesh_from_parts, mesh_from_world, read_mesh, read_mesh_bytes, write_mesh,
-    write_mesh_to,
+    check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh, read_mesh_bytes,
+    write_mesh, write_mesh_to,
 };
 pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
 pub use perturb::{

@@ -57,6 +57,13 @@ pub fn mesh_format(path: &Path) -> Result<MeshFormat> {
     MeshFormat::from_path(path).writing()
 }
 
+/// Refuses, before the work, an output `path` whose format cannot hold a mesh in `like`'s frame
+/// and of its size (STL far from the origin), as writing the result would.
+pub fn check_mesh_output(path: &Path, like: &Mesh) -> Result<()> {
+    let format = mesh_format(path)?;
+    pgvol_mesh::check_precision(like, format, path).writing()
+}
+
 /// Writes `mesh` to `path` atomically in the format of its extension.
 pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<()> {
     pgvol_mesh::write(path, mesh).writing()
