@@ -70,7 +70,8 @@ pub struct SliceArgs {
     /// Distance between layer planes, in model units.
     #[arg(long)]
     pub layer_height: f32,
-    /// Height of the first plane (default: half a layer above the bottom of the shape).
+    /// Height of the first plane, in the model's own coordinates however far from the origin
+    /// (default: half a layer above the bottom of the shape).
     #[arg(long, allow_negative_numbers = true)]
     pub first: Option<f64>,
     /// Axis the layers are stacked along.
