@@ -72,7 +72,7 @@ fn rebuild(name: &str, count: usize) -> (f64, Reproduction) {
     let mut again = Shape::from_file(rebuilt.file);
     again.bounds = shape.bounds;
     let mut at_input = settings;
-    at_input.first = Some(layers[0].height);
+    at_input.first = Some(f64::from(layers[0].height));
     let resliced = pgvol::slice(&again, &at_input, &pgvol::Silent).expect("reslice");
     let (worst, mean) = contour_distance(&layers, &resliced);
     let (back, back_mean) = contour_distance(&resliced, &layers);

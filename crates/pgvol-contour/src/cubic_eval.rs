@@ -82,6 +82,7 @@ pub(crate) fn rough_volume() -> CoefficientVolume {
         origin: Vec3::new(-1.0, -0.5, 0.25),
         spacing: 0.1,
         dims: [12, 10, 9],
+        offset: Default::default(),
     };
     let samples: Vec<f32> = (0..grid.len())
         .map(|i| ((i * 7919) % 101) as f32 / 50.0 - 1.0)

@@ -9,6 +9,7 @@ pub(crate) fn two_balls(basis: Basis) -> CoefficientVolume {
         origin: Vec3::splat(-1.0),
         spacing: 2.0 / 39.0,
         dims: [40, 40, 40],
+        offset: Default::default(),
     };
     let mut s = Vec::with_capacity(grid.len());
     for k in 0..40 {

@@ -39,6 +39,7 @@ pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
         origin: volume.grid.origin,
         spacing,
         dims,
+        offset: volume.grid.offset,
     })
 }
 
@@ -58,6 +59,12 @@ pub fn contour_volume(
     contour_volume_reporting(volume, grid, iso, method, &|_| {})
 }
 
+/// `mesh`, contoured in `grid`'s local coordinates, placed in the grid's world frame.
+fn in_frame_of(grid: &Grid, mut mesh: pgvol_core::Mesh) -> pgvol_core::Mesh {
+    mesh.offset = grid.offset;
+    mesh
+}
+
 /// [`contour_volume`], reporting the fraction done to `report`.
 pub fn contour_volume_reporting(
     volume: &CoefficientVolume,
@@ -70,7 +77,8 @@ pub fn contour_volume_reporting(
     let sampling = Some(span.part(0.0, SAMPLING_PART));
     let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso, sampling);
     let rest = Some(span.part(SAMPLING_PART, 1.0));
-    contour_nodes(volume, &padded(grid), &nodes, iso, method, rest)
+    let mesh = contour_nodes(volume, &padded(grid), &nodes, iso, method, rest);
+    in_frame_of(grid, mesh)
 }
 
 /// The part of [`contour_volume_reporting`]'s progress spent evaluating the field at nodes.
@@ -95,6 +103,7 @@ fn padded(grid: &Grid) -> Grid {
         origin: grid.origin - Vec3::splat(grid.spacing),
         spacing: grid.spacing,
         dims: grid.dims.map(|n| n + 2),
+        offset: grid.offset,
     }
 }
 
@@ -147,7 +156,7 @@ pub fn contour_field_reporting(
             crate::place::lerp_crossing(a, va, b, vb, iso)
         }
     };
-    match method {
+    let mesh = match method {
         Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
             let place = |a, va, b, vb, axis| {
@@ -157,7 +166,8 @@ pub fn contour_field_reporting(
             dual_contour_with(&samples, field, options, &place)
         }
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
-    }
+    };
+    in_frame_of(grid, mesh)
 }
 
 /// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
@@ -177,7 +187,7 @@ pub fn contour_sampled(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = DenseNodes::new(values, grid.dims);
-    contour_nodes(volume, grid, &nodes, iso, method, None)
+    in_frame_of(grid, contour_nodes(volume, grid, &nodes, iso, method, None))
 }
 
 /// [`contour_sampled`] with the samples from any source.
@@ -250,6 +260,7 @@ mod tests {
             origin: Vec3::splat(-1.0),
             spacing: 2.0 / 19.0,
             dims: [20, 20, 20],
+            offset: Default::default(),
         };
         let mut samples = Vec::with_capacity(grid.len());
         for k in 0..20 {
@@ -339,6 +350,7 @@ mod tests {
             origin: Vec3::splat(-1.0),
             spacing: 2.0 / 23.0,
             dims: [24, 24, 24],
+            offset: Default::default(),
         };
         let mut samples = Vec::with_capacity(grid.len());
         for k in 0..24 {
@@ -383,6 +395,7 @@ mod tests {
             origin: Vec3::ZERO,
             spacing: 0.1,
             dims: [4, 4, 4],
+            offset: Default::default(),
         };
         let options = DualContourOptions::default();
         let mesh = contour_field(

@@ -1,19 +1,29 @@
 //! The sampling grid shared by every stage: a cube around the mesh with nodes at
 //! `origin + spacing * (i, j, k)`, x varying fastest in flat arrays.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// The side of the grid cube relative to the longest extent of the mesh's bounding box.
 pub const GRID_MARGIN: f32 = 1.1;
 
 /// A regular grid of nodes. Index `(i, j, k)` lives at `origin + spacing * (i, j, k)` and at flat
-/// position `i + nx * (j + ny * k)`.
+/// position `i + nx * (j + ny * k)`, in the local frame; its world position adds `offset`
+/// (in f64; zero unless the grid was made for a mesh far from the origin, see
+/// [`crate::frame`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Grid {
     pub origin: Vec3,
     pub spacing: f32,
     pub dims: [usize; 3],
+    /// World translation of the local frame. Absent from serialised grids when zero, so grids
+    /// near the origin serialise as before it existed.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub offset: DVec3,
+}
+
+fn is_zero(v: &DVec3) -> bool {
+    *v == DVec3::ZERO
 }
 
 /// Why a grid could not be made.
@@ -70,6 +80,7 @@ impl Grid {
             origin: centre - Vec3::splat(half),
             spacing: h,
             dims: [n, n, n],
+            offset: DVec3::ZERO,
         })
     }
 
@@ -100,6 +111,11 @@ impl Grid {
     #[inline]
     pub fn to_grid(&self, p: Vec3) -> Vec3 {
         (p - self.origin) / self.spacing
+    }
+
+    /// The same grid in the frame translated by `offset` (the local coordinates unchanged).
+    pub fn with_offset(self, offset: DVec3) -> Grid {
+        Grid { offset, ..self }
     }
 
     /// The far corner of the grid.

@@ -7,6 +7,7 @@
 
 pub mod atomic;
 pub mod file_error;
+pub mod frame;
 pub mod grid;
 pub mod input;
 pub mod mesh;

@@ -21,6 +21,7 @@ fn box_grid(dims: [usize; 3]) -> Grid {
         origin: Vec3::splat(-1.0),
         spacing: 2.0 / (dims[0] - 1) as f32,
         dims,
+        offset: Default::default(),
     }
 }
 
@@ -267,6 +268,7 @@ fn grids_not_a_multiple_of_the_brick() {
             origin: Vec3::splat(-0.6),
             spacing: 1.2 / (dims[1] - 1) as f32,
             dims,
+            offset: Default::default(),
         };
         let samples = banded(&grid, &sphere());
         let clamp = samples.background().outside;

@@ -16,6 +16,9 @@
 
 use std::path::Path;
 
+/// The largest frame offset a header may declare: the coordinate range meshes are accepted in.
+const MAX_OFFSET: f64 = 1e8;
+
 use crate::error::{err, FormatError};
 use crate::header::{PgvHeader, ENCODING_DENSE_F32};
 use crate::perturbation::ENCODING_PERTURBATION;
@@ -156,6 +159,15 @@ pub(crate) fn parse_container<'a>(
         return Err(err(
             path,
             "grid origin or spacing is not a finite positive number",
+        ));
+    }
+    if !(g.offset.is_finite() && g.offset.abs().max_element() < MAX_OFFSET) {
+        return Err(err(
+            path,
+            format!(
+                "grid offset {} is not finite or beyond {MAX_OFFSET:e} in magnitude",
+                g.offset
+            ),
         ));
     }
     if g.dims.iter().any(|&n| n < 2) {

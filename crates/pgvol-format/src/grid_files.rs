@@ -25,7 +25,13 @@ pub fn nrrd_header(grid: &Grid, comment: &str, fields: &[(&str, String)]) -> Str
     s.push_str(&format!(
         "space directions: ({h},0,0) (0,{h},0) (0,0,{h})\n"
     ));
-    s.push_str(&format!("space origin: ({},{},{})\n", o.x, o.y, o.z));
+    if grid.offset == glam::DVec3::ZERO {
+        s.push_str(&format!("space origin: ({},{},{})\n", o.x, o.y, o.z));
+    } else {
+        // World coordinates, the frame offset added in f64.
+        let o = pgvol_core::frame::to_world(o, grid.offset);
+        s.push_str(&format!("space origin: ({},{},{})\n", o.x, o.y, o.z));
+    }
     s.push_str("centers: node node node\nkinds: domain domain domain\n");
     s.push_str("endian: little\nencoding: raw\n");
     for (k, v) in fields {
@@ -79,6 +85,7 @@ mod tests {
             origin: Vec3::new(1.0, 2.0, 3.0),
             spacing: 0.5,
             dims: [2, 3, 4],
+            offset: Default::default(),
         };
         let values: Vec<f32> = (0..24).map(|v| v as f32).collect();
         let nrrd = dir.path().join("g.nrrd");

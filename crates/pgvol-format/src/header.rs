@@ -58,6 +58,12 @@ pub fn mesh_hash(mesh: &pgvol_core::Mesh) -> String {
             eat(&i.to_le_bytes());
         }
     }
+    // Only a far mesh's offset is hashed, so meshes near the origin keep their hashes.
+    if mesh.offset != glam::DVec3::ZERO {
+        for c in mesh.offset.to_array() {
+            eat(&c.to_le_bytes());
+        }
+    }
     format!("{h:016x}")
 }
 

@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::DVec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 
 use crate::error::{err, FormatError};
@@ -310,10 +310,15 @@ pub fn decode_nrrd(bytes: &[u8], path: &Path) -> Result<NrrdGrid, FormatError> {
             format!("'{origin_text}' is not an (x,y,z) vector"),
         )
     })?;
+    let world_origin = DVec3::from_array(o);
+    let extent = DVec3::from_array(dims.map(|n| h * (n - 1) as f64));
+    // A grid far from the origin is held relative to a nearby point, as meshes are.
+    let offset = pgvol_core::frame::recentring_offset(world_origin, world_origin + extent);
     let grid = Grid {
-        origin: Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32),
+        origin: pgvol_core::frame::to_local(world_origin, offset),
         spacing: h as f32,
         dims,
+        offset,
     };
     if !(grid.origin.is_finite() && grid.spacing.is_finite() && grid.spacing > 0.0) {
         return Err(bad(
@@ -443,9 +448,10 @@ mod tests {
 
     fn sample_file(basis: Basis) -> PgvFile {
         let grid = Grid {
-            origin: Vec3::new(-1.25, 0.1, 2.0),
+            origin: glam::Vec3::new(-1.25, 0.1, 2.0),
             spacing: 0.3,
             dims: [3, 4, 5],
+            offset: Default::default(),
         };
         // Values that do not survive a decimal round trip unless written exactly.
         let coeffs = (0..60).map(|i| (i as f32 * 0.37 - 3.0) / 7.0).collect();

@@ -112,6 +112,7 @@ mod tests {
             origin: Vec3::new(-1.0, 0.0, 2.0),
             spacing: 0.25,
             dims: [3, 4, 5],
+            offset: Default::default(),
         };
         let coeffs = (0..60).map(|i| i as f32 * 0.5 - 3.0).collect();
         let volume = CoefficientVolume::new(grid, Basis::Bspline3, coeffs).unwrap();
@@ -151,6 +152,28 @@ mod tests {
         v.push(0);
         assert!(msg(&v).contains("unexpected bytes"));
         assert!(msg(&v).starts_with("x.pgv: "));
+    }
+
+    #[test]
+    fn frame_offsets_round_trip_and_hostile_ones_are_refused() {
+        // Near the origin no offset is written: the header is as it always was.
+        let near = encode_pgv(&sample_file());
+        assert!(!String::from_utf8_lossy(&near).contains("offset"));
+        let mut f = sample_file();
+        f.volume.grid.offset = glam::DVec3::new(1e6 + 0.125, -3e7, 0.0);
+        f.header.grid = f.volume.grid;
+        assert_eq!(decode_pgv(&encode_pgv(&f), Path::new("f.pgv")).unwrap(), f);
+        for bad in [2e8, -1e300] {
+            f.volume.grid.offset.x = bad;
+            f.header.grid = f.volume.grid;
+            let e = decode_pgv(&encode_pgv(&f), Path::new("h.pgv"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("offset"), "{e}");
+        }
+        // Non-finite values have no JSON form, and a number beyond f64 is not read as one.
+        let grid = r#"{"origin":[0,0,0],"spacing":1,"dims":[2,2,2],"offset":[1e400,0,0]}"#;
+        assert!(serde_json::from_str::<Grid>(grid).is_err());
     }
 
     #[test]

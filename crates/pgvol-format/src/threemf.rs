@@ -62,7 +62,10 @@ impl Quantisation {
 /// pixel centre lands on its grid node.
 pub fn object_to_uvw(grid: &Grid) -> [f64; 12] {
     let h = grid.spacing as f64;
-    let o = grid.origin.to_array().map(|c| c as f64 - 0.5 * h);
+    // World coordinates: the frame offset added in f64.
+    let o = pgvol_core::frame::to_world(grid.origin, grid.offset)
+        .to_array()
+        .map(|c| c - 0.5 * h);
     let s = grid.dims.map(|n| 1.0 / (n as f64 * h));
     [
         s[0],
@@ -102,8 +105,18 @@ fn num(v: f64) -> String {
 /// The `3D/3dmodel.model` part for `grid` and the sheet paths.
 pub fn model_xml(grid: &Grid, q: Quantisation, sheets: &[String], unit: &str) -> String {
     let [nx, ny, nz] = grid.dims;
-    let lo = grid.origin;
-    let hi = grid.max_corner();
+    // World coordinates: f32 text near the origin, the offset added in f64 otherwise.
+    let corner = |p: glam::Vec3| -> [String; 3] {
+        if grid.offset == glam::DVec3::ZERO {
+            p.to_array().map(|c| c.to_string())
+        } else {
+            pgvol_core::frame::to_world(p, grid.offset)
+                .to_array()
+                .map(num)
+        }
+    };
+    let lo = corner(grid.origin);
+    let hi = corner(grid.max_corner());
     let t = object_to_uvw(grid).map(num).join(" ");
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -118,12 +131,12 @@ pub fn model_xml(grid: &Grid, q: Quantisation, sheets: &[String], unit: &str) ->
     for k in 0..2 {
         for j in 0..2 {
             for i in 0..2 {
-                let p = |c: usize, a: f32, b: f32| if c == 0 { a } else { b };
+                let p = |c: usize, a: usize| if c == 0 { &lo[a] } else { &hi[a] };
                 s.push_str(&format!(
                     "     <vertex x=\"{}\" y=\"{}\" z=\"{}\"/>\n",
-                    p(i, lo.x, hi.x),
-                    p(j, lo.y, hi.y),
-                    p(k, lo.z, hi.z)
+                    p(i, 0),
+                    p(j, 1),
+                    p(k, 2)
                 ));
             }
         }
@@ -275,6 +288,7 @@ mod tests {
             origin: Vec3::new(-1.0, 2.0, 0.5),
             spacing: 0.25,
             dims: [4, 5, 6],
+            offset: Default::default(),
         };
         let m = object_to_uvw(&grid);
         let uvw = |p: Vec3| {
@@ -301,6 +315,7 @@ mod tests {
             origin: Vec3::ZERO,
             spacing: 0.5,
             dims: [3, 2, 4],
+            offset: Default::default(),
         };
         let values: Vec<f32> = (0..24).map(|i| i as f32 - 10.0).collect();
         let path = dir.path().join("a.3mf");

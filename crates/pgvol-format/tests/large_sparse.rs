@@ -19,6 +19,7 @@ fn shell() -> (PgvFile, f32) {
         origin: Vec3::ZERO,
         spacing: 1.0 / (N - 1) as f32,
         dims: [N; 3],
+        offset: Default::default(),
     };
     let h = grid.spacing;
     let clamp = 4.0 * h;

@@ -21,6 +21,7 @@ fn two_spheres() -> PgvFile {
         origin: Vec3::new(-1.0, -0.8, -1.2),
         spacing: 0.05,
         dims: [41, 33, 50],
+        offset: Default::default(),
     })
 }
 
@@ -134,6 +135,7 @@ fn thin_grids_in_small_bricks_read_the_same() {
         origin: Vec3::new(-0.3, -0.9, -1.0),
         spacing: 0.05,
         dims: [2, 37, 41],
+        offset: Default::default(),
     });
     let o = EncodeOptions {
         precision: Some(Precision::F16),

@@ -661,7 +661,7 @@ proptest! {
         band in 0.0f32..3.0,
         predictor in 0usize..3,
     ) {
-        let grid = Grid { origin: Vec3::ZERO, spacing: 0.1, dims };
+        let grid = Grid { origin: Vec3::ZERO, spacing: 0.1, dims, offset: Default::default() };
         let mut s = seed | 1;
         let coeffs: Vec<f32> = (0..grid.len())
             .map(|_| {

@@ -110,7 +110,8 @@ struct Instance {
 impl<'a> Reader<'a> {
     fn mesh(&mut self) -> Result<Mesh, String> {
         let instances = self.instances()?;
-        let mut out = Mesh::default();
+        // World positions in f64: node translations may put the mesh far from the origin.
+        let mut out = (Vec::new(), Vec::new());
         let mut other_modes = 0;
         for inst in &instances {
             let mesh = self.root.meshes.get(inst.mesh).ok_or_else(|| {
@@ -128,7 +129,7 @@ impl<'a> Reader<'a> {
                     .map_err(at)?;
             }
         }
-        if out.triangles.is_empty() {
+        if out.1.is_empty() {
             return Err(if other_modes > 0 {
                 format!(
                     "no triangles ({other_modes} primitives use points or lines or strips, \
@@ -138,7 +139,7 @@ impl<'a> Reader<'a> {
                 "no triangles".into()
             });
         }
-        Ok(out)
+        Ok(Mesh::from_world(&out.0, out.1))
     }
 
     /// Meshes with their world transforms: the default scene, else every scene, else every
@@ -220,7 +221,7 @@ impl<'a> Reader<'a> {
         prim: &json::mesh::Primitive,
         world: DMat4,
         flip: bool,
-        out: &mut Mesh,
+        out: &mut (Vec<DVec3>, Vec<[u32; 3]>),
     ) -> Result<(), String> {
         let pos_acc = prim
             .attributes
@@ -253,17 +254,17 @@ impl<'a> Reader<'a> {
                 indices.len()
             ));
         }
-        let base = out.positions.len();
+        let base = out.0.len();
         if base + n > u32::MAX as usize {
             return Err("more than 2^32 vertices in total".into());
         }
         let base = base as u32;
-        out.positions.extend(coords.chunks_exact(3).map(|c| {
-            world
-                .transform_point3(DVec3::new(c[0], c[1], c[2]))
-                .as_vec3()
-        }));
-        out.triangles.extend(indices.chunks_exact(3).map(|t| {
+        out.0.extend(
+            coords
+                .chunks_exact(3)
+                .map(|c| world.transform_point3(DVec3::new(c[0], c[1], c[2]))),
+        );
+        out.1.extend(indices.chunks_exact(3).map(|t| {
             let [a, b, c] = [t[0] + base, t[1] + base, t[2] + base];
             if flip {
                 [a, c, b]
@@ -489,6 +490,31 @@ fn local_transform(node: &json::Node) -> DMat4 {
     DMat4::from_scale_rotation_translation(s, q, t)
 }
 
+/// The node holding the mesh, under parents translating it by `offset` when that is not zero.
+/// glTF translations are f32, so the offset is split in two: its f32 rounding on an outer node
+/// and the remainder on an inner one, which readers compose to within 2^-48 of the offset.
+fn frame_nodes(
+    root: &mut Root,
+    mesh_node: json::Index<json::Node>,
+    offset: DVec3,
+) -> json::Index<json::Node> {
+    if offset == DVec3::ZERO {
+        return mesh_node;
+    }
+    let coarse = offset.as_vec3();
+    let fine = (offset - coarse.as_dvec3()).as_vec3();
+    let inner = root.push(json::Node {
+        children: Some(vec![mesh_node]),
+        translation: Some(fine.to_array()),
+        ..Default::default()
+    });
+    root.push(json::Node {
+        children: Some(vec![inner]),
+        translation: Some(coarse.to_array()),
+        ..Default::default()
+    })
+}
+
 fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
     let (meta, payload) = uri
         .split_once(',')
@@ -655,8 +681,9 @@ pub(crate) fn write(
         mesh: Some(mesh_index),
         ..Default::default()
     });
+    let top = frame_nodes(&mut root, node, mesh.offset);
     let scene = root.push(json::Scene {
-        nodes: vec![node],
+        nodes: vec![top],
         name: None,
         extensions: Default::default(),
         extras: Default::default(),

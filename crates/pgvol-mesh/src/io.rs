@@ -49,7 +49,7 @@ fn parse(
 /// per-vertex normals (facet normals for STL).
 pub fn write(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
     let format = MeshFormat::from_path(path)?;
-    check_writable(mesh, path)?;
+    check_writable(mesh, format, path)?;
     write_atomic(path, |w| encode(w, mesh, format))
 }
 
@@ -61,15 +61,36 @@ pub fn write_to(
     format: MeshFormat,
     name: &Path,
 ) -> Result<(), MeshError> {
-    check_writable(mesh, name)?;
+    check_writable(mesh, format, name)?;
     encode(w, mesh, format).map_err(|e| MeshError::new(name, format!("write failed: {e}")))
 }
 
-fn check_writable(mesh: &Mesh, name: &Path) -> Result<(), MeshError> {
-    match problem(mesh, "mesh") {
-        Some(p) => Err(MeshError::new(name, format!("refusing to write: {p}"))),
-        None => Ok(()),
+fn check_writable(mesh: &Mesh, format: MeshFormat, name: &Path) -> Result<(), MeshError> {
+    if let Some(p) = problem(mesh, "mesh") {
+        return Err(MeshError::new(name, format!("refusing to write: {p}")));
     }
+    check_precision(mesh, format, name)
+}
+
+/// Refuses `format` for `mesh` when it cannot hold the mesh's positions: STL's f32 world
+/// coordinates far from the origin. Every other writer keeps the frame offset in f64 (text,
+/// doubles or a node translation). A mesh of the same frame and size (the input of a remesh,
+/// say) gives the answer before any work.
+pub fn check_precision(mesh: &Mesh, format: MeshFormat, name: &Path) -> Result<(), MeshError> {
+    if format == MeshFormat::Stl {
+        if let Some((step, relative)) = crate::f32_rounding_loss(mesh) {
+            return Err(MeshError::new(
+                name,
+                format!(
+                    "refusing to write: STL stores single-precision coordinates, which this \
+                     far from the origin are rounded by up to {step:e} ({:.2} % of the mesh's \
+                     size); write OBJ, GLB/glTF or PLY instead, which keep full precision",
+                    relative * 100.0
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: MeshFormat) -> std::io::Result<()> {

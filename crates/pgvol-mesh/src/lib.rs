@@ -18,10 +18,13 @@ mod validate;
 
 pub use clean::{clean, read_clean, CleanReport};
 pub use format::MeshFormat;
-pub use io::{read, read_bytes, read_ply_points, write, write_to};
+pub use io::{check_precision, read, read_bytes, read_ply_points, write, write_to};
 pub use normals::{face_normal, vertex_normals};
 pub use pgvol_core::{write_atomic, FileError, Mesh, MeshStats};
-pub use validate::{coordinate_out_of_range, mesh_problem, too_small, MAX_COORDINATE, MIN_EXTENT};
+pub use validate::{
+    coordinate_out_of_range, f32_rounding_loss, mesh_problem, too_small, MAX_COORDINATE,
+    MAX_F32_ROUNDING, MIN_EXTENT,
+};
 
 /// The error of every reader and writer here: the file and what is wrong with it.
 pub type MeshError = FileError;

@@ -6,7 +6,7 @@ use std::io::{self, Write};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::{Mesh, MeshError};
 
@@ -35,15 +35,16 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
         Err(_) => return Err(MeshError::new(name, "malformed OBJ (the parser gave up)")),
     };
 
-    let mut mesh = Mesh::default();
+    let mut world = Vec::new();
+    let mut triangles = Vec::new();
     for model in &models {
         let m = &model.mesh;
-        let base = u32::try_from(mesh.positions.len())
+        let base = u32::try_from(world.len())
             .map_err(|_| MeshError::new(name, "more than 2^32 vertices"))?;
-        mesh.positions.extend(
+        world.extend(
             m.positions
                 .chunks_exact(3)
-                .map(|c| Vec3::new(c[0], c[1], c[2])),
+                .map(|c| DVec3::new(c[0], c[1], c[2])),
         );
         let mut corners = Vec::new();
         let mut at = 0usize;
@@ -70,10 +71,10 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
                         .ok_or_else(|| MeshError::new(name, "more than 2^32 vertices"))?,
                 );
             }
-            triangulate(&corners, &mut mesh.triangles);
+            triangulate(&corners, &mut triangles);
         }
     }
-    Ok(mesh)
+    Ok(Mesh::from_world(&world, triangles))
 }
 
 /// Polygons up to this many corners are fanned from their first corner, as OBJ readers do.
@@ -201,7 +202,8 @@ fn describe(e: &tobj::LoadError) -> String {
 }
 
 /// `v` and `vn` per vertex and `f a//a b//b c//c`; f32 `Display` is the shortest text that
-/// parses back to the same value, so positions survive a round trip bit for bit.
+/// parses back to the same value, so positions survive a round trip bit for bit. A mesh with
+/// a frame offset gets its world positions, offset added in f64 and written as f64.
 pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, normals: &[Vec3]) -> io::Result<()> {
     writeln!(w, "# pgvol mesh")?;
     writeln!(
@@ -210,8 +212,15 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, normals: &[Vec3]) -> io::Res
         mesh.positions.len(),
         mesh.triangles.len()
     )?;
-    for p in &mesh.positions {
-        writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+    if mesh.offset == DVec3::ZERO {
+        for p in &mesh.positions {
+            writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+        }
+    } else {
+        for i in 0..mesh.positions.len() {
+            let p = mesh.world(i);
+            writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+        }
     }
     for n in normals {
         writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;

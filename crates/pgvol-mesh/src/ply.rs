@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::{Mesh, MeshError};
 
@@ -99,21 +99,15 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     let body = &bytes[header.body_start..];
     let mut values = body_values(header.encoding, body);
 
-    let mut mesh = Mesh::default();
+    let (mut world, mut triangles) = (Vec::new(), Vec::new());
     let mut saw_vertices = false;
     for element in &header.elements {
         let result = match element.name.as_str() {
             "vertex" if !saw_vertices => {
                 saw_vertices = true;
-                read_vertices(
-                    element,
-                    values.as_mut(),
-                    body.len(),
-                    &mut mesh.positions,
-                    None,
-                )
+                read_vertices(element, values.as_mut(), body.len(), &mut world, None)
             }
-            "face" => read_faces(element, values.as_mut(), &mut mesh.triangles),
+            "face" => read_faces(element, values.as_mut(), &mut triangles),
             _ => skip(element, values.as_mut()),
         };
         result.map_err(err)?;
@@ -121,7 +115,7 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     if !saw_vertices {
         return Err(err("PLY header declares no 'vertex' element".into()));
     }
-    Ok(mesh)
+    Ok(Mesh::from_world(&world, triangles))
 }
 
 /// The `vertex` element of a PLY file as points, with their normals when it has nx, ny, nz;
@@ -148,6 +142,7 @@ pub(crate) fn read_points(
     if points.is_empty() {
         return Err(err("PLY file has no vertices to read as points".into()));
     }
+    let points: Vec<Vec3> = points.iter().map(|p: &DVec3| p.as_vec3()).collect();
     let normals = (normals.len() == points.len()).then_some(normals);
     Ok((points, normals))
 }
@@ -345,7 +340,7 @@ fn read_vertices(
     element: &Element,
     values: &mut dyn Values,
     body_len: usize,
-    out: &mut Vec<Vec3>,
+    out: &mut Vec<DVec3>,
     mut normals: Option<&mut Vec<Vec3>>,
 ) -> Result<(), String> {
     let find = |axis: &str| {
@@ -378,14 +373,14 @@ fn read_vertices(
     out.reserve((element.count as usize).min(body_len / 3));
     let normal_slots = normal_slots.unwrap_or([usize::MAX; 3]);
     for i in 0..element.count {
-        let mut xyz = [0f32; 3];
+        let mut xyz = [0f64; 3];
         let mut nxyz = [0f32; 3];
         for (k, p) in element.props.iter().enumerate() {
             let axis = slots.iter().position(|&s| s == k);
             let normal_axis = normal_slots.iter().position(|&s| s == k);
             match (p.kind_scalar(), axis, normal_axis) {
                 (Some(ty), Some(a), _) => {
-                    xyz[a] = values.next(ty).map_err(|e| at(element, i, e))? as f32;
+                    xyz[a] = values.next(ty).map_err(|e| at(element, i, e))?;
                 }
                 (Some(ty), None, Some(a)) => {
                     nxyz[a] = values.next(ty).map_err(|e| at(element, i, e))? as f32;
@@ -393,7 +388,7 @@ fn read_vertices(
                 _ => skip_property(&p.kind, values).map_err(|e| at(element, i, e))?,
             }
         }
-        out.push(Vec3::from_array(xyz));
+        out.push(DVec3::from_array(xyz));
         if let Some(n) = normals.as_deref_mut() {
             n.push(Vec3::from_array(nxyz));
         }
@@ -458,22 +453,35 @@ fn vertex_index(v: f64) -> Result<u32, String> {
     }
 }
 
-/// Binary little-endian PLY with per-vertex normals.
+/// Binary little-endian PLY with per-vertex normals. Positions are floats, or for a mesh with a
+/// frame offset doubles holding the world positions (offset added in f64).
 pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, normals: &[Vec3]) -> io::Result<()> {
+    let far = mesh.offset != DVec3::ZERO;
+    let position_type = if far { "double" } else { "float" };
     write!(
         w,
         "ply\nformat binary_little_endian 1.0\ncomment pgvol\n\
          element vertex {}\n\
-         property float x\nproperty float y\nproperty float z\n\
+         property {position_type} x\nproperty {position_type} y\nproperty {position_type} z\n\
          property float nx\nproperty float ny\nproperty float nz\n\
          element face {}\nproperty list uchar uint vertex_indices\nend_header\n",
         mesh.positions.len(),
         mesh.triangles.len()
     )?;
-    let mut record = [0u8; 24];
-    for (p, n) in mesh.positions.iter().zip(normals) {
-        for (k, c) in p.to_array().iter().chain(&n.to_array()).enumerate() {
-            record[4 * k..4 * k + 4].copy_from_slice(&c.to_le_bytes());
+    let mut record = Vec::with_capacity(36);
+    for (i, (p, n)) in mesh.positions.iter().zip(normals).enumerate() {
+        record.clear();
+        if far {
+            for c in mesh.world(i).to_array() {
+                record.extend_from_slice(&c.to_le_bytes());
+            }
+        } else {
+            for c in p.to_array() {
+                record.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for c in n.to_array() {
+            record.extend_from_slice(&c.to_le_bytes());
         }
         w.write_all(&record)?;
     }

@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::{face_normal, Mesh, MeshError};
 
@@ -83,19 +83,20 @@ fn read_binary(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
                 let s = o + 4 * i;
                 f32::from_le_bytes([facet[s], facet[s + 1], facet[s + 2], facet[s + 3]])
             };
-            positions.push(Vec3::new(f(0), f(1), f(2)));
+            positions.push(Vec3::new(f(0), f(1), f(2)).as_dvec3());
         }
     }
     let triangles = (0..n as u32)
         .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
         .collect();
-    Ok(Mesh::new(positions, triangles))
+    Ok(Mesh::from_world(&positions, triangles))
 }
 
 fn read_ascii(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| MeshError::new(name, format!("ASCII STL is not valid text: {e}")))?;
-    let mut mesh = Mesh::default();
+    // World positions in f64 (text keeps what f32 would round away far from the origin).
+    let mut mesh = (Vec::<DVec3>::new(), Vec::<[u32; 3]>::new());
     let mut loop_start: Option<usize> = None;
     let mut facets = 0usize;
     for (line_no, line) in text.lines().enumerate() {
@@ -106,7 +107,7 @@ fn read_ascii(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
         };
         match keyword.to_ascii_lowercase().as_str() {
             "vertex" => {
-                let mut xyz = [0f32; 3];
+                let mut xyz = [0f64; 3];
                 for c in &mut xyz {
                     let word = words.next().ok_or_else(|| {
                         MeshError::new(name, format!("line {line_no}: vertex needs 3 numbers"))
@@ -117,16 +118,16 @@ fn read_ascii(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
                 }
                 if loop_start.is_none() {
                     // Tolerate a missing "outer loop" line: the vertex starts a loop.
-                    loop_start = Some(mesh.positions.len());
+                    loop_start = Some(mesh.0.len());
                 }
-                mesh.positions.push(Vec3::from_array(xyz));
+                mesh.0.push(DVec3::from_array(xyz));
             }
-            "outer" => loop_start = Some(mesh.positions.len()),
+            "outer" => loop_start = Some(mesh.0.len()),
             "endloop" | "endfacet" => {
                 let Some(start) = loop_start.take() else {
                     continue;
                 };
-                let count = mesh.positions.len() - start;
+                let count = mesh.0.len() - start;
                 if count < 3 {
                     return Err(MeshError::new(
                         name,
@@ -138,19 +139,19 @@ fn read_ascii(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
                 let base = index(start, name)?;
                 for k in 1..count - 1 {
                     let k = index(k, name)?;
-                    mesh.triangles.push([base, base + k, base + k + 1]);
+                    mesh.1.push([base, base + k, base + k + 1]);
                 }
             }
             _ => {}
         }
     }
-    if loop_start.is_some_and(|s| mesh.positions.len() > s) {
+    if loop_start.is_some_and(|s| mesh.0.len() > s) {
         return Err(MeshError::new(
             name,
             "ASCII STL ends in the middle of a facet (missing 'endloop')",
         ));
     }
-    Ok(mesh)
+    Ok(Mesh::from_world(&mesh.0, mesh.1))
 }
 
 fn index(i: usize, name: &Path) -> Result<u32, MeshError> {

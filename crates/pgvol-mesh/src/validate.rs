@@ -26,9 +26,14 @@ pub(crate) fn problem(mesh: &Mesh, owner: &str) -> Option<String> {
             return Some(format!("vertex {i} has a non-finite coordinate ({what})"));
         }
     }
+    if !mesh.offset.is_finite() {
+        return Some(format!("the frame offset {} is not finite", mesh.offset));
+    }
     if let Some((i, c)) = coordinate_out_of_range(mesh) {
         return Some(format!(
-            "coordinate {c:e} at vertex {i} is out of range (|x| must be < 1e8)"
+            "coordinate {:e} at vertex {i} is out of range (|x| must be < 1e8); give the mesh \
+             relative to a nearer origin or in larger units",
+            c as f32
         ));
     }
     let n = mesh.positions.len();
@@ -54,14 +59,38 @@ pub fn mesh_problem(mesh: &Mesh) -> Option<String> {
     problem(mesh, "mesh")
 }
 
-/// The first vertex with a coordinate at or beyond [`MAX_COORDINATE`], and that coordinate.
-pub fn coordinate_out_of_range(mesh: &Mesh) -> Option<(usize, f32)> {
-    mesh.positions.iter().enumerate().find_map(|(i, p)| {
-        p.to_array()
+/// The first vertex with a world coordinate (offset added, in f64) at or beyond
+/// [`MAX_COORDINATE`], and that coordinate.
+pub fn coordinate_out_of_range(mesh: &Mesh) -> Option<(usize, f64)> {
+    let limit = f64::from(MAX_COORDINATE);
+    (0..mesh.positions.len()).find_map(|i| {
+        mesh.world(i)
+            .to_array()
             .into_iter()
-            .find(|c| c.abs() >= MAX_COORDINATE)
+            .find(|c| c.abs() >= limit)
             .map(|c| (i, c))
     })
+}
+
+/// The largest rounding, relative to the mesh's longest extent, that a format storing f32
+/// world coordinates (STL) may add; beyond it such a write is refused.
+pub const MAX_F32_ROUNDING: f64 = 1e-5;
+
+/// For a format holding f32 world coordinates: the rounding error at the mesh's farthest
+/// coordinate (half an f32 step there) and that error over the mesh's longest extent, when the
+/// latter exceeds [`MAX_F32_ROUNDING`]. Meshes near the origin (offset zero) are stored as
+/// they are and never refused.
+pub fn f32_rounding_loss(mesh: &Mesh) -> Option<(f64, f64)> {
+    if mesh.offset == glam::DVec3::ZERO {
+        return None;
+    }
+    let (lo, hi) = mesh.bounds()?;
+    let size = f64::from((hi - lo).max_element());
+    let far = (mesh.offset.abs() + lo.abs().max(hi.abs()).as_dvec3()).max_element();
+    // Half the spacing of f32 values at `far`.
+    let step = f64::from((far as f32).next_up() - far as f32) * 0.5;
+    let relative = step / size;
+    (relative > MAX_F32_ROUNDING).then_some((step, relative))
 }
 
 /// The largest bounding-box extent of the faces' vertices when it is below [`MIN_EXTENT`]

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use pgvol_core::{write_atomic, FileError};
 
+use crate::layer_frame::{f32_loss, world_text, LayerFrame};
 use crate::slice::Layer;
 use crate::write::extent;
 
@@ -33,17 +34,50 @@ pub fn write_cli_with(
     units_mm: f32,
     encoding: CliEncoding,
 ) -> Result<(), FileError> {
+    write_cli_in(path, layers, units_mm, encoding, &LayerFrame::default())
+}
+
+/// The largest rounding, relative to the layers' extent, that binary CLI's f32 coordinates may
+/// add to layers in a frame away from the origin; beyond it the write is refused.
+pub const MAX_BINARY_ROUNDING: f64 = 1e-5;
+
+/// [`write_cli_with`] for layers in `frame`: world coordinates, the frame added in f64 (ASCII
+/// text keeps them whole; binary f32 is refused when it would round them by more than
+/// [`MAX_BINARY_ROUNDING`] of the layers' extent).
+pub fn write_cli_in(
+    path: &Path,
+    layers: &[Layer],
+    units_mm: f32,
+    encoding: CliEncoding,
+    frame: &LayerFrame,
+) -> Result<(), FileError> {
     if !(units_mm.is_finite() && units_mm > 0.0) {
         return Err(FileError::new(
             path,
             format!("units must be a positive length in mm, got {units_mm}"),
         ));
     }
+    if let (CliEncoding::Binary, Some(extent), Some(first), Some(last)) =
+        (encoding, extent(layers), layers.first(), layers.last())
+    {
+        let loss = f32_loss(frame, extent, (first.height, last.height));
+        if let Some(relative) = loss.filter(|&r| r > MAX_BINARY_ROUNDING) {
+            return Err(FileError::new(
+                path,
+                format!(
+                    "refusing to write: binary CLI stores single-precision coordinates, which \
+                     this far from the origin are rounded by up to {:.3} % of the part's size; \
+                     write ASCII CLI (without --binary), SVG or JSON instead",
+                    relative * 100.0
+                ),
+            ));
+        }
+    }
     write_atomic(path, |w| {
-        write_header(w, layers, units_mm, encoding)?;
+        write_header(w, layers, units_mm, encoding, frame)?;
         match encoding {
-            CliEncoding::Ascii => write_ascii_geometry(w, layers),
-            CliEncoding::Binary => write_binary_geometry(w, layers),
+            CliEncoding::Ascii => write_ascii_geometry(w, layers, frame),
+            CliEncoding::Binary => write_binary_geometry(w, layers, frame),
         }
     })
 }
@@ -58,6 +92,7 @@ fn write_header(
     layers: &[Layer],
     units_mm: f32,
     encoding: CliEncoding,
+    frame: &LayerFrame,
 ) -> io::Result<()> {
     writeln!(w, "$$HEADERSTART")?;
     match encoding {
@@ -70,10 +105,16 @@ fn write_header(
     if let (Some([u0, v0, u1, v1]), Some(first), Some(last)) =
         (extent(layers), layers.first(), layers.last())
     {
+        let (u, v, h) = (frame.u, frame.v, frame.height);
         writeln!(
             w,
-            "$$DIMENSION/{u0},{v0},{},{u1},{v1},{}",
-            first.height, last.height
+            "$$DIMENSION/{},{},{},{},{},{}",
+            world_text(u0, u),
+            world_text(v0, v),
+            world_text(first.height, h),
+            world_text(u1, u),
+            world_text(v1, v),
+            world_text(last.height, h)
         )?;
     }
     writeln!(w, "$$LAYERS/{}", layers.len())?;
@@ -84,10 +125,10 @@ fn write_header(
     }
 }
 
-fn write_ascii_geometry(w: &mut dyn Write, layers: &[Layer]) -> io::Result<()> {
+fn write_ascii_geometry(w: &mut dyn Write, layers: &[Layer], frame: &LayerFrame) -> io::Result<()> {
     writeln!(w, "$$GEOMETRYSTART")?;
     for layer in layers {
-        writeln!(w, "$$LAYER/{}", layer.height)?;
+        writeln!(w, "$$LAYER/{}", world_text(layer.height, frame.height))?;
         for lp in &layer.loops {
             let Some(start) = lp.points.first() else {
                 continue;
@@ -99,7 +140,12 @@ fn write_ascii_geometry(w: &mut dyn Write, layers: &[Layer]) -> io::Result<()> {
                 lp.points.len() + 1
             )?;
             for p in lp.points.iter().chain(std::iter::once(start)) {
-                write!(w, ",{},{}", p[0], p[1])?;
+                write!(
+                    w,
+                    ",{},{}",
+                    world_text(p[0], frame.u),
+                    world_text(p[1], frame.v)
+                )?;
             }
             writeln!(w)?;
         }
@@ -107,10 +153,23 @@ fn write_ascii_geometry(w: &mut dyn Write, layers: &[Layer]) -> io::Result<()> {
     writeln!(w, "$$GEOMETRYEND")
 }
 
-fn write_binary_geometry(w: &mut dyn Write, layers: &[Layer]) -> io::Result<()> {
+/// f32 world coordinate of a local one (the frame added in f64, rounded once).
+fn world_f32(local: f32, shift: f64) -> f32 {
+    if shift == 0.0 {
+        local
+    } else {
+        (shift + f64::from(local)) as f32
+    }
+}
+
+fn write_binary_geometry(
+    w: &mut dyn Write,
+    layers: &[Layer],
+    frame: &LayerFrame,
+) -> io::Result<()> {
     for layer in layers {
         w.write_all(&START_LAYER_LONG.to_le_bytes())?;
-        w.write_all(&layer.height.to_le_bytes())?;
+        w.write_all(&world_f32(layer.height, frame.height).to_le_bytes())?;
         for lp in &layer.loops {
             let Some(start) = lp.points.first() else {
                 continue;
@@ -122,8 +181,8 @@ fn write_binary_geometry(w: &mut dyn Write, layers: &[Layer]) -> io::Result<()> 
                 w.write_all(&v.to_le_bytes())?;
             }
             for p in lp.points.iter().chain(std::iter::once(start)) {
-                w.write_all(&p[0].to_le_bytes())?;
-                w.write_all(&p[1].to_le_bytes())?;
+                w.write_all(&world_f32(p[0], frame.u).to_le_bytes())?;
+                w.write_all(&world_f32(p[1], frame.v).to_le_bytes())?;
             }
         }
     }

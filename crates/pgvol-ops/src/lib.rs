@@ -28,6 +28,7 @@ mod cli_read;
 mod csg;
 mod error;
 mod lattice;
+mod layer_frame;
 mod local_fit;
 mod measure;
 mod polygon;
@@ -41,7 +42,7 @@ pub use blend::{
     edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming, renormalised,
 };
 pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
-pub use cli_file::{write_cli, write_cli_with, CliEncoding};
+pub use cli_file::{write_cli, write_cli_in, write_cli_with, CliEncoding, MAX_BINARY_ROUNDING};
 pub use cli_read::read_cli;
 pub use csg::{
     hollow, needs_wider_band, offset, shell, stored_band, support_reach, Drain, ShellSide,
@@ -51,6 +52,7 @@ pub use lattice::{
     infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms,
     TPMS_NAMES,
 };
+pub use layer_frame::LayerFrame;
 pub use local_fit::{node_value, refit_box, LocalFit, NodeBox};
 pub use measure::{measure_field, FieldMeasure};
 pub use repair::{
@@ -62,4 +64,4 @@ pub use slice::{
     SliceOptions, MAX_LAYERS, MAX_LAYER_NODES,
 };
 pub use svg_read::read_svg;
-pub use write::{read_slice_json, write_slice_json, write_svg};
+pub use write::{read_slice_json, write_slice_json, write_slice_json_in, write_svg, write_svg_in};

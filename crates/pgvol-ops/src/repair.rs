@@ -372,6 +372,7 @@ fn coarse_resample(
         origin: mask.lo,
         spacing: step,
         dims,
+        offset: Default::default(),
     };
     let mut samples = Vec::with_capacity(dims.iter().product());
     for k in 0..dims[2] {

@@ -596,6 +596,7 @@ mod tests {
             origin: Vec3::new(-1.0, -0.8, -0.6),
             spacing: 0.1,
             dims: [21, 15, 13],
+            offset: Default::default(),
         };
         let mut samples = Vec::with_capacity(grid.len());
         for k in 0..grid.dims[2] {

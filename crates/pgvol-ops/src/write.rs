@@ -6,6 +6,7 @@ use std::path::Path;
 use pgvol_core::{write_atomic, FileError};
 use serde::{Deserialize, Serialize};
 
+use crate::layer_frame::{world_text, LayerFrame};
 use crate::slice::Layer;
 
 /// Bounding box `[min_u, min_v, max_u, max_v]` of every loop point, if any.
@@ -41,6 +42,12 @@ pub(crate) fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
 /// `data-u-offset` and `data-v-offset`: a point (x, y) of a layer's path is at
 /// u = x + u-offset, v = v-offset − y in layer coordinates ([`read_svg`](crate::read_svg)).
 pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
+    write_svg_in(path, layers, &LayerFrame::default())
+}
+
+/// [`write_svg`] for layers in `frame`: the heights and the root's offsets are world
+/// coordinates (the frame added in f64); the paths, relative to the offsets, are unchanged.
+pub fn write_svg_in(path: &Path, layers: &[Layer], frame: &LayerFrame) -> Result<(), FileError> {
     let [u0, v0, u1, v1] = extent(layers).unwrap_or([0.0, 0.0, 1.0, 1.0]);
     let size = (u1 - u0).max(v1 - v0).max(f32::MIN_POSITIVE);
     let pad = 0.05 * size;
@@ -57,19 +64,23 @@ pub fn write_svg(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
             th * rows as f32,
             (1024 * columns / columns.max(rows)).max(64),
             (1024 * rows / columns.max(rows)).max(64),
-            u0 - pad,
-            v1 + pad,
+            world_text(u0 - pad, frame.u),
+            world_text(v1 + pad, frame.v),
         )?;
         for (i, layer) in layers.iter().enumerate() {
             let (c, r) = (i % columns, i / columns);
             writeln!(
                 w,
                 r#"<g id="layer-{i}" data-height="{}" transform="translate({} {})">"#,
-                layer.height,
+                world_text(layer.height, frame.height),
                 tw * c as f32,
                 th * r as f32
             )?;
-            writeln!(w, "<title>layer {i} at {}</title>", layer.height)?;
+            writeln!(
+                w,
+                "<title>layer {i} at {}</title>",
+                world_text(layer.height, frame.height)
+            )?;
             write!(
                 w,
                 r##"<rect width="{tw}" height="{th}" fill="none" stroke="#ccc" stroke-width="{stroke}"/>"##
@@ -107,8 +118,45 @@ struct SliceFile {
 /// The layers as JSON: `{"layers": [{"height": z, "loops": [{"points": [[u, v], …], "hole":
 /// false}, …]}, …]}`, numbers written so they read back to the same f32.
 pub fn write_slice_json(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
+    write_slice_json_in(path, layers, &LayerFrame::default())
+}
+
+/// [`write_slice_json`] for layers in `frame`: heights and points are world coordinates, the
+/// frame added in f64 and written as f64.
+pub fn write_slice_json_in(
+    path: &Path,
+    layers: &[Layer],
+    frame: &LayerFrame,
+) -> Result<(), FileError> {
+    if frame.is_zero() {
+        return write_atomic(path, |w| {
+            serde_json::to_writer(&mut *w, &SliceFileRef { layers })?;
+            writeln!(w)
+        });
+    }
+    let world: Vec<serde_json::Value> = layers
+        .iter()
+        .map(|layer| {
+            let loops: Vec<serde_json::Value> = layer
+                .loops
+                .iter()
+                .map(|lp| {
+                    let points: Vec<[f64; 2]> = lp
+                        .points
+                        .iter()
+                        .map(|p| [frame.u + f64::from(p[0]), frame.v + f64::from(p[1])])
+                        .collect();
+                    serde_json::json!({ "points": points, "hole": lp.hole })
+                })
+                .collect();
+            serde_json::json!({
+                "height": frame.height + f64::from(layer.height),
+                "loops": loops,
+            })
+        })
+        .collect();
     write_atomic(path, |w| {
-        serde_json::to_writer(&mut *w, &SliceFileRef { layers })?;
+        serde_json::to_writer(&mut *w, &serde_json::json!({ "layers": world }))?;
         writeln!(w)
     })
 }

@@ -2,7 +2,7 @@
 //! int32, int64, uint32 or uint64, in C or Fortran order or any strides; anything array-like is
 //! passed through `numpy.asarray` first. Arrays returned are handed to NumPy without a copy.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use numpy::ndarray::{Array1, Array2, Array3, ShapeBuilder};
 use numpy::{
     Element, IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArray,
@@ -76,19 +76,34 @@ fn dtype_name(a: &Bound<'_, PyUntypedArray>) -> String {
     a.dtype().to_string()
 }
 
-/// Points (or vertices) from an (N, 3) float32 or float64 array-like; `name` labels errors.
-pub(crate) fn points(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec3>> {
+/// World points (or vertices) from an (N, 3) float32 or float64 array-like, kept in f64 so
+/// that positions far from the origin keep their precision; `name` labels errors.
+pub(crate) fn world_points(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<DVec3>> {
     let a = n_by_3(obj, name)?;
-    if let Some(p) = rows::<f32, _>(&a, |r| Ok(Vec3::from_array(r))) {
+    if let Some(p) = rows::<f32, _>(&a, |r| Ok(Vec3::from_array(r).as_dvec3())) {
         return p;
     }
-    if let Some(p) = rows::<f64, _>(&a, |[x, y, z]| Ok(Vec3::new(x as f32, y as f32, z as f32))) {
+    if let Some(p) = rows::<f64, _>(&a, |r| Ok(DVec3::from_array(r))) {
         return p;
     }
     Err(errors::parameter(
         obj.py(),
         format!("{name} must be float32 or float64, got {}", dtype_name(&a)),
     ))
+}
+
+/// A mesh's vertices in world coordinates: (N, 3) float32 as held for a mesh near the origin,
+/// float64 (the frame offset added) for a mesh far from it.
+pub(crate) fn mesh_vertices<'py>(py: Python<'py>, mesh: pgvol::Mesh) -> Bound<'py, PyAny> {
+    if mesh.offset == DVec3::ZERO {
+        return vec3s(py, mesh.positions).into_any();
+    }
+    let n = mesh.positions.len();
+    let flat: Vec<f64> = (0..n).flat_map(|i| mesh.world(i).to_array()).collect();
+    Array2::from_shape_vec((n, 3), flat)
+        .expect("three coordinates per vertex")
+        .into_pyarray(py)
+        .into_any()
 }
 
 /// One vertex index, refused when negative or beyond u32.
@@ -132,7 +147,7 @@ pub(crate) fn faces(obj: &Bound<'_, PyAny>) -> PyResult<Vec<[u32; 3]>> {
 pub(crate) fn mesh_parts(
     obj: &Bound<'_, PyAny>,
     name: &str,
-) -> PyResult<(Vec<Vec3>, Vec<[u32; 3]>)> {
+) -> PyResult<(Vec<DVec3>, Vec<[u32; 3]>)> {
     let py = obj.py();
     let (v, f) = if obj.hasattr("vertices")? && obj.hasattr("faces")? {
         (obj.getattr("vertices")?, obj.getattr("faces")?)
@@ -145,7 +160,7 @@ pub(crate) fn mesh_parts(
                 )
             })?
     };
-    Ok((points(&v, "vertices")?, faces(&f)?))
+    Ok((world_points(&v, "vertices")?, faces(&f)?))
 }
 
 /// Floats as a 1-D array.

@@ -29,6 +29,7 @@ impl Grid {
                 origin: glam::Vec3::new(origin.0, origin.1, origin.2),
                 spacing,
                 dims: [dims.0, dims.1, dims.2],
+                offset: Default::default(),
             },
         }
     }
@@ -299,7 +300,7 @@ impl Field {
         z_step: Option<f32>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Field> {
-        let positions = arrays::points(vertices, "vertices")?;
+        let positions = arrays::world_points(vertices, "vertices")?;
         let triangles = arrays::faces(faces)?;
         let options = pgvol::EncodeOptions {
             grid: grid_spec(py, res, voxel)?,
@@ -309,7 +310,7 @@ impl Field {
             sign: names::sign(py, sign)?,
         };
         let encoded = run(py, progress, |p| {
-            let (mesh, _) = pgvol::mesh_from_parts(positions, triangles)?;
+            let (mesh, _) = pgvol::mesh_from_world(&positions, triangles)?;
             pgvol::encode(&mesh, &options, p)
         })?;
         Ok(Field::from_file(encoded.file, false))
@@ -386,7 +387,9 @@ impl Field {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
-        let points = arrays::points(points, "points")?;
+        let points = self
+            .shape
+            .to_local(&arrays::world_points(points, "points")?);
         let values = py.detach(|| self.shape.volume.values_many(&points));
         Ok(arrays::vector(py, values))
     }
@@ -398,7 +401,9 @@ impl Field {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
     ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<f32>>)> {
-        let points = arrays::points(points, "points")?;
+        let points = self
+            .shape
+            .to_local(&arrays::world_points(points, "points")?);
         let (values, gradients): (Vec<f32>, Vec<glam::Vec3>) =
             py.detach(|| self.shape.volume.eval_many(&points).into_iter().unzip());
         Ok((arrays::vector(py, values), arrays::vec3s(py, gradients)))
@@ -411,7 +416,7 @@ impl Field {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let points = arrays::points(points, "points")?;
+        let points = arrays::world_points(points, "points")?;
         let exact: Vec<bool> = py.detach(|| {
             pgvol::eval(&self.shape, &points)
                 .into_iter()
@@ -439,7 +444,8 @@ impl Field {
         self.sample_grid(py, None)
     }
 
-    /// Contours the level set `iso` into a mesh: (vertices (N, 3) float32, faces (M, 3) int32).
+    /// Contours the level set `iso` into a mesh: (vertices (N, 3), faces (M, 3) int32), the
+    /// vertices float32, or float64 world positions for a field far from the origin.
     #[pyo3(signature = (*, method="mc", iso=0.0, res=None, min_component=None, progress=None))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn to_mesh<'py>(
@@ -450,7 +456,7 @@ impl Field {
         res: Option<usize>,
         min_component: Option<f32>,
         progress: Option<Py<PyAny>>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyArray2<i32>>)> {
         if min_component.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
             return Err(pyo3::exceptions::PyValueError::new_err(
                 "min_component must be a finite volume of at least 0",
@@ -466,9 +472,10 @@ impl Field {
             pgvol::decode_shape(&self.shape, &options, p)
         })?;
         let n = mesh.positions.len();
+        let triangles = mesh.triangles.clone();
         Ok((
-            arrays::vec3s(py, mesh.positions),
-            arrays::triangles(py, mesh.triangles, n)?,
+            arrays::mesh_vertices(py, mesh),
+            arrays::triangles(py, triangles, n)?,
         ))
     }
 
@@ -596,10 +603,13 @@ impl Field {
         tolerance: Option<f32>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Vec<Layer>> {
+        // Layers are returned in the field's local coordinates, exact only near the origin.
+        pgvol::require_near(self.shape.volume.grid.offset, "slicing into arrays")
+            .map_err(|e| errors::to_py(py, e))?;
         let settings = pgvol::SliceSettings {
             axis: names::axis(py, axis)?,
             layer_height,
-            first,
+            first: first.map(f64::from),
             resolution,
             tolerance,
         };

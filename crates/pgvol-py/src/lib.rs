@@ -25,19 +25,21 @@ use pyo3::types::{PyDict, PyList};
 use crate::progress::quiet;
 
 /// Reads a mesh file (OBJ, glTF/GLB, STL or PLY by extension), with bit-identical vertices
-/// welded and degenerate or repeated triangles dropped: (vertices (N, 3) float32, faces (M, 3)
-/// int32).
+/// welded and degenerate or repeated triangles dropped: (vertices (N, 3), faces (M, 3) int32).
+/// Vertices are float32, or float64 for a mesh far from the origin (more than 64 times its
+/// size away), whose positions single precision would round.
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 fn read_mesh(
     py: Python<'_>,
     path: PathBuf,
-) -> PyResult<(Bound<'_, PyArray2<f32>>, Bound<'_, PyArray2<i32>>)> {
+) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyArray2<i32>>)> {
     let (mesh, _) = quiet(py, || pgvol::read_mesh(&path))?;
     let n = mesh.positions.len();
+    let triangles = mesh.triangles.clone();
     Ok((
-        arrays::vec3s(py, mesh.positions),
-        arrays::triangles(py, mesh.triangles, n)?,
+        arrays::mesh_vertices(py, mesh),
+        arrays::triangles(py, triangles, n)?,
     ))
 }
 
@@ -49,7 +51,10 @@ fn write_mesh(
     vertices: &Bound<'_, PyAny>,
     faces: &Bound<'_, PyAny>,
 ) -> PyResult<()> {
-    let mesh = pgvol::Mesh::new(arrays::points(vertices, "vertices")?, arrays::faces(faces)?);
+    let mesh = pgvol::Mesh::from_world(
+        &arrays::world_points(vertices, "vertices")?,
+        arrays::faces(faces)?,
+    );
     quiet(py, || pgvol::write_mesh(&path, &mesh))
 }
 
@@ -68,8 +73,8 @@ fn compare<'py>(
     let (va, fa) = arrays::mesh_parts(a, "a")?;
     let (vb, fb) = arrays::mesh_parts(b, "b")?;
     let comparison = quiet(py, || {
-        let (a, _) = pgvol::mesh_from_parts(va, fa)?;
-        let (b, _) = pgvol::mesh_from_parts(vb, fb)?;
+        let (a, _) = pgvol::mesh_from_world(&va, fa)?;
+        let (b, _) = pgvol::mesh_from_world(&vb, fb)?;
         pgvol::compare(&a, &b, samples, seed)
     })?;
     let value = serde_json::to_value(&comparison)

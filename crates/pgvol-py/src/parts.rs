@@ -41,9 +41,9 @@ fn mesh(
     vertices: &Bound<'_, PyAny>,
     faces: &Bound<'_, PyAny>,
 ) -> PyResult<pgvol::Mesh> {
-    let positions = arrays::points(vertices, "vertices")?;
+    let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
-    quiet(py, || Ok(pgvol::mesh_from_parts(positions, triangles)?.0))
+    quiet(py, || Ok(pgvol::mesh_from_world(&positions, triangles)?.0))
 }
 
 /// A part of an encode: groups `y0..y1`, `z0..z1` and the estimated peak bytes.
@@ -244,7 +244,7 @@ pub(crate) fn weld_parts<'py>(
         .iter()
         .map(|p| {
             let (v, f) = arrays::mesh_parts(p, "piece")?;
-            Ok(pgvol::Mesh::new(v, f))
+            Ok(pgvol::Mesh::from_world(&v, f))
         })
         .collect::<PyResult<Vec<_>>>()?;
     let options = pgvol::DecodeOptions {
@@ -274,7 +274,7 @@ fn slice_settings(
     Ok(pgvol::SliceSettings {
         axis: names::axis(py, axis)?,
         layer_height,
-        first,
+        first: first.map(f64::from),
         resolution,
         tolerance,
     })
@@ -374,7 +374,8 @@ pub(crate) fn write_layers(
     }
     quiet(py, || {
         let format = pgvol::LayerFormat::from_path(&path, binary)?;
-        pgvol::write_layers(&path, &out, format, units_mm)
+        // Layers from Python are world coordinates as given.
+        pgvol::write_layers(&path, &out, format, units_mm, &pgvol::LayerFrame::default())
     })
 }
 

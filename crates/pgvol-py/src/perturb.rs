@@ -32,7 +32,7 @@ pub(crate) fn perturb<'py>(
     list_path: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(Field, Bound<'py, PyAny>)> {
-    let positions = arrays::points(vertices, "vertices")?;
+    let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
     let options = pgvol::PerturbOptions {
         max_functions,
@@ -41,7 +41,7 @@ pub(crate) fn perturb<'py>(
     };
     let spec = pgvol::GridSpec::Res(res);
     let (file, report) = run(py, progress, |p| {
-        let (mesh, _) = pgvol::mesh_from_parts(positions, triangles)?;
+        let (mesh, _) = pgvol::mesh_from_world(&positions, triangles)?;
         let built = pgvol::perturb_on(&mesh, &options, spec, p)?;
         if let Some(path) = &list_path {
             let header = pgvol::perturbation_header(&built.field, &mesh, spec)?;

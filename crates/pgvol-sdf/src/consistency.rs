@@ -129,6 +129,7 @@ mod tests {
             origin: Vec3::ZERO,
             spacing: 1.0,
             dims: [n, n, n],
+            offset: Default::default(),
         }
     }
 

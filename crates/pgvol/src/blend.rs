@@ -41,8 +41,9 @@ pub enum BlendOperator {
         bounds: Vec<Operand>,
         /// `w₁..wₙ` and `w`, when given.
         weights: Option<(Vec<f32>, f32)>,
-        /// Points on the wanted surface, to fit the weights when not given.
-        points: Vec<Vec3>,
+        /// Points on the wanted surface (world coordinates, as [`crate::read_points`] gives
+        /// them), to fit the weights when not given.
+        points: Vec<glam::DVec3>,
     },
 }
 
@@ -147,7 +148,9 @@ pub fn blend(
         BlendOperator::IPatch { points, .. } => {
             let terms: Vec<Vec<f64>> = points
                 .iter()
-                .map(|&p| pgvol_ops::ipatch_terms(&value(prim, p), &value(rest, p)))
+                // Operands are near the origin (far ones are refused), so world is local.
+                .map(|&p| p.as_vec3())
+                .map(|p| pgvol_ops::ipatch_terms(&value(prim, p), &value(rest, p)))
                 .collect();
             Some(pgvol_ops::fit_ipatch_weights(&terms).map_err(crate::csg::ops_error)?)
         }

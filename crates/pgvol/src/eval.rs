@@ -3,7 +3,7 @@
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use glam::Vec3;
+use glam::DVec3;
 use pgvol_core::Grid;
 use pgvol_field::CoefficientVolume;
 
@@ -17,7 +17,10 @@ use crate::shape::Shape;
 /// (a header such as `x,y,z`); a UTF-8 byte-order mark is ignored. Any other line that is not
 /// three finite numbers below [`MAX_COORDINATE`](pgvol_mesh::MAX_COORDINATE) in magnitude is an
 /// error naming the line; `name` labels errors.
-pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
+///
+/// The points are world coordinates, parsed in f64 so that points far from the origin keep
+/// their precision until [`eval`] takes them into the field's frame.
+pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<DVec3>> {
     let fail = |message: String| Error::new(ErrorKind::InputFile, message).at(name);
     let mut points = Vec::new();
     let mut seen_data = false;
@@ -31,14 +34,14 @@ pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
             .split([',', ';', ' ', '\t'])
             .filter(|f| !f.is_empty())
             .collect();
-        let numbers: Vec<Option<f32>> = fields.iter().map(|f| f.parse::<f32>().ok()).collect();
+        let numbers: Vec<Option<f64>> = fields.iter().map(|f| f.parse::<f64>().ok()).collect();
         let first = !seen_data;
         seen_data = true;
         if first && numbers.iter().all(Option::is_none) {
             continue;
         }
         let point = match numbers.as_slice() {
-            [Some(x), Some(y), Some(z)] => Vec3::new(*x, *y, *z),
+            [Some(x), Some(y), Some(z)] => DVec3::new(*x, *y, *z),
             _ => {
                 return Err(fail(format!(
                     "line {}: expected three numbers x,y,z, got '{line}'",
@@ -46,7 +49,8 @@ pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
                 )))
             }
         };
-        if !point.is_finite() || point.abs().max_element() >= pgvol_mesh::MAX_COORDINATE {
+        if !point.is_finite() || point.abs().max_element() >= f64::from(pgvol_mesh::MAX_COORDINATE)
+        {
             return Err(fail(format!(
                 "line {}: coordinates must be finite and below {:e} in magnitude, got '{line}'",
                 n + 1,
@@ -62,7 +66,7 @@ pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<Vec3>> {
 }
 
 /// Reads the points of a file; see [`read_points`].
-pub fn read_points_file(path: &Path) -> Result<Vec<Vec3>> {
+pub fn read_points_file(path: &Path) -> Result<Vec<DVec3>> {
     let bytes = pgvol_core::read_input(path).reading()?;
     read_points(bytes.as_slice(), path)
 }
@@ -80,16 +84,17 @@ pub struct Evaluation {
     pub exact: bool,
 }
 
-/// Value and gradient of `shape`'s field at each point, in parallel, each flagged by whether it
-/// is an exact distance.
-pub fn eval(shape: &Shape, points: &[Vec3]) -> Vec<Evaluation> {
+/// Value and gradient of `shape`'s field at each point (world coordinates, taken into the
+/// field's frame in f64), in parallel, each flagged by whether it is an exact distance.
+pub fn eval(shape: &Shape, points: &[DVec3]) -> Vec<Evaluation> {
     let volume: &CoefficientVolume = &shape.volume;
     let band = shape.exact_band();
     let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    let points = shape.to_local(points);
     volume
-        .eval_many(points)
+        .eval_many(&points)
         .into_iter()
-        .zip(points)
+        .zip(&points)
         .map(|((value, gradient), p)| Evaluation {
             value,
             gradient: gradient.to_array(),
@@ -131,17 +136,41 @@ pub fn sample(volume: &CoefficientVolume, grid: &Grid) -> Result<Vec<f32>> {
     Ok(volume.sample(grid))
 }
 
+/// A query point as a report gives it: single precision near the origin, full f64 for a field
+/// with a frame offset (as [`eval_csv`] writes it).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum ReportPoint {
+    /// A point of a field near the origin.
+    Single([f32; 3]),
+    /// A point of a field far from the origin.
+    Double([f64; 3]),
+}
+
+/// `p` as [`ReportPoint`] for `shape`.
+pub fn point_json(shape: &Shape, p: DVec3) -> ReportPoint {
+    if shape.volume.grid.offset != DVec3::ZERO {
+        ReportPoint::Double(p.to_array())
+    } else {
+        ReportPoint::Single(p.as_vec3().to_array())
+    }
+}
+
 /// The rows `x,y,z,value,gx,gy,gz,exact` of [`eval`]'s results (`exact` 1 or 0), with a header
-/// line.
-pub fn eval_csv(points: &[Vec3], results: &[Evaluation]) -> String {
+/// line. Points are written as single precision for a field near the origin (as read), and in
+/// full f64 for a field with a frame offset, so a far point is written as given.
+pub fn eval_csv(shape: &Shape, points: &[DVec3], results: &[Evaluation]) -> String {
+    let far = shape.volume.grid.offset != DVec3::ZERO;
     let mut text = String::from("x,y,z,value,gx,gy,gz,exact\n");
     for (p, e) in points.iter().zip(results) {
         let [gx, gy, gz] = e.gradient;
+        let [x, y, z] = if far {
+            p.to_array().map(|c| c.to_string())
+        } else {
+            p.as_vec3().to_array().map(|c| c.to_string())
+        };
         text.push_str(&format!(
-            "{},{},{},{},{gx},{gy},{gz},{}\n",
-            p.x,
-            p.y,
-            p.z,
+            "{x},{y},{z},{},{gx},{gy},{gz},{}\n",
             e.value,
             u8::from(e.exact)
         ));

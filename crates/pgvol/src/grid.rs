@@ -30,12 +30,12 @@ impl Default for GridSpec {
 }
 
 impl GridSpec {
-    /// The grid around `mesh`.
+    /// The grid around `mesh`, in the mesh's frame (its local coordinates, its offset).
     pub fn grid_for(self, mesh: &Mesh) -> Result<Grid> {
         let (lo, hi) = mesh
             .bounds()
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
-        self.grid_for_box(lo, hi)
+        Ok(self.grid_for_box(lo, hi)?.with_offset(mesh.offset))
     }
 
     /// The grid around the box `[lo, hi]` (of a point cloud, say).

@@ -96,6 +96,7 @@ fn check_lattice_memory(shape: &Shape) -> Result<()> {
 
 /// The part of `shape` intersected with `lattice`.
 pub fn lattice(shape: &Shape, lattice: &Lattice, progress: &dyn Progress) -> Result<LatticeSolid> {
+    crate::frame::require_near(shape.volume.grid.offset, "a lattice")?;
     check_resolution(shape, lattice)?;
     shape.check_reach(lattice_reach(lattice, 0.0))?;
     check_lattice_memory(shape)?;
@@ -114,6 +115,7 @@ pub fn infill(
     progress: &dyn Progress,
 ) -> Result<LatticeSolid> {
     check_thickness(wall)?;
+    crate::frame::require_near(shape.volume.grid.offset, "an infill")?;
     check_resolution(shape, lattice)?;
     shape.check_reach(lattice_reach(lattice, wall))?;
     check_drains(shape, wall, drains, progress)?;

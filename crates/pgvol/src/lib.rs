@@ -68,6 +68,8 @@ mod error;
 mod eval;
 mod exact_field;
 mod export;
+mod frame;
+pub use frame::require_near;
 mod grid;
 mod lattice;
 mod memory;
@@ -96,7 +98,9 @@ pub use encode::{
     MIN_BAND, PG_ORDER, PG_RADIUS,
 };
 pub use error::{Error, ErrorKind, Result};
-pub use eval::{eval, eval_csv, read_points, read_points_file, sample, Evaluation};
+pub use eval::{
+    eval, eval_csv, point_json, read_points, read_points_file, sample, Evaluation, ReportPoint,
+};
 pub use exact_field::{MeshField, NODE_BAND};
 pub use export::{export, ExportKind, THREEMF_UNIT, THREEMF_UNITS};
 pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
@@ -106,7 +110,8 @@ pub use lattice::{
 };
 pub use memory::{human, memory_limit, parse_size, set_memory_limit};
 pub use mesh_io::{
-    mesh_format, mesh_from_parts, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to,
+    check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh, read_mesh_bytes,
+    write_mesh, write_mesh_to,
 };
 pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
 pub use perturb::{
@@ -132,7 +137,7 @@ pub use shape::{
     check_offset, check_thickness, growth, offset, operation_name, parse_drain, shell, Shape,
     ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
 };
-pub use slice::{slice, write_layers, LayerFormat, SliceSettings, DEFAULT_UNITS_MM};
+pub use slice::{layer_frame, slice, write_layers, LayerFormat, SliceSettings, DEFAULT_UNITS_MM};
 
 /// The stage crates, for what the facade does not wrap.
 pub use pgvol_contour as contour;
@@ -152,8 +157,8 @@ pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
 pub use pgvol_ops::{
-    Axis, Blend, BoolOp, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Layer, Mask,
-    MaskReport, Ramp, Restore, ShellSide, Tpms, TPMS_NAMES,
+    Axis, Blend, BoolOp, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Layer,
+    LayerFrame, Mask, MaskReport, Ramp, Restore, ShellSide, Tpms, TPMS_NAMES,
 };
 pub use pgvol_points::{PointCloud, PointsReport};
 pub use pgvol_sdf::SignMode;
@@ -187,5 +192,13 @@ pub fn compare(a: &Mesh, b: &Mesh, samples: usize, seed: u64) -> Result<Comparis
         (samples as u64).saturating_mul(memory::BYTES_PER_SAMPLE),
         "use fewer samples",
     )?;
-    Ok(pgvol_metrics::compare(a, b, samples, seed)?)
+    // Both meshes in one frame, taken from their f64 world positions: a far mesh compared
+    // with its copy keeps the precision of its own size.
+    let frame = if a.offset != glam::DVec3::ZERO {
+        a.offset
+    } else {
+        b.offset
+    };
+    let (a, b) = (a.in_frame(frame), b.in_frame(frame));
+    Ok(pgvol_metrics::compare(&a, &b, samples, seed)?)
 }

@@ -32,7 +32,18 @@ pub fn mesh_from_parts(
     positions: Vec<glam::Vec3>,
     triangles: Vec<[u32; 3]>,
 ) -> Result<(Mesh, CleanReport)> {
-    let mut mesh = Mesh::new(positions, triangles);
+    let world: Vec<glam::DVec3> = positions.iter().map(|p| p.as_dvec3()).collect();
+    mesh_from_world(&world, triangles)
+}
+
+/// [`mesh_from_parts`] from f64 world positions: a mesh far from the origin (more than
+/// [`FAR_RATIO`](pgvol_core::frame::FAR_RATIO) times its size away) is recentred with its
+/// offset kept in f64, so its precision follows its size.
+pub fn mesh_from_world(
+    positions: &[glam::DVec3],
+    triangles: Vec<[u32; 3]>,
+) -> Result<(Mesh, CleanReport)> {
+    let mut mesh = Mesh::from_world(positions, triangles);
     if let Some(problem) = pgvol_mesh::mesh_problem(&mesh) {
         return Err(Error::parameter(format!("the mesh is unusable: {problem}")));
     }
@@ -44,6 +55,13 @@ pub fn mesh_from_parts(
 /// The mesh format a file name asks for, refused (as an output error) when there is none.
 pub fn mesh_format(path: &Path) -> Result<MeshFormat> {
     MeshFormat::from_path(path).writing()
+}
+
+/// Refuses, before the work, an output `path` whose format cannot hold a mesh in `like`'s frame
+/// and of its size (STL far from the origin), as writing the result would.
+pub fn check_mesh_output(path: &Path, like: &Mesh) -> Result<()> {
+    let format = mesh_format(path)?;
+    pgvol_mesh::check_precision(like, format, path).writing()
 }
 
 /// Writes `mesh` to `path` atomically in the format of its extension.

@@ -70,7 +70,7 @@ pub enum OperandField {
     /// An analytic solid's exact distance.
     Primary(Primary),
     /// A coefficient volume.
-    Volume(CoefficientVolume),
+    Volume(Box<CoefficientVolume>),
 }
 
 impl OperandField {
@@ -181,13 +181,18 @@ impl LoadedOperand {
         Ok(match operand {
             Operand::Primary(p) => LoadedOperand::Primary(*p),
             Operand::File(path) if is_pgv(path) => {
-                LoadedOperand::Field(Box::new(Shape::from_file(read_pgv(path)?)))
+                let shape = Shape::from_file(read_pgv(path)?);
+                crate::frame::require_near(shape.volume.grid.offset, "combining shapes")
+                    .map_err(|e| e.at(path))?;
+                LoadedOperand::Field(Box::new(shape))
             }
             Operand::File(path) => {
                 let (mesh, _) = mesh_io::read_mesh(path)?;
                 if mesh.bounds().is_none() {
                     return Err(Error::parameter("the mesh has no triangles").at(path));
                 }
+                crate::frame::require_near(mesh.offset, "combining shapes")
+                    .map_err(|e| e.at(path))?;
                 LoadedOperand::Mesh(Box::new(mesh))
             }
         })
@@ -210,7 +215,7 @@ impl LoadedOperand {
             LoadedOperand::Primary(p) => Ok(OperandField::Primary(*p)),
             LoadedOperand::Field(shape) => {
                 shape.check_reach(reach)?;
-                Ok(OperandField::Volume(shape.volume.clone()))
+                Ok(OperandField::Volume(Box::new(shape.volume.clone())))
             }
             LoadedOperand::Mesh(mesh) => {
                 let options = EncodeOptions {
@@ -222,7 +227,7 @@ impl LoadedOperand {
                 };
                 crate::memory::check_sparse_encode("encoding the mesh", mesh, &grid, options.band)?;
                 let fitted = fit_volume(mesh, grid, &options, &mut Timings::default(), progress)?;
-                Ok(OperandField::Volume(fitted.volume))
+                Ok(OperandField::Volume(Box::new(fitted.volume)))
             }
         }
     }

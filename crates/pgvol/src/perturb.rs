@@ -76,6 +76,7 @@ pub fn perturb_on(
     spec: GridSpec,
     progress: &dyn Progress,
 ) -> Result<Perturbed> {
+    crate::frame::require_near(mesh.offset, "the perturbation field")?;
     validate(options)?;
     let grid = spec.grid_for(mesh)?;
     // The mesh's distances, the field's resampled nodes and two label arrays per node.

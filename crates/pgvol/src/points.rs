@@ -146,6 +146,15 @@ pub fn read_cloud_text(r: impl Read, name: &Path) -> Result<PointCloud> {
             normals.push(normal);
         }
     }
+    if let Some((lo, hi)) = cloud
+        .points
+        .iter()
+        .fold(None, |b: Option<(Vec3, Vec3)>, &p| {
+            Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))))
+        })
+    {
+        crate::frame::require_near_box(lo, hi, "reconstruction from points")?;
+    }
     if cloud.points.is_empty() {
         return Err(fail("no points".into()));
     }
@@ -367,6 +376,7 @@ pub fn contours(
     // The box of the loops, grown by the caps' half layers.
     let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
     let (lo, hi) = pgvol_points::index::bounds(&outline.points);
+    crate::frame::require_near_box(lo, hi, "reconstruction from contours")?;
     let grid = options.grid.grid_for_box(lo, hi)?;
     if options.method != Method::Spline {
         // Samples at half the grid spacing: every cell the surface crosses holds several.

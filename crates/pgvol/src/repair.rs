@@ -80,6 +80,7 @@ pub fn repair(
     restore: Restore,
     progress: &dyn Progress,
 ) -> Result<(CoefficientVolume, Vec<MaskReport>)> {
+    crate::frame::require_near(shape.volume.grid.offset, "repair")?;
     if let Restore::Protrusion { alpha, .. } = restore {
         if !alpha.is_finite() {
             return Err(Error::parameter(format!(

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use pgvol_core::{Grid, Mesh};
 use pgvol_field::{Basis, CoefficientVolume, FitMethod};
 use pgvol_format::PgvFile;
@@ -67,7 +67,7 @@ impl Shape {
             .bounds()
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
         let pad = Vec3::splat(grow.max(0.0));
-        let grid = Grid::cube_res(lo - pad, hi + pad, res)?;
+        let grid = Grid::cube_res(lo - pad, hi + pad, res)?.with_offset(mesh.offset);
         let options = EncodeOptions {
             grid: GridSpec::Res(res),
             basis: Basis::Bspline3,
@@ -123,6 +123,16 @@ impl Shape {
             ));
         }
         Ok(())
+    }
+
+    /// Points given in world coordinates, in the field's local frame (the offset subtracted in
+    /// f64, then rounded once).
+    pub fn to_local(&self, points: &[DVec3]) -> Vec<Vec3> {
+        let offset = self.volume.grid.offset;
+        points
+            .iter()
+            .map(|&p| pgvol_core::frame::to_local(p, offset))
+            .collect()
     }
 
     /// The distance from the surface within which level sets of the field are exact: the
@@ -233,11 +243,19 @@ pub fn shell(
         return Err(Error::parameter("drain holes apply to hollowing only"));
     }
     shape.check_reach(thickness)?;
+    // Drain points are world coordinates; the field's are local.
+    let drains: Vec<Drain> = drains
+        .iter()
+        .map(|d| Drain {
+            point: shape.to_local(&[d.point.as_dvec3()])[0],
+            ..*d
+        })
+        .collect();
     if kind == ShellKind::Hollow {
-        check_drains(shape, thickness, drains, progress)?;
+        check_drains(shape, thickness, &drains, progress)?;
     }
     Ok(match kind {
-        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, drains)?,
+        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, &drains)?,
         ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,
     })
 }
@@ -264,7 +282,7 @@ pub(crate) fn check_drains(
         // The hole runs from its point outward: a point outside the cavity opens nothing.
         let value = shape.volume.value(drain.point);
         if value >= -thickness {
-            let p = drain.point;
+            let p = pgvol_core::frame::to_world(drain.point, shape.volume.grid.offset);
             let place = if value >= 0.0 {
                 "outside the shape".to_string()
             } else {

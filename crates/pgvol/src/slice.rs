@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use pgvol_ops::{Axis, CliEncoding, Layer, SliceOptions};
+use pgvol_ops::{Axis, CliEncoding, Layer, LayerFrame, SliceOptions};
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::progress::{self, Progress};
@@ -15,8 +15,9 @@ pub struct SliceSettings {
     pub axis: Axis,
     /// Distance between layer planes, in model units (> 0).
     pub layer_height: f32,
-    /// Height of the first plane; `None` (the default) for half a layer above the bottom.
-    pub first: Option<f32>,
+    /// Height of the first plane in world coordinates; `None` (the default) for half a layer
+    /// above the bottom.
+    pub first: Option<f64>,
     /// Spacing of each layer's sampling grid; `None` (the default) for the field's spacing.
     pub resolution: Option<f32>,
     /// Simplification tolerance; `None` (the default) for a tenth of the resolution.
@@ -59,11 +60,19 @@ pub(crate) fn slice_options(shape: &Shape, settings: &SliceSettings) -> Result<S
     }
     let resolution = settings.resolution.unwrap_or(shape.volume.grid.spacing);
     let mut options = SliceOptions::new(settings.axis, settings.layer_height, resolution);
-    options.first = settings.first;
+    // The stage slices in the field's local frame.
+    let shift = layer_frame(shape, settings.axis).height;
+    options.first = settings.first.map(|f| (f - shift) as f32);
     if let Some(t) = settings.tolerance {
         options.tolerance = t;
     }
     Ok(options)
+}
+
+/// Where layers of `shape` stacked along `axis` sit in the world: the field's frame offset, which
+/// [`write_layers`] adds (in f64) to the local layer coordinates.
+pub fn layer_frame(shape: &Shape, axis: Axis) -> LayerFrame {
+    LayerFrame::new(axis, shape.volume.grid.offset)
 }
 
 /// Layer file formats.
@@ -108,12 +117,15 @@ impl LayerFormat {
 /// Millimetres per model unit written to Common Layer Interface headers unless told otherwise.
 pub const DEFAULT_UNITS_MM: f32 = 1.0;
 
-/// Writes `layers` to `path` atomically; `units_mm` is millimetres per model unit (CLI header).
+/// Writes `layers` to `path` atomically in world coordinates (`frame`, from [`layer_frame`],
+/// added in f64); `units_mm` is millimetres per model unit (CLI header). Binary CLI, which
+/// holds f32, is refused for layers so far from the origin that it would round them visibly.
 pub fn write_layers(
     path: &Path,
     layers: &[Layer],
     format: LayerFormat,
     units_mm: f32,
+    frame: &LayerFrame,
 ) -> Result<()> {
     if !(units_mm.is_finite() && units_mm > 0.0) {
         return Err(Error::parameter(format!(
@@ -121,9 +133,11 @@ pub fn write_layers(
         )));
     }
     match format {
-        LayerFormat::Svg => pgvol_ops::write_svg(path, layers),
-        LayerFormat::Cli(encoding) => pgvol_ops::write_cli_with(path, layers, units_mm, encoding),
-        LayerFormat::Json => pgvol_ops::write_slice_json(path, layers),
+        LayerFormat::Svg => pgvol_ops::write_svg_in(path, layers, frame),
+        LayerFormat::Cli(encoding) => {
+            pgvol_ops::write_cli_in(path, layers, units_mm, encoding, frame)
+        }
+        LayerFormat::Json => pgvol_ops::write_slice_json_in(path, layers, frame),
     }
     .writing()
 }

@@ -741,6 +741,7 @@ fn sampling_a_grid_gives_the_field_at_its_nodes_x_fastest() {
         origin: Vec3::new(-0.5, -0.25, 0.0),
         spacing: 0.125,
         dims: [3, 4, 5],
+        offset: Default::default(),
     };
     let values = pgvol::sample(&volume, &grid).unwrap();
     assert_eq!(values.len(), 60);

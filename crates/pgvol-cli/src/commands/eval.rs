@@ -34,12 +34,12 @@ pub fn run(a: EvalArgs) -> Result<()> {
         let rows: Vec<_> = points
             .iter()
             .zip(&results)
-            .map(|(p, e)| serde_json::json!({ "point": p.to_array(), "value": e.value, "gradient": e.gradient, "exact": e.exact }))
+            .map(|(p, e)| serde_json::json!({ "point": pgvol::point_json(&shape, *p), "value": e.value, "gradient": e.gradient, "exact": e.exact }))
             .collect();
         outln!("{}", serde_json::to_string(&rows)?);
         return Ok(());
     }
-    let text = pgvol::eval_csv(&points, &results);
+    let text = pgvol::eval_csv(&shape, &points, &results);
     match &a.output {
         Some(path) => pgvol::core::write_atomic(path, |w| w.write_all(text.as_bytes()))?,
         None => std::io::stdout().write_all(text.as_bytes())?,

@@ -361,6 +361,14 @@ pub fn info(a: InfoArgs) -> Result<()> {
         g.origin.y,
         g.origin.z
     );
+    if g.offset != pgvol::glam::DVec3::ZERO {
+        outln!(
+            "frame offset  ({}, {}, {}): world = offset + the local positions above",
+            g.offset.x,
+            g.offset.y,
+            g.offset.z
+        );
+    }
     let list = pgvol::format::is_perturbation(h);
     if list {
         outln!(

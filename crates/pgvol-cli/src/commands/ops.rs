@@ -70,9 +70,10 @@ pub struct SliceArgs {
     /// Distance between layer planes, in model units.
     #[arg(long)]
     pub layer_height: f32,
-    /// Height of the first plane (default: half a layer above the bottom of the shape).
+    /// Height of the first plane, in the model's own coordinates however far from the origin
+    /// (default: half a layer above the bottom of the shape).
     #[arg(long, allow_negative_numbers = true)]
-    pub first: Option<f32>,
+    pub first: Option<f64>,
     /// Axis the layers are stacked along.
     #[arg(long, value_enum, default_value_t)]
     pub axis: AxisArg,
@@ -121,7 +122,8 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let t = Instant::now();
     let layers = pgvol::slice(&shape, &settings, &bars).map_err(|e| at_input(e, &a.input))?;
     let slice_seconds = t.elapsed().as_secs_f64();
-    pgvol::write_layers(&a.output, &layers, format, a.units_mm)?;
+    let frame = pgvol::layer_frame(&shape, settings.axis);
+    pgvol::write_layers(&a.output, &layers, format, a.units_mm, &frame)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
     let points: usize = layers
         .iter()

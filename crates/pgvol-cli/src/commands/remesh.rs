@@ -71,6 +71,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
     let start = Instant::now();
     let quiet = a.out.silent();
     let mesh = load_mesh(&a.input, quiet)?;
+    pgvol::check_mesh_output(&a.output, &mesh)?;
     let read = start.elapsed().as_secs_f64();
     let options = pgvol::RemeshOptions {
         grid: a.grid.spec(),

@@ -95,6 +95,7 @@ fn bspline(s: &Samples) -> pgvol_field::CoefficientVolume {
         origin: s.origin,
         spacing: s.spacing,
         dims: s.dims,
+        offset: Default::default(),
     };
     CoefficientVolume::interpolate(grid, Basis::Bspline3, s.values.clone()).unwrap()
 }

@@ -31,6 +31,7 @@ fn sphere_volume(
         origin: Vec3::ZERO,
         spacing: 1.0,
         dims,
+        offset: Default::default(),
     };
     let mut coeffs = SparseGrid::new(dims, Background::clamp(clamp));
     let half = (BRICK_EDGE - 1) as f32 / 2.0;
@@ -128,6 +129,7 @@ fn absent_bricks_of_both_sides_bound_a_closed_region() {
         origin: Vec3::ZERO,
         spacing: 1.0,
         dims,
+        offset: Default::default(),
     };
     let v = CoefficientVolume::from_sparse(grid, Basis::Bspline3, coeffs).unwrap();
     for method in METHODS {

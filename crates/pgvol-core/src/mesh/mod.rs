@@ -6,24 +6,67 @@ mod components;
 mod orient;
 mod stats;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
+
+use crate::frame;
 
 pub use stats::MeshStats;
 
 /// An indexed triangle mesh in the units of its source file.
 ///
 /// Triangles are counter-clockwise seen from outside (right-hand rule gives the outward normal).
+/// `positions` are local: the world position of a vertex is `offset + position`, with the
+/// offset zero unless the mesh sits far from the origin (see [`crate::frame`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
+    /// The world translation of the local frame, in f64.
+    pub offset: DVec3,
 }
 
 impl Mesh {
+    /// A mesh in the world frame (offset zero).
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
         Self {
             positions,
             triangles,
+            offset: DVec3::ZERO,
+        }
+    }
+
+    /// A mesh from f64 world positions, recentred when it sits far from the origin
+    /// ([`frame::recentring_offset`]); near the origin the positions are rounded to f32 as
+    /// they are.
+    pub fn from_world(world: &[DVec3], triangles: Vec<[u32; 3]>) -> Self {
+        let offset = frame::world_bounds(world)
+            .map_or(DVec3::ZERO, |(lo, hi)| frame::recentring_offset(lo, hi));
+        Self {
+            positions: world.iter().map(|&p| frame::to_local(p, offset)).collect(),
+            triangles,
+            offset,
+        }
+    }
+
+    /// The world position of vertex `i`.
+    #[inline]
+    pub fn world(&self, i: usize) -> DVec3 {
+        frame::to_world(self.positions[i], self.offset)
+    }
+
+    /// The same surface with its local coordinates taken relative to `offset` (rounded once
+    /// to f32 from the f64 world positions).
+    pub fn in_frame(&self, offset: DVec3) -> Mesh {
+        if offset == self.offset {
+            return self.clone();
+        }
+        let positions = (0..self.positions.len())
+            .map(|i| frame::to_local(self.world(i), offset))
+            .collect();
+        Mesh {
+            positions,
+            triangles: self.triangles.clone(),
+            offset,
         }
     }
 

@@ -190,6 +190,7 @@ mod tests {
                 origin: Vec3::new(-0.3, 0.1, 0.2),
                 spacing: 0.07,
                 dims,
+                offset: Default::default(),
             };
             let coeffs: Vec<f32> = (0..grid.len())
                 .map(|i| ((i * 37) % 11) as f32 * 0.1 - 0.5)
@@ -224,6 +225,7 @@ mod tests {
             origin: Vec3::ZERO,
             spacing: 0.1,
             dims,
+            offset: Default::default(),
         };
         let coeffs: Vec<f32> = (0..grid.len())
             .map(|i| ((i * 7919) % 101) as f32 * 0.013 - 0.6)

@@ -139,6 +139,7 @@ mod tests {
                 origin: Vec3::new(-0.3, 0.1, 0.2),
                 spacing: 0.07,
                 dims,
+                offset: Default::default(),
             };
             let dense: Vec<f32> = (0..grid.len())
                 .map(|i| ((i * 37) % 11) as f32 * 0.1 - 0.5)
@@ -173,6 +174,7 @@ mod tests {
             origin: Vec3::ZERO,
             spacing: 1.0,
             dims,
+            offset: Default::default(),
         };
         let mut coeffs = SparseGrid::new(dims, Background::clamp(3.0));
         coeffs.insert([10, 10, 10], Box::new([0.5; BRICK_NODES]));

@@ -83,5 +83,6 @@ pub fn brick_grid(g: &Grid, brick: &Brick) -> Grid {
         ),
         spacing: g.spacing,
         dims: brick.dims,
+        offset: g.offset,
     }
 }

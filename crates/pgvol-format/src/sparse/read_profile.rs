@@ -144,6 +144,7 @@ mod tests {
             origin: Vec3::new(-1.0, -0.8, -1.2),
             spacing: 2.4 / dims[2] as f32,
             dims,
+            offset: Default::default(),
         };
         let clamp = 4.0 * grid.spacing;
         let mut samples = Vec::with_capacity(grid.len());

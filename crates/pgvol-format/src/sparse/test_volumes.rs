@@ -30,6 +30,7 @@ pub(crate) fn dense(dims: [usize; 3], basis: Basis, seed: u64, scale: f32) -> Co
         origin: Vec3::new(-0.4, 0.3, 0.1),
         spacing: 0.1,
         dims,
+        offset: Default::default(),
     };
     let mut r = random(seed);
     let coeffs = (0..grid.len()).map(|_| r() * scale).collect();
@@ -44,6 +45,7 @@ pub(crate) fn sparse(basis: Basis, bg: Background, seed: u64) -> CoefficientVolu
         origin: Vec3::ZERO,
         spacing: 0.1,
         dims: [37, 29, 26],
+        offset: Default::default(),
     };
     let mut r = random(seed);
     let mut coeffs = SparseGrid::new(grid.dims, bg);

@@ -416,6 +416,7 @@ mod tests {
                     origin: lo,
                     spacing,
                     dims,
+                    offset: Default::default(),
                 };
                 let dense = sdf.sample(&grid, Extent::Band(3.0), &|_| {});
                 let sdf = MeshSdf::new(&mesh, sign).unwrap();
@@ -597,6 +598,7 @@ mod tests {
                 origin: grid.origin * scale,
                 spacing: grid.spacing * scale,
                 dims: grid.dims,
+                offset: Default::default(),
             };
             for mode in [SignMode::Winding, SignMode::Pseudonormal] {
                 let want = MeshSdf::new(&unit, mode).unwrap();

@@ -31,6 +31,7 @@ fn z_cells(volume: &CoefficientVolume) -> usize {
 
 /// Cuts the contouring of `volume` into at most `parts` slabs of cells along z.
 pub fn plan_decode(volume: &CoefficientVolume, parts: usize) -> Result<Vec<Range<usize>>> {
+    crate::frame::require_near(volume.grid.offset, "a decode in parts")?;
     split(z_cells(volume), parts)
 }
 
@@ -124,6 +125,7 @@ pub fn plan_slice(
     settings: &SliceSettings,
     parts: usize,
 ) -> Result<Vec<Range<usize>>> {
+    crate::frame::require_near(shape.volume.grid.offset, "slicing in parts")?;
     let options = crate::slice::slice_options(shape, settings)?;
     let heights = pgvol_ops::layer_heights(shape.bounds, &options)?;
     split(heights.len(), parts)

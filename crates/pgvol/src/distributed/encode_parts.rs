@@ -64,6 +64,7 @@ fn check_parts_options(options: &EncodeOptions) -> Result<()> {
 /// layers (at most one part per group column, so fewer on small grids).
 pub fn plan_encode(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> Result<EncodePlan> {
     check_parts_options(options)?;
+    crate::frame::require_near(mesh.offset, "an encode in parts")?;
     let grid = options.grid.grid_for(mesh)?;
     let [_, ny, nz] = group_counts(&grid);
     let slabs = split(nz, parts)?;

@@ -154,6 +154,7 @@ impl Slab {
             origin,
             spacing,
             dims,
+            offset: Default::default(),
         };
         let tag = r.take(2).ok_or_else(|| bad("truncated header"))?.to_vec();
         let pg_r = f(&mut r)?;

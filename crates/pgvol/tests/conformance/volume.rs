@@ -6,7 +6,7 @@ use pgvol::contour::Field;
 use pgvol::field::fit::collocation_is_spd;
 use pgvol::field::kernel::{kernel, Profile, PseudoGaussian};
 use pgvol::field::Kernel;
-use pgvol::glam::{Mat3, Vec3};
+use pgvol::glam::{DVec3, Mat3, Vec3};
 use pgvol::{Basis, CoefficientVolume, Grid};
 use proptest::prelude::*;
 
@@ -43,6 +43,7 @@ const GRID: Grid = Grid {
     origin: Vec3::new(-1.0, 0.5, 2.0),
     spacing: 0.25,
     dims: [12, 11, 12],
+    offset: DVec3::ZERO,
 };
 
 /// Coefficients in [-1, 1) from a hash of the node and `seed`.
@@ -146,6 +147,7 @@ pub fn batch_evaluation_equals_pointwise_at_every_thread_count<K>(case: &VolumeC
         origin: GRID.origin - Vec3::splat(0.1),
         spacing: 0.17,
         dims: [19, 17, 20],
+        offset: Default::default(),
     };
     let nodes = |g: &Grid| {
         let mut v = Vec::with_capacity(g.len());
@@ -200,6 +202,7 @@ pub fn interpolation_reproduces_node_samples<K>(case: &VolumeCase<K>) {
         origin: Vec3::splat(-1.0),
         spacing: 2.0 / 13.0,
         dims: [14, 14, 14],
+        offset: Default::default(),
     };
     let f = |p: Vec3| p.length() - 0.6 + 0.1 * (3.0 * p.x).sin();
     let samples: Vec<f32> = (0..grid.len())

@@ -64,6 +64,7 @@ fn main() {
         origin: Vec3::from_slice(&origin),
         spacing,
         dims: [shape[2], shape[1], shape[0]],
+        offset: Default::default(),
     };
     let volume = CoefficientVolume::interpolate(grid, Basis::Bspline3, values)
         .unwrap_or_else(|e| fail(format!("{input}: {e}")));

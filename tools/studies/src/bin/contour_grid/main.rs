@@ -59,6 +59,7 @@ fn main() {
         origin: Vec3::ZERO,
         spacing: 1.0,
         dims,
+        offset: Default::default(),
     };
     let (origin, h) = (grid.origin, grid.spacing);
     // The continuous field is built only when a run needs it, so `--only mc_grid` profiles
