@@ -8,13 +8,16 @@
 //!
 //! The normal equations are solved matrix-free by conjugate gradients with a Jacobi
 //! preconditioner, starting from x₀. Each product visits the 4³ coefficients of every
-//! constraint and six neighbours of every unknown, so memory and time follow the surface:
-//! the unknowns are the stored bricks only, the other coefficients keep their background.
+//! constraint and four neighbours per axis of every unknown, so memory and time follow the
+//! surface: the unknowns are the stored bricks only, the other coefficients keep their
+//! background. The constraints' contributions are summed per brick colour (see [`colour`]) so
+//! threads never write the same coefficient and no per-thread copy of the vector is needed.
 
 use glam::Vec3;
 use pgvol_core::sparse::{brick_offset, BRICK_EDGE, BRICK_NODES};
 use pgvol_core::{Grid, SparseGrid};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Weight λ of the squared second differences, relative to one constraint's squared
 /// residual (both in the field's units). On spot at 64³ from 2 500 to 20 000 points, 0.003
@@ -41,22 +44,24 @@ pub const TOLERANCE: f64 = 1e-4;
 /// Iteration cap.
 pub const MAX_ITERATIONS: usize = 400;
 
-/// Bytes per stored brick while fitting: per unknown eight f64 vectors (solution, start,
-/// right-hand side, diagonal, residual, preconditioned residual, direction, product), three
-/// second differences, six neighbour indices and one f64 per chunk of rows (four chunks on two
-/// threads; `fit_bytes` scales it).
-const BYTES_PER_UNKNOWN: u64 = 8 * 8 + 3 * 8 + 6 * 4;
+/// Bytes per unknown while fitting: five f32 vectors (solution, residual, direction, product,
+/// diagonal). Neighbours and second differences are recomputed in each product rather than
+/// stored.
+const BYTES_PER_UNKNOWN: u64 = 5 * 4;
 
 /// Bytes per constraint row.
 pub const BYTES_PER_ROW: u64 = size_of::<Row>() as u64;
 
-/// Estimated peak bytes of [`fit`] over `bricks` stored bricks and `constraints` rows.
+/// Estimated peak bytes of [`fit`] over `bricks` stored bricks and `constraints` rows: the
+/// vectors, the rows, and the scatter blocks of one colour class (an eighth of the bricks,
+/// each with its 2 × 2 × 2 bricks of f64 sums).
 pub fn fit_bytes(bricks: u64, constraints: u64) -> u64 {
-    let chunks = 2 * rayon::current_num_threads().max(1) as u64;
-    let per_unknown = BYTES_PER_UNKNOWN + 8 * chunks;
+    let per_brick = BRICK_NODES as u64 * BYTES_PER_UNKNOWN;
+    let scatter = (bricks / 8 + 1).saturating_mul(8 * BRICK_NODES as u64 * 8);
     bricks
-        .saturating_mul(BRICK_NODES as u64 * per_unknown)
-        .saturating_add(constraints.saturating_mul(BYTES_PER_ROW))
+        .saturating_mul(per_brick)
+        .saturating_add(scatter)
+        .saturating_add(constraints.saturating_mul(BYTES_PER_ROW + 4))
 }
 
 /// What the fit did.
@@ -97,6 +102,32 @@ impl Unknowns {
         }
     }
 
+    /// The slot of the brick at `brick`, if it is stored.
+    #[inline]
+    fn slot_of(&self, brick: [usize; 3]) -> Option<usize> {
+        let c = self.brick_counts;
+        if (0..3).any(|a| brick[a] >= c[a]) {
+            return None;
+        }
+        let s = self.slot[brick[0] + c[0] * (brick[1] + c[1] * brick[2])];
+        (s != u32::MAX).then_some(s as usize)
+    }
+
+    /// The unknown `k` nodes from node `n` (unknown `u`) along axis `a`, if it is one; found
+    /// without a brick lookup when it lies in u's own brick.
+    #[inline]
+    fn neighbour(&self, n: [i64; 3], u: usize, a: usize, k: i64) -> Option<usize> {
+        let local = n[a] % BRICK_EDGE as i64 + k;
+        let m = n[a] + k;
+        if (0..BRICK_EDGE as i64).contains(&local) && m < self.dims[a] as i64 {
+            let stride = (BRICK_EDGE as i64).pow(a as u32);
+            return Some((u as i64 + k * stride) as usize);
+        }
+        let mut node = n;
+        node[a] = m;
+        self.index(node)
+    }
+
     fn len(&self) -> usize {
         self.bricks.len() * BRICK_NODES
     }
@@ -116,6 +147,35 @@ impl Unknowns {
         let c = self.brick_counts;
         let s = self.slot[b[0] + c[0] * (b[1] + c[1] * b[2])];
         (s != u32::MAX).then(|| s as usize * BRICK_NODES + brick_offset(local))
+    }
+
+    /// Calls `f(unknown, node, &mut values[unknown])` for every unknown in parallel, brick by
+    /// brick; `node` is `None` for padding past the grid's end.
+    fn for_each_unknown(
+        &self,
+        values: &mut [f32],
+        f: impl Fn(usize, Option<[i64; 3]>, &mut f32) + Sync,
+    ) {
+        values
+            .par_chunks_mut(BRICK_NODES)
+            .zip(&self.bricks)
+            .enumerate()
+            .for_each(|(slot, (values, b))| {
+                for (at, v) in values.iter_mut().enumerate() {
+                    let local = [
+                        at % BRICK_EDGE,
+                        at / BRICK_EDGE % BRICK_EDGE,
+                        at / (BRICK_EDGE * BRICK_EDGE),
+                    ];
+                    let n: [usize; 3] = std::array::from_fn(|a| b[a] * BRICK_EDGE + local[a]);
+                    let inside = (0..3).all(|a| n[a] < self.dims[a]);
+                    f(
+                        slot * BRICK_NODES + at,
+                        inside.then(|| n.map(|v| v as i64)),
+                        v,
+                    );
+                }
+            });
     }
 
     /// Node indices of unknown `u`, `None` past the grid's end (padding of border bricks).
@@ -164,9 +224,11 @@ struct Row {
 }
 
 impl Row {
-    /// Calls `f(unknown, weight)` for the 64 coefficients of the stencil.
+    /// Calls `f(brick, offset, weight)` for the 64 coefficients of the stencil, where `brick`
+    /// (0..8, x fastest) is which of the 2 × 2 × 2 bricks from the stencil's lowest corner's
+    /// brick holds the coefficient and `offset` its place in that brick.
     #[inline]
-    fn for_each(&self, mut f: impl FnMut(usize, f32)) {
+    fn for_each_local(&self, mut f: impl FnMut(usize, usize, f32)) {
         let axes = [weights(self.at.x), weights(self.at.y), weights(self.at.z)];
         // Per axis and stencil node: which of the two bricks, and the place within it.
         let split = |a: usize| -> [(usize, usize); 4] {
@@ -182,14 +244,28 @@ impl Row {
             for (j, &(oy, ly)) in sy.iter().enumerate() {
                 let wyz = axes[1].1[j] * axes[2].1[k];
                 for (i, &(ox, lx)) in sx.iter().enumerate() {
-                    let slot = self.bricks[ox + 2 * (oy + 2 * oz)] as usize;
                     f(
-                        slot * BRICK_NODES + brick_offset([lx, ly, lz]),
+                        ox + 2 * (oy + 2 * oz),
+                        brick_offset([lx, ly, lz]),
                         axes[0].1[i] * wyz,
                     );
                 }
             }
         }
+    }
+
+    /// Calls `f(unknown, weight)` for the 64 coefficients of the stencil.
+    #[inline]
+    fn for_each(&self, mut f: impl FnMut(usize, f32)) {
+        self.for_each_local(|o, at, w| f(self.bricks[o] as usize * BRICK_NODES + at, w));
+    }
+
+    /// `Σ w p` over the stencil.
+    #[inline]
+    fn dot(&self, p: &[f32]) -> f64 {
+        let mut r = 0.0f64;
+        self.for_each(|i, w| r += w as f64 * p[i] as f64);
+        r
     }
 }
 
@@ -216,96 +292,118 @@ fn rows(grid: &Grid, unknowns: &Unknowns, centres: &[Vec3], values: &[f32]) -> V
         .collect()
 }
 
-/// The neighbours of each unknown along each axis, (minus, plus), `u32::MAX` where the
-/// neighbour is not an unknown. A second difference is centred on every unknown with both.
-fn neighbours(unknowns: &Unknowns) -> Vec<[[u32; 2]; 3]> {
-    (0..unknowns.len())
-        .into_par_iter()
-        .map(|u| {
-            let mut out = [[u32::MAX; 2]; 3];
-            if let Some(n) = unknowns.node(u) {
-                for (a, pair) in out.iter_mut().enumerate() {
-                    let mut lo = n;
-                    let mut hi = n;
-                    lo[a] -= 1;
-                    hi[a] += 1;
-                    for (end, m) in pair.iter_mut().zip([lo, hi]) {
-                        if let Some(v) = unknowns.index(m) {
-                            *end = v as u32;
-                        }
-                    }
-                }
-            }
-            out
-        })
-        .collect()
+/// The colour of a brick: the parities of its coordinates. The rows whose lowest stencil
+/// corner lies in bricks of one colour write disjoint sets of bricks (their 2 × 2 × 2 blocks are
+/// at least two bricks apart along some axis), so a colour's blocks can be summed in parallel.
+fn colour(brick: [usize; 3]) -> usize {
+    (brick[0] & 1) | (brick[1] & 1) << 1 | (brick[2] & 1) << 2
+}
+
+/// Sorts `rows` by colour and base brick (the brick of the stencil's lowest corner) and returns,
+/// per colour, the ranges of rows sharing a base brick.
+fn group(unknowns: &Unknowns, rows: &mut [Row]) -> [Vec<Range<usize>>; 8] {
+    let key = |row: &Row| {
+        let base = row.bricks[0];
+        (colour(unknowns.bricks[base as usize]), base)
+    };
+    rows.par_sort_unstable_by_key(key);
+    let mut groups: [Vec<Range<usize>>; 8] = Default::default();
+    let mut start = 0;
+    while start < rows.len() {
+        let k = key(&rows[start]);
+        let end = start + rows[start..].partition_point(|r| key(r) == k);
+        groups[k.0].push(start..end);
+        start = end;
+    }
+    groups
+}
+
+/// Groups summed at once per colour: enough to keep every thread busy, few enough that their
+/// blocks (32 KiB each) stay small.
+fn batch_len() -> usize {
+    16 * rayon::current_num_threads().max(1)
 }
 
 /// `y = (AᵀA + λ DᵀD + μ I) p` over the unknowns (padding nodes: `y = p`).
 struct Operator<'a> {
+    unknowns: &'a Unknowns,
     rows: &'a [Row],
-    neighbours: &'a [[[u32; 2]; 3]],
-    inside: &'a [bool],
+    groups: &'a [Vec<Range<usize>>; 8],
     smoothness: f64,
     pull: f64,
 }
 
 impl Operator<'_> {
-    fn apply(&self, p: &[f64], y: &mut [f64]) {
-        let n = p.len();
-        // Data term, scattered into one buffer per chunk of rows, then summed.
-        let chunks = (rayon::current_num_threads() * 2).max(1);
-        let per = self.rows.len().div_ceil(chunks).max(1);
-        let partial: Vec<Vec<f64>> = self
-            .rows
-            .par_chunks(per)
-            .map(|rows| {
-                let mut acc = vec![0.0f64; n];
-                for row in rows {
-                    let mut r = 0.0f64;
-                    row.for_each(|i, w| r += w as f64 * p[i]);
-                    row.for_each(|i, w| acc[i] += w as f64 * r);
+    fn apply(&self, p: &[f32], y: &mut [f32]) {
+        self.unknowns.for_each_unknown(y, |u, node, yu| {
+            *yu = match node {
+                None => p[u],
+                Some(n) => {
+                    (self.smoothness * self.second_differences(n, u, p) + self.pull * p[u] as f64)
+                        as f32
                 }
-                acc
-            })
-            .collect();
-        // Second differences centred at every unknown along each axis (0 where one end is
-        // missing: no such row).
-        let d: Vec<[f64; 3]> = self
-            .neighbours
-            .par_iter()
-            .enumerate()
-            .map(|(u, t)| {
-                std::array::from_fn(|a| {
-                    let [l, h] = t[a];
-                    if l == u32::MAX || h == u32::MAX {
-                        0.0
-                    } else {
-                        p[l as usize] - 2.0 * p[u] + p[h as usize]
-                    }
-                })
-            })
-            .collect();
-        y.par_iter_mut().enumerate().for_each(|(u, yu)| {
-            if !self.inside[u] {
-                *yu = p[u];
-                return;
-            }
-            let mut v: f64 = partial.iter().map(|acc| acc[u]).sum();
-            // Dᵀ: −2 from the difference centred on u, +1 from those centred on its
-            // neighbours.
-            let mut s = 0.0;
-            for (a, ends) in self.neighbours[u].iter().enumerate() {
-                s -= 2.0 * d[u][a];
-                for &m in ends {
-                    if m != u32::MAX {
-                        s += d[m as usize][a];
-                    }
-                }
-            }
-            v += self.smoothness * s + self.pull * p[u];
-            *yu = v;
+            };
         });
+        self.scatter(y, 1, |row| row.dot(p));
+    }
+
+    /// `(DᵀD p)_u` for the unknown `u` at node `n`: along each axis, the second differences
+    /// centred at u − e, u and u + e that exist (both ends unknowns), weighted 1, −2 and 1.
+    fn second_differences(&self, n: [i64; 3], u: usize, p: &[f32]) -> f64 {
+        let at = |i: Option<usize>| i.map(|i| p[i] as f64);
+        let pu = p[u] as f64;
+        let mut s = 0.0;
+        for a in 0..3 {
+            let step = |k: i64| at(self.unknowns.neighbour(n, u, a, k));
+            let (m2, m1, p1, p2) = (step(-2), step(-1), step(1), step(2));
+            if let (Some(m1), Some(p1)) = (m1, p1) {
+                s -= 2.0 * (m1 - 2.0 * pu + p1);
+            }
+            if let (Some(m2), Some(m1)) = (m2, m1) {
+                s += m2 - 2.0 * m1 + pu;
+            }
+            if let (Some(p1), Some(p2)) = (p1, p2) {
+                s += pu - 2.0 * p1 + p2;
+            }
+        }
+        s
+    }
+
+    /// `y += Σ_rows w^power s(row)` over each row's stencil weights w: per colour, each base
+    /// brick's rows summed into a block of its 2 × 2 × 2 bricks in parallel, the blocks then
+    /// added to `y` (disjoint within a colour). With `s(row) = row·p` and power 1 it is `AᵀA p`.
+    fn scatter(&self, y: &mut [f32], power: i32, s: impl Fn(&Row) -> f64 + Sync) {
+        for groups in self.groups {
+            for batch in groups.chunks(batch_len()) {
+                let blocks: Vec<(u32, Vec<f64>)> = batch
+                    .par_iter()
+                    .map(|range| {
+                        let rows = &self.rows[range.clone()];
+                        let mut block = vec![0.0f64; 8 * BRICK_NODES];
+                        for row in rows {
+                            let r = s(row);
+                            row.for_each_local(|o, at, w| {
+                                block[o * BRICK_NODES + at] += (w as f64).powi(power) * r
+                            });
+                        }
+                        (rows[0].bricks[0], block)
+                    })
+                    .collect();
+                for (base, block) in blocks {
+                    let b = self.unknowns.bricks[base as usize];
+                    for (o, part) in block.chunks(BRICK_NODES).enumerate() {
+                        let brick = [b[0] + (o & 1), b[1] + (o >> 1 & 1), b[2] + (o >> 2 & 1)];
+                        let Some(slot) = self.unknowns.slot_of(brick) else {
+                            continue;
+                        };
+                        let dst = &mut y[slot * BRICK_NODES..(slot + 1) * BRICK_NODES];
+                        for (d, v) in dst.iter_mut().zip(part) {
+                            *d += *v as f32;
+                        }
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -322,78 +420,48 @@ pub fn fit(
 ) -> (SparseGrid, SplineFitReport) {
     let unknowns = Unknowns::new(start);
     let n = unknowns.len();
-    let rows = rows(grid, &unknowns, centres, values);
-    let neighbours = neighbours(&unknowns);
-    let inside: Vec<bool> = (0..n)
-        .into_par_iter()
-        .map(|u| unknowns.node(u).is_some())
-        .collect();
-    let x0: Vec<f64> = (0..n)
+    let mut rows = rows(grid, &unknowns, centres, values);
+    let groups = group(&unknowns, &mut rows);
+    let x0: Vec<f32> = (0..n)
         .into_par_iter()
         .map(|u| {
-            let brick = start
+            start
                 .brick(unknowns.bricks[u / BRICK_NODES])
-                .expect("stored");
-            brick[u % BRICK_NODES] as f64
+                .expect("stored")[u % BRICK_NODES]
         })
         .collect();
     let op = Operator {
+        unknowns: &unknowns,
         rows: &rows,
-        neighbours: &neighbours,
-        inside: &inside,
+        groups: &groups,
         smoothness: smoothness as f64,
         pull: pull as f64,
     };
-    // Right-hand side Aᵀh + μ x₀ (padding: x₀, so it stays put).
-    let mut b: Vec<f64> = (0..n)
-        .map(|u| {
-            if inside[u] {
-                pull as f64 * x0[u]
-            } else {
-                x0[u]
-            }
-        })
-        .collect();
-    let mut diag: Vec<f64> = (0..n)
-        .map(|u| if inside[u] { pull as f64 } else { 1.0 })
-        .collect();
-    for row in &rows {
-        row.for_each(|i, w| {
-            b[i] += w as f64 * row.target as f64;
-            diag[i] += (w as f64) * (w as f64);
-        });
-    }
-    for u in 0..n {
-        if !inside[u] {
-            continue;
+    // Right-hand side Aᵀh + μ x₀ and the diagonal (padding: x₀ and 1, so it stays put).
+    let mut b = vec![0.0f32; n];
+    unknowns.for_each_unknown(&mut b, |u, node, bu| {
+        *bu = if node.is_some() { pull * x0[u] } else { x0[u] }
+    });
+    op.scatter(&mut b, 1, |row| row.target as f64);
+    let mut diag = vec![0.0f32; n];
+    unknowns.for_each_unknown(&mut diag, |u, node, du| {
+        *du = match node {
+            None => 1.0,
+            Some(node) => pull + smoothness * smoothness_diagonal(&unknowns, node, u) as f32,
         }
-        let has_row = |m: u32, a: usize| {
-            m != u32::MAX && neighbours[m as usize][a].iter().all(|&e| e != u32::MAX)
-        };
-        for (a, ends) in neighbours[u].iter().enumerate() {
-            if has_row(u as u32, a) {
-                diag[u] += 4.0 * smoothness as f64;
-            }
-            for &m in ends {
-                if has_row(m, a) {
-                    diag[u] += smoothness as f64;
-                }
-            }
-        }
-    }
-    let (x, iterations, residual) = preconditioned_cg(|p, y| op.apply(p, y), &b, &diag, x0);
+    });
+    op.scatter(&mut diag, 2, |_| 1.0);
+    let inside = (0..n).filter(|&u| unknowns.node(u).is_some()).count();
+    let (x, iterations, residual) = preconditioned_cg(|p, y| op.apply(p, y), b, &diag, x0);
     let mut coeffs = start.clone();
-    let bricks = unknowns.bricks.clone();
-    for (s, b) in bricks.iter().enumerate() {
+    for (s, b) in unknowns.bricks.iter().enumerate() {
         let brick = coeffs.brick_mut(*b).expect("stored");
-        for (at, v) in brick.iter_mut().enumerate() {
-            *v = x[s * BRICK_NODES + at] as f32;
-        }
+        brick.copy_from_slice(&x[s * BRICK_NODES..(s + 1) * BRICK_NODES]);
     }
     (
         coeffs,
         SplineFitReport {
-            unknowns: inside.iter().filter(|&&i| i).count(),
+            unknowns: inside,
             constraints: rows.len(),
             iterations,
             residual,
@@ -401,28 +469,51 @@ pub fn fit(
     )
 }
 
+/// `(DᵀD)_uu` at `node`: 4 for the second difference centred there, 1 for each centred on a
+/// neighbour, counting those whose ends are both unknowns.
+fn smoothness_diagonal(unknowns: &Unknowns, node: [i64; 3], u: usize) -> f64 {
+    let mut d = 0.0;
+    for a in 0..3 {
+        let step = |k: i64| unknowns.neighbour(node, u, a, k).is_some();
+        let (m2, m1, p1, p2) = (step(-2), step(-1), step(1), step(2));
+        if m1 && p1 {
+            d += 4.0;
+        }
+        if m2 && m1 {
+            d += 1.0;
+        }
+        if p1 && p2 {
+            d += 1.0;
+        }
+    }
+    d
+}
+
 /// Solves A x = b (A symmetric positive definite, given by its product) from `x`, with the
-/// Jacobi preconditioner `diag`.
+/// Jacobi preconditioner `diag`. Vectors are stored in f32 (the coefficients' own precision),
+/// sums taken in f64; `b` becomes the residual.
 fn preconditioned_cg(
-    matvec: impl Fn(&[f64], &mut [f64]),
-    b: &[f64],
-    diag: &[f64],
-    mut x: Vec<f64>,
-) -> (Vec<f64>, usize, f64) {
-    let n = b.len();
-    let dot = |a: &[f64], b: &[f64]| -> f64 { a.par_iter().zip(b).map(|(x, y)| x * y).sum() };
-    let norm_b = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
-    let mut ax = vec![0.0; n];
+    matvec: impl Fn(&[f32], &mut [f32]),
+    mut r: Vec<f32>,
+    diag: &[f32],
+    mut x: Vec<f32>,
+) -> (Vec<f32>, usize, f64) {
+    let n = r.len();
+    let sum = |f: &(dyn Fn(usize) -> f64 + Sync)| -> f64 { (0..n).into_par_iter().map(f).sum() };
+    let norm_b = sum(&|i| r[i] as f64 * r[i] as f64)
+        .sqrt()
+        .max(f64::MIN_POSITIVE);
+    let mut ax = vec![0.0f32; n];
     matvec(&x, &mut ax);
-    let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
-    let mut z: Vec<f64> = r.iter().zip(diag).map(|(r, d)| r / d).collect();
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
+    r.par_iter_mut().zip(&ax).for_each(|(r, a)| *r -= a);
+    // z = r / diag is formed where used rather than stored.
+    let mut p: Vec<f32> = r.iter().zip(diag).map(|(r, d)| r / d).collect();
+    let mut rz = sum(&|i| r[i] as f64 * r[i] as f64 / diag[i] as f64);
     let mut iterations = 0;
-    let mut residual = dot(&r, &r).sqrt() / norm_b;
+    let mut residual = sum(&|i| r[i] as f64 * r[i] as f64).sqrt() / norm_b;
     while iterations < MAX_ITERATIONS && residual > TOLERANCE {
         matvec(&p, &mut ax);
-        let pap = dot(&p, &ax);
+        let pap = sum(&|i| p[i] as f64 * ax[i] as f64);
         if pap <= 0.0 {
             break;
         }
@@ -431,20 +522,17 @@ fn preconditioned_cg(
             .zip(r.par_iter_mut())
             .zip(p.par_iter().zip(&ax))
             .for_each(|((xi, ri), (pi, api))| {
-                *xi += alpha * pi;
-                *ri -= alpha * api;
+                *xi = (*xi as f64 + alpha * *pi as f64) as f32;
+                *ri = (*ri as f64 - alpha * *api as f64) as f32;
             });
-        z.par_iter_mut()
-            .zip(&r)
-            .zip(diag)
-            .for_each(|((zi, ri), di)| *zi = ri / di);
-        let rz_new = dot(&r, &z);
+        let rz_new = sum(&|i| r[i] as f64 * r[i] as f64 / diag[i] as f64);
         let beta = rz_new / rz;
         p.par_iter_mut()
-            .zip(&z)
-            .for_each(|(pi, zi)| *pi = zi + beta * *pi);
+            .zip(&r)
+            .zip(diag)
+            .for_each(|((pi, ri), di)| *pi = (*ri as f64 / *di as f64 + beta * *pi as f64) as f32);
         rz = rz_new;
-        residual = dot(&r, &r).sqrt() / norm_b;
+        residual = sum(&|i| r[i] as f64 * r[i] as f64).sqrt() / norm_b;
         iterations += 1;
     }
     (x, iterations, residual)
