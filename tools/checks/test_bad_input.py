@@ -272,6 +272,71 @@ def test_reversed_faces_give_the_same_solid(reversed_share, dirs, pgvol):
     assert abs(mesh.volume / reference.volume - 1) < 0.01, (mesh.volume, reference.volume)
 
 
+def _inside_out_cube(folder: Path) -> Path:
+    """A unit cube with every face wound inward."""
+    import trimesh
+
+    cube = trimesh.creation.box()
+    cube.faces = cube.faces[:, ::-1]
+    path = folder / "cube-inside-out.obj"
+    cube.export(path)
+    return path
+
+
+@pytest.mark.parametrize(
+    "command, args, output",
+    [
+        ("remesh", ["--res", 32], "out.stl"),
+        ("offset", ["--distance", 0.1, "--res", 32], "out.stl"),
+        ("shell", ["--thickness", 0.1, "--res", 32], "out.stl"),
+        ("slice", ["--layer-height", 0.25, "--res", 32], "out.json"),
+    ],
+)
+def test_every_command_reading_a_mesh_takes_the_sign_method(command, args, output, dirs, pgvol):
+    """`--sign` reaches the sampler: on an inside-out cube the default orients the faces first,
+    while `pseudonormal` trusts them as given and turns the solid inside out."""
+    in_dir, out_dir = dirs
+    src = _inside_out_cube(in_dir)
+    results = {}
+    for sign in ["auto", "winding", "pseudonormal"]:
+        out = out_dir / f"{sign}-{output}"
+        r = helpers.run([pgvol, command, src, "-o", out, *args, "--sign", sign], timeout=120)
+        results[sign] = out.read_bytes() if r.returncode == 0 else r.returncode
+        assert r.returncode in (0, 1), r.describe()
+    assert results["auto"] != results["pseudonormal"]
+    if output.endswith(".stl"):
+        solid = helpers.load_output(out_dir / f"auto-{output}")
+        assert solid.is_watertight
+        low = {"remesh": 0.99, "offset": 1.6, "shell": 0.3}[command]
+        high = {"remesh": 1.01, "offset": 1.8, "shell": 0.6}[command]
+        assert low < solid.volume < high, solid.volume
+
+
+def test_csg_takes_the_sign_method_for_its_mesh_operands(dirs, pgvol):
+    in_dir, out_dir = dirs
+    src = _inside_out_cube(in_dir)
+    outputs = {}
+    for sign in ["auto", "pseudonormal"]:
+        out = out_dir / f"{sign}.stl"
+        r = helpers.run([pgvol, "csg", "union", src, "sphere:3,0,0,0.5", "-o", out, "--res", 48, "--sign", sign])
+        assert r.returncode in (0, 1), r.describe()
+        outputs[sign] = out.read_bytes() if r.returncode == 0 else r.returncode
+    assert outputs["auto"] != outputs["pseudonormal"]
+    solid = helpers.load_output(out_dir / "auto.stl")
+    expected = 1.0 + 4.0 / 3.0 * np.pi * 0.5**3
+    assert abs(solid.volume / expected - 1) < 0.03, solid.volume
+
+
+def test_a_sign_method_for_a_pgv_input_is_refused(dirs, pgvol):
+    in_dir, out_dir = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    pgv = out_dir / "tetra.pgv"
+    helpers.run_ok([pgvol, "encode", src, "-o", pgv, "--res", 24])
+    r = helpers.run([pgvol, "offset", pgv, "-o", out_dir / "o.stl", "--distance", 0.01, "--sign", "winding"])
+    assert r.returncode == 1 and "mesh inputs" in r.stderr and str(pgv) in r.stderr, r.describe()
+
+
 def test_a_missing_output_folder_is_named_before_any_work(dirs, pgvol):
     in_dir, out_dir = dirs
     src = in_dir / "tetra.obj"

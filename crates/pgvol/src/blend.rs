@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume};
+use pgvol_sdf::SignMode;
 
 use crate::csg::{covering_grid, load_operands, operand_fields};
 use crate::encode::ENCODE_BAND;
@@ -54,6 +55,8 @@ pub struct BlendSettings {
     pub res: usize,
     /// The box the result covers; by default that of the bounded primaries.
     pub bounds: Option<(Vec3, Vec3)>,
+    /// How inside is told from outside in mesh primaries (default [`SignMode::Auto`]).
+    pub sign: SignMode,
 }
 
 impl Default for BlendSettings {
@@ -61,6 +64,7 @@ impl Default for BlendSettings {
         BlendSettings {
             res: crate::CSG_RES,
             bounds: None,
+            sign: SignMode::Auto,
         }
     }
 }
@@ -127,7 +131,7 @@ pub fn blend(
         settings.res,
     )?;
     let reach = BLEND_REACH * grid.spacing;
-    let fields = operand_fields(&all, &loaded, grid, reach, progress)?;
+    let fields = operand_fields(&all, &loaded, grid, reach, settings.sign, progress)?;
     let (prim, rest) = fields.split_at(primaries.len());
     let value =
         |f: &[OperandField], p: Vec3| -> Vec<f32> { f.iter().map(|x| x.value(p)).collect() };

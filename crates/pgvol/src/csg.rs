@@ -6,6 +6,7 @@ use pgvol_core::Grid;
 use pgvol_field::{Basis, CoefficientVolume};
 use pgvol_format::PgvFile;
 use pgvol_ops::{Blend, BoolOp};
+use pgvol_sdf::SignMode;
 
 use crate::encode::{BAND_KEY, ENCODE_BAND};
 use crate::error::{Error, Result};
@@ -36,6 +37,8 @@ pub struct CsgSettings {
     /// box of every bounded operand, grown by the blend radius. Needed when no operand is
     /// bounded (planes, cylinders).
     pub bounds: Option<(Vec3, Vec3)>,
+    /// How inside is told from outside in mesh operands (default [`SignMode::Auto`]).
+    pub sign: SignMode,
 }
 
 impl Default for CsgSettings {
@@ -45,6 +48,7 @@ impl Default for CsgSettings {
             blend: Blend::Sharp,
             res: CSG_RES,
             bounds: None,
+            sign: SignMode::Auto,
         }
     }
 }
@@ -110,13 +114,14 @@ pub fn operand_fields(
     loaded: &[LoadedOperand],
     grid: Grid,
     reach: f32,
+    sign: SignMode,
     progress: &dyn Progress,
 ) -> Result<Vec<OperandField>> {
     operands
         .iter()
         .zip(loaded)
         .map(|(o, l)| {
-            l.field(grid, reach, progress)
+            l.field(grid, reach, sign, progress)
                 .map_err(|e| match (o, e.path()) {
                     (Operand::File(path), None) => e.at(path),
                     _ => e,
@@ -147,7 +152,7 @@ pub fn csg(
     };
     let loaded = load_operands(operands)?;
     let grid = covering_grid(&loaded, settings.bounds, radius, settings.res)?;
-    let fields = operand_fields(operands, &loaded, grid, radius, progress)?;
+    let fields = operand_fields(operands, &loaded, grid, radius, settings.sign, progress)?;
     progress.stage("combining the fields");
     let band = ENCODE_BAND * grid.spacing;
     let (op, blend) = (settings.op, settings.blend);

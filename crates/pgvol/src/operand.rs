@@ -209,8 +209,14 @@ impl LoadedOperand {
 
     /// The field on `grid`: meshes are encoded onto it with exact distances `reach` beyond the
     /// usual band; `.pgv` files keep their own grid and are refused when their band is too
-    /// narrow for `reach`.
-    pub fn field(&self, grid: Grid, reach: f32, progress: &dyn Progress) -> Result<OperandField> {
+    /// narrow for `reach`. `sign` applies to meshes.
+    pub fn field(
+        &self,
+        grid: Grid,
+        reach: f32,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<OperandField> {
         match self {
             LoadedOperand::Primary(p) => Ok(OperandField::Primary(*p)),
             LoadedOperand::Field(shape) => {
@@ -223,7 +229,7 @@ impl LoadedOperand {
                     basis: Basis::Bspline3,
                     fit: FitMethod::Interp,
                     band: ENCODE_BAND + reach / grid.spacing,
-                    sign: SignMode::Auto,
+                    sign,
                 };
                 crate::memory::check_sparse_encode("encoding the mesh", mesh, &grid, options.band)?;
                 let fitted = fit_volume(mesh, grid, &options, &mut Timings::default(), progress)?;

@@ -39,6 +39,8 @@ pub struct RemeshOptions {
     /// Pieces enclosing less than this volume are removed; see
     /// [`DecodeOptions::min_component`] (default: specks under 2 grid cells).
     pub min_component: Option<f32>,
+    /// How inside is told from outside (default [`SignMode::Auto`]).
+    pub sign: SignMode,
 }
 
 impl Default for RemeshOptions {
@@ -48,6 +50,7 @@ impl Default for RemeshOptions {
             method: Method::MarchingCubes,
             field: RemeshField::Exact,
             min_component: None,
+            sign: SignMode::Auto,
         }
     }
 }
@@ -70,7 +73,7 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
     let out = match options.field {
         RemeshField::Exact => {
             crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
-            let mut out = contour_exact(mesh, &grid, options.method, &mut timings, progress)?;
+            let mut out = contour_exact(mesh, &grid, options, &mut timings, progress)?;
             crate::decode::remove_specks(&mut out, options.min_component, grid.spacing, progress);
             out
         }
@@ -80,7 +83,7 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
                 basis,
                 fit: FitMethod::Interp,
                 band: ENCODE_BAND,
-                sign: SignMode::Auto,
+                sign: options.sign,
             };
             encode.validate()?;
             crate::memory::check_sparse_encode("remeshing", mesh, &grid, ENCODE_BAND)?;
@@ -123,14 +126,15 @@ fn vanished() -> Error {
 fn contour_exact(
     mesh: &Mesh,
     grid: &Grid,
-    method: Method,
+    options: &RemeshOptions,
     timings: &mut Timings,
     progress: &dyn Progress,
 ) -> Result<Mesh> {
     let start = Instant::now();
+    let method = options.method;
     // The exact field's gradients on the surface come from the faces: orient them first.
-    let mesh = &*oriented(mesh, SignMode::Auto);
-    let sdf = pgvol_sdf::MeshSdf::new(mesh, SignMode::Auto)?;
+    let mesh = &*oriented(mesh, options.sign);
+    let sdf = pgvol_sdf::MeshSdf::new(mesh, options.sign)?;
     let sampled = sample(&sdf, grid, Extent::Band(NODE_BAND), progress)?;
     timings.sdf = start.elapsed().as_secs_f64();
     let start = Instant::now();

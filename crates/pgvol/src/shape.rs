@@ -55,12 +55,13 @@ impl Shape {
 
     /// `mesh` encoded on `res` nodes per axis over its box grown by `grow` on every side, with
     /// exact distances `reach` beyond the usual encoding band, so that an operation reaching
-    /// `reach` from the surface reads exact distances.
+    /// `reach` from the surface reads exact distances; inside told from outside by `sign`.
     pub fn from_mesh(
         mesh: Mesh,
         res: usize,
         grow: f32,
         reach: f32,
+        sign: SignMode,
         progress: &dyn Progress,
     ) -> Result<Shape> {
         let (lo, hi) = mesh
@@ -73,7 +74,7 @@ impl Shape {
             basis: Basis::Bspline3,
             fit: FitMethod::Interp,
             band: ENCODE_BAND + reach.abs() / grid.spacing,
-            sign: SignMode::Auto,
+            sign,
         };
         crate::memory::check_sparse_encode("encoding the mesh", &mesh, &grid, options.band)?;
         let volume = fit_volume(&mesh, grid, &options, &mut Timings::default(), progress)?.volume;
@@ -85,20 +86,29 @@ impl Shape {
         })
     }
 
-    /// A `.pgv` file or a mesh file by extension; see [`Shape::from_mesh`] for `res`, `grow`
-    /// and `reach`.
+    /// A `.pgv` file or a mesh file by extension; see [`Shape::from_mesh`] for `res`, `grow`,
+    /// `reach` and `sign`. A `.pgv` file holds its signs already: a `sign` other than
+    /// [`SignMode::Auto`] is refused for one rather than ignored.
     pub fn load(
         path: &Path,
         res: usize,
         grow: f32,
         reach: f32,
+        sign: SignMode,
         progress: &dyn Progress,
     ) -> Result<Shape> {
         if is_pgv(path) {
+            if sign != SignMode::Auto {
+                return Err(Error::new(
+                    ErrorKind::BadParameter,
+                    "a sign method applies to mesh inputs; a .pgv file stores its field's signs                      (pass the mesh to choose how they are found)",
+                )
+                .at(path));
+            }
             return Ok(Shape::from_file(read_pgv(path)?));
         }
         let (mesh, _) = mesh_io::read_mesh(path)?;
-        Shape::from_mesh(mesh, res, grow, reach, progress).map_err(|e| match e.path() {
+        Shape::from_mesh(mesh, res, grow, reach, sign, progress).map_err(|e| match e.path() {
             Some(_) => e,
             None => e.at(path),
         })

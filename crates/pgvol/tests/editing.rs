@@ -35,6 +35,7 @@ fn rounded_union_of_orthogonal_planes_is_a_fillet_of_the_radius() {
         blend: Blend::Round(r),
         res: 96,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+        ..CsgSettings::default()
     };
     // The half-spaces x ≤ 0 and y ≤ 0: the fillet fills their concave corner along z.
     let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
@@ -143,6 +144,7 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
     let settings = pgvol::BlendSettings {
         res: 64,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+        ..pgvol::BlendSettings::default()
     };
     let blended = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap();
     let v = &blended.volume;

@@ -9,7 +9,8 @@ use pgvol::glam::Vec3;
 use pgvol::mesh::{shapes, MeshFormat};
 use pgvol::{
     Basis, DecodeOptions, EncodeOptions, ErrorKind, FitMethod, GridSpec, Mesh, Method, Progress,
-    RemeshField, RemeshOptions, SdfOptions, Shape, ShellKind, ShellSide, Silent, StorageOptions,
+    RemeshField, RemeshOptions, SdfOptions, Shape, ShellKind, ShellSide, SignMode, Silent,
+    StorageOptions,
 };
 
 fn sphere() -> Mesh {
@@ -258,7 +259,7 @@ fn missing_inputs_are_input_errors_naming_the_file() {
         } else {
             assert_error(pgvol::read_mesh(&path), ErrorKind::InputFile, Some(&path));
         }
-        let e = Shape::load(&path, 16, 0.0, 0.0, &Silent).unwrap_err();
+        let e = Shape::load(&path, 16, 0.0, 0.0, SignMode::Auto, &Silent).unwrap_err();
         assert_eq!((e.kind(), e.path()), (ErrorKind::InputFile, Some(&*path)));
     }
 }
@@ -675,9 +676,17 @@ fn load_names_the_mesh_when_encoding_it_fails() {
     let dir = tempfile::tempdir().unwrap();
     let path: PathBuf = dir.path().join("s.obj");
     pgvol::write_mesh(&path, &sphere()).unwrap();
-    let e = Shape::load(&path, 16, 0.0, 0.0, &Recorder::cancelling_in("")).unwrap_err();
+    let e = Shape::load(
+        &path,
+        16,
+        0.0,
+        0.0,
+        SignMode::Auto,
+        &Recorder::cancelling_in(""),
+    )
+    .unwrap_err();
     assert_eq!((e.kind(), e.path()), (ErrorKind::Cancelled, Some(&*path)));
-    let shape = Shape::load(&path, 16, 0.0, 0.1, &Silent).unwrap();
+    let shape = Shape::load(&path, 16, 0.0, 0.1, SignMode::Auto, &Silent).unwrap();
     assert!(shape.band.is_some() && shape.mesh.is_some());
 }
 

@@ -2,13 +2,13 @@
 //! infill leaves the two labyrinths of a sheet as enclosed voids until a drain opens each.
 
 use glam::Vec3;
-use pgvol::{ErrorKind, Lattice, Shape, Silent, Tpms};
+use pgvol::{ErrorKind, Lattice, Shape, SignMode, Silent, Tpms};
 
 const WALL: f32 = 0.1;
 
 fn sphere() -> Shape {
     let mesh = pgvol::mesh::shapes::octasphere(5);
-    Shape::from_mesh(mesh, 96, 0.0, WALL, &Silent).unwrap()
+    Shape::from_mesh(mesh, 96, 0.0, WALL, SignMode::Auto, &Silent).unwrap()
 }
 
 fn solid(solid: &pgvol::LatticeSolid) -> pgvol::SolidReport {

@@ -118,6 +118,7 @@ pub fn csg(a: CsgArgs) -> Result<()> {
         },
         res: a.shape.res as usize,
         bounds: a.bounds,
+        sign: a.shape.sign.into(),
     };
     let volume = pgvol::csg(&a.operands, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * volume.grid.spacing;
@@ -183,7 +184,14 @@ pub fn repair(a: RepairArgs) -> Result<()> {
         _ => pgvol::Restore::Denoise { coarse: a.coarse },
     };
     let reach = pgvol::repair_reach(&a.mask);
-    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let shape = pgvol::Shape::load(
+        &a.input,
+        a.shape.res as usize,
+        0.0,
+        reach,
+        a.shape.sign.into(),
+        &bars,
+    )?;
     let (volume, reports) = pgvol::repair(&shape, &a.mask, restore, &bars)
         .map_err(|e| super::args::at_input(e, &a.input))?;
     let band = shape
@@ -326,6 +334,7 @@ pub fn blend(a: BlendArgs) -> Result<()> {
     let settings = pgvol::BlendSettings {
         res: a.shape.res as usize,
         bounds: a.bounds,
+        sign: a.shape.sign.into(),
     };
     let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;

@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{
-    at_input, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg,
+    at_input, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg, SignArg,
 };
 use super::lattice::{build_lattice, write_solid, GradeArgs, StyleArg};
 use crate::output::outln;
@@ -94,6 +94,9 @@ pub struct SliceArgs {
     /// drop out of them.
     #[arg(long, default_value_t = pgvol::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub res: u32,
+    /// How inside is told from outside when the input is a mesh.
+    #[arg(long, value_enum, default_value_t)]
+    pub sign: SignArg,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -107,7 +110,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
     let start = Instant::now();
-    let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, &bars)?;
+    let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, a.sign.into(), &bars)?;
     let settings = pgvol::SliceSettings {
         axis: match a.axis {
             AxisArg::X => pgvol::Axis::X,
@@ -162,6 +165,9 @@ pub struct ShapeOutputArgs {
     /// default specks under 2 grid cells go, with a warning; 0 keeps every piece.
     #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
     pub min_component: Option<f32>,
+    /// How inside is told from outside when the input is a mesh.
+    #[arg(long, value_enum, default_value_t)]
+    pub sign: SignArg,
 }
 
 #[derive(Args)]
@@ -191,6 +197,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
         a.shape.res as usize,
         a.distance.max(0.0),
         a.distance.abs(),
+        a.shape.sign.into(),
         &bars,
     )?;
     let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
@@ -274,7 +281,14 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
         .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, a.thickness);
-    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, 0.0, reach, &bars)?;
+    let shape = pgvol::Shape::load(
+        &a.input,
+        a.shape.res as usize,
+        0.0,
+        reach,
+        a.shape.sign.into(),
+        &bars,
+    )?;
     let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
         .map_err(|e| at_input(e, &a.input))?;
@@ -322,7 +336,14 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         })
     };
     let grow = pgvol::growth(kind, a.thickness);
-    let shape = pgvol::Shape::load(&a.input, a.shape.res as usize, grow, a.thickness, &bars)?;
+    let shape = pgvol::Shape::load(
+        &a.input,
+        a.shape.res as usize,
+        grow,
+        a.thickness,
+        a.shape.sign.into(),
+        &bars,
+    )?;
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
         .map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::args::{
     at_input, load_mesh, non_negative, print_json, seconds_json, BasisArgs, GridArgs, MethodArg,
-    OutputArgs, PathArg,
+    OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -46,6 +46,9 @@ pub struct RemeshArgs {
     /// default specks under 2 grid cells go, with a warning; 0 keeps every piece.
     #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
     pub min_component: Option<f32>,
+    /// How inside is told from outside.
+    #[arg(long, value_enum, default_value_t)]
+    pub sign: SignArg,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -81,6 +84,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
             FieldArg::Decoded => pgvol::RemeshField::Decoded(a.basis.basis()?),
         },
         min_component: a.min_component,
+        sign: a.sign.into(),
     };
     let remeshed =
         pgvol::remesh(&mesh, &options, &Bars::new(quiet)).map_err(|e| at_input(e, &a.input))?;
