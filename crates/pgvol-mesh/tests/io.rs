@@ -215,6 +215,48 @@ fn large_obj_polygons_become_triangles_of_the_same_area_and_orientation() {
     }
 }
 
+/// A cylinder of 50,000 sides with one polygon per cap: rounded to f32, runs of rim corners
+/// are exactly collinear, and the slivers of the caps' triangulation are flat. Cleaning drops
+/// them and must leave the mesh closed.
+#[test]
+fn a_many_sided_cylinder_stays_closed_when_its_flat_slivers_go() {
+    let n = 50_000usize;
+    let mut text = String::new();
+    for z in [-1.0, 1.0] {
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            text += &format!("v {:.9} {:.9} {z}\n", a.cos(), a.sin());
+        }
+    }
+    let bottom: Vec<String> = (1..=n).rev().map(|i| i.to_string()).collect();
+    let top: Vec<String> = (n + 1..=2 * n).map(|i| i.to_string()).collect();
+    text += &format!("f {}\nf {}\n", bottom.join(" "), top.join(" "));
+    for i in 0..n {
+        let j = (i + 1) % n;
+        text += &format!("f {} {} {} {}\n", i + 1, j + 1, n + j + 1, n + i + 1);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cylinder.obj");
+    fs::write(&path, text).unwrap();
+    let (mesh, report) = read_clean(&path).unwrap();
+    assert!(
+        report.degenerate_dropped > 0,
+        "no flat slivers: the test lost its point"
+    );
+    let stats = mesh.stats();
+    assert!(stats.watertight && stats.winding_consistent, "{stats:?}");
+    let volume: f64 = (0..mesh.triangles.len())
+        .map(|t| {
+            let [a, b, c] = mesh.triangle(t).map(|p| p.as_dvec3());
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
+    assert!(
+        (volume / (2.0 * std::f64::consts::PI) - 1.0).abs() < 1e-3,
+        "{volume}"
+    );
+}
+
 #[test]
 fn obj_faces_with_one_or_two_vertices_are_reported_with_their_line() {
     for (face, line) in [("f 1 2", 5), ("f 3", 5), ("f 1 2 # a comment 4", 5)] {

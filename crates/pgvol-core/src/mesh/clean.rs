@@ -88,8 +88,11 @@ impl Mesh {
     }
 
     /// Removes triangles that repeat a vertex or whose cross product is exactly zero (computed
-    /// in f64, so tiny but real triangles are kept). Returns how many were removed.
+    /// in f64, so tiny but real triangles are kept). Flat triangles with distinct corners are
+    /// first folded into the triangle across their long edge (`collinear.rs`), so removing them
+    /// opens no crack. Returns how many were removed.
     pub fn drop_degenerate(&mut self) -> usize {
+        let folded = super::collinear::fold_collinear(self);
         let before = self.triangles.len();
         let positions = &self.positions;
         self.triangles.retain(|&[a, b, c]| {
@@ -103,7 +106,7 @@ impl Mesh {
                 _ => true,
             }
         });
-        before - self.triangles.len()
+        folded + before - self.triangles.len()
     }
 
     /// Removes triangles repeating an earlier one: the same three vertices in the same cyclic

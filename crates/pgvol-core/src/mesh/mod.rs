@@ -2,6 +2,7 @@
 //! `pgvol-mesh`'s job.
 
 mod clean;
+mod collinear;
 mod components;
 mod orient;
 mod stats;
