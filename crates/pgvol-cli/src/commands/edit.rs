@@ -184,14 +184,7 @@ pub fn repair(a: RepairArgs) -> Result<()> {
         _ => pgvol::Restore::Denoise { coarse: a.coarse },
     };
     let reach = pgvol::repair_reach(&a.mask);
-    let shape = pgvol::Shape::load(
-        &a.input,
-        a.shape.res as usize,
-        0.0,
-        reach,
-        a.shape.sign.into(),
-        &bars,
-    )?;
+    let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
     let (volume, reports) = pgvol::repair(&shape, &a.mask, restore, &bars)
         .map_err(|e| super::args::at_input(e, &a.input))?;
     let band = shape

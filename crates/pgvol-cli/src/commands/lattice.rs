@@ -123,14 +123,7 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
     let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, 0.0);
-    let shape = pgvol::Shape::load(
-        &a.input,
-        a.shape.res as usize,
-        0.0,
-        reach,
-        a.shape.sign.into(),
-        &bars,
-    )?;
+    let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::lattice(&shape, &lattice, &bars).map_err(|e| at_input(e, &a.input))?;
     let stages = [

@@ -170,6 +170,27 @@ pub struct ShapeOutputArgs {
     pub sign: SignArg,
 }
 
+impl ShapeOutputArgs {
+    /// `input` as a shape: a `.pgv` file, or a mesh encoded at `--res` with `--sign` over its
+    /// box grown by `grow`, exact `reach` beyond the band (see [`pgvol::Shape::load`]).
+    pub fn load(
+        &self,
+        input: &Path,
+        grow: f32,
+        reach: f32,
+        bars: &Bars,
+    ) -> pgvol::Result<pgvol::Shape> {
+        pgvol::Shape::load(
+            input,
+            self.res as usize,
+            grow,
+            reach,
+            self.sign.into(),
+            bars,
+        )
+    }
+}
+
 #[derive(Args)]
 #[command(after_help = "Example: pgvol offset part.stl -o grown.glb --distance 0.5")]
 pub struct OffsetArgs {
@@ -192,14 +213,9 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     check_output_name(&a.output)?;
     let bars = Bars::new(a.out.silent());
     pgvol::check_offset(a.distance).map_err(|e| anyhow::anyhow!("--distance: {e}"))?;
-    let shape = pgvol::Shape::load(
-        &a.input,
-        a.shape.res as usize,
-        a.distance.max(0.0),
-        a.distance.abs(),
-        a.shape.sign.into(),
-        &bars,
-    )?;
+    let shape = a
+        .shape
+        .load(&a.input, a.distance.max(0.0), a.distance.abs(), &bars)?;
     let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(None, a.distance);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
@@ -281,14 +297,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
         .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, a.thickness);
-    let shape = pgvol::Shape::load(
-        &a.input,
-        a.shape.res as usize,
-        0.0,
-        reach,
-        a.shape.sign.into(),
-        &bars,
-    )?;
+    let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
         .map_err(|e| at_input(e, &a.input))?;
@@ -336,14 +345,7 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         })
     };
     let grow = pgvol::growth(kind, a.thickness);
-    let shape = pgvol::Shape::load(
-        &a.input,
-        a.shape.res as usize,
-        grow,
-        a.thickness,
-        a.shape.sign.into(),
-        &bars,
-    )?;
+    let shape = a.shape.load(&a.input, grow, a.thickness, &bars)?;
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
         .map_err(|e| at_input(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
