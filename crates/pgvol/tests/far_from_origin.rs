@@ -24,22 +24,7 @@ fn torus_knot() -> Mesh {
 }
 
 fn unit_cube() -> Mesh {
-    let positions = (0..8)
-        .map(|i| Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32))
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-        .collect();
-    Mesh::new(positions, triangles)
+    pgvol::mesh::shapes::cuboid(Vec3::ZERO, Vec3::ONE)
 }
 
 /// `mesh` moved by `shift`, written as OBJ text in f64 and read back as a user's file would be.
