@@ -68,6 +68,34 @@ pub fn octasphere(levels: u32) -> Mesh {
     Mesh::new(positions, triangles)
 }
 
+/// A prism over the regular `sides`-gon of radius 1 between z = −1 and z = 1, its caps fanned
+/// from their centres: `4 · sides` outward triangles. With many sides its walls are needles
+/// 2 long, the triangles on which distance and winding-number queries are hardest.
+pub fn prism(sides: u32) -> Mesh {
+    let n = sides.max(3);
+    let mut positions = Vec::with_capacity(2 * n as usize + 2);
+    for z in [-1.0, 1.0] {
+        positions.extend((0..n).map(|i| {
+            let a = std::f32::consts::TAU * i as f32 / n as f32;
+            Vec3::new(a.cos(), a.sin(), z)
+        }));
+    }
+    positions.extend([Vec3::NEG_Z, Vec3::Z]);
+    let (bottom, top) = (2 * n, 2 * n + 1);
+    let triangles = (0..n)
+        .flat_map(|i| {
+            let j = (i + 1) % n;
+            [
+                [i, j, n + j],
+                [i, n + j, n + i],
+                [bottom, j, i],
+                [top, n + i, n + j],
+            ]
+        })
+        .collect();
+    Mesh::new(positions, triangles)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -84,5 +112,17 @@ mod tests {
         let ball = 4.0 / 3.0 * std::f64::consts::PI;
         assert!(st.volume > 0.9 * ball && st.volume < ball);
         assert!(s.positions.iter().all(|p| (p.length() - 1.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn prism_is_closed_and_outward_with_the_polygons_volume() {
+        let p = prism(1000);
+        let st = p.stats();
+        assert!(st.watertight && st.winding_consistent && st.non_manifold_edges == 0);
+        assert_eq!(p.triangles.len(), 4000);
+        // Area of the regular 1000-gon times the height 2.
+        let n = 1000.0f64;
+        let polygon = n / 2.0 * (std::f64::consts::TAU / n).sin();
+        assert!((st.volume - 2.0 * polygon).abs() < 1e-4, "{}", st.volume);
     }
 }

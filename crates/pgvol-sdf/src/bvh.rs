@@ -359,6 +359,17 @@ impl Bvh {
         best.expect("a leaf holds at least one triangle")
     }
 
+    /// The box of every triangle; `None` for an empty tree.
+    pub fn bounds(&self) -> Option<(Vec3A, Vec3A)> {
+        self.nodes.first().map(|root| (root.min, root.max))
+    }
+
+    /// Whether `p` lies outside the box of every triangle (always, for an empty tree).
+    pub fn is_outside_box(&self, p: Vec3A) -> bool {
+        self.bounds()
+            .is_none_or(|(min, max)| p.cmplt(min).any() || p.cmpgt(max).any())
+    }
+
     /// The change of the generalized winding number from `a` to `b` caused by the triangles the
     /// segment crosses: +1 for each triangle crossed from its front to its back (into the
     /// inside), −1 the other way. `None` when a crossing is too close to an edge, a vertex or an

@@ -69,6 +69,9 @@ pub struct MeshSdf {
     avx2: bool,
     /// Whether grid scans skip leaves by their oriented boxes.
     oriented: bool,
+    /// Winding numbers the grid sampler computed rather than carried, to check how rarely.
+    #[cfg(test)]
+    pub(crate) sampler_windings: std::sync::atomic::AtomicUsize,
 }
 
 /// Winding numbers within this margin of 1/2 are recomputed with a finer expansion before the
@@ -123,6 +126,8 @@ impl MeshSdf {
             rims,
             avx2: crate::wide::avx2_available(),
             oriented: true,
+            #[cfg(test)]
+            sampler_windings: Default::default(),
         })
     }
 
@@ -175,6 +180,13 @@ impl MeshSdf {
     #[cfg(test)]
     pub(crate) fn use_axis_aligned_boxes_only(&mut self) {
         self.oriented = false;
+    }
+
+    /// Whether the sign is the winding number and that takes whole values off the surface: a
+    /// closed mesh (no rims), however folded or overlapping. Then it is constant between
+    /// crossings and 0 outside the mesh's box.
+    pub fn winding_is_whole(&self) -> bool {
+        self.sign_mode() == SignMode::Winding && self.rims.is_empty()
     }
 
     pub fn bvh(&self) -> &Bvh {

@@ -138,7 +138,7 @@ fn contour_exact(
     let sampled = sample(&sdf, grid, Extent::Band(NODE_BAND), progress)?;
     timings.sdf = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let field = MeshField::new(mesh, &sdf, grid.spacing);
+    let field = MeshField::with_node_signs(mesh, &sdf, grid, &sampled.values);
     let options = DualContourOptions {
         feature_offset: 0.0,
         ..DualContourOptions::default()

@@ -3,7 +3,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::carry::Segment;
+use super::carry::{bend_point, Segment};
 use crate::{
     bvh::{triangle_jump, Closest},
     grid::Grid,
@@ -145,6 +145,19 @@ impl Segment for BrickSegment<'_> {
             Some(0)
         } else {
             self.sdf.bvh().winding_jump(a.into(), b.into())
+        }
+    }
+
+    fn bend(&self, a: Vec3A, b: Vec3A, side: f32) -> Option<Vec3A> {
+        let m = bend_point(a, b, side);
+        if self.brick.contains(a) {
+            // Both legs stay in the brick, whose triangles are the only ones they can cross.
+            Some(m.clamp(self.brick.pmin, self.brick.pmax))
+        } else if self.entry_is_clear {
+            // Only the straight entry is known to be clear (and is never unsure).
+            None
+        } else {
+            Some(m)
         }
     }
 

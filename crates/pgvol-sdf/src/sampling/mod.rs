@@ -678,6 +678,48 @@ mod tests {
     }
 
     #[test]
+    fn a_closed_mesh_carries_its_whole_winding_number_without_computing_it() {
+        // Two overlapping spheres (winding number 2 where they overlap), and a many-sided
+        // prism: rows of nodes pass through its vertical edges at every height alike.
+        let mut overlapping = sphere(3);
+        let second = sphere(3);
+        let base = overlapping.positions.len() as u32;
+        let shift = Vec3::new(0.7, 0.2, 0.1);
+        overlapping
+            .positions
+            .extend(second.positions.iter().map(|p| *p + shift));
+        overlapping
+            .triangles
+            .extend(second.triangles.iter().map(|t| t.map(|i| i + base)));
+        for mesh in [overlapping, pgvol_mesh::shapes::prism(1000)] {
+            let sdf = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
+            assert!(sdf.winding_is_whole());
+            let (lo, hi) = mesh.bounds().unwrap();
+            let grid = Grid::cube_res(lo - 0.1, hi + 0.1, 29).unwrap();
+            let tris: Vec<_> = (0..mesh.triangles.len())
+                .map(|t| mesh.triangle(t))
+                .collect();
+            let exact: Vec<f64> = (0..grid.len())
+                .map(|n| {
+                    let (i, j, k) = (n % 29, (n / 29) % 29, n / (29 * 29));
+                    crate::winding::exact_winding(&tris, grid.point(i, j, k))
+                })
+                .collect();
+            for extent in [Extent::Dense, Extent::Band(2.0)] {
+                let values = sdf.sample(&grid, extent, &|_| {}).values;
+                let wrong = exact
+                    .iter()
+                    .zip(&values)
+                    .filter(|(w, v)| (**w > 0.5) != (**v < 0.0))
+                    .count();
+                assert_eq!(wrong, 0, "{extent:?}");
+            }
+            let computed = sdf.sampler_windings.load(Ordering::Relaxed);
+            assert_eq!(computed, 0, "winding numbers computed by the sampler");
+        }
+    }
+
+    #[test]
     fn parity_agrees_with_the_winding_number_on_closed_meshes() {
         let mesh = sphere(3);
         let w = MeshSdf::new(&mesh, SignMode::Winding).unwrap();

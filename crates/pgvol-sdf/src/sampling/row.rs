@@ -86,7 +86,11 @@ impl MeshSdf {
                     Some(inside) => {
                         let v = if inside { -plan.clamp } else { plan.clamp };
                         brick.for_each_node(grid, |at, _| out.put(at, v));
-                        carry.forget();
+                        // A whole winding number carries across any distance without drift
+                        // (only crossings change it); otherwise the next brick starts afresh.
+                        if !self.winding_is_whole() {
+                            carry.forget();
+                        }
                     }
                     // Two neighbouring far bricks: no triangle meets either, so nothing is
                     // crossed between them.
