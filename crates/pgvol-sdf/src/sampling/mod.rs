@@ -641,6 +641,20 @@ mod tests {
         assert_eq!(vw, vp);
     }
 
+    /// The exact (f64) winding number of `mesh` at every node of `grid`, x fastest.
+    fn exact_node_windings(mesh: &pgvol_mesh::Mesh, grid: &Grid) -> Vec<f64> {
+        let tris: Vec<_> = (0..mesh.triangles.len())
+            .map(|t| mesh.triangle(t))
+            .collect();
+        let [nx, ny, _] = grid.dims;
+        (0..grid.len())
+            .map(|n| {
+                let (i, j, k) = (n % nx, (n / nx) % ny, n / (nx * ny));
+                crate::winding::exact_winding(&tris, grid.point(i, j, k))
+            })
+            .collect()
+    }
+
     #[test]
     fn carried_winding_signs_match_per_node_winding_on_an_open_mesh() {
         let mut mesh = sphere(4);
@@ -651,15 +665,7 @@ mod tests {
         });
         let sdf = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
         let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::ONE, 41).unwrap();
-        let tris: Vec<_> = (0..mesh.triangles.len())
-            .map(|t| mesh.triangle(t))
-            .collect();
-        let exact: Vec<f64> = (0..grid.len())
-            .map(|n| {
-                let (i, j, k) = (n % 41, (n / 41) % 41, n / (41 * 41));
-                crate::winding::exact_winding(&tris, grid.point(i, j, k))
-            })
-            .collect();
+        let exact = exact_node_windings(&mesh, &grid);
         // Dense, and a band whose far bricks take their signs from carried values too.
         for extent in [Extent::Dense, Extent::Band(2.0)] {
             let values = sdf.sample(&grid, extent, &|_| {}).values;
@@ -696,15 +702,7 @@ mod tests {
             assert!(sdf.winding_is_whole());
             let (lo, hi) = mesh.bounds().unwrap();
             let grid = Grid::cube_res(lo - 0.1, hi + 0.1, 29).unwrap();
-            let tris: Vec<_> = (0..mesh.triangles.len())
-                .map(|t| mesh.triangle(t))
-                .collect();
-            let exact: Vec<f64> = (0..grid.len())
-                .map(|n| {
-                    let (i, j, k) = (n % 29, (n / 29) % 29, n / (29 * 29));
-                    crate::winding::exact_winding(&tris, grid.point(i, j, k))
-                })
-                .collect();
+            let exact = exact_node_windings(&mesh, &grid);
             for extent in [Extent::Dense, Extent::Band(2.0)] {
                 let values = sdf.sample(&grid, extent, &|_| {}).values;
                 let wrong = exact
