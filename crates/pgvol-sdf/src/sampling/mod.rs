@@ -655,6 +655,16 @@ mod tests {
             .collect()
     }
 
+    /// Nodes whose sampled sign differs from the exact winding number's, among those at least
+    /// `margin` from 1/2.
+    fn sign_disagreements(exact: &[f64], values: &[f32], margin: f64) -> usize {
+        exact
+            .iter()
+            .zip(values)
+            .filter(|(w, v)| (**w > 0.5) != (**v < 0.0) && (**w - 0.5).abs() >= margin)
+            .count()
+    }
+
     #[test]
     fn carried_winding_signs_match_per_node_winding_on_an_open_mesh() {
         let mut mesh = sphere(4);
@@ -670,11 +680,7 @@ mod tests {
         for extent in [Extent::Dense, Extent::Band(2.0)] {
             let values = sdf.sample(&grid, extent, &|_| {}).values;
             // Within 0.01 of 1/2 the sign is decided by rounding: not counted.
-            let wrong = exact
-                .iter()
-                .zip(&values)
-                .filter(|(w, v)| (**w > 0.5) != (**v < 0.0) && (**w - 0.5).abs() > 0.01)
-                .count();
+            let wrong = sign_disagreements(&exact, &values, 0.01);
             assert!(
                 wrong <= 2,
                 "{extent:?}: {wrong} sign disagreements out of {}",
@@ -705,11 +711,7 @@ mod tests {
             let exact = exact_node_windings(&mesh, &grid);
             for extent in [Extent::Dense, Extent::Band(2.0)] {
                 let values = sdf.sample(&grid, extent, &|_| {}).values;
-                let wrong = exact
-                    .iter()
-                    .zip(&values)
-                    .filter(|(w, v)| (**w > 0.5) != (**v < 0.0))
-                    .count();
+                let wrong = sign_disagreements(&exact, &values, 0.0);
                 assert_eq!(wrong, 0, "{extent:?}");
             }
             let computed = sdf.sampler_windings.load(Ordering::Relaxed);
