@@ -7,7 +7,7 @@ use pgvol_core::{write_atomic, FileError};
 use serde::{Deserialize, Serialize};
 
 use crate::layer_frame::{world_text, LayerFrame};
-use crate::slice::Layer;
+use crate::slice::{Layer, Loop};
 
 /// Bounding box `[min_u, min_v, max_u, max_v]` of every loop point, if any.
 pub(crate) fn extent(layers: &[Layer]) -> Option<[f32; 4]> {
@@ -105,9 +105,19 @@ pub fn write_svg_in(path: &Path, layers: &[Layer], frame: &LayerFrame) -> Result
     })
 }
 
+/// A layer as the JSON file holds it: its loops, then its area and perimeter for readers that
+/// plan without tracing the loops (readers of the loops ignore them).
+#[derive(Serialize)]
+struct LayerRecord<'a> {
+    height: f32,
+    loops: &'a [Loop],
+    area: f64,
+    perimeter: f64,
+}
+
 #[derive(Serialize)]
 struct SliceFileRef<'a> {
-    layers: &'a [Layer],
+    layers: Vec<LayerRecord<'a>>,
 }
 
 #[derive(Deserialize)]
@@ -116,7 +126,8 @@ struct SliceFile {
 }
 
 /// The layers as JSON: `{"layers": [{"height": z, "loops": [{"points": [[u, v], …], "hole":
-/// false}, …]}, …]}`, numbers written so they read back to the same f32.
+/// false}, …], "area": a, "perimeter": p}, …]}`, numbers written so they read back to the same
+/// f32; `area` is the solid's (holes subtracted) and `perimeter` the loops' total length, in f64.
 pub fn write_slice_json(path: &Path, layers: &[Layer]) -> Result<(), FileError> {
     write_slice_json_in(path, layers, &LayerFrame::default())
 }
@@ -129,6 +140,15 @@ pub fn write_slice_json_in(
     frame: &LayerFrame,
 ) -> Result<(), FileError> {
     if frame.is_zero() {
+        let layers = layers
+            .iter()
+            .map(|l| LayerRecord {
+                height: l.height,
+                loops: &l.loops,
+                area: l.area(),
+                perimeter: l.perimeter(),
+            })
+            .collect();
         return write_atomic(path, |w| {
             serde_json::to_writer(&mut *w, &SliceFileRef { layers })?;
             writeln!(w)
@@ -152,6 +172,8 @@ pub fn write_slice_json_in(
             serde_json::json!({
                 "height": frame.height + f64::from(layer.height),
                 "loops": loops,
+                "area": layer.area(),
+                "perimeter": layer.perimeter(),
             })
         })
         .collect();

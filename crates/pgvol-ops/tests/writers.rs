@@ -111,6 +111,42 @@ fn json_round_trips_exactly() {
 }
 
 #[test]
+fn json_layers_carry_their_area_and_perimeter() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("layers.json");
+    write_slice_json(&path, &layers()).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let layer = |i: usize, key: &str| v["layers"][i][key].as_f64().unwrap();
+    // The torus's cut through its tube's middle: an annulus between radii 0.3 and 0.7, its
+    // boundary two circles (within the slicing's resolution of 0.02).
+    let mid = (0..2)
+        .min_by(|&a, &b| {
+            let h = |i: usize| layer(i, "height").abs();
+            h(a).total_cmp(&h(b))
+        })
+        .unwrap();
+    let z = layer(mid, "height");
+    let t = (0.04 - z * z).sqrt();
+    let (r0, r1) = (0.5 - t, 0.5 + t);
+    let pi = std::f64::consts::PI;
+    let area = pi * (r1 * r1 - r0 * r0);
+    let perimeter = 2.0 * pi * (r0 + r1);
+    assert!(
+        (layer(mid, "area") - area).abs() < 0.01 * area,
+        "area {}",
+        layer(mid, "area")
+    );
+    assert!(
+        (layer(mid, "perimeter") - perimeter).abs() < 0.01 * perimeter,
+        "perimeter {}",
+        layer(mid, "perimeter")
+    );
+    // The empty layer above the torus.
+    assert_eq!((layer(2, "area"), layer(2, "perimeter")), (0.0, 0.0));
+}
+
+#[test]
 fn writing_into_a_missing_directory_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("missing").join("layers.json");

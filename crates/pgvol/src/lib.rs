@@ -137,7 +137,10 @@ pub use shape::{
     check_offset, check_thickness, growth, offset, operation_name, parse_drain, shell, Shape,
     ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
 };
-pub use slice::{layer_frame, slice, write_layers, LayerFormat, SliceSettings, DEFAULT_UNITS_MM};
+pub use slice::{
+    layer_frame, slice, slice_file, write_layers, LayerFormat, SliceSettings, Sliced,
+    DEFAULT_UNITS_MM,
+};
 
 /// The stage crates, for what the facade does not wrap.
 pub use pgvol_contour as contour;

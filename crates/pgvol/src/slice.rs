@@ -2,9 +2,15 @@
 
 use std::path::Path;
 
-use pgvol_ops::{Axis, CliEncoding, Layer, LayerFrame, SliceOptions};
+use glam::Vec3;
+use pgvol_format::SlabReader;
+use pgvol_ops::{
+    brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
+    LayerFrame, SliceOptions,
+};
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::pgv_io::read_pgv_bytes;
 use crate::progress::{self, Progress};
 use crate::shape::Shape;
 
@@ -50,18 +56,136 @@ pub fn slice(
     Ok(layers?)
 }
 
+/// The layers of a `.pgv` file and where they sit in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sliced {
+    /// The layers, bottom first.
+    pub layers: Vec<Layer>,
+    /// The world translation [`write_layers`] adds to the layers.
+    pub frame: LayerFrame,
+}
+
+/// The layers of the `.pgv` file at `path`, as [`slice`] of the file's shape gives them. A
+/// sparse file is decoded one slab of bricks at a time, only the slabs within reach of the
+/// layers being sliced held, so memory is the file's bytes and a window of the volume.
+pub fn slice_file(
+    path: &Path,
+    settings: &SliceSettings,
+    progress: &dyn Progress,
+) -> Result<Sliced> {
+    let bytes = pgvol_core::read_input(path).reading()?;
+    let at = |e: Error| match e.path() {
+        Some(_) => e,
+        None => e.at(path),
+    };
+    let Some(reader) = SlabReader::open(&bytes, path).reading()? else {
+        let shape = Shape::from_file(read_pgv_bytes(&bytes, path)?);
+        let layers = slice(&shape, settings, progress).map_err(at)?;
+        let frame = layer_frame(&shape, settings.axis);
+        return Ok(Sliced { layers, frame });
+    };
+    let header = reader.header().clone();
+    if !header.basis.is_separable() {
+        let shape = Shape::from_file(read_pgv_bytes(&bytes, path)?);
+        let layers = slice(&shape, settings, progress).map_err(at)?;
+        let frame = layer_frame(&shape, settings.axis);
+        return Ok(Sliced { layers, frame });
+    }
+    let grid = header.grid;
+    let bounds = match header.source_bounds {
+        Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
+        None => (grid.origin, grid.max_corner()),
+    };
+    let options = options_for(grid.spacing, grid.offset, settings)?;
+    let total = pgvol_ops::layer_heights(bounds, &options)
+        .map_err(|e| at(e.into()))?
+        .len();
+    let source = FileBricks {
+        reader: &reader,
+        grid_counts: brick_counts(grid.dims),
+    };
+    let mut layers = Vec::with_capacity(total);
+    progress::check(progress)?;
+    progress.stage("slice");
+    pgvol_ops::slice_bricks(
+        &source,
+        &grid,
+        header.basis,
+        reader.background(),
+        bounds,
+        &options,
+        0..usize::MAX,
+        &mut |layer| {
+            layers.push(layer);
+            progress.update(layers.len() as f64 / total.max(1) as f64);
+            progress::check(progress)
+        },
+    )
+    .map_err(at)?;
+    progress.finish();
+    Ok(Sliced {
+        layers,
+        frame: LayerFrame::new(settings.axis, grid.offset),
+    })
+}
+
+/// A sparse `.pgv` file's bricks, decoded slab by slab.
+struct FileBricks<'r, 'b> {
+    reader: &'r SlabReader<'b>,
+    /// The sparse grid's bricks per axis.
+    grid_counts: [usize; 3],
+}
+
+impl BrickSource for FileBricks<'_, '_> {
+    type Error = Error;
+
+    fn slab_bricks(&self) -> usize {
+        self.reader.grid_bricks_per_slab()
+    }
+
+    fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>> {
+        let decoded = self.reader.slab(axis, slab).reading()?;
+        let per = self.slab_bricks();
+        let [p, q] = plane_axes(axis);
+        let first = slab * per;
+        let count = per.min(self.grid_counts[axis].saturating_sub(first));
+        let plane = self.grid_counts[p] * self.grid_counts[q];
+        let mut layers: Vec<BrickLayer> = (0..count).map(|_| BrickLayer::outside(plane)).collect();
+        let at = |m: [usize; 3]| (m[axis] - first, m[p] + self.grid_counts[p] * m[q]);
+        for m in decoded.inside {
+            let (n, k) = at(m);
+            layers[n].set_inside(k);
+        }
+        for (m, values) in decoded.stored {
+            let (n, k) = at(m);
+            layers[n].insert(k, BrickRef::Owned(values), axis);
+        }
+        Ok(layers.into_iter().map(BrickLayer::finish).collect())
+    }
+}
+
 /// The stage's options for slicing `shape` by `settings`.
 pub(crate) fn slice_options(shape: &Shape, settings: &SliceSettings) -> Result<SliceOptions> {
+    let grid = &shape.volume.grid;
+    options_for(grid.spacing, grid.offset, settings)
+}
+
+/// The stage's options for slicing a field of grid `spacing` and frame `offset` by `settings`.
+fn options_for(
+    spacing: f32,
+    offset: glam::DVec3,
+    settings: &SliceSettings,
+) -> Result<SliceOptions> {
     if !(settings.layer_height.is_finite() && settings.layer_height > 0.0) {
         return Err(Error::parameter(format!(
             "the layer height must be a positive number, got {}",
             settings.layer_height
         )));
     }
-    let resolution = settings.resolution.unwrap_or(shape.volume.grid.spacing);
+    let resolution = settings.resolution.unwrap_or(spacing);
     let mut options = SliceOptions::new(settings.axis, settings.layer_height, resolution);
     // The stage slices in the field's local frame.
-    let shift = layer_frame(shape, settings.axis).height;
+    let shift = LayerFrame::new(settings.axis, offset).height;
     options.first = settings.first.map(|f| (f - shift) as f32);
     if let Some(t) = settings.tolerance {
         options.tolerance = t;

@@ -783,3 +783,33 @@ fn sampling_a_grid_gives_the_field_at_its_nodes_x_fastest() {
         None,
     );
 }
+
+#[test]
+fn a_file_sliced_slab_by_slab_gives_the_layers_of_the_whole_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.pgv");
+    let file = encoded(72).file;
+    pgvol::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
+    let shape = Shape::from_file(pgvol::read_pgv(&path).unwrap());
+    for axis in [pgvol::Axis::X, pgvol::Axis::Y, pgvol::Axis::Z] {
+        for height in [0.013, 0.2] {
+            let settings = pgvol::SliceSettings {
+                axis,
+                ..pgvol::SliceSettings::new(height)
+            };
+            let whole = pgvol::slice(&shape, &settings, &Silent).unwrap();
+            let streamed = pgvol::slice_file(&path, &settings, &Silent).unwrap();
+            assert!(whole.iter().filter(|l| !l.loops.is_empty()).count() >= 4);
+            assert_eq!(streamed.layers, whole, "{axis:?} every {height}");
+            assert_eq!(streamed.frame, pgvol::layer_frame(&shape, axis));
+        }
+    }
+    // A damaged file is refused, naming it.
+    let mut bytes = std::fs::read(&path).unwrap();
+    let n = bytes.len();
+    bytes[n / 2] ^= 0x10;
+    std::fs::write(&path, &bytes).unwrap();
+    let e = pgvol::slice_file(&path, &pgvol::SliceSettings::new(0.05), &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::InputFile);
+    assert!(e.to_string().contains("s.pgv"), "{e}");
+}

@@ -110,7 +110,6 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
     let start = Instant::now();
-    let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, a.sign.into(), &bars)?;
     let settings = pgvol::SliceSettings {
         axis: match a.axis {
             AxisArg::X => pgvol::Axis::X,
@@ -122,11 +121,20 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         resolution: a.resolution,
         tolerance: a.tolerance,
     };
+    let sign: pgvol::SignMode = a.sign.into();
     let t = Instant::now();
-    let layers = pgvol::slice(&shape, &settings, &bars).map_err(|e| at_input(e, &a.input))?;
+    // A .pgv file is sliced as it is read, a window of its bricks at a time.
+    let sliced = if pgvol::is_pgv(&a.input) && sign == pgvol::SignMode::Auto {
+        pgvol::slice_file(&a.input, &settings, &bars).map_err(|e| at_input(e, &a.input))?
+    } else {
+        let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, sign, &bars)?;
+        let layers = pgvol::slice(&shape, &settings, &bars).map_err(|e| at_input(e, &a.input))?;
+        let frame = pgvol::layer_frame(&shape, settings.axis);
+        pgvol::Sliced { layers, frame }
+    };
     let slice_seconds = t.elapsed().as_secs_f64();
-    let frame = pgvol::layer_frame(&shape, settings.axis);
-    pgvol::write_layers(&a.output, &layers, format, a.units_mm, &frame)?;
+    let layers = sliced.layers;
+    pgvol::write_layers(&a.output, &layers, format, a.units_mm, &sliced.frame)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
     let points: usize = layers
         .iter()

@@ -18,8 +18,8 @@
 //! bricks at the precision `precision_choice` picks, behind the index of `index`. Memory follows
 //! the stored bricks plus a byte per file brick, and so does time, plus a table look-up per grid
 //! brick. Reading: `index` checks the layout, `brick_read` and `brick_decoder` decode one stored
-//! brick, `payload_read` a whole payload in parallel, `read_brick` a single brick and `info` the
-//! header and index alone.
+//! brick, `payload_read` a whole payload in parallel, `slab_read` one slab of bricks along an
+//! axis at a time, `read_brick` a single brick and `info` the header and index alone.
 
 mod brick_decoder;
 mod brick_encoder;
@@ -38,6 +38,7 @@ mod quantise;
 mod read_brick;
 #[cfg(test)]
 mod read_profile;
+mod slab_read;
 mod stored_band;
 #[cfg(test)]
 mod test_volumes;
@@ -50,4 +51,5 @@ pub use info::{pgv_info, PgvInfo};
 pub use options::{EncodeOptions, EncodeReport};
 pub use precision_choice::{basis_weight_bound, AUTO_TOLERANCE};
 pub use read_brick::{brick_grid, read_brick, Brick};
+pub use slab_read::{SlabBricks, SlabReader};
 pub use writer::{encode_pgv_with, write_pgv_with};

@@ -73,7 +73,10 @@ pub(crate) fn decode_payload(
 type GridBrick = ([usize; 3], Box<BrickValues>);
 
 /// The grid bricks inside file brick `b`, with their first node relative to the file brick's.
-fn grid_bricks_of(l: &Layout, b: usize) -> impl Iterator<Item = ([usize; 3], [usize; 3])> {
+pub(crate) fn grid_bricks_of(
+    l: &Layout,
+    b: usize,
+) -> impl Iterator<Item = ([usize; 3], [usize; 3])> {
     let (lo, n) = l.bricks.extent(b);
     let per = n.map(|c| c.div_ceil(BRICK_EDGE));
     (0..per[2]).flat_map(move |k| {
@@ -88,7 +91,12 @@ fn grid_bricks_of(l: &Layout, b: usize) -> impl Iterator<Item = ([usize; 3], [us
 
 /// File brick `b`'s decoded `values` (`n` nodes, x fastest) as grid bricks; nodes past the
 /// grid hold the clamp.
-fn cut_into_grid_bricks(l: &Layout, b: usize, n: [usize; 3], values: &[f32]) -> Vec<GridBrick> {
+pub(crate) fn cut_into_grid_bricks(
+    l: &Layout,
+    b: usize,
+    n: [usize; 3],
+    values: &[f32],
+) -> Vec<GridBrick> {
     grid_bricks_of(l, b)
         .map(|(m, rel)| {
             let mut out = Box::new([l.sp.clamp; BRICK_NODES]);

@@ -1,0 +1,155 @@
+//! The coefficient bricks a layer reads, one brick layer at a time, and where they come from.
+
+use std::ops::Deref;
+
+use pgvol_core::sparse::BrickValues;
+use pgvol_core::{SparseGrid, BRICK_EDGE};
+
+use crate::OpsError;
+
+/// A brick's values, borrowed from a grid held in memory or decoded from a file.
+pub enum BrickRef<'a> {
+    Borrowed(&'a BrickValues),
+    Owned(Box<BrickValues>),
+}
+
+impl Deref for BrickRef<'_> {
+    type Target = BrickValues;
+
+    fn deref(&self) -> &BrickValues {
+        match self {
+            BrickRef::Borrowed(b) => b,
+            BrickRef::Owned(b) => b,
+        }
+    }
+}
+
+/// A brick layer's entry for an absent brick outside.
+pub const OUTSIDE: u32 = u32::MAX;
+/// A brick layer's entry for an absent brick inside.
+pub const INSIDE: u32 = u32::MAX - 1;
+
+/// The bricks of a grid whose coordinate along one axis is fixed: per brick position in the
+/// plane of the two other axes (the first of them fastest, in the axes' cyclic order), the index
+/// of its values in `bricks`, or [`OUTSIDE`] / [`INSIDE`] for an absent brick.
+pub struct BrickLayer<'a> {
+    states: Vec<u32>,
+    /// The positions whose state is not [`OUTSIDE`], in the order they were set.
+    occupied: Vec<u32>,
+    pub bricks: Vec<BrickRef<'a>>,
+    /// Per brick in `bricks`, per node layer along the layer's axis: its least and greatest
+    /// value.
+    pub ranges: Vec<[[f32; 2]; BRICK_EDGE]>,
+}
+
+impl<'a> BrickLayer<'a> {
+    /// A layer of `count` brick positions, every brick absent and outside.
+    pub fn outside(count: usize) -> Self {
+        BrickLayer {
+            states: vec![OUTSIDE; count],
+            occupied: Vec::new(),
+            bricks: Vec::new(),
+            ranges: Vec::new(),
+        }
+    }
+
+    /// Marks the absent brick at position `at` inside.
+    pub fn set_inside(&mut self, at: usize) {
+        if self.states[at] == OUTSIDE {
+            self.occupied.push(at as u32);
+        }
+        self.states[at] = INSIDE;
+    }
+
+    /// The state of position `at`: an index in `bricks`, [`INSIDE`] or [`OUTSIDE`].
+    #[inline]
+    pub fn state(&self, at: usize) -> u32 {
+        self.states[at]
+    }
+
+    /// The positions that are not absent and outside, ascending once [`BrickLayer::finish`]
+    /// has run.
+    pub fn occupied(&self) -> &[u32] {
+        &self.occupied
+    }
+
+    /// Sorts the occupied positions; to be called once every brick is set.
+    pub fn finish(mut self) -> Self {
+        self.occupied.sort_unstable();
+        self
+    }
+
+    /// Stores `values` at brick position `at` of a layer across grid axis `axis`.
+    pub fn insert(&mut self, at: usize, values: BrickRef<'a>, axis: usize) {
+        if self.states[at] == OUTSIDE {
+            self.occupied.push(at as u32);
+        }
+        self.states[at] = self.bricks.len() as u32;
+        let stride = [1, BRICK_EDGE, BRICK_EDGE * BRICK_EDGE][axis];
+        let mut ranges = [[f32::INFINITY, f32::NEG_INFINITY]; BRICK_EDGE];
+        for (i, &x) in values.iter().enumerate() {
+            let r = &mut ranges[i / stride % BRICK_EDGE];
+            if x < r[0] {
+                r[0] = x;
+            }
+            if x > r[1] {
+                r[1] = x;
+            }
+        }
+        self.ranges.push(ranges);
+        self.bricks.push(values);
+    }
+}
+
+/// Brick layers of a coefficient grid along an axis, handed out in slabs of consecutive layers.
+/// Slicing asks for the slabs its layers' supports reach, in increasing order, and keeps only a
+/// window of them, so a source that decodes slabs on demand bounds memory by that window.
+pub trait BrickSource: Sync {
+    /// Why a slab could not be had (a damaged file, say).
+    type Error: From<OpsError> + Send;
+
+    /// Brick layers per slab.
+    fn slab_bricks(&self) -> usize;
+
+    /// The brick layers of slab `slab` along grid axis `axis` (0, 1 or 2), in order; positions
+    /// within a layer as [`BrickLayer`] says. The last slab may hold fewer.
+    fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>, Self::Error>;
+}
+
+/// The axes of a brick layer's plane: the two after `axis` in cyclic order.
+pub fn plane_axes(axis: usize) -> [usize; 2] {
+    [(axis + 1) % 3, (axis + 2) % 3]
+}
+
+/// Brick counts of a grid of `dims` nodes.
+pub fn brick_counts(dims: [usize; 3]) -> [usize; 3] {
+    dims.map(|n| n.div_ceil(BRICK_EDGE))
+}
+
+/// A sparse grid held in memory, one brick layer per slab, its bricks borrowed.
+impl BrickSource for SparseGrid {
+    type Error = OpsError;
+
+    fn slab_bricks(&self) -> usize {
+        1
+    }
+
+    fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>, OpsError> {
+        let counts = self.brick_counts();
+        let [b, c] = plane_axes(axis);
+        let mut layer = BrickLayer::outside(counts[b] * counts[c]);
+        for jc in 0..counts[c] {
+            for jb in 0..counts[b] {
+                let mut at = [0; 3];
+                (at[axis], at[b], at[c]) = (slab, jb, jc);
+                let k = jb + counts[b] * jc;
+                match self.brick(at) {
+                    Some(values) => layer.insert(k, BrickRef::Borrowed(values), axis),
+                    None if self.is_inside(at) => layer.set_inside(k),
+                    None => {}
+                }
+            }
+        }
+        Ok(vec![layer.finish()])
+    }
+}

@@ -1,0 +1,632 @@
+//! A separable coefficient volume restricted to one axis-aligned plane: the coefficients summed
+//! along the axis with the plane's weights (4 per column for the cubic B-spline), kept brick by
+//! brick. Columns whose bricks are all absent collapse to one value per brick, so building a
+//! plane costs the band's bricks, and each plane brick knows the range of its values, which
+//! bounds the field over every point whose support lies in it (the weights are a convex
+//! combination).
+
+use std::cell::OnceCell;
+
+use glam::Vec3;
+use pgvol_core::Background;
+use pgvol_core::BRICK_EDGE;
+use pgvol_field::kernel::{axis_window, AxisWindow, Profile};
+use pgvol_field::{mirror, Grid};
+
+use super::bricks::{brick_counts, plane_axes, BrickLayer, INSIDE};
+use super::plane::LayerField;
+
+const E: usize = BRICK_EDGE;
+/// Coefficients per edge of the squares whose value ranges bound the field finely.
+const CELL: usize = 2;
+const CELLS: usize = E / CELL;
+
+/// Where the values of a plane brick (or a part of one) lie.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Sign {
+    /// All > 0.
+    Outside,
+    /// All < 0 (with a margin, so no sum of them rounds to zero).
+    Inside,
+    Mixed,
+}
+
+/// Below this a value is safely negative: a convex combination of such values stays below 0.
+const INSIDE_MARGIN: f32 = -1e-20;
+
+fn sign_of(lo: f32, hi: f32) -> Sign {
+    if lo > 0.0 {
+        Sign::Outside
+    } else if hi < INSIDE_MARGIN {
+        Sign::Inside
+    } else {
+        Sign::Mixed
+    }
+}
+
+/// One plane brick.
+enum Tile {
+    /// Every column absent: one value.
+    Uniform(f32),
+    /// Some column stored: the values, computed when first read.
+    Stored {
+        sign: Sign,
+        values: OnceCell<Box<StoredTile>>,
+    },
+}
+
+struct StoredTile {
+    values: [f32; E * E],
+    /// Sign of each `CELL`² square of values, the first axis fastest.
+    cells: [Sign; CELLS * CELLS],
+}
+
+/// Per tap (node layer along the axis): its weight, brick layer and offset within a brick.
+type Tap<'w, 's> = (f32, &'w BrickLayer<'s>, usize);
+
+pub(crate) struct CollapsedPlane<'w, 's> {
+    /// Coefficients per axis of the plane.
+    dims: [usize; 2],
+    /// Plane bricks per axis.
+    counts: [usize; 2],
+    slots: Vec<u32>,
+    tiles: Vec<Tile>,
+    /// Plane bricks holding a crossing or beside one of the other side, as (u, v) brick indices.
+    edges: Vec<[usize; 2]>,
+    taps: Vec<Tap<'w, 's>>,
+    /// Brick-relative offsets of the plane's two axes.
+    stride: [usize; 2],
+    background: Background,
+    origin: [f32; 2],
+    spacing: f32,
+    profile: Profile,
+    /// Distance of the plane from the grid box along the axis.
+    off_axis: f32,
+}
+
+/// The union of two ascending lists, ascending and without repeats.
+fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let next = match (a.get(i), b.get(j)) {
+            (Some(&x), Some(&y)) if x <= y => {
+                i += 1;
+                j += usize::from(x == y);
+                x
+            }
+            (_, Some(&y)) => {
+                j += 1;
+                y
+            }
+            (Some(&x), None) => {
+                i += 1;
+                x
+            }
+            (None, None) => unreachable!("one list has more"),
+        };
+        out.push(next);
+    }
+    out
+}
+
+/// [`axis_window`] at `u ≥ 0`, the cubic profile's weights computed here by the same
+/// expressions: it is the innermost step of root finding, and inlined it costs a third.
+#[inline]
+fn window_at(profile: Profile, u: f32, n: usize) -> AxisWindow {
+    if profile != Profile::Cubic {
+        return axis_window(profile, u, n);
+    }
+    // ⌊u⌋ for u ≥ 0 without a call to floor.
+    let c = (u as i64).clamp(0, n as i64 - 2);
+    let t = u - (c - 1) as f32;
+    let mut w = [[0.0f32; 3]; 4];
+    for (a, slot) in w.iter_mut().enumerate() {
+        let x = t - a as f32;
+        let m = x.abs();
+        slot[0] = if m < 1.0 {
+            2.0 / 3.0 - x * x + 0.5 * m * m * m
+        } else if m < 2.0 {
+            let b = 2.0 - m;
+            b * b * b / 6.0
+        } else {
+            0.0
+        };
+    }
+    AxisWindow {
+        first: c - 1,
+        len: 4,
+        w,
+    }
+}
+
+/// The node layers (mirrored into the grid) and weights of the plane at height `h` along
+/// `axis`, with the height clamped into the grid.
+pub(crate) fn taps(grid: &Grid, profile: Profile, axis: usize, h: f32) -> (AxisWindow, f32) {
+    let (lo, hi) = (grid.origin[axis], grid.max_corner()[axis]);
+    let q = h.clamp(lo, hi);
+    (
+        axis_window(profile, (q - lo) / grid.spacing, grid.dims[axis]),
+        q,
+    )
+}
+
+/// The node layers the plane at height `h` reads.
+pub(crate) fn tap_layers(grid: &Grid, profile: Profile, axis: usize, h: f32) -> Vec<usize> {
+    let (w, _) = taps(grid, profile, axis, h);
+    (0..w.len)
+        .map(|t| mirror(w.first + t as i64, grid.dims[axis]))
+        .collect()
+}
+
+impl<'w, 's> CollapsedPlane<'w, 's> {
+    /// The plane at height `h` along grid axis `axis`; `layer(n)` gives brick layer `n`, which
+    /// must hold every node layer of [`tap_layers`].
+    pub(crate) fn new(
+        grid: &Grid,
+        background: Background,
+        profile: Profile,
+        axis: usize,
+        h: f32,
+        layer: &dyn Fn(usize) -> &'w BrickLayer<'s>,
+    ) -> Self {
+        let [b, c] = plane_axes(axis);
+        let (window, q) = taps(grid, profile, axis, h);
+        let counts3 = brick_counts(grid.dims);
+        let counts = [counts3[b], counts3[c]];
+        let stride3 = [1, E, E * E];
+        let layers: Vec<usize> = (0..window.len)
+            .map(|t| mirror(window.first + t as i64, grid.dims[axis]))
+            .collect();
+        let taps: Vec<Tap> = (0..window.len)
+            .map(|t| {
+                let n = layers[t];
+                (window.w[t][0], layer(n / E), (n % E) * stride3[axis])
+            })
+            .collect();
+        let mut uniform_of: [Option<f32>; 16] = [None; 16];
+        // Summed as a column of coefficients is, so the value is the same float.
+        // `key` has bit t set when tap t's brick is inside.
+        let mut uniform = |key: usize| {
+            *uniform_of[key].get_or_insert_with(|| {
+                let mut value = 0.0f32;
+                for (t, (w, _, _)) in taps.iter().enumerate() {
+                    value += w * background.value(key >> t & 1 == 1);
+                }
+                value
+            })
+        };
+        // Slot 0, every plane brick whose columns are all absent and outside.
+        let mut tiles = vec![Tile::Uniform(uniform(0))];
+        let mut slots = vec![0u32; counts[0] * counts[1]];
+        let mut occupied: Vec<u32> = Vec::new();
+        for (t, (_, l, _)) in taps.iter().enumerate() {
+            // Taps in one brick layer share its list.
+            if taps[..t].iter().any(|(_, m, _)| std::ptr::eq(*m, *l)) {
+                continue;
+            }
+            occupied = merge_sorted(&occupied, l.occupied());
+        }
+        for &k in &occupied {
+            let k = k as usize;
+            let states = taps.iter().map(|(_, l, _)| l.state(k));
+            slots[k] = tiles.len() as u32;
+            if states.clone().all(|s| s >= INSIDE) {
+                let key = states
+                    .enumerate()
+                    .fold(0, |key, (t, s)| key | usize::from(s == INSIDE) << t);
+                tiles.push(Tile::Uniform(uniform(key)));
+                continue;
+            }
+            // A convex combination lies within its terms' range.
+            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+            for (t, (_, l, _)) in taps.iter().enumerate() {
+                let s = l.state(k);
+                let [a, z] = if s >= INSIDE {
+                    let x = background.value(s == INSIDE);
+                    [x, x]
+                } else {
+                    l.ranges[s as usize][layers[t] % E]
+                };
+                (lo, hi) = (lo.min(a), hi.max(z));
+            }
+            tiles.push(Tile::Stored {
+                sign: sign_of(lo, hi),
+                values: OnceCell::new(),
+            });
+        }
+        let mut plane = CollapsedPlane {
+            dims: [grid.dims[b], grid.dims[c]],
+            counts,
+            slots,
+            tiles,
+            edges: Vec::new(),
+            taps,
+            stride: [stride3[b], stride3[c]],
+            background,
+            origin: [grid.origin[b], grid.origin[c]],
+            spacing: grid.spacing,
+            profile,
+            off_axis: h - q,
+        };
+        plane.edges = plane.find_edges(&occupied);
+        plane
+    }
+
+    /// The plane bricks whose values may change side within them or toward a neighbour; only
+    /// `occupied` ones and their neighbours can, the others all being slot 0.
+    fn find_edges(&self, occupied: &[u32]) -> Vec<[usize; 2]> {
+        let [cu, cv] = self.counts;
+        let mut marked: Vec<usize> = Vec::new();
+        for &k in occupied {
+            let k = k as usize;
+            let s = self.sign(k);
+            if s == Sign::Mixed {
+                marked.push(k);
+                continue;
+            }
+            let (tu, tv) = (k % cu, k / cu);
+            let beside = [
+                (tu + 1 < cu).then(|| k + 1),
+                (tv + 1 < cv).then(|| k + cu),
+                (tu > 0).then(|| k - 1),
+                (tv > 0).then(|| k - cu),
+            ];
+            for n in beside.into_iter().flatten() {
+                if self.sign(n) != s {
+                    marked.extend([k, n]);
+                }
+            }
+        }
+        marked.sort_unstable();
+        marked.dedup();
+        marked.into_iter().map(|k| [k % cu, k / cu]).collect()
+    }
+
+    /// The sign of plane brick `k`, exact where its bound is not.
+    fn sign(&self, k: usize) -> Sign {
+        match &self.tiles[self.slots[k] as usize] {
+            Tile::Uniform(v) => sign_of(*v, *v),
+            Tile::Stored {
+                sign: Sign::Mixed, ..
+            } => {
+                let t = self.stored(k);
+                let mut all = t.cells[0];
+                for &c in &t.cells[1..] {
+                    if c != all {
+                        all = Sign::Mixed;
+                    }
+                }
+                all
+            }
+            Tile::Stored { sign, .. } => *sign,
+        }
+    }
+
+    /// The values of stored plane brick `k`.
+    fn stored(&self, k: usize) -> &StoredTile {
+        let Tile::Stored { values, .. } = &self.tiles[self.slots[k] as usize] else {
+            unreachable!("plane brick {k} is uniform")
+        };
+        values.get_or_init(|| self.collapse(k))
+    }
+
+    /// Sums the columns of plane brick `k` with the taps' weights.
+    fn collapse(&self, k: usize) -> Box<StoredTile> {
+        let (kb, kc) = (k % self.counts[0], k / self.counts[0]);
+        let len = [E.min(self.dims[0] - kb * E), E.min(self.dims[1] - kc * E)];
+        let mut out = Box::new(StoredTile {
+            values: [0.0; E * E],
+            cells: [Sign::Mixed; CELLS * CELLS],
+        });
+        // Tap by tap over the whole brick, each value summed in the taps' order.
+        for (w, l, off) in &self.taps {
+            let s = l.state(k);
+            let brick = (s < INSIDE).then(|| &*l.bricks[s as usize]);
+            let x0 = self.background.value(s == INSIDE);
+            for jc in 0..len[1] {
+                for jb in 0..len[0] {
+                    let x = match brick {
+                        Some(values) => values[jb * self.stride[0] + jc * self.stride[1] + off],
+                        None => x0,
+                    };
+                    out.values[jb + E * jc] += w * x;
+                }
+            }
+        }
+        let mut ranges = [[f32::INFINITY, f32::NEG_INFINITY]; CELLS * CELLS];
+        for jc in 0..len[1] {
+            for jb in 0..len[0] {
+                let value = out.values[jb + E * jc];
+                let r = &mut ranges[jb / CELL + CELLS * (jc / CELL)];
+                if value < r[0] {
+                    r[0] = value;
+                }
+                if value > r[1] {
+                    r[1] = value;
+                }
+            }
+        }
+        for (cell, r) in out.cells.iter_mut().zip(ranges) {
+            // Squares past the grid's last coefficient hold none: any side will do.
+            *cell = if r[0] > r[1] {
+                Sign::Outside
+            } else {
+                sign_of(r[0], r[1])
+            };
+        }
+        out
+    }
+
+    #[inline]
+    fn coefficient(&self, iu: usize, iv: usize) -> f32 {
+        let k = iu / E + self.counts[0] * (iv / E);
+        match &self.tiles[self.slots[k] as usize] {
+            Tile::Uniform(v) => *v,
+            Tile::Stored { .. } => self.stored(k).values[iu % E + E * (iv % E)],
+        }
+    }
+
+    /// The sign of the coefficients `[u0, u1] × [v0, v1]`, at the finest resolution held.
+    fn sign_over(&self, u: (usize, usize), v: (usize, usize)) -> Sign {
+        let mut all = None;
+        let mut meet = |s: Sign| {
+            if s == Sign::Mixed || all.is_some_and(|a| a != s) {
+                return false;
+            }
+            all = Some(s);
+            true
+        };
+        for tv in v.0 / E..=v.1 / E {
+            for tu in u.0 / E..=u.1 / E {
+                let k = tu + self.counts[0] * tv;
+                match &self.tiles[self.slots[k] as usize] {
+                    Tile::Stored {
+                        sign: Sign::Mixed, ..
+                    } => {
+                        let t = self.stored(k);
+                        let cu = (
+                            u.0.max(tu * E) % E / CELL,
+                            u.1.min(tu * E + E - 1) % E / CELL,
+                        );
+                        let cv = (
+                            v.0.max(tv * E) % E / CELL,
+                            v.1.min(tv * E + E - 1) % E / CELL,
+                        );
+                        for jv in cv.0..=cv.1 {
+                            for ju in cu.0..=cu.1 {
+                                if !meet(t.cells[ju + CELLS * jv]) {
+                                    return Sign::Mixed;
+                                }
+                            }
+                        }
+                    }
+                    _ => {
+                        if !meet(self.sign(k)) {
+                            return Sign::Mixed;
+                        }
+                    }
+                }
+            }
+        }
+        all.unwrap_or(Sign::Mixed)
+    }
+
+    fn top(&self, k: usize) -> f32 {
+        self.origin[k] + self.spacing * (self.dims[k] - 1) as f32
+    }
+
+    /// The clamped grid coordinate along plane axis `k`, with the distance beyond the box.
+    #[inline]
+    fn window(&self, k: usize, x: f32) -> (AxisWindow, f32) {
+        let q = x.clamp(self.origin[k], self.top(k));
+        let w = window_at(
+            self.profile,
+            (q - self.origin[k]) / self.spacing,
+            self.dims[k],
+        );
+        (w, x - q)
+    }
+
+    /// The coefficient indices along plane axis `k` that points in `[x0, x1]` read, mirrored
+    /// ones included.
+    fn support(&self, k: usize, x0: f32, x1: f32) -> (usize, usize) {
+        let n = self.dims[k] as i64;
+        // Every profile's window at grid coordinate g lies within [c − 1, c + 2] for
+        // c = min(⌊g⌋, n − 2).
+        let g = |x: f32| {
+            let q = x.clamp(self.origin[k], self.top(k));
+            (((q - self.origin[k]) / self.spacing).floor() as i64).min(n - 2)
+        };
+        let (lo, hi) = (g(x0) - 1, g(x1) + 2);
+        // Mirrored indices: below 0 they reach up to −lo, past n − 1 down to 2(n − 1) − hi.
+        let first = lo.max(0).min(2 * (n - 1) - hi).max(0);
+        let last = hi.min(n - 1).max(-lo).min(n - 1);
+        (first as usize, last as usize)
+    }
+}
+
+impl LayerField for CollapsedPlane<'_, '_> {
+    fn value(&self, u: f32, v: f32) -> f32 {
+        let (wu, du) = self.window(0, u);
+        let (wv, dv) = self.window(1, v);
+        let mut value = 0.0f32;
+        for t in 0..wv.len {
+            let iv = mirror(wv.first + t as i64, self.dims[1]);
+            let mut s = 0.0f32;
+            for r in 0..wu.len {
+                s += wu.w[r][0] * self.coefficient(mirror(wu.first + r as i64, self.dims[0]), iv);
+            }
+            value += wv.w[t][0] * s;
+        }
+        value + Vec3::new(du, dv, self.off_axis).length()
+    }
+
+    /// Each node sums its column taps first, then its row taps, as a plane collapsed row by row
+    /// would. The coefficients the nodes read are gathered once when they are few next to the
+    /// nodes' 16 reads each.
+    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) {
+        let wus: Vec<(AxisWindow, f32)> = us.iter().map(|&u| self.window(0, u)).collect();
+        let wvs: Vec<(AxisWindow, f32)> = vs.iter().map(|&v| self.window(1, v)).collect();
+        let span = |ws: &[(AxisWindow, f32)]| {
+            let lo = ws.iter().map(|w| w.0.first).min().unwrap_or(0);
+            let hi = ws
+                .iter()
+                .map(|w| w.0.first + w.0.len as i64)
+                .max()
+                .unwrap_or(0);
+            (lo, (hi - lo).max(0) as usize)
+        };
+        let ((u0, nu), (v0, nv)) = (span(&wus), span(&wvs));
+        let gather = nu * nv <= 4 * us.len() * vs.len();
+        let mut local = Vec::new();
+        if gather {
+            local.reserve(nu * nv);
+            for rv in 0..nv {
+                let iv = mirror(v0 + rv as i64, self.dims[1]);
+                for ru in 0..nu {
+                    local.push(self.coefficient(mirror(u0 + ru as i64, self.dims[0]), iv));
+                }
+            }
+        }
+        let mut line = vec![0.0f32; nu];
+        for (j, (wv, dv)) in wvs.iter().enumerate() {
+            if gather {
+                // The row's coefficients summed along v, for every u the nodes read.
+                line.fill(0.0);
+                for t in 0..wv.len {
+                    let row = (wv.first + t as i64 - v0) as usize * nu;
+                    let w = wv.w[t][0];
+                    for (l, c) in line.iter_mut().zip(&local[row..row + nu]) {
+                        *l += w * c;
+                    }
+                }
+            }
+            for (i, (wu, du)) in wus.iter().enumerate() {
+                let mut value = 0.0f32;
+                for r in 0..wu.len {
+                    let line_r = if gather {
+                        line[(wu.first + r as i64 - u0) as usize]
+                    } else {
+                        let iu = mirror(wu.first + r as i64, self.dims[0]);
+                        let mut sum = 0.0f32;
+                        for t in 0..wv.len {
+                            let iv = mirror(wv.first + t as i64, self.dims[1]);
+                            sum += wv.w[t][0] * self.coefficient(iu, iv);
+                        }
+                        sum
+                    };
+                    value += wu.w[r][0] * line_r;
+                }
+                let outside = Vec3::new(*du, *dv, self.off_axis).length();
+                out[i + us.len() * j] = value + outside;
+            }
+        }
+    }
+
+    /// The coefficients the segment reads are gathered once; each point then sums them in
+    /// [`LayerField::value`]'s order.
+    fn along<'a>(&'a self, p: [f32; 2], step: [f32; 2]) -> Box<dyn Fn(f32) -> f32 + 'a> {
+        // k: the axis the segment runs along; the other one is fixed.
+        let k = usize::from(step[0] == 0.0);
+        let at = move |t: f32| [p[0] + step[0] * t, p[1] + step[1] * t];
+        let (w0, _) = self.window(k, at(0.0)[k]);
+        let (w1, _) = self.window(k, at(1.0)[k]);
+        let first = w0.first.min(w1.first);
+        let len = ((w0.first.max(w1.first) + w0.len.max(w1.len) as i64) - first) as usize;
+        if len > 8 {
+            return Box::new(move |t| {
+                let q = at(t);
+                self.value(q[0], q[1])
+            });
+        }
+        let (fixed, d_fixed) = self.window(1 - k, p[1 - k]);
+        // patch[r][s]: r along the segment's axis, s over the fixed axis' taps.
+        let mut patch = [[0.0f32; 4]; 8];
+        for (r, row) in patch.iter_mut().enumerate().take(len) {
+            let i = mirror(first + r as i64, self.dims[k]);
+            for (s, c) in row.iter_mut().enumerate().take(fixed.len) {
+                let j = mirror(fixed.first + s as i64, self.dims[1 - k]);
+                *c = if k == 0 {
+                    self.coefficient(i, j)
+                } else {
+                    self.coefficient(j, i)
+                };
+            }
+        }
+        Box::new(move |t| {
+            let q = at(t);
+            let (w, d) = self.window(k, q[k]);
+            let off = (w.first - first) as usize;
+            let mut value = 0.0f32;
+            if k == 0 {
+                // Rows are the fixed v taps, each summed along u first.
+                for (s, ws) in fixed.w.iter().enumerate().take(fixed.len) {
+                    let mut sum = 0.0f32;
+                    for (wr, row) in w.w.iter().zip(&patch[off..]).take(w.len) {
+                        sum += wr[0] * row[s];
+                    }
+                    value += ws[0] * sum;
+                }
+                value + Vec3::new(d, d_fixed, self.off_axis).length()
+            } else {
+                for (wr, row) in w.w.iter().zip(&patch[off..]).take(w.len) {
+                    let mut sum = 0.0f32;
+                    for (ws, c) in fixed.w.iter().zip(row).take(fixed.len) {
+                        sum += ws[0] * c;
+                    }
+                    value += wr[0] * sum;
+                }
+                value + Vec3::new(d_fixed, d, self.off_axis).length()
+            }
+        })
+    }
+
+    fn side_of(&self, u: [f32; 2], v: [f32; 2]) -> Option<bool> {
+        let su = self.support(0, u[0], u[1]);
+        let sv = self.support(1, v[0], v[1]);
+        match self.sign_over(su, sv) {
+            Sign::Outside => Some(false),
+            // Beyond the grid box the distance to it is added, which may turn a value positive.
+            Sign::Inside => {
+                let within = |k: usize, x: [f32; 2]| x[0] >= self.origin[k] && x[1] <= self.top(k);
+                (self.off_axis == 0.0 && within(0, u) && within(1, v)).then_some(true)
+            }
+            Sign::Mixed => None,
+        }
+    }
+
+    fn uncertain(&self) -> Option<Vec<[[f32; 2]; 2]>> {
+        if self.off_axis != 0.0 {
+            return None;
+        }
+        // A point reads coefficients up to three below and two above its cell.
+        let h = self.spacing;
+        let span = |k: usize, t: usize| {
+            let first = self.origin[k] + h * (t * E) as f32 - 3.0 * h;
+            let last = self.origin[k] + h * (t * E + E) as f32 + 3.0 * h;
+            [first, last]
+        };
+        let mut rects: Vec<[[f32; 2]; 2]> = self
+            .edges
+            .iter()
+            .map(|&[tu, tv]| [span(0, tu), span(1, tv)])
+            .collect();
+        // Mirrored coefficients are read across the box's faces: near them, anything goes.
+        for k in 0..2 {
+            if self
+                .edges
+                .iter()
+                .any(|t| t[k] == 0 || t[k] + 1 == self.counts[k])
+            {
+                return None;
+            }
+        }
+        rects.shrink_to_fit();
+        Some(rects)
+    }
+
+    fn known_box(&self) -> [[f32; 2]; 2] {
+        [[self.origin[0], self.top(0)], [self.origin[1], self.top(1)]]
+    }
+}

@@ -1,0 +1,431 @@
+//! One layer's 2D grid and its contours: marching squares over the blocks of cells the contour
+//! can cross, vertices on the continuous field, loops traced with the inside on their left.
+//!
+//! The grid's cells are grouped in blocks of [`BLOCK`]². A block whose nodes the field can bound
+//! to one side ([`LayerField::side_of`]) holds no crossing and is never evaluated, so a layer
+//! costs what its contours' length does, not its area. Nodes, edges and vertices are numbered as
+//! in a dense pass over the whole grid, and the loops come out in the same order.
+
+use crate::slice::MAX_LAYER_NODES;
+use crate::OpsError;
+
+/// Cells per block edge.
+pub(crate) const BLOCK: usize = 4;
+
+/// Vertices keep this fraction of their grid edge from its ends, so no segment touches a node
+/// and segments of different cells meet only at shared vertices.
+const EDGE_MARGIN: f32 = 1e-3;
+
+/// The field on one layer plane.
+pub(crate) trait LayerField {
+    fn value(&self, u: f32, v: f32) -> f32;
+
+    /// Values at the nodes `(us[i], vs[j])` into `out[i + us.len() · j]`.
+    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) {
+        for (j, &v) in vs.iter().enumerate() {
+            for (i, &u) in us.iter().enumerate() {
+                out[i + us.len() * j] = self.value(u, v);
+            }
+        }
+    }
+
+    /// `Some(inside)` when every point of the rectangle `u × v` is on one side (`value < 0`
+    /// inside), `None` when that is not known.
+    fn side_of(&self, _u: [f32; 2], _v: [f32; 2]) -> Option<bool> {
+        None
+    }
+
+    /// The field along the segment from `p` by `step` (along one axis), as a function of the
+    /// fraction `t` of the way; the same values as [`LayerField::value`] there.
+    fn along<'a>(&'a self, p: [f32; 2], step: [f32; 2]) -> Box<dyn Fn(f32) -> f32 + 'a> {
+        Box::new(move |t| self.value(p[0] + step[0] * t, p[1] + step[1] * t))
+    }
+
+    /// Rectangles `[[u0, u1], [v0, v1]]` outside which every point of the grid box is on one
+    /// side, the same for all of them, or `None` when that is not known.
+    fn uncertain(&self) -> Option<Vec<[[f32; 2]; 2]>> {
+        None
+    }
+
+    /// The rectangle within which [`LayerField::uncertain`] speaks; beyond it, points may take
+    /// another side.
+    fn known_box(&self) -> [[f32; 2]; 2] {
+        [[f32::NEG_INFINITY, f32::INFINITY]; 2]
+    }
+}
+
+/// A layer's 2D grid: `n[0] × n[1]` nodes at `origin + spacing · (i − 1, j − 1)`, the outer ring
+/// artificial.
+pub(crate) struct Plane {
+    origin: [f32; 2],
+    spacing: f32,
+    n: [usize; 2],
+}
+
+/// The values of one block's nodes.
+struct BlockNodes {
+    /// First node of the block.
+    first: [usize; 2],
+    /// Nodes per axis (cells + 1).
+    len: [usize; 2],
+    values: Vec<f32>,
+    /// False on the ring and where the field is not finite, whose values are stand-ins (±h)
+    /// and whose edges are cut by linear interpolation.
+    real: Vec<bool>,
+}
+
+impl BlockNodes {
+    fn at(&self, i: usize, j: usize) -> (f32, bool) {
+        let k = i - self.first[0] + self.len[0] * (j - self.first[1]);
+        (self.values[k], self.real[k])
+    }
+}
+
+/// What a layer's contouring did, for measuring how its cost grows.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LayerCost {
+    /// Grid nodes whose field value was computed.
+    pub nodes: u64,
+    /// Blocks of cells visited.
+    pub blocks: u64,
+    /// Grid edges the contours cross.
+    pub crossings: u64,
+}
+
+impl Plane {
+    pub(crate) fn new(u: (f32, f32), v: (f32, f32), spacing: f32) -> Result<Plane, OpsError> {
+        let axis = |(lo, hi): (f32, f32)| {
+            let cells = ((hi - lo) / spacing).ceil().max(1.0);
+            let origin = (lo + hi) * 0.5 - cells * spacing * 0.5;
+            (origin, cells as f64 + 3.0)
+        };
+        let (ou, nu) = axis(u);
+        let (ov, nv) = axis(v);
+        if nu * nv > MAX_LAYER_NODES as f64 {
+            return Err(OpsError::BadParameter(format!(
+                "a layer grid of {nu} x {nv} nodes exceeds the limit of {MAX_LAYER_NODES}; \
+                 use a coarser resolution"
+            )));
+        }
+        Ok(Plane {
+            origin: [ou, ov],
+            spacing,
+            n: [nu as usize, nv as usize],
+        })
+    }
+
+    fn node(&self, i: usize, j: usize) -> [f32; 2] {
+        [
+            self.origin[0] + self.spacing * (i as f32 - 1.0),
+            self.origin[1] + self.spacing * (j as f32 - 1.0),
+        ]
+    }
+
+    /// The blocks that may hold a crossing, in raster order, as (block u, block v): of the
+    /// candidates, those whose nodes the field does not place on one side.
+    fn active_blocks(&self, field: &impl LayerField) -> Vec<[usize; 2]> {
+        self.candidate_blocks(field)
+            .into_iter()
+            .filter(|&b| {
+                let (first, len) = self.block_nodes(b);
+                // The real nodes' rectangle; ring nodes are outside.
+                let lo = [first[0].max(1), first[1].max(1)];
+                let hi = [
+                    (first[0] + len[0] - 1).min(self.n[0] - 2),
+                    (first[1] + len[1] - 1).min(self.n[1] - 2),
+                ];
+                let ring = first[0] == 0
+                    || first[1] == 0
+                    || first[0] + len[0] == self.n[0]
+                    || first[1] + len[1] == self.n[1];
+                let (a, b) = (self.node(lo[0], lo[1]), self.node(hi[0], hi[1]));
+                match field.side_of([a[0], b[0]], [a[1], b[1]]) {
+                    Some(inside) => inside && ring,
+                    None => true,
+                }
+            })
+            .collect()
+    }
+
+    /// Blocks that may hold a crossing, in raster order: every block, or, where the field says
+    /// where its sides may change, the blocks meeting those places, the ring or the outside of
+    /// the box the field speaks for.
+    fn candidate_blocks(&self, field: &impl LayerField) -> Vec<[usize; 2]> {
+        let cells = [self.n[0] - 1, self.n[1] - 1];
+        let blocks = cells.map(|c| c.div_ceil(BLOCK));
+        let every = || {
+            (0..blocks[1])
+                .flat_map(|bj| (0..blocks[0]).map(move |bi| [bi, bj]))
+                .collect()
+        };
+        let Some(rects) = field.uncertain() else {
+            return every();
+        };
+        // Blocks meeting the node range of [x0, x1] along axis k.
+        let range = |k: usize, x: [f32; 2]| -> Option<(usize, usize)> {
+            let node = |x: f32| (x - self.origin[k]) / self.spacing + 1.0;
+            let (lo, hi) = (node(x[0]).floor(), node(x[1]).ceil());
+            if !(lo.is_finite() && hi.is_finite()) {
+                return Some((0, blocks[k] - 1));
+            }
+            if hi < 0.0 || lo > cells[k] as f32 {
+                return None;
+            }
+            let lo = (lo.max(0.0) as usize).saturating_sub(1) / BLOCK;
+            let hi = (hi.min(cells[k] as f32) as usize / BLOCK).min(blocks[k] - 1);
+            Some((lo, hi))
+        };
+        let mut picked: Vec<usize> = Vec::new();
+        let mut add = |u: (usize, usize), v: (usize, usize)| {
+            for bj in v.0..=v.1 {
+                picked.extend((u.0..=u.1).map(|bi| bi + blocks[0] * bj));
+            }
+        };
+        for r in &rects {
+            if let (Some(u), Some(v)) = (range(0, r[0]), range(1, r[1])) {
+                add(u, v);
+            }
+        }
+        // The ring, and blocks reaching past the field's box.
+        let known = field.known_box();
+        let last = [blocks[0] - 1, blocks[1] - 1];
+        add((0, last[0]), (0, 0));
+        add((0, last[0]), (last[1], last[1]));
+        add((0, 0), (0, last[1]));
+        add((last[0], last[0]), (0, last[1]));
+        for k in 0..2 {
+            let lo = self.origin[k] - self.spacing;
+            let hi = self.origin[k] + self.spacing * (cells[k] as f32 - 1.0);
+            let other = (0, last[1 - k]);
+            if lo < known[k][0] {
+                if let Some(r) = range(k, [lo, known[k][0]]) {
+                    if k == 0 {
+                        add(r, other)
+                    } else {
+                        add(other, r)
+                    }
+                }
+            }
+            if hi > known[k][1] {
+                if let Some(r) = range(k, [known[k][1], hi]) {
+                    if k == 0 {
+                        add(r, other)
+                    } else {
+                        add(other, r)
+                    }
+                }
+            }
+        }
+        picked.sort_unstable();
+        picked.dedup();
+        picked
+            .into_iter()
+            .map(|b| [b % blocks[0], b / blocks[0]])
+            .collect()
+    }
+
+    /// First node and node count per axis of block `b`.
+    fn block_nodes(&self, b: [usize; 2]) -> ([usize; 2], [usize; 2]) {
+        let first = b.map(|c| c * BLOCK);
+        let len = [0, 1].map(|a| BLOCK.min(self.n[a] - 1 - first[a]) + 1);
+        (first, len)
+    }
+
+    fn evaluate(&self, field: &impl LayerField, b: [usize; 2], cost: &mut LayerCost) -> BlockNodes {
+        let (first, len) = self.block_nodes(b);
+        let h = self.spacing;
+        let mut values = vec![h; len[0] * len[1]];
+        let mut real = vec![false; len[0] * len[1]];
+        // The block's real nodes, sampled together.
+        let lo = [first[0].max(1), first[1].max(1)];
+        let hi = [
+            (first[0] + len[0]).min(self.n[0] - 1),
+            (first[1] + len[1]).min(self.n[1] - 1),
+        ];
+        if lo[0] < hi[0] && lo[1] < hi[1] {
+            let us: Vec<f32> = (lo[0]..hi[0]).map(|i| self.node(i, 0)[0]).collect();
+            let vs: Vec<f32> = (lo[1]..hi[1]).map(|j| self.node(0, j)[1]).collect();
+            let mut inner = vec![0.0f32; us.len() * vs.len()];
+            field.sample(&us, &vs, &mut inner);
+            cost.nodes += inner.len() as u64;
+            for j in lo[1]..hi[1] {
+                for i in lo[0]..hi[0] {
+                    let x = inner[i - lo[0] + us.len() * (j - lo[1])];
+                    let k = i - first[0] + len[0] * (j - first[1]);
+                    if x.is_finite() {
+                        values[k] = x;
+                        real[k] = true;
+                    } else if x == f32::NEG_INFINITY {
+                        values[k] = -h;
+                    }
+                }
+            }
+        }
+        BlockNodes {
+            first,
+            len,
+            values,
+            real,
+        }
+    }
+
+    /// The closed loops of `f(u, v) < 0`, inside on the left, in a deterministic order.
+    pub(crate) fn contours(
+        &self,
+        field: &impl LayerField,
+        cost: &mut LayerCost,
+    ) -> Vec<Vec<[f32; 2]>> {
+        let [nu, nv] = self.n;
+        let h = self.spacing;
+        let blocks: Vec<BlockNodes> = self
+            .active_blocks(field)
+            .into_iter()
+            .map(|b| self.evaluate(field, b, cost))
+            .collect();
+        cost.blocks += blocks.len() as u64;
+        let edge_id = |i: usize, j: usize, dir: usize| 2 * (i + nu * j) + dir;
+
+        // One vertex per crossed edge: edge id 2·node for +u, 2·node + 1 for +v. Each cell
+        // places its lower and left edges (and the grid's last column and row their far ones),
+        // so every edge of an evaluated cell is placed once.
+        let mut crossings: Vec<(usize, [f32; 2])> = Vec::new();
+        for b in &blocks {
+            let cells = [b.len[0] - 1, b.len[1] - 1];
+            for cj in 0..cells[1] {
+                for ci in 0..cells[0] {
+                    let (i, j) = (b.first[0] + ci, b.first[1] + cj);
+                    let far_u = (i + 2 == nu).then_some((i + 1, j, 1));
+                    let far_v = (j + 2 == nv).then_some((i, j + 1, 0));
+                    let own = [Some((i, j, 0)), Some((i, j, 1)), far_u, far_v];
+                    for (i, j, dir) in own.into_iter().flatten() {
+                        let (ib, jb) = if dir == 0 { (i + 1, j) } else { (i, j + 1) };
+                        let (va, ra) = b.at(i, j);
+                        let (vb, rb) = b.at(ib, jb);
+                        if (va < 0.0) == (vb < 0.0) {
+                            continue;
+                        }
+                        let t = if ra && rb {
+                            let pa = self.node(i, j);
+                            let step = [h * (1 - dir) as f32, h * dir as f32];
+                            edge_root(&*field.along(pa, step), va, vb)
+                        } else {
+                            va / (va - vb)
+                        };
+                        let t = t.clamp(EDGE_MARGIN, 1.0 - EDGE_MARGIN);
+                        let [u, v] = self.node(i, j);
+                        let p = if dir == 0 {
+                            [u + h * t, v]
+                        } else {
+                            [u, v + h * t]
+                        };
+                        crossings.push((edge_id(i, j, dir), p));
+                    }
+                }
+            }
+        }
+        crossings.sort_unstable_by_key(|c| c.0);
+        cost.crossings += crossings.len() as u64;
+        let vertex_of = |e: usize| -> u32 {
+            crossings
+                .binary_search_by_key(&e, |c| c.0)
+                .map_or(u32::MAX, |k| k as u32)
+        };
+
+        // Each vertex has exactly one outgoing segment: along a shared edge the counter-clockwise
+        // orders of the two cells are opposite, so a crossing starts a segment in one cell and
+        // ends one in the other.
+        let mut next = vec![u32::MAX; crossings.len()];
+        for b in &blocks {
+            let cells = [b.len[0] - 1, b.len[1] - 1];
+            for cj in 0..cells[1] {
+                for ci in 0..cells[0] {
+                    let (i, j) = (b.first[0] + ci, b.first[1] + cj);
+                    let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+                    let values = corners.map(|(i, j)| b.at(i, j).0);
+                    let ins = values.map(|x| x < 0.0);
+                    if ins.iter().all(|&x| x) || ins.iter().all(|&x| !x) {
+                        continue;
+                    }
+                    // Cell edges counter-clockwise: corner k to corner k + 1.
+                    let edges = [
+                        edge_id(i, j, 0),
+                        edge_id(i + 1, j, 1),
+                        edge_id(i, j + 1, 0),
+                        edge_id(i, j, 1),
+                    ];
+                    let vert = |e: usize| vertex_of(edges[e]);
+                    let starts = (0..4).filter(|&k| ins[k] && !ins[(k + 1) % 4]);
+                    let ambiguous = ins[0] == ins[2] && ins[1] == ins[3];
+                    if ambiguous {
+                        let v = values.map(|x| x as f64);
+                        // The bilinear interpolant's saddle; the denominator is non-zero here
+                        // since the diagonals have opposite signs.
+                        let saddle = (v[0] * v[2] - v[1] * v[3]) / (v[0] + v[2] - v[1] - v[3]);
+                        // Inside joined through the centre: each start meets the next edge;
+                        // otherwise the previous one, cutting off the inside corner.
+                        let turn = if saddle < 0.0 { 1 } else { 3 };
+                        for k in starts {
+                            next[vert(k) as usize] = vert((k + turn) % 4);
+                        }
+                    } else {
+                        let end = (0..4).find(|&k| !ins[k] && ins[(k + 1) % 4]);
+                        if let (Some(k), Some(e)) = (starts.into_iter().next(), end) {
+                            next[vert(k) as usize] = vert(e);
+                        }
+                    }
+                }
+            }
+        }
+
+        let mut seen = vec![false; crossings.len()];
+        let mut loops = Vec::new();
+        for s in 0..crossings.len() {
+            if seen[s] {
+                continue;
+            }
+            let mut points = Vec::new();
+            let mut k = s;
+            while !seen[k] {
+                seen[k] = true;
+                points.push(crossings[k].1);
+                k = next[k] as usize;
+            }
+            loops.push(points);
+        }
+        loops
+    }
+}
+
+/// The zero of `g` on [0, 1] given `g(0) = va`, `g(1) = vb` of opposite signs: regula falsi with
+/// the Illinois modification, which keeps the bracket and converges superlinearly.
+fn edge_root(g: &dyn Fn(f32) -> f32, va: f32, vb: f32) -> f32 {
+    let (mut t0, mut f0, mut t1, mut f1) = (0.0f32, va, 1.0f32, vb);
+    let mut side = 0i8;
+    let mut t = f0 / (f0 - f1);
+    for _ in 0..12 {
+        t = t0 - f0 * (t1 - t0) / (f1 - f0);
+        if !t.is_finite() {
+            return 0.5 * (t0 + t1);
+        }
+        let ft = g(t);
+        if ft == 0.0 || (t1 - t0) < 1e-6 || !ft.is_finite() {
+            break;
+        }
+        if (ft < 0.0) == (f1 < 0.0) {
+            t1 = t;
+            f1 = ft;
+            if side == -1 {
+                f0 *= 0.5;
+            }
+            side = -1;
+        } else {
+            t0 = t;
+            f0 = ft;
+            if side == 1 {
+                f1 *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    t
+}
