@@ -202,6 +202,20 @@ def test_malformed_inputs_and_unwritable_outputs_name_the_file(small_field, tmp_
         pgvol.write_mesh(tmp_path / "x.xyz", *small_field.to_mesh())
 
 
+def test_a_sheet_without_thickness_is_an_empty_result_saying_so():
+    """A flat open sheet encloses nothing: an EmptyResultError (a ValueError), not a field."""
+    n = 8
+    v = np.array([(i / n, j / n, 0.0) for j in range(n + 1) for i in range(n + 1)], np.float32)
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
+    with pytest.raises(pgvol.EmptyResultError, match="no thickness|no extent along one axis") as info:
+        pgvol.Field.from_mesh(v, np.array(faces, np.int32), res=24)
+    assert isinstance(info.value, ValueError) and info.value.kind == "empty result"
+
+
 def test_jobs_beyond_the_memory_limit_are_memory_errors(small_mesh):
     pgvol.set_memory_limit(1 << 20)
     try:
