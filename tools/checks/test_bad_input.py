@@ -466,3 +466,21 @@ def test_empty_results_are_errors_not_files(case, dirs, pgvol):
     if case != "slice":
         assert "is empty" in r.stderr, r.describe()
 
+
+def test_clouds_of_coincident_points_say_so_once(dirs, pgvol):
+    inputs, outputs = dirs
+    for name, text, says in [
+        ("one.xyz", "0 0 0\n", "a single point"),
+        ("same.xyz", "0.5 0.5 0.5\n" * 1000, "all 1000 points coincide"),
+    ]:
+        cloud = inputs / name
+        cloud.write_text(text)
+        r = helpers.run([pgvol, "points", cloud, "-o", outputs / "x.pgv", "-q"])
+        _assert_clean_failure(r, says, outputs)
+        assert "at least 10 distinct points" in r.stderr and "bounding box" not in r.stderr, r.describe()
+    # A library message that includes its cause's sentence prints that sentence once.
+    tetra = inputs / "tetra.obj"
+    tetra.write_text(GOOD_OBJ)
+    r = helpers.run([pgvol, "encode", tetra, "-o", outputs / "x.pgv", "--voxel", 1e-6, "-q"])
+    _assert_clean_failure(r, "cannot make the grid", outputs)
+    assert r.stderr.count("more than the limit") == 1, r.describe()
