@@ -427,3 +427,60 @@ def test_specks_are_removed_by_default_and_kept_on_request(tmp_path, pgvol):
     assert len(trimesh.load(out, force="mesh").split(only_watertight=False)) == 2
     r = helpers.run([pgvol, "remesh", src, "-o", out, "--min-component=-1"])
     assert r.returncode != 0 and "at least 0" in r.stderr, r.describe()
+
+
+def _flat_sheet(folder: Path) -> Path:
+    """A flat square of 8 x 8 cells in z = 0: an open sheet with no thickness."""
+    p = folder / "sheet.obj"
+    n = 8
+    lines = [f"v {i / n} {j / n} 0" for j in range(n + 1) for i in range(n + 1)]
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            lines += [f"f {a} {a + 1} {a + n + 2}", f"f {a} {a + n + 2} {a + n + 1}"]
+    p.write_text("\n".join(lines) + "\n")
+    return p
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["intersection", "difference", "repair", "encode", "perturb", "slice"],
+)
+def test_empty_results_are_errors_not_files(case, dirs, pgvol):
+    """An operation whose result has nothing inside fails and writes nothing, saying why."""
+    inputs, outputs = dirs
+    sheet = _flat_sheet(inputs)
+    ball = inputs / "ball.pgv"
+    if case == "repair":
+        helpers.run_ok([pgvol, "csg", "union", "sphere:0,0,0,1", "sphere:0.5,0,0,1", "-o", ball, "--res", 32, "-q"])
+    args, reason = {
+        "intersection": (["csg", "intersection", "sphere:0,0,0,1", "sphere:3,0,0,1", "-o", outputs / "x.pgv"], "do not overlap"),
+        "difference": (["csg", "difference", "sphere:0,0,0,1", "sphere:0,0,0,1", "-o", outputs / "x.pgv"], "cover all of the first"),
+        "repair": (["repair", ball, "-o", outputs / "x.pgv", "--mask=-9,-9,-9,9,9,9", "--face", "+z"], "masks around only the parts"),
+        "encode": (["encode", sheet, "-o", outputs / "x.pgv", "--res", 32], "no extent along one axis"),
+        "perturb": (["perturb", sheet, "-o", outputs / "x.pgv", "--max-functions", 20, "--resample", 32], "no extent along one axis"),
+        "slice": (["slice", sheet, "-o", outputs / "x.svg", "--layer-height", 0.1, "--res", 32], "no layer holds a contour"),
+    }[case]
+    r = helpers.run([pgvol, *args, "-q"])
+    _assert_clean_failure(r, reason, outputs)
+    if case != "slice":
+        assert "is empty" in r.stderr, r.describe()
+
+
+def test_clouds_of_coincident_points_say_so_once(dirs, pgvol):
+    inputs, outputs = dirs
+    for name, text, says in [
+        ("one.xyz", "0 0 0\n", "a single point"),
+        ("same.xyz", "0.5 0.5 0.5\n" * 1000, "all 1000 points coincide"),
+    ]:
+        cloud = inputs / name
+        cloud.write_text(text)
+        r = helpers.run([pgvol, "points", cloud, "-o", outputs / "x.pgv", "-q"])
+        _assert_clean_failure(r, says, outputs)
+        assert "at least 10 distinct points" in r.stderr and "bounding box" not in r.stderr, r.describe()
+    # A library message that includes its cause's sentence prints that sentence once.
+    tetra = inputs / "tetra.obj"
+    tetra.write_text(GOOD_OBJ)
+    r = helpers.run([pgvol, "encode", tetra, "-o", outputs / "x.pgv", "--voxel", 1e-6, "-q"])
+    _assert_clean_failure(r, "cannot make the grid", outputs)
+    assert r.stderr.count("more than the limit") == 1, r.describe()

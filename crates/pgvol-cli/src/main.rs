@@ -33,7 +33,42 @@ fn main() {
     });
     let cli = Cli::parse();
     if let Err(e) = commands::run(cli.command) {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", message(&e));
         std::process::exit(1);
+    }
+}
+
+/// The error and its causes, joined by ": ", leaving out a cause whose text is already there:
+/// the library's messages include their cause's sentence, which would otherwise print twice.
+fn message(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::message;
+
+    #[test]
+    fn a_cause_already_in_the_message_is_printed_once() {
+        let cause = std::io::Error::other("5 points given; at least 10 are needed");
+        let e = pgvol::Error::parameter(format!("fit: {cause}")).caused_by(cause);
+        assert_eq!(
+            message(&anyhow::Error::from(e).context("a.xyz")),
+            "a.xyz: fit: 5 points given; at least 10 are needed"
+        );
+        // A cause the message does not repeat is kept.
+        let e = anyhow::Error::from(std::io::Error::other("disk full")).context("writing b.pgv");
+        assert_eq!(message(&e), "writing b.pgv: disk full");
     }
 }

@@ -62,7 +62,16 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
             bytes.len()
         ));
     }
-    let data = &bytes[..length];
+    if length < bytes.len() {
+        // The header's length is the whole file's; more bytes mean a damaged or joined file.
+        return Err(format!(
+            "GLB header says {length} bytes, but the file has {} ({} more); a GLB file ends \
+             where its header's length says",
+            bytes.len(),
+            bytes.len() - length
+        ));
+    }
+    let data = bytes;
     let mut pos = 12;
     let mut chunks = Vec::new();
     while pos < data.len() && chunks.len() < 2 {

@@ -1,5 +1,7 @@
 //! PLY (ascii, binary_little_endian, binary_big_endian). Only `vertex` x/y/z and the `face`
-//! index list are kept; every other element and property is parsed past and dropped.
+//! index list are kept; every other element and property is parsed past and dropped. The body
+//! must be exactly what the header declares: a binary header over text, or data after the last
+//! element, is refused.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -93,10 +95,54 @@ fn body_values(encoding: Encoding, body: &[u8]) -> Box<dyn Values + '_> {
     }
 }
 
+/// The header and the body after it, checked to be in the encoding the header states.
+fn split(bytes: &[u8]) -> Result<(Header, &[u8]), String> {
+    let header = parse_header(bytes)?;
+    let body = &bytes[header.body_start..];
+    if header.encoding != Encoding::Ascii && looks_like_text(body) {
+        // Read as binary, the digits' bytes would make a few tiny numbers and no error.
+        let format = match header.encoding {
+            Encoding::BigEndian => "binary_big_endian",
+            _ => "binary_little_endian",
+        };
+        return Err(format!(
+            "the header says 'format {format}' but the data after 'end_header' is ASCII \
+             text; for text data the format line must be 'format ascii 1.0'"
+        ));
+    }
+    Ok((header, body))
+}
+
+/// Only digits, signs, points, exponents and whitespace, with at least one digit and one
+/// separator: numbers written as text. Binary coordinates almost always hold other bytes.
+fn looks_like_text(body: &[u8]) -> bool {
+    body.iter().any(u8::is_ascii_digit)
+        && body.iter().any(u8::is_ascii_whitespace)
+        && body
+            .iter()
+            .all(|&b| b.is_ascii_digit() || b.is_ascii_whitespace() || b"+-.eE".contains(&b))
+}
+
+/// Refuses data after the last declared element: the header's counts or types do not match
+/// the body, so what was read is not what the file holds.
+fn check_end(values: &dyn Values, elements: &[Element]) -> Result<(), String> {
+    let Some(left) = values.leftover() else {
+        return Ok(());
+    };
+    let declared: Vec<String> = elements
+        .iter()
+        .map(|e| format!("{} {}", e.count, e.name))
+        .collect();
+    Err(format!(
+        "{left} after the last element the header declares ({}); the header's element counts \
+         and property types must describe the data exactly",
+        declared.join(", ")
+    ))
+}
+
 pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     let err = |problem: String| MeshError::new(name, problem);
-    let header = parse_header(bytes).map_err(err)?;
-    let body = &bytes[header.body_start..];
+    let (header, body) = split(bytes).map_err(err)?;
     let mut values = body_values(header.encoding, body);
 
     let (mut world, mut triangles) = (Vec::new(), Vec::new());
@@ -115,6 +161,7 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     if !saw_vertices {
         return Err(err("PLY header declares no 'vertex' element".into()));
     }
+    check_end(values.as_ref(), &header.elements).map_err(err)?;
     Ok(Mesh::from_world(&world, triangles))
 }
 
@@ -125,20 +172,22 @@ pub(crate) fn read_points(
     name: &Path,
 ) -> Result<(Vec<Vec3>, Option<Vec<Vec3>>), MeshError> {
     let err = |problem: String| MeshError::new(name, problem);
-    let header = parse_header(bytes).map_err(err)?;
-    let body = &bytes[header.body_start..];
+    let (header, body) = split(bytes).map_err(err)?;
     let mut values = body_values(header.encoding, body);
     let (mut points, mut normals) = (Vec::new(), Vec::new());
+    let mut saw_vertices = false;
     for element in &header.elements {
-        if element.name == "vertex" {
+        let result = if element.name == "vertex" && !saw_vertices {
+            saw_vertices = true;
             let normals = Some(&mut normals);
             read_vertices(element, values.as_mut(), body.len(), &mut points, normals)
-                .map_err(err)?;
-            // Elements after the vertices (faces) are not needed.
-            break;
-        }
-        skip(element, values.as_mut()).map_err(err)?;
+        } else {
+            // Faces and other elements are not needed, but are parsed past to check the end.
+            skip(element, values.as_mut())
+        };
+        result.map_err(err)?;
     }
+    check_end(values.as_ref(), &header.elements).map_err(err)?;
     if points.is_empty() {
         return Err(err("PLY file has no vertices to read as points".into()));
     }
@@ -235,6 +284,8 @@ fn scalar_type(word: &str) -> Result<Scalar, String> {
 /// Sequential access to the body's numbers, independent of encoding.
 trait Values {
     fn next(&mut self, ty: Scalar) -> Result<f64, String>;
+    /// What is left after the values read so far, described, if anything.
+    fn leftover(&self) -> Option<String>;
 }
 
 struct AsciiValues<'a> {
@@ -261,6 +312,15 @@ impl Values for AsciiValues<'_> {
         } else {
             word.parse::<f64>().map_err(|_| bad())
         }
+    }
+
+    fn leftover(&self) -> Option<String> {
+        let rest = self.body[self.pos..].trim_ascii();
+        let word = rest.split(u8::is_ascii_whitespace).next().unwrap_or(rest);
+        (!rest.is_empty()).then(|| {
+            let word = String::from_utf8_lossy(&word[..word.len().min(20)]).into_owned();
+            format!("text ('{word}' ...)")
+        })
     }
 }
 
@@ -293,6 +353,11 @@ impl Values for BinaryValues<'_> {
             Scalar::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
             Scalar::F64 => f64::from_le_bytes(b),
         })
+    }
+
+    fn leftover(&self) -> Option<String> {
+        let n = self.body.len() - self.pos;
+        (n > 0).then(|| format!("{n} more bytes"))
     }
 }
 

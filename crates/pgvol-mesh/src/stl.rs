@@ -22,7 +22,8 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     }
     if looks_ascii(bytes) {
         let ascii = read_ascii(bytes, name);
-        // A binary file whose header happens to read as text: fall back if the size allows.
+        // A binary file whose header happens to read as text: the binary checks below report
+        // on it if its size could be binary.
         let fits_binary = expected_len.is_some_and(|e| e <= bytes.len() as u64);
         match ascii {
             Ok(m) if !m.triangles.is_empty() || !fits_binary => return Ok(m),
@@ -47,8 +48,18 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
             format!("truncated binary STL: header says {n} triangles, file holds {holds}"),
         ));
     }
-    // Trailing bytes after the declared facets are common exporter padding; ignore them.
-    read_binary(&bytes[..expected as usize], name)
+    // Bytes after the declared facets: the count or the file is wrong, so what the facets
+    // would give is not known to be the whole mesh.
+    let extra = bytes.len() as u64 - expected;
+    Err(MeshError::new(
+        name,
+        format!(
+            "binary STL with {extra} bytes after its last facet: the header says {n} \
+             triangles, which take {expected} bytes, but the file has {}; a binary STL file \
+             is exactly 84 + 50 × (triangle count) bytes",
+            bytes.len()
+        ),
+    ))
 }
 
 /// ASCII if it starts with "solid" and the beginning has no control characters (binary headers

@@ -803,3 +803,144 @@ fn writes_through_a_link_replace_its_target() {
         .is_symlink());
     assert_eq!(fs::read_to_string(&target).unwrap(), "new");
 }
+
+/// A binary PLY header over a text body, and data after the last declared element, are refused
+/// (read as binary, the text's bytes would make a few tiny points and no error).
+#[test]
+fn ply_bodies_that_do_not_match_their_header_are_refused() {
+    let head = |format: &str, vertices: usize| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\n\
+             property float y\nproperty float z\nelement face 1\n\
+             property list uchar int vertex_indices\nend_header\n"
+        )
+    };
+    let text_body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let good = head("ascii", 3) + text_body;
+    let m = read_bytes(good.as_bytes(), MeshFormat::Ply, Path::new("a.ply")).unwrap();
+    assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    // The issue's case: a text body long enough for every value the binary header asks for.
+    let mut long_text = String::new();
+    for i in 0..100 {
+        long_text += &format!("{}.25 {}.5 -{}.125\n", i, i + 1, i + 2);
+    }
+    long_text += "3 0 1 2\n";
+    for format in ["binary_little_endian", "binary_big_endian"] {
+        for (vertices, body) in [(3, text_body), (100, long_text.as_str())] {
+            let file = head(format, vertices) + body;
+            let msg = err_of(read_bytes(
+                file.as_bytes(),
+                MeshFormat::Ply,
+                Path::new("t.ply"),
+            ));
+            assert_mentions(
+                &msg,
+                &[
+                    "t.ply",
+                    &format!("'format {format}'"),
+                    "is ASCII text",
+                    "format ascii 1.0",
+                ],
+            );
+            let msg = match pgvol_mesh::read_ply_points(file.as_bytes(), Path::new("t.ply")) {
+                Ok((p, _)) => panic!("expected an error, got {} points", p.len()),
+                Err(e) => e.to_string(),
+            };
+            assert_mentions(&msg, &["t.ply", "is ASCII text"]);
+        }
+    }
+
+    // Data after the last element, binary: the counts do not describe the file.
+    let mut bin = head("binary_little_endian", 3).into_bytes();
+    for c in [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    bin.push(3);
+    for i in [0i32, 1, 2] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let m = read_bytes(&bin, MeshFormat::Ply, Path::new("b.ply")).unwrap();
+    assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    let mut extra = bin.clone();
+    extra.extend_from_slice(&[0x80, 0x3f, 0x00, 0x00, 0x11]);
+    let msg = err_of(read_bytes(&extra, MeshFormat::Ply, Path::new("b.ply")));
+    assert_mentions(
+        &msg,
+        &[
+            "b.ply",
+            "5 more bytes after the last element",
+            "3 vertex, 1 face",
+        ],
+    );
+    let msg = pgvol_mesh::read_ply_points(&extra, Path::new("b.ply"))
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert_mentions(&msg, &["b.ply", "5 more bytes after the last element"]);
+
+    // Text: trailing whitespace is fine, more numbers are not.
+    let spaced = good.clone() + "\n  \n";
+    read_bytes(spaced.as_bytes(), MeshFormat::Ply, Path::new("a.ply")).unwrap();
+    let more = good + "3 2 1 0\n";
+    let msg = err_of(read_bytes(
+        more.as_bytes(),
+        MeshFormat::Ply,
+        Path::new("a.ply"),
+    ));
+    assert_mentions(&msg, &["a.ply", "text ('3' ...) after the last element"]);
+}
+
+/// A binary STL or GLB is exactly as long as its header says; bytes after that are refused.
+#[test]
+fn binary_stl_and_glb_with_bytes_after_their_data_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["stl", "glb"] {
+        let path = dir.path().join(format!("c.{ext}"));
+        write(&path, &unit_cube()).unwrap();
+        let mut bytes = fs::read(&path).unwrap();
+        let format = MeshFormat::from_path(&path).unwrap();
+        read_bytes(&bytes, format, &path).unwrap();
+        let len = bytes.len();
+        bytes.extend_from_slice(&[7; 60]);
+        let msg = err_of(read_bytes(&bytes, format, Path::new("x.bin")));
+        let expect: &[&str] = match ext {
+            "stl" => &[
+                "x.bin",
+                "binary STL with 60 bytes after its last facet",
+                "header says 12 triangles",
+            ],
+            _ => &["x.bin", &format!("header says {len} bytes"), "(60 more)"],
+        };
+        assert_mentions(&msg, expect);
+    }
+}
+
+/// The fuzzing seeds of the binary readers (`fuzz/corpus`): the valid ones read, those made to
+/// be refused (a binary PLY header over text, bytes after the declared data) are refused.
+#[test]
+fn fuzz_seeds_read_or_are_refused_as_named() {
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus");
+    let refused = [
+        "binary-header-ascii-body.ply",
+        "trailing-bytes.ply",
+        "trailing-text.ply",
+        "trailing-bytes.stl",
+        "trailing-bytes.glb",
+    ];
+    let mut seen = 0;
+    for target in ["read_ply", "read_stl", "read_glb"] {
+        for entry in fs::read_dir(corpus.join(target)).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_str().unwrap().to_string();
+            let format = MeshFormat::from_path(&path).unwrap();
+            let result = read_bytes(&fs::read(&path).unwrap(), format, &path);
+            if refused.contains(&name.as_str()) {
+                seen += 1;
+                assert!(result.is_err(), "{name} should be refused");
+            } else {
+                result.unwrap_or_else(|e| panic!("{name} should read: {e}"));
+            }
+        }
+    }
+    assert_eq!(seen, refused.len());
+}

@@ -74,6 +74,9 @@ impl Method {
     }
 }
 
+/// Distinct points a surface fit needs at least.
+pub const MIN_POINTS: usize = 10;
+
 /// Off-surface constraints lie this many point spacings along the normal: less than half the
 /// spacing keeps them nearer their own point than a neighbouring sheet a spacing away.
 pub const OFFSET_SPACINGS: f32 = 0.5;
@@ -127,7 +130,7 @@ pub struct PointsReport {
 
 #[derive(Debug, thiserror::Error)]
 pub enum PointsError {
-    #[error("{0} points given; at least 10 are needed to fit a surface")]
+    #[error("{0} points given; at least {MIN_POINTS} are needed to fit a surface")]
     TooFew(usize),
     #[error("{normals} normals for {points} points")]
     NormalCount { points: usize, normals: usize },
@@ -237,7 +240,7 @@ pub fn reconstruct(
 ) -> Result<(CoefficientVolume, PointsReport), PointsError> {
     let cloud = dedup(cloud);
     let points = &cloud.points;
-    if points.len() < 10 {
+    if points.len() < MIN_POINTS {
         return Err(PointsError::TooFew(points.len()));
     }
     if let Some(normals) = &cloud.normals {

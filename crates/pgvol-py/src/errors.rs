@@ -20,8 +20,9 @@ fn raise(py: Python<'_>, name: &str, message: &str, kind: &str, path: Option<Str
     }
 }
 
-/// A library error as its exception class: input and output files, bad parameters (a
-/// `ValueError`), resource limits (a `MemoryError`), cancellation and internal failures. An
+/// A library error as its exception class: input and output files, bad parameters and empty
+/// results (`ValueError`s), resource limits (a `MemoryError`), cancellation and internal
+/// failures. An
 /// input file that does not exist is also a `FileNotFoundError`.
 pub(crate) fn to_py(py: Python<'_>, e: pgvol::Error) -> PyErr {
     use pgvol::ErrorKind as K;
@@ -35,6 +36,7 @@ pub(crate) fn to_py(py: Python<'_>, e: pgvol::Error) -> PyErr {
         K::OutputFile => "OutputFileError",
         K::BadParameter => "ParameterError",
         K::ResourceLimit => "ResourceLimitError",
+        K::EmptyResult => "EmptyResultError",
         K::Cancelled => "CancelledError",
         K::Internal => "InternalError",
     };

@@ -340,7 +340,16 @@ impl Field {
     /// Decodes the bytes of a `.pgv` file.
     #[staticmethod]
     fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Field> {
-        let file = quiet(py, || pgvol::read_pgv_bytes(data, Path::new("<bytes>")))?;
+        // There is no file: bytes that do not decode are a bad value, not a missing file.
+        let file = quiet(py, || {
+            pgvol::read_pgv_bytes(data, Path::new("<bytes>")).map_err(|e| match e.kind() {
+                pgvol::ErrorKind::InputFile => pgvol::Error::parameter(format!(
+                    "the bytes are not a readable .pgv file: {}",
+                    e.message()
+                )),
+                _ => e,
+            })
+        })?;
         Ok(Field::from_file(file, false))
     }
 

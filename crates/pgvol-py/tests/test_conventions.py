@@ -120,6 +120,9 @@ def test_bad_options_are_value_errors(small_mesh, small_field):
         small_field.offset(10.0)
     with pytest.raises(ValueError, match="level set 5 is empty|exact distance only within"):
         small_field.to_mesh(iso=5.0)
+    for res in (0, 3):
+        with pytest.raises(pgvol.ParameterError, match=f"at least 4 nodes along the longest side, got {res}"):
+            small_field.to_mesh(res=res)
     with pytest.raises(ValueError, match="unknown axis"):
         small_field.slice(0.1, axis="w")
     with pytest.raises(ValueError, match="layer height must be a positive number"):
@@ -190,8 +193,10 @@ def test_malformed_inputs_and_unwritable_outputs_name_the_file(small_field, tmp_
         pgvol.Field.load(bad)
     assert not isinstance(info.value, FileNotFoundError)
     assert info.value.path == str(bad) and info.value.kind == "input file"
-    with pytest.raises(pgvol.InputFileError, match="<bytes>"):
+    # Bytes are a value, not a file: junk is a ValueError saying so, never a missing file.
+    with pytest.raises(pgvol.ParameterError, match="not a readable .pgv file") as info:
         pgvol.Field.from_bytes(b"garbage")
+    assert isinstance(info.value, ValueError) and not isinstance(info.value, FileNotFoundError)
     out = tmp_path / "no-such-folder" / "x.pgv"
     with pytest.raises(pgvol.OutputFileError) as info:
         small_field.save(out)
@@ -200,6 +205,20 @@ def test_malformed_inputs_and_unwritable_outputs_name_the_file(small_field, tmp_
         small_field.save(tmp_path / "x.txt")
     with pytest.raises(pgvol.OutputFileError, match="unknown extension"):
         pgvol.write_mesh(tmp_path / "x.xyz", *small_field.to_mesh())
+
+
+def test_a_sheet_without_thickness_is_an_empty_result_saying_so():
+    """A flat open sheet encloses nothing: an EmptyResultError (a ValueError), not a field."""
+    n = 8
+    v = np.array([(i / n, j / n, 0.0) for j in range(n + 1) for i in range(n + 1)], np.float32)
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
+    with pytest.raises(pgvol.EmptyResultError, match="no thickness|no extent along one axis") as info:
+        pgvol.Field.from_mesh(v, np.array(faces, np.int32), res=24)
+    assert isinstance(info.value, ValueError) and info.value.kind == "empty result"
 
 
 def test_jobs_beyond_the_memory_limit_are_memory_errors(small_mesh):

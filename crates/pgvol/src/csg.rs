@@ -8,6 +8,7 @@ use pgvol_format::PgvFile;
 use pgvol_ops::{Blend, BoolOp};
 use pgvol_sdf::SignMode;
 
+use crate::emptiness::{require_surface, IfEmpty, Sides};
 use crate::encode::{BAND_KEY, ENCODE_BAND};
 use crate::error::{Error, Result};
 use crate::operand::{LoadedOperand, Operand, OperandField};
@@ -170,6 +171,29 @@ pub fn csg(
     })
     .map_err(ops_error)?;
     crate::progress::check(progress)?;
+    let (result, no_inside) = match op {
+        BoolOp::Union => (
+            "the union",
+            "no operand has an inside within the box the result covers",
+        ),
+        BoolOp::Intersection => (
+            "the intersection",
+            "the operands do not overlap, or overlap by less than the grid spacing; operands \
+             that share a volume, or a finer grid for a thin overlap, give a non-empty one",
+        ),
+        BoolOp::Difference => (
+            "the difference",
+            "the other operands cover all of the first, or all but slivers thinner than the \
+             grid spacing; subtract less, or use a finer grid for thin slivers",
+        ),
+    };
+    let why = IfEmpty {
+        result,
+        no_inside,
+        no_outside: "it fills the whole box it covers; a box larger than the result gives it \
+                     a surface",
+    };
+    require_surface(Sides::of_volume(&volume), &why)?;
     Ok(volume)
 }
 

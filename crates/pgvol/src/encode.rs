@@ -13,6 +13,9 @@ use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 
 use crate::distance::{mesh_sdf, sample, sample_sparse, MeshDistance};
+use crate::emptiness::{
+    mesh_without_inside, require_surface, IfEmpty, Sides, MESH_WITHOUT_OUTSIDE,
+};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::memory::{check_grid, BYTES_PER_NODE};
@@ -111,6 +114,17 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     }
     let mut timings = Timings::default();
     let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
+    let sides = Sides::of_volume(&fitted.volume);
+    let why = IfEmpty {
+        result: "the encoded field",
+        no_inside: &if sides.inside {
+            String::new()
+        } else {
+            mesh_without_inside(mesh, grid.spacing)
+        },
+        no_outside: MESH_WITHOUT_OUTSIDE,
+    };
+    require_surface(sides, &why)?;
     let file = encoded_file(mesh, fitted.volume, &fitted.report, fitted.band);
     Ok(Encoded {
         file,

@@ -15,6 +15,8 @@ pub enum ErrorKind {
     BadParameter,
     /// The job would exceed a size limit (grid nodes, memory).
     ResourceLimit,
+    /// The result would be empty: nothing inside, or inside everywhere with no surface.
+    EmptyResult,
     /// The caller's [`Progress`](crate::Progress) asked to stop.
     Cancelled,
     /// A stage failed on valid input: a defect in the library.
@@ -29,6 +31,7 @@ impl ErrorKind {
             ErrorKind::OutputFile => "output file",
             ErrorKind::BadParameter => "bad parameter",
             ErrorKind::ResourceLimit => "resource limit",
+            ErrorKind::EmptyResult => "empty result",
             ErrorKind::Cancelled => "cancelled",
             ErrorKind::Internal => "internal",
         }

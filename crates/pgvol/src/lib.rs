@@ -63,6 +63,7 @@ mod csg;
 mod decode;
 mod distance;
 pub mod distributed;
+mod emptiness;
 mod encode;
 mod error;
 mod eval;

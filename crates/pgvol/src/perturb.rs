@@ -17,6 +17,9 @@ use pgvol_sdf::SignMode;
 
 use crate::decode::{decode, DecodeOptions};
 use crate::distance::{mesh_sdf, sample};
+use crate::emptiness::{
+    mesh_without_inside, require_surface, IfEmpty, Sides, MESH_WITHOUT_OUTSIDE,
+};
 use crate::encode::{BAND_KEY, ENCODE_BAND};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
@@ -100,7 +103,17 @@ pub fn perturb_on(
     let truth = mesh_distances(mesh, &grid, progress)?;
     let (field, cleanup) =
         perturb::clear_points(&field, &check_points(&grid, &truth)).map_err(cannot_clear)?;
-    let (field, strays) = clear_strays(field, &grid, &truth, progress)?;
+    let (field, strays, sides) = clear_strays(field, &grid, &truth, progress)?;
+    let why = IfEmpty {
+        result: "the perturbation field",
+        no_inside: &if sides.inside {
+            String::new()
+        } else {
+            mesh_without_inside(mesh, grid.spacing)
+        },
+        no_outside: MESH_WITHOUT_OUTSIDE,
+    };
+    require_surface(sides, &why)?;
     Ok(Perturbed {
         field,
         report,
@@ -158,14 +171,16 @@ fn check_points(grid: &pgvol_core::Grid, truth: &[f32]) -> Vec<(Vec3, f32)> {
 
 /// Removes the stray pieces of `field` on `grid`: its node signs, as [`resample_onto`] samples
 /// them, labelled against the mesh's (`truth`), and every node of a stray region turned over
-/// by a bump; repeated until none is left or [`STRAY_ROUNDS`] passes have run.
+/// by a bump; repeated until none is left or [`STRAY_ROUNDS`] passes have run. Also gives the
+/// sides of the last samples, the nodes the output is contoured from.
 fn clear_strays(
     mut field: PerturbationField,
     grid: &pgvol_core::Grid,
     truth: &[f32],
     progress: &dyn Progress,
-) -> Result<(PerturbationField, Strays)> {
+) -> Result<(PerturbationField, Strays, Sides)> {
     let mut total = Strays::default();
+    let mut sides = Sides::default();
     for round in 0..=STRAY_ROUNDS {
         progress::check(progress)?;
         let samples = perturb::sample_band(&field, grid, RESAMPLE_BAND, &|_| {}).to_dense();
@@ -173,6 +188,7 @@ fn clear_strays(
             perturb::stray_nodes(grid.dims, &|i| samples[i] < 0.0, &|i| truth[i] < 0.0);
         if nodes.is_empty() || round == STRAY_ROUNDS {
             total.pieces_left = pieces;
+            sides = Sides::of_values(&samples);
             break;
         }
         let points: Vec<(Vec3, f32)> = nodes
@@ -187,7 +203,7 @@ fn clear_strays(
         total.against_mesh += pass.against_mesh;
         total.rounds += 1;
     }
-    Ok((field, total))
+    Ok((field, total, sides))
 }
 
 /// Nodes per axis of the coarse grid whose exact signed distances guard the sides (the

@@ -233,9 +233,37 @@ pub fn points(
     if cloud.points.is_empty() {
         return Err(Error::new(ErrorKind::InputFile, "the cloud has no points"));
     }
+    check_distinct(&cloud.points)?;
     let (lo, hi) = pgvol_points::index::bounds(&cloud.points);
     let grid = options.grid.grid_for_box(lo, hi)?;
     fit_on_grid(cloud, grid, options, (lo, hi), progress)
+}
+
+/// Refuses a cloud of fewer distinct points than a fit needs, saying so (its box, a point, would
+/// otherwise be refused as an empty box).
+fn check_distinct(points: &[Vec3]) -> Result<()> {
+    let min = pgvol_points::MIN_POINTS;
+    let mut distinct: Vec<[u32; 3]> = Vec::with_capacity(min);
+    for p in points {
+        let key = p.to_array().map(f32::to_bits);
+        if !distinct.contains(&key) {
+            distinct.push(key);
+            if distinct.len() >= min {
+                return Ok(());
+            }
+        }
+    }
+    let n = points.len();
+    let problem = match (n, distinct.len()) {
+        (1, _) => format!("the cloud has a single point, {}", points[0]),
+        (_, 1) => format!("all {n} points coincide, at {}", points[0]),
+        (_, d) if d == n => format!("the cloud has only {n} points"),
+        (_, d) => format!("the cloud's {n} points hold only {d} distinct ones"),
+    };
+    Err(Error::new(
+        ErrorKind::InputFile,
+        format!("{problem}; fitting a surface needs at least {min} distinct points"),
+    ))
 }
 
 /// The reconstruction of `cloud` on `grid`; `bounds` is the box recorded as the source's.
@@ -473,6 +501,29 @@ pub fn stack_bytes(planes: usize, grid: &pgvol_core::Grid) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn clouds_of_too_few_distinct_points_say_so() {
+        let fit = |cloud: Vec<Vec3>| {
+            let cloud = PointCloud {
+                points: cloud,
+                normals: None,
+            };
+            let e = points(&cloud, &PointsOptions::default(), &crate::Silent).unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::InputFile);
+            e.to_string()
+        };
+        let one = fit(vec![Vec3::ONE]);
+        assert!(one.contains("a single point"), "{one}");
+        let same = fit(vec![Vec3::splat(0.5); 1000]);
+        assert!(same.contains("all 1000 points coincide"), "{same}");
+        let few = fit((0..1000).map(|i| Vec3::X * (i % 4) as f32).collect());
+        assert!(few.contains("only 4 distinct ones"), "{few}");
+        for msg in [one, same, few] {
+            assert!(msg.contains("at least 10 distinct points"), "{msg}");
+            assert!(!msg.contains("bounding box"), "{msg}");
+        }
+    }
 
     #[test]
     fn text_clouds_with_and_without_normals() {

@@ -5,6 +5,7 @@ use glam::Vec3;
 use pgvol_field::CoefficientVolume;
 use pgvol_ops::{Face, Mask, MaskReport, Restore};
 
+use crate::emptiness::{require_surface, IfEmpty, Sides};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::shape::Shape;
@@ -92,6 +93,14 @@ pub fn repair(
     let repaired =
         pgvol_ops::repair(&shape.volume, masks, restore).map_err(crate::csg::ops_error)?;
     crate::progress::check(progress)?;
+    let why = IfEmpty {
+        result: "the restored field",
+        no_inside: "the masks take in every part of the shape, so nothing of it is kept; masks \
+                    around only the parts to restore keep the rest",
+        no_outside: "the masks take in every part of the shape's surface, so none of it is \
+                     kept; masks around only the parts to restore keep the rest",
+    };
+    require_surface(Sides::of_volume(&repaired.0), &why)?;
     Ok(repaired)
 }
 

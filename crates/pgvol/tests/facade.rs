@@ -434,6 +434,28 @@ fn grids_beyond_the_node_limit_are_resource_errors() {
     );
 }
 
+#[test]
+fn a_resampling_too_coarse_to_hold_a_surface_is_refused_as_such() {
+    let volume = encoded(16).file.volume;
+    for res in [0, 1, 3] {
+        let options = DecodeOptions {
+            res: Some(res),
+            ..DecodeOptions::default()
+        };
+        let e = assert_error(
+            pgvol::decode(&volume, &options, &Silent),
+            ErrorKind::BadParameter,
+            None,
+        );
+        assert!(
+            e.message().contains(&format!(
+                "resolution must be at least 4 nodes along the longest side, got {res}"
+            )),
+            "{e}"
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Progress: stages and cancellation.
 

@@ -134,8 +134,17 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     };
     let slice_seconds = t.elapsed().as_secs_f64();
     let layers = sliced.layers;
-    pgvol::write_layers(&a.output, &layers, format, a.units_mm, &sliced.frame)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
+    if loops == 0 {
+        // Nothing to build: refuse rather than write a file of empty layers.
+        anyhow::bail!(
+            "{}: no layer holds a contour: the shape has no inside at the layer heights; a \
+             mesh without thickness (a flat or open sheet) encloses none, and --first and \
+             --layer-height must put layers through the solid",
+            a.input.display()
+        );
+    }
+    pgvol::write_layers(&a.output, &layers, format, a.units_mm, &sliced.frame)?;
     let points: usize = layers
         .iter()
         .flat_map(|l| &l.loops)

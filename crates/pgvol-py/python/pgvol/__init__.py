@@ -17,6 +17,7 @@ See docs/python.md in the repository for the conventions, errors, threads and pr
 
 from ._errors import (
     CancelledError,
+    EmptyResultError,
     InputFileError,
     InternalError,
     MissingFileError,
@@ -46,6 +47,7 @@ from ._pgvol import (
 
 for _cls in (
     CancelledError,
+    EmptyResultError,
     InputFileError,
     InternalError,
     MissingFileError,
@@ -65,6 +67,7 @@ __all__ = [
     "MAX_RES",
     "MIN_RES",
     "CancelledError",
+    "EmptyResultError",
     "Field",
     "Grid",
     "InputFileError",

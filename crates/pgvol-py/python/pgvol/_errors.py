@@ -12,7 +12,7 @@ class PgvolError(Exception):
     Attributes:
         message: the problem, in a sentence, without the path.
         kind: one of "input file", "output file", "bad parameter", "resource limit",
-            "cancelled", "internal".
+            "empty result", "cancelled", "internal".
         path: the file the error concerns, or None.
     """
 
@@ -49,6 +49,11 @@ class OutputFileError(PgvolError):
 
 class ParameterError(PgvolError, ValueError):
     """A parameter is out of range, of the wrong type or shape, or contradicts another
+    (also a ValueError)."""
+
+
+class EmptyResultError(PgvolError, ValueError):
+    """The result would be empty: nothing inside, or inside everywhere with no surface
     (also a ValueError)."""
 
 

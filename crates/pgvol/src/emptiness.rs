@@ -1,0 +1,199 @@
+//! The check every operation makes of its result before returning it: a field with no inside
+//! (nothing to contour) or no outside (no surface within its box) is refused with the
+//! operation's own reason, instead of being written as a file that only a later decode refuses.
+
+use pgvol_core::Mesh;
+use pgvol_field::CoefficientVolume;
+use rayon::prelude::*;
+
+use crate::error::{Error, ErrorKind, Result};
+
+/// The sides of the surface a field's grid nodes lie on: negative values inside, positive
+/// outside, as contouring reads them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Sides {
+    pub inside: bool,
+    pub outside: bool,
+}
+
+impl Sides {
+    const BOTH: Sides = Sides {
+        inside: true,
+        outside: true,
+    };
+
+    fn of(v: f32) -> Sides {
+        Sides {
+            inside: v < 0.0,
+            outside: v > 0.0,
+        }
+    }
+
+    fn join(self, other: Sides) -> Sides {
+        Sides {
+            inside: self.inside || other.inside,
+            outside: self.outside || other.outside,
+        }
+    }
+
+    /// The sides of node values.
+    pub fn of_values(values: &[f32]) -> Sides {
+        Sides {
+            inside: values.par_iter().any(|&v| v < 0.0),
+            outside: values.par_iter().any(|&v| v > 0.0),
+        }
+    }
+
+    /// The sides of `volume`'s field at the nodes of its grid, stopping once both are found.
+    pub fn of_volume(volume: &CoefficientVolume) -> Sides {
+        let coeffs = &volume.coeffs;
+        // Every basis function is non-negative, so coefficients of one sign give a field of
+        // that sign: the common empty results need no evaluation.
+        let [lo, hi] = coeffs.value_range();
+        if lo >= 0.0 || hi <= 0.0 {
+            return Sides {
+                inside: lo < 0.0,
+                outside: hi > 0.0,
+            };
+        }
+        // The nodes of an absent brick away from its faces see only its background.
+        let mut sides = coeffs
+            .all_bricks()
+            .filter(|&b| !coeffs.is_stored(b))
+            .map(|b| Sides::of(coeffs.background_of(b)))
+            .fold(Sides::default(), Sides::join);
+        if sides == Sides::BOTH {
+            return sides;
+        }
+        let stored: Vec<[usize; 3]> = coeffs.stored().map(|(b, _)| b).collect();
+        let found = stored
+            .par_iter()
+            .map(|&b| Ok(brick_sides(volume, b)))
+            .try_reduce(Sides::default, |a, b| match a.join(b) {
+                Sides::BOTH => Err(()),
+                s => Ok(s),
+            });
+        sides = match found {
+            Ok(s) => sides.join(s),
+            Err(()) => Sides::BOTH,
+        };
+        sides
+    }
+}
+
+/// The sides of the field at the nodes of coefficient brick `b`.
+fn brick_sides(volume: &CoefficientVolume, b: [usize; 3]) -> Sides {
+    let (lo, n) = volume.coeffs.brick_extent(b);
+    let mut sides = Sides::default();
+    for k in lo[2]..lo[2] + n[2] {
+        for j in lo[1]..lo[1] + n[1] {
+            for i in lo[0]..lo[0] + n[0] {
+                sides = sides.join(Sides::of(volume.value(volume.grid.point(i, j, k))));
+                if sides == Sides::BOTH {
+                    return sides;
+                }
+            }
+        }
+    }
+    sides
+}
+
+/// What an operation says of an empty result: the result, and for each way of being empty
+/// why it happened and what would work, in the operation's own terms.
+pub(crate) struct IfEmpty<'a> {
+    /// The result as the subject of a sentence ("the intersection").
+    pub result: &'a str,
+    /// Why no node is inside, and what would give an inside.
+    pub no_inside: &'a str,
+    /// Why every node is inside, and what would give a surface.
+    pub no_outside: &'a str,
+}
+
+/// Refuses a result whose nodes lie on one side only, with `why`'s reason.
+pub(crate) fn require_surface(sides: Sides, why: &IfEmpty<'_>) -> Result<()> {
+    let message = match (sides.inside, sides.outside) {
+        (true, true) => return Ok(()),
+        (false, _) => format!(
+            "{} is empty (no point of its grid is inside): {}",
+            why.result, why.no_inside
+        ),
+        (true, false) => format!(
+            "{} has no surface (every point of its grid is inside): {}",
+            why.result, why.no_outside
+        ),
+    };
+    Err(Error::new(ErrorKind::EmptyResult, message))
+}
+
+/// Why the field of `mesh` on a grid of `spacing` has no inside, and what would give one: a
+/// mesh without thickness encloses nothing at any resolution; a thin closed one needs a finer
+/// grid.
+pub(crate) fn mesh_without_inside(mesh: &Mesh, spacing: f32) -> String {
+    let stats = mesh.stats();
+    let extent = mesh.bounds().map_or(Default::default(), |(lo, hi)| hi - lo);
+    if extent.min_element() <= 1e-6 * extent.max_element() {
+        "the mesh is flat (it has no extent along one axis), so it encloses no volume and a \
+         finer grid would not help; give it a thickness"
+            .into()
+    } else if !stats.watertight {
+        format!(
+            "the mesh is an open surface ({} boundary edges) with no thickness, so it encloses \
+             no volume and a finer grid would not help; close it, or give it a thickness",
+            stats.boundary_edges
+        )
+    } else {
+        format!(
+            "the mesh's solid parts are thinner than the grid spacing {spacing}; a grid finer \
+             than their thickness would resolve them"
+        )
+    }
+}
+
+/// Why every node of a mesh's grid is inside it.
+pub(crate) const MESH_WITHOUT_OUTSIDE: &str =
+    "the mesh's faces may point inward; reversed, they would enclose the mesh's volume";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pgvol_core::{Background, Grid, SparseGrid};
+    use pgvol_field::Basis;
+
+    fn volume(values: impl Fn([usize; 3]) -> f32) -> CoefficientVolume {
+        let grid = Grid::cube_res(glam::Vec3::ZERO, glam::Vec3::ONE, 20).unwrap();
+        let [nx, ny, nz] = grid.dims;
+        let mut dense = Vec::new();
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    dense.push(values([i, j, k]));
+                }
+            }
+        }
+        let coeffs = SparseGrid::from_dense(grid.dims, &dense, Background::clamp(1.0));
+        CoefficientVolume::from_sparse(grid, Basis::Bspline3, coeffs).unwrap()
+    }
+
+    #[test]
+    fn sides_are_those_of_the_nodes_not_of_the_coefficients() {
+        let both = volume(|n| if n == [10, 10, 10] { -10.0 } else { 1.0 });
+        assert_eq!(Sides::of_volume(&both), Sides::BOTH);
+        // One slightly negative coefficient among positive ones: every node stays outside.
+        let dip = volume(|n| if n == [10, 10, 10] { -0.1 } else { 1.0 });
+        let sides = Sides::of_volume(&dip);
+        assert_eq!((sides.inside, sides.outside), (false, true));
+        let inside = volume(|_| -1.0);
+        assert!(!Sides::of_volume(&inside).outside);
+        let why = IfEmpty {
+            result: "the result",
+            no_inside: "A",
+            no_outside: "B",
+        };
+        let e = require_surface(sides, &why).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::EmptyResult);
+        assert!(e.message().ends_with(": A"), "{e}");
+        let e = require_surface(Sides::of_volume(&inside), &why).unwrap_err();
+        assert!(e.message().contains("no surface") && e.message().ends_with(": B"));
+        require_surface(Sides::BOTH, &why).unwrap();
+    }
+}

@@ -1,0 +1,144 @@
+//! Operations whose result has no inside (or no surface) refuse it with an empty-result error
+//! that says why, instead of returning a field that only a later decode refuses.
+
+use pgvol::glam::{DVec3, Vec3};
+use pgvol::mesh::shapes;
+use pgvol::{
+    BoolOp, CsgSettings, EncodeOptions, ErrorKind, GridSpec, Mesh, PerturbOptions, Restore, Shape,
+    Silent,
+};
+
+fn operands(texts: &[&str]) -> Vec<pgvol::Operand> {
+    texts
+        .iter()
+        .map(|t| pgvol::parse_operand(t).unwrap())
+        .collect()
+}
+
+#[track_caller]
+fn assert_empty<T: std::fmt::Debug>(result: pgvol::Result<T>, words: &[&str]) {
+    let e = result.expect_err("expected an empty-result error");
+    assert_eq!(e.kind(), ErrorKind::EmptyResult, "{e}");
+    for w in words {
+        assert!(e.message().contains(w), "{e} should mention {w:?}");
+    }
+    // The library names no command-line option.
+    assert!(!e.message().contains("--"), "{e}");
+}
+
+/// A flat square of `n` × `n` cells in z = 0, two triangles each: an open sheet.
+fn sheet(n: u32) -> Mesh {
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            positions.push(Vec3::new(i as f32, j as f32, 0.0) / n as f32);
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            triangles.push([a, a + 1, a + n + 2]);
+            triangles.push([a, a + n + 2, a + n + 1]);
+        }
+    }
+    pgvol::mesh_from_parts(positions, triangles).unwrap().0
+}
+
+/// The sheet tilted: open and without thickness, though not flat along an axis.
+fn tilted(n: u32) -> Mesh {
+    let mesh = sheet(n);
+    let world: Vec<_> = (0..mesh.positions.len())
+        .map(|i| {
+            let p = mesh.world(i);
+            p + DVec3::Z * (0.3 * p.x + 0.2 * p.y)
+        })
+        .collect();
+    pgvol::mesh_from_world(&world, mesh.triangles.clone())
+        .unwrap()
+        .0
+}
+
+#[test]
+fn booleans_with_nothing_inside_are_refused_with_their_reason() {
+    let settings = |op| CsgSettings {
+        op,
+        res: 32,
+        ..CsgSettings::default()
+    };
+    let disjoint = operands(&["sphere:0,0,0,1", "sphere:3,0,0,1"]);
+    assert_empty(
+        pgvol::csg(&disjoint, &settings(BoolOp::Intersection), &Silent),
+        &["the intersection is empty", "do not overlap"],
+    );
+    let same = operands(&["sphere:0,0,0,1", "sphere:0,0,0,1"]);
+    assert_empty(
+        pgvol::csg(&same, &settings(BoolOp::Difference), &Silent),
+        &["the difference is empty", "cover all of the first"],
+    );
+    // Overlapping operands still give their intersection, and a smaller ball its difference.
+    let overlap = operands(&["sphere:0,0,0,1", "sphere:1,0,0,1"]);
+    let v = pgvol::csg(&overlap, &settings(BoolOp::Intersection), &Silent).unwrap();
+    assert!(v.value(Vec3::new(0.5, 0.0, 0.0)) < 0.0);
+    let smaller = operands(&["sphere:0,0,0,1", "sphere:0,0,0,0.5"]);
+    pgvol::csg(&smaller, &settings(BoolOp::Difference), &Silent).unwrap();
+}
+
+#[test]
+fn a_repair_that_keeps_nothing_is_refused() {
+    let options = EncodeOptions {
+        grid: GridSpec::Res(32),
+        ..EncodeOptions::default()
+    };
+    let encoded = pgvol::encode(&shapes::octasphere(2), &options, &Silent).unwrap();
+    let shape = Shape::from_file(encoded.file);
+    let (lo, hi) = (shape.volume.grid.origin, shape.volume.grid.max_corner());
+    let whole = pgvol::Mask {
+        lo: lo - 1.0,
+        hi: hi + 1.0,
+    };
+    let restore = Restore::Protrusion {
+        face: pgvol::parse_face("-z").unwrap(),
+        alpha: 1.0,
+    };
+    assert_empty(
+        pgvol::repair(&shape, &[whole], restore, &Silent),
+        &[
+            "the restored field",
+            "masks around only the parts to restore",
+        ],
+    );
+    // A mask over a cap only keeps the rest.
+    let cap = pgvol::parse_mask("-1.2,-1.2,0.6,1.2,1.2,1.2").unwrap();
+    pgvol::repair(&shape, &[cap], restore, &Silent).unwrap();
+}
+
+#[test]
+fn sheets_without_thickness_encode_and_perturb_to_an_error_saying_so() {
+    let options = EncodeOptions {
+        grid: GridSpec::Res(32),
+        ..EncodeOptions::default()
+    };
+    assert_empty(
+        pgvol::encode(&sheet(10), &options, &Silent),
+        &[
+            "the encoded field is empty",
+            "flat",
+            "finer grid would not help",
+        ],
+    );
+    assert_empty(
+        pgvol::encode(&tilted(16), &options, &Silent),
+        &["open surface", "no thickness", "finer grid would not help"],
+    );
+    let perturb = PerturbOptions {
+        max_functions: 20,
+        ..PerturbOptions::default()
+    };
+    assert_empty(
+        pgvol::perturb_on(&sheet(6), &perturb, GridSpec::Res(24), &Silent),
+        &["the perturbation field is empty", "flat"],
+    );
+    // A closed mesh encodes as before.
+    pgvol::encode(&shapes::octasphere(2), &options, &Silent).unwrap();
+}
