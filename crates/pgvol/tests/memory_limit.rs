@@ -48,4 +48,31 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     // Under the default limit (the memory available) the same jobs run.
     let back = pgvol::read_pgv_bytes(&bytes, name).unwrap();
     assert_eq!(back.volume.grid, encoded.file.volume.grid);
+
+    // The largest grid is accepted and estimated before any work: a sparse encode at 4096³ is
+    // refused under a 1 GB limit with its figure, and a dense remesh (13 bytes a node, 893 GB)
+    // under the machine's own.
+    let top = pgvol::MAX_RES as usize;
+    assert_eq!(top, 4096);
+    pgvol::set_memory_limit(Some(1_000_000_000));
+    let big = EncodeOptions {
+        grid: GridSpec::Res(top),
+        ..Default::default()
+    };
+    let encode = pgvol::encode(&mesh, &big, &Silent).unwrap_err();
+    pgvol::set_memory_limit(None);
+    assert_eq!(encode.kind(), ErrorKind::ResourceLimit, "{encode}");
+    assert!(encode.message().contains("4096 x 4096 x 4096"), "{encode}");
+    assert!(encode.message().contains("GB"), "{encode}");
+    let dense = pgvol::remesh(
+        &mesh,
+        &pgvol::RemeshOptions {
+            grid: GridSpec::Res(top),
+            ..Default::default()
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(dense.kind(), ErrorKind::ResourceLimit, "{dense}");
+    assert!(dense.message().contains("893.4 GB"), "{dense}");
 }
