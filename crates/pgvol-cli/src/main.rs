@@ -57,7 +57,7 @@ fn message(e: &anyhow::Error) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::message;
+    use super::*;
 
     #[test]
     fn a_cause_already_in_the_message_is_printed_once() {
@@ -70,5 +70,30 @@ mod tests {
         // A cause the message does not repeat is kept.
         let e = anyhow::Error::from(std::io::Error::other("disk full")).context("writing b.pgv");
         assert_eq!(message(&e), "writing b.pgv: disk full");
+    }
+
+    #[test]
+    fn an_ipatch_without_a_bound_per_primary_names_the_option() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("b.stl");
+        let cli = Cli::try_parse_from([
+            "pgvol",
+            "blend",
+            "ipatch",
+            "plane:1,0,0,0",
+            "plane:0,1,0,0",
+            "--bound",
+            "plane:-1,0,0,1",
+            "--weights",
+            "1,1,-0.5",
+            "--box=-1,-1,-1,1,1,1",
+            "--quiet",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .unwrap();
+        let e = commands::run(cli.command).unwrap_err().to_string();
+        assert!(e.contains("one --bound per primary"), "{e}");
+        assert!(!out.exists());
     }
 }

@@ -39,7 +39,8 @@ mod svg_read;
 mod write;
 
 pub use blend::{
-    edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming, renormalised,
+    check_ipatch, edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming,
+    renormalised,
 };
 pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
 pub use cli_file::{write_cli, write_cli_in, write_cli_with, CliEncoding, MAX_BINARY_ROUNDING};

@@ -105,13 +105,28 @@ pub fn blend(
             check_lambda(*lambda)?;
             bounds.to_vec()
         }
-        BlendOperator::IPatch { bounds, .. } => bounds.clone(),
+        BlendOperator::IPatch {
+            bounds, weights, ..
+        } => {
+            pgvol_ops::check_ipatch(
+                primaries.len(),
+                bounds.len(),
+                weights.as_ref().map(|w| w.0.len()),
+            )
+            .map_err(crate::csg::ops_error)?;
+            bounds.clone()
+        }
     };
     let needed = match operator {
         BlendOperator::IPatch { .. } => primaries.len().max(2),
         _ => 2,
     };
-    if primaries.len() != needed || (extra.len() != needed && extra.len() != 1) {
+    // Liming has its one cutting surface; the others one bound per primary.
+    let wanted_extra = match operator {
+        BlendOperator::Liming { .. } => 1,
+        _ => needed,
+    };
+    if primaries.len() != needed || extra.len() != wanted_extra {
         return Err(Error::parameter(format!(
             "this blend needs {needed} primaries{}, got {} primaries and {} bounds",
             match operator {

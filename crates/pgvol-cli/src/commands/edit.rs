@@ -299,6 +299,14 @@ pub fn blend(a: BlendArgs) -> Result<()> {
             }
         }
         BlendKind::Ipatch => {
+            if a.bound.len() != a.primaries.len() {
+                anyhow::bail!(
+                    "ipatch needs one --bound per primary, in order: got {} --bound for {} \
+                     primaries",
+                    a.bound.len(),
+                    a.primaries.len()
+                );
+            }
             let parsed = match &a.weights {
                 Some(text) => {
                     Some(parse_weights(text).map_err(|e| anyhow::anyhow!("--weights: {e}"))?)
