@@ -36,7 +36,8 @@ pub(super) fn write_edited(
     Ok(mesh.triangles.len())
 }
 
-/// A box from `x0,y0,z0,x1,y1,z1`.
+/// A box from `x0,y0,z0,x1,y1,z1`. Options taking such comma lists set `allow_hyphen_values`:
+/// a list starting `-1,…` is not one number, so `allow_negative_numbers` would not admit it.
 pub(super) fn parse_box(text: &str) -> Result<(pgvol::glam::Vec3, pgvol::glam::Vec3), String> {
     let v: Vec<f32> = text
         .split(',')
@@ -94,7 +95,7 @@ pub struct CsgArgs {
     pub radius: Option<f32>,
     /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: every bounded operand's box,
     /// grown by the radius); needed when every operand is a plane or cylinder.
-    #[arg(long = "box", value_parser = parse_box, allow_negative_numbers = true)]
+    #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
     pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
@@ -149,7 +150,7 @@ pub struct RepairArgs {
     pub output: PathArg,
     /// An axis-aligned box x0,y0,z0,x1,y1,z1 in model units to restore; repeat for more.
     /// Coefficients whose support misses every mask stay bit-identical.
-    #[arg(long, required = true, value_parser = parse_mask, allow_negative_numbers = true)]
+    #[arg(long, required = true, value_parser = parse_mask, allow_hyphen_values = true)]
     pub mask: Vec<pgvol::Mask>,
     /// Protrusion removal: the mask's face the protrusion's base crosses (+x, -x, +y, -y, +z,
     /// -z), where the new field joins the body.
@@ -261,13 +262,13 @@ pub struct BlendArgs {
     #[arg(long, default_value_t = pgvol::DEFAULT_LAMBDA)]
     pub lambda: f32,
     /// I-patch weights w1,..,wn,w.
-    #[arg(long, allow_negative_numbers = true, conflicts_with = "points")]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "points")]
     pub weights: Option<String>,
     /// I-patch: a CSV of points (x,y,z per line) on the wanted surface, to fit the weights.
     #[arg(long)]
     pub points: Option<PathArg>,
     /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: the bounded primaries' box).
-    #[arg(long = "box", value_parser = parse_box, allow_negative_numbers = true)]
+    #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
     pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
