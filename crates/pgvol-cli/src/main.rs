@@ -147,6 +147,23 @@ mod tests {
     }
 
     #[test]
+    fn coarse_samples_out_of_range_are_refused_by_the_parser() {
+        for coarse in ["3", "3000", "100000000", "-1"] {
+            let line = format!(
+                "pgvol repair a.pgv -o b.pgv --mask 0,0,0,1,1,1 --denoise --coarse={coarse}"
+            );
+            let e = Cli::try_parse_from(line.split_whitespace())
+                .err()
+                .unwrap_or_else(|| panic!("--coarse {coarse} parsed"))
+                .to_string();
+            assert!(
+                e.contains("--coarse") && e.contains("expected 4 to 2048"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
     fn an_ipatch_without_a_bound_per_primary_names_the_option() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("b.stl");

@@ -57,7 +57,8 @@ pub use layer_frame::LayerFrame;
 pub use local_fit::{node_value, refit_box, LocalFit, NodeBox};
 pub use measure::{measure_field, FieldMeasure};
 pub use repair::{
-    mask_nodes, repair, Face, LaplaceSystem, Mask, MaskReport, Restore, MAX_MASK_NODES,
+    coarse_lattice, mask_nodes, repair, Face, LaplaceSystem, Mask, MaskReport, Restore,
+    MAX_MASK_NODES,
 };
 pub use simplify::simplify_loops;
 pub use slice::{

@@ -136,6 +136,18 @@ fn parse_face(s: &str) -> Result<pgvol::Face, String> {
     pgvol::parse_face(s).map_err(|e| e.to_string())
 }
 
+/// Coarse samples: at least 4, and never more than a grid may have nodes along an axis (the
+/// library refuses lattices finer than the field's own grid once it is read).
+fn parse_coarse(s: &str) -> Result<usize, String> {
+    let max = pgvol::MAX_RES as usize;
+    match s.trim().parse::<usize>() {
+        Ok(n) if (4..=max).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected 4 to {max} samples along the mask's longest side, got '{s}'"
+        )),
+    }
+}
+
 #[derive(Args)]
 #[command(
     after_help = "Examples:\n  pgvol repair part.pgv -o fixed.pgv --mask -5,-5,20,5,5,32 --face -z\n  \
@@ -165,7 +177,7 @@ pub struct RepairArgs {
     #[arg(long)]
     pub denoise: bool,
     /// Coarse samples along a mask's longest side when denoising (fewer smooth more).
-    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, requires = "denoise")]
+    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, value_parser = parse_coarse, requires = "denoise")]
     pub coarse: usize,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
