@@ -163,8 +163,41 @@ mod tests {
         }
     }
 
+    /// Tests that run a command take turns: the memory limit is global.
+    static RUN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    #[test]
+    fn an_edit_written_dense_is_refused_before_work_with_its_figure() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("u.pgv");
+        let cli = Cli::try_parse_from([
+            "pgvol",
+            "csg",
+            "union",
+            "sphere:0,0,0,1",
+            "sphere:0.5,0,0,1",
+            "--res",
+            "600",
+            "--max-memory",
+            "100M",
+            "--quiet",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .unwrap();
+        let e = commands::run(cli.command).unwrap_err().to_string();
+        pgvol::set_memory_limit(None);
+        assert!(
+            e.contains("600 x 600 x 600 grid needs about") && e.contains("100.0 MB allowed"),
+            "{e}"
+        );
+        assert!(!out.exists());
+    }
+
     #[test]
     fn an_ipatch_without_a_bound_per_primary_names_the_option() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("b.stl");
         let cli = Cli::try_parse_from([

@@ -5,7 +5,7 @@ use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume};
 use pgvol_sdf::SignMode;
 
-use crate::csg::{covering_grid, load_operands, operand_fields};
+use crate::csg::{check_edit_memory, covering_grid, load_operands, operand_fields, ResultUse};
 use crate::encode::ENCODE_BAND;
 use crate::error::{Error, Result};
 use crate::operand::{Operand, OperandField};
@@ -57,6 +57,8 @@ pub struct BlendSettings {
     pub bounds: Option<(Vec3, Vec3)>,
     /// How inside is told from outside in mesh primaries (default [`SignMode::Auto`]).
     pub sign: SignMode,
+    /// What becomes of the result, for the memory estimate (default kept as a volume).
+    pub result: ResultUse,
 }
 
 impl Default for BlendSettings {
@@ -65,6 +67,7 @@ impl Default for BlendSettings {
             res: crate::CSG_RES,
             bounds: None,
             sign: SignMode::Auto,
+            result: ResultUse::Volume,
         }
     }
 }
@@ -146,6 +149,7 @@ pub fn blend(
         settings.res,
     )?;
     let reach = BLEND_REACH * grid.spacing;
+    check_edit_memory("a blend", &loaded, &grid, reach, settings.result)?;
     let fields = operand_fields(&all, &loaded, grid, reach, settings.sign, progress)?;
     let (prim, rest) = fields.split_at(primaries.len());
     let value =

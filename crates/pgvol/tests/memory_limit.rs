@@ -109,3 +109,96 @@ fn denoising_lattices_are_range_checked_and_estimated_before_work() {
     let (repaired, _) = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap();
     assert!(repaired.value(Vec3::ZERO) < 0.0);
 }
+
+/// Records the stages a call starts: none means it was refused before any work.
+#[derive(Default)]
+struct Stages(Mutex<Vec<String>>);
+
+impl pgvol::Progress for Stages {
+    fn stage(&self, name: &str) {
+        self.0.lock().unwrap().push(name.to_string());
+    }
+}
+
+/// The bytes a refusal says the job needs ("needs about 2.6 GB of memory").
+fn needed_bytes(message: &str) -> f64 {
+    let rest = &message[message.find("needs about ").expect(message) + 12..];
+    let mut words = rest.split_whitespace();
+    let value: f64 = words.next().unwrap().parse().unwrap();
+    let unit = match words.next().unwrap() {
+        "B" => 1.0,
+        "kB" => 1e3,
+        "MB" => 1e6,
+        "GB" => 1e9,
+        "TB" => 1e12,
+        other => panic!("unit {other}"),
+    };
+    value * unit
+}
+
+#[test]
+fn edits_count_their_output_and_refuse_before_any_work() {
+    let _limit = Limit::take();
+    let dir = tempfile::tempdir().unwrap();
+    let ball = dir.path().join("ball.stl");
+    pgvol::write_mesh(&ball, &pgvol::mesh::shapes::octasphere(3)).unwrap();
+    let operands: Vec<pgvol::Operand> = [ball.to_str().unwrap(), "sphere:0.5,0,0,0.8"]
+        .iter()
+        .map(|t| pgvol::parse_operand(t).unwrap())
+        .collect();
+    // Written dense, every node of a 600³ grid costs its coefficient three times over.
+    let dense = pgvol::CsgSettings {
+        res: 600,
+        result: pgvol::ResultUse::DenseFile,
+        ..Default::default()
+    };
+    pgvol::set_memory_limit(Some(100_000_000));
+    let stages = Stages::default();
+    let e = pgvol::csg(&operands, &dense, &stages).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+    assert!(
+        e.message().contains("a Boolean on a 600 x 600 x 600 grid"),
+        "{e}"
+    );
+    assert!(e.message().contains("100.0 MB allowed"), "{e}");
+    assert!(needed_bytes(e.message()) >= 600f64.powi(3) * 12.0, "{e}");
+    assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+
+    // Blends of unbounded primaries at 2048³: the dense file alone is 100 GB, and even kept
+    // as a volume the sampling's bookkeeping of 256³ bricks exceeds 1 GB.
+    let planes: Vec<pgvol::Operand> = ["plane:1,0,0,0", "plane:0,1,0,0"]
+        .iter()
+        .map(|t| pgvol::parse_operand(t).unwrap())
+        .collect();
+    let operator = pgvol::BlendOperator::Liming {
+        cut: pgvol::parse_operand("plane:-1,-1,0,0.5").unwrap(),
+        lambda: 0.5,
+    };
+    pgvol::set_memory_limit(Some(1_000_000_000));
+    for (result, at_least) in [
+        (pgvol::ResultUse::DenseFile, 2048f64.powi(3) * 12.0),
+        (pgvol::ResultUse::Volume, 256f64.powi(3) * 64.0),
+        (pgvol::ResultUse::Mesh, 256f64.powi(3) * 64.0),
+    ] {
+        let settings = pgvol::BlendSettings {
+            res: 2048,
+            bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+            result,
+            ..Default::default()
+        };
+        let stages = Stages::default();
+        let e = pgvol::blend(&planes, &operator, &settings, &stages).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+        assert!(
+            e.message().contains("a blend on a 2048 x 2048 x 2048 grid"),
+            "{e}"
+        );
+        assert!(needed_bytes(e.message()) >= at_least, "{result:?}: {e}");
+        assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+    }
+
+    // Within the limit the same jobs run.
+    let small = pgvol::CsgSettings { res: 48, ..dense };
+    let v = pgvol::csg(&operands, &small, &Silent).unwrap();
+    assert!(v.value(Vec3::new(1.2, 0.0, 0.0)) < 0.0);
+}

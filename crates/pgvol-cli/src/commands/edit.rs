@@ -36,6 +36,15 @@ pub(super) fn write_edited(
     Ok(mesh.triangles.len())
 }
 
+/// What the output's extension makes of an edit's result, for the library's memory estimate.
+pub(super) fn result_use(output: &Path) -> pgvol::ResultUse {
+    if pgvol::is_pgv(output) {
+        pgvol::ResultUse::DenseFile
+    } else {
+        pgvol::ResultUse::Mesh
+    }
+}
+
 /// A box from `x0,y0,z0,x1,y1,z1`. Options taking such comma lists set `allow_hyphen_values`:
 /// a list starting `-1,…` is not one number, so `allow_negative_numbers` would not admit it.
 pub(super) fn parse_box(text: &str) -> Result<(pgvol::glam::Vec3, pgvol::glam::Vec3), String> {
@@ -120,6 +129,7 @@ pub fn csg(a: CsgArgs) -> Result<()> {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
+        result: result_use(&a.output),
     };
     let volume = pgvol::csg(&a.operands, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * volume.grid.spacing;
@@ -349,6 +359,7 @@ pub fn blend(a: BlendArgs) -> Result<()> {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
+        result: result_use(&a.output),
     };
     let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;
