@@ -53,7 +53,7 @@ pub use lattice::{
     infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms,
     TPMS_NAMES,
 };
-pub use layer_frame::LayerFrame;
+pub use layer_frame::{layer_coordinate_problem, LayerFrame, MAX_LAYER_COORDINATE};
 pub use local_fit::{node_value, refit_box, LocalFit, NodeBox};
 pub use measure::{measure_field, FieldMeasure};
 pub use repair::{

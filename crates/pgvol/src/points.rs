@@ -367,6 +367,10 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
             "no closed contours",
         ));
     }
+    // The CLI and SVG readers check this themselves; the JSON one does not.
+    if let Some(problem) = pgvol_ops::layer_coordinate_problem(&layers) {
+        return Err(Error::file(ErrorKind::InputFile, path, problem));
+    }
     Ok(layers)
 }
 
@@ -399,6 +403,10 @@ pub fn contours(
         .collect();
     if planes.is_empty() {
         return Err(Error::new(ErrorKind::InputFile, "no closed contours"));
+    }
+    // Layers given directly, not read from a file, are checked here.
+    if let Some(problem) = pgvol_ops::layer_coordinate_problem(layers) {
+        return Err(Error::parameter(problem));
     }
     planes.sort_by(|x, y| x.height.total_cmp(&y.height));
     // The box of the loops, grown by the caps' half layers.
@@ -582,6 +590,28 @@ mod tests {
         let mut uneven = heights.clone();
         uneven[3] += 0.3 * gap;
         assert_eq!(planes_on_nodes(grid, &uneven, 2, (lo, hi)).unwrap(), grid);
+    }
+
+    #[test]
+    fn layer_files_and_layers_beyond_the_mesh_limit_are_refused() {
+        let far = pgvol_ops::Layer {
+            height: 0.5,
+            loops: vec![pgvol_ops::Loop {
+                points: vec![[0.0, 0.0], [1e20, 0.0], [0.0, 1.0]],
+                hole: false,
+            }],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("far.json");
+        pgvol_ops::write_slice_json(&path, std::slice::from_ref(&far)).unwrap();
+        let e = read_layers(&path).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::InputFile, "{e}");
+        assert_eq!(e.path(), Some(path.as_path()));
+        assert!(e.message().contains("coordinate 1e20 in layer 0"), "{e}");
+        let options = PointsOptions::default();
+        let e = contours(&[far], pgvol_ops::Axis::Z, &options, &crate::Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(e.message().contains("out of range"), "{e}");
     }
 
     #[test]
