@@ -202,3 +202,37 @@ fn edits_count_their_output_and_refuse_before_any_work() {
     let v = pgvol::csg(&operands, &small, &Silent).unwrap();
     assert!(v.value(Vec3::new(1.2, 0.0, 0.0)) < 0.0);
 }
+
+#[test]
+fn clouds_of_isolated_points_on_a_fine_grid_are_estimated_by_their_bricks() {
+    let _limit = Limit::take();
+    // 3000 points scattered through the unit cube, 0.04 apart, on a grid of spacing 0.002: each
+    // point holds its own blob of band bricks, and its coefficients the blob grown by one
+    // brick all round.
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let points: Vec<Vec3> = (0..3000)
+        .map(|_| Vec3::new(next(), next(), next()))
+        .collect();
+    let cloud = pgvol::PointCloud {
+        points,
+        normals: None,
+    };
+    let options = pgvol::PointsOptions {
+        grid: GridSpec::Voxel(0.002),
+        ..Default::default()
+    };
+    pgvol::set_memory_limit(Some(1000));
+    let stages = Stages::default();
+    let e = pgvol::points(&cloud, &options, &stages).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+    assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+    // The fit of this cloud passes 1.7 GB within 20 seconds; a surface of the cloud's area
+    // (3000 × 0.04²) would be estimated at 1.1 GB.
+    assert!(needed_bytes(e.message()) >= 2.5e9, "{e}");
+}
