@@ -57,7 +57,81 @@ fn message(e: &anyhow::Error) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::message;
+    use super::*;
+    use clap::CommandFactory;
+
+    /// The command lines in a help text: lines that start with `pgvol `, or carry one after a
+    /// label (`Example: pgvol …`), less a trailing remark in parentheses.
+    fn example_lines(text: &str) -> Vec<String> {
+        text.lines()
+            .filter_map(|line| {
+                let line = line.trim();
+                let line = match line.find(": pgvol ") {
+                    Some(at) => &line[at + 2..],
+                    None if line.starts_with("pgvol ") => line,
+                    None => return None,
+                };
+                let line = line.find("  (").map_or(line, |at| &line[..at]);
+                Some(line.trim().to_string())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_example_in_the_help_parses() {
+        let root = Cli::command();
+        let mut texts = vec![(
+            "pgvol".to_string(),
+            root.get_long_about()
+                .or(root.get_about())
+                .map(|t| t.to_string())
+                .unwrap_or_default(),
+        )];
+        for sub in root.get_subcommands() {
+            let name = sub.get_name().to_string();
+            for text in [sub.get_after_help(), sub.get_after_long_help()]
+                .into_iter()
+                .flatten()
+            {
+                texts.push((name.clone(), text.to_string()));
+            }
+        }
+        let mut parsed = 0;
+        for (name, text) in &texts {
+            let examples = example_lines(text);
+            assert!(
+                !text.contains("Example") || !examples.is_empty(),
+                "{name}: no command line found in {text:?}"
+            );
+            for line in examples {
+                let words: Vec<&str> = line.split_whitespace().collect();
+                if let Err(e) = Cli::try_parse_from(&words) {
+                    panic!("{name}: the example `{line}` does not parse:\n{e}");
+                }
+                parsed += 1;
+            }
+        }
+        // Every subcommand but a few shows an example.
+        assert!(parsed >= 15, "only {parsed} examples found");
+    }
+
+    #[test]
+    fn comma_lists_may_start_with_a_minus() {
+        for line in [
+            "pgvol csg union sphere:0,0,0,1 plane:0,0,1,0 -o u.stl --box -1,-1,-1,1,1,1",
+            "pgvol blend ipatch plane:1,0,0,0 plane:0,1,0,0 --bound plane:-1,0,0,1 \
+             --bound plane:0,-1,0,1 --weights -1,2,-0.5 -o b.stl",
+            "pgvol repair a.pgv -o b.pgv --mask -5,-5,20,5,5,32 --mask -1,-1,-1,0,0,0 --face -z",
+            "pgvol shell a.stl -o b.stl --thickness 1 --hollow --drain -1,0,0,-1,0,0,0.5",
+            "pgvol lattice a.stl -o b.stl --surface gyroid --cell 5 --thickness 0.5 \
+             --grade-linear -1,0,0,1,0,0 --cell-far 3",
+        ] {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            if let Err(e) = Cli::try_parse_from(&words) {
+                panic!("`{line}` does not parse:\n{e}");
+            }
+        }
+    }
 
     #[test]
     fn a_cause_already_in_the_message_is_printed_once() {
@@ -70,5 +144,80 @@ mod tests {
         // A cause the message does not repeat is kept.
         let e = anyhow::Error::from(std::io::Error::other("disk full")).context("writing b.pgv");
         assert_eq!(message(&e), "writing b.pgv: disk full");
+    }
+
+    #[test]
+    fn coarse_samples_out_of_range_are_refused_by_the_parser() {
+        for coarse in ["3", "3000", "100000000", "-1"] {
+            let line = format!(
+                "pgvol repair a.pgv -o b.pgv --mask 0,0,0,1,1,1 --denoise --coarse={coarse}"
+            );
+            let e = Cli::try_parse_from(line.split_whitespace())
+                .err()
+                .unwrap_or_else(|| panic!("--coarse {coarse} parsed"))
+                .to_string();
+            assert!(
+                e.contains("--coarse") && e.contains("expected 4 to 2048"),
+                "{e}"
+            );
+        }
+    }
+
+    /// Tests that run a command take turns: the memory limit is global.
+    static RUN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    #[test]
+    fn an_edit_written_dense_is_refused_before_work_with_its_figure() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("u.pgv");
+        let cli = Cli::try_parse_from([
+            "pgvol",
+            "csg",
+            "union",
+            "sphere:0,0,0,1",
+            "sphere:0.5,0,0,1",
+            "--res",
+            "600",
+            "--max-memory",
+            "100M",
+            "--quiet",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .unwrap();
+        let e = commands::run(cli.command).unwrap_err().to_string();
+        pgvol::set_memory_limit(None);
+        assert!(
+            e.contains("600 x 600 x 600 grid needs about") && e.contains("100.0 MB allowed"),
+            "{e}"
+        );
+        assert!(!out.exists());
+    }
+
+    #[test]
+    fn an_ipatch_without_a_bound_per_primary_names_the_option() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("b.stl");
+        let cli = Cli::try_parse_from([
+            "pgvol",
+            "blend",
+            "ipatch",
+            "plane:1,0,0,0",
+            "plane:0,1,0,0",
+            "--bound",
+            "plane:-1,0,0,1",
+            "--weights",
+            "1,1,-0.5",
+            "--box=-1,-1,-1,1,1,1",
+            "--quiet",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .unwrap();
+        let e = commands::run(cli.command).unwrap_err().to_string();
+        assert!(e.contains("one --bound per primary"), "{e}");
+        assert!(!out.exists());
     }
 }

@@ -32,7 +32,30 @@ pub fn functional_spline(p: [f32; 2], b: [f32; 2], lambda: f32) -> f32 {
     lambda * (b[0] * b[0]) * (b[1] * b[1]) - (1.0 - lambda) * p[0] * p[1]
 }
 
-/// The I-patch of primaries `p` with bounds `b`, weights `w` and the bounds' weight `w0`.
+/// Refuses an I-patch whose bounds or weights do not pair one to one with its primaries:
+/// [`ipatch`] and [`ipatch_terms`] take that as given.
+pub fn check_ipatch(
+    primaries: usize,
+    bounds: usize,
+    weights: Option<usize>,
+) -> Result<(), OpsError> {
+    if primaries < 2 || bounds != primaries {
+        return Err(OpsError::BadParameter(format!(
+            "an I-patch needs two or more primaries and one bound per primary, got {primaries} \
+             primaries and {bounds} bounds"
+        )));
+    }
+    match weights {
+        Some(n) if n != primaries => Err(OpsError::BadParameter(format!(
+            "an I-patch of {primaries} primaries needs {primaries} weights besides the bounds' \
+             weight, got {n}"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// The I-patch of primaries `p` with bounds `b`, weights `w` and the bounds' weight `w0`; one
+/// bound and one weight per primary (see [`check_ipatch`]).
 pub fn ipatch(p: &[f32], b: &[f32], w: &[f32], w0: f32) -> f32 {
     let squares: Vec<f32> = b.iter().map(|x| x * x).collect();
     let all: f32 = squares.iter().product();
@@ -47,7 +70,8 @@ pub fn ipatch(p: &[f32], b: &[f32], w: &[f32], w0: f32) -> f32 {
     sum
 }
 
-/// The I-patch's terms at a point: `Pᵢ Π_{j≠i} Bⱼ²` for each i, then `ΠBᵢ²`.
+/// The I-patch's terms at a point: `Pᵢ Π_{j≠i} Bⱼ²` for each i, then `ΠBᵢ²`; one bound per
+/// primary (see [`check_ipatch`]).
 pub fn ipatch_terms(p: &[f32], b: &[f32]) -> Vec<f64> {
     let mut terms: Vec<f64> = (0..p.len())
         .map(|i| {
@@ -219,6 +243,17 @@ mod tests {
             "{fw:?} {fw0}"
         );
         assert!(fit_ipatch_weights(&terms[..1]).is_err());
+    }
+
+    #[test]
+    fn ipatches_without_a_bound_per_primary_are_refused() {
+        assert!(check_ipatch(2, 2, None).is_ok() && check_ipatch(3, 3, Some(3)).is_ok());
+        let e = check_ipatch(2, 1, None).unwrap_err().to_string();
+        assert!(e.contains("2 primaries and 1 bounds"), "{e}");
+        assert!(check_ipatch(1, 1, None).is_err());
+        assert!(check_ipatch(2, 3, None).is_err());
+        let e = check_ipatch(2, 2, Some(1)).unwrap_err().to_string();
+        assert!(e.contains("needs 2 weights"), "{e}");
     }
 
     #[test]

@@ -24,6 +24,9 @@ pub fn read_cli(bytes: &[u8], name: &Path) -> Result<Vec<Layer>, FileError> {
     if layers.iter().all(|l| l.loops.is_empty()) {
         return Err(fail("the file has no closed polylines".into()));
     }
+    if let Some(problem) = crate::layer_frame::layer_coordinate_problem(&layers) {
+        return Err(fail(problem));
+    }
     Ok(layers)
 }
 
@@ -215,5 +218,21 @@ mod tests {
         }
         let e = read_cli(b"$$HEADERSTART\n$$ASCII\n", Path::new("x.cli")).unwrap_err();
         assert!(e.to_string().starts_with("x.cli: "), "{e}");
+    }
+
+    #[test]
+    fn coordinates_beyond_the_mesh_limit_are_refused() {
+        let name = Path::new("far.cli");
+        for (height, x) in [("1e20", "1"), ("0.5", "1e20"), ("0.5", "-3e8")] {
+            let text = format!(
+                "$$HEADERSTART\n$$ASCII\n$$HEADEREND\n$$GEOMETRYSTART\n$$LAYER/{height}\n\
+                 $$POLYLINE/1,1,4,0,0,{x},0,0,1,0,0\n$$GEOMETRYEND\n"
+            );
+            let e = read_cli(text.as_bytes(), name).unwrap_err().to_string();
+            assert!(
+                e.starts_with("far.cli: ") && e.contains("out of range"),
+                "{e}"
+            );
+        }
     }
 }

@@ -3,7 +3,36 @@
 
 use glam::DVec3;
 
-use crate::slice::Axis;
+use crate::slice::{Axis, Layer};
+
+/// Layer coordinates and heights must be below this in magnitude: the limit mesh coordinates
+/// have, beyond which f32 distances and grid spacings lose their meaning (a contour at 1e20
+/// asks for a grid of that extent).
+pub const MAX_LAYER_COORDINATE: f32 = 1e8;
+
+/// What is wrong with the first layer height or contour point that is not finite or not below
+/// [`MAX_LAYER_COORDINATE`] in magnitude, or `None` when every one is in range.
+pub fn layer_coordinate_problem(layers: &[Layer]) -> Option<String> {
+    let bad = |c: f32| !(c.is_finite() && c.abs() < MAX_LAYER_COORDINATE);
+    let advice = "(|x| must be < 1e8); give the layers relative to a nearer origin or in larger \
+                  units";
+    for (i, layer) in layers.iter().enumerate() {
+        if bad(layer.height) {
+            return Some(format!(
+                "the height {:e} of layer {i} is out of range {advice}",
+                layer.height
+            ));
+        }
+        let point = layer.loops.iter().flat_map(|l| &l.points).flatten();
+        if let Some(c) = point.copied().find(|&c| bad(c)) {
+            return Some(format!(
+                "coordinate {c:e} in layer {i} (height {}) is out of range {advice}",
+                layer.height
+            ));
+        }
+    }
+    None
+}
 
 /// The world translation of layer coordinates: `height` along the stacking axis and `u`, `v`
 /// in the plane (the axis's in-plane coordinates, as in [`Axis::indices`]). Zero for shapes
@@ -60,4 +89,29 @@ pub(crate) fn f32_loss(frame: &LayerFrame, extent: [f32; 4], heights: (f32, f32)
     let size = f64::from((extent[2] - extent[0]).max(extent[3] - extent[1])).max(f64::MIN_POSITIVE);
     let step = f64::from((far as f32).next_up() - far as f32) * 0.5;
     Some(step / size)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::slice::Loop;
+
+    #[test]
+    fn layer_coordinates_beyond_the_mesh_limit_are_named() {
+        let layer = |height: f32, x: f32| Layer {
+            height,
+            loops: vec![Loop {
+                points: vec![[0.0, 0.0], [x, 0.0], [0.0, 1.0]],
+                hole: false,
+            }],
+        };
+        assert_eq!(layer_coordinate_problem(&[layer(0.0, 9.9e7)]), None);
+        let e = layer_coordinate_problem(&[layer(0.0, 1.0), layer(0.5, -1e20)]).unwrap();
+        assert!(
+            e.contains("coordinate -1e20 in layer 1") && e.contains("< 1e8"),
+            "{e}"
+        );
+        let e = layer_coordinate_problem(&[layer(1e8, 1.0)]).unwrap();
+        assert!(e.contains("height 1e8 of layer 0"), "{e}");
+    }
 }

@@ -39,7 +39,8 @@ mod svg_read;
 mod write;
 
 pub use blend::{
-    edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming, renormalised,
+    check_ipatch, edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming,
+    renormalised,
 };
 pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
 pub use cli_file::{write_cli, write_cli_in, write_cli_with, CliEncoding, MAX_BINARY_ROUNDING};
@@ -52,11 +53,12 @@ pub use lattice::{
     infill, lattice_bricks, lattice_part, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms,
     TPMS_NAMES,
 };
-pub use layer_frame::LayerFrame;
+pub use layer_frame::{layer_coordinate_problem, LayerFrame, MAX_LAYER_COORDINATE};
 pub use local_fit::{node_value, refit_box, LocalFit, NodeBox};
 pub use measure::{measure_field, FieldMeasure};
 pub use repair::{
-    mask_nodes, repair, Face, LaplaceSystem, Mask, MaskReport, Restore, MAX_MASK_NODES,
+    coarse_lattice, mask_nodes, repair, Face, LaplaceSystem, Mask, MaskReport, Restore,
+    MAX_MASK_NODES,
 };
 pub use simplify::simplify_loops;
 pub use slice::{

@@ -352,6 +352,39 @@ fn laplace_fill(
     Ok((system.outer, values, outcome.iterations))
 }
 
+/// The lattice a denoising mask is resampled on: `coarse` samples along the mask's longest
+/// side, refused when finer than `grid` itself (that would smooth nothing and only cost time
+/// and memory) or larger than [`MAX_MASK_NODES`].
+pub fn coarse_lattice(grid: &Grid, mask: &Mask, coarse: usize) -> Result<Grid, OpsError> {
+    let side = (mask.hi - mask.lo).max_element().max(grid.spacing);
+    // The grid's own nodes along the side: the finest lattice that still resamples coarsely.
+    let finest = ((side / grid.spacing) as f64).floor().min(1e9) as usize + 1;
+    let finest = finest.max(4);
+    if !(4..=finest).contains(&coarse) {
+        return Err(OpsError::BadParameter(format!(
+            "the coarse resolution must be 4 to {finest} samples along the mask's longest side \
+             (the field's own grid has {finest} nodes there; fewer samples smooth more), got \
+             {coarse}"
+        )));
+    }
+    let step = side / (coarse - 1) as f32;
+    let dims = [0, 1, 2].map(|a| (((mask.hi[a] - mask.lo[a]) / step).ceil() as usize + 1).max(4));
+    let nodes = dims.iter().fold(1usize, |n, &d| n.saturating_mul(d));
+    if nodes > MAX_MASK_NODES {
+        return Err(OpsError::BadParameter(format!(
+            "the coarse lattice of {} x {} x {} samples is larger than the {MAX_MASK_NODES} \
+             nodes a mask may hold; use fewer samples or a smaller mask",
+            dims[0], dims[1], dims[2]
+        )));
+    }
+    Ok(Grid {
+        origin: mask.lo,
+        spacing: step,
+        dims,
+        offset: Default::default(),
+    })
+}
+
 /// The field inside `mask` seen through a coarse lattice of `coarse` samples along the
 /// mask's longest side: the quadratic B-spline interpolant of the samples, at the mask's nodes.
 fn coarse_resample(
@@ -360,20 +393,8 @@ fn coarse_resample(
     nodes: &NodeBox,
     coarse: usize,
 ) -> Result<Vec<f32>, OpsError> {
-    if coarse < 4 {
-        return Err(OpsError::BadParameter(format!(
-            "the coarse resolution must be at least 4 samples, got {coarse}"
-        )));
-    }
-    let side = (mask.hi - mask.lo).max_element().max(volume.grid.spacing);
-    let step = side / (coarse - 1) as f32;
-    let dims = [0, 1, 2].map(|a| (((mask.hi[a] - mask.lo[a]) / step).ceil() as usize + 1).max(4));
-    let coarse_grid = Grid {
-        origin: mask.lo,
-        spacing: step,
-        dims,
-        offset: Default::default(),
-    };
+    let coarse_grid = coarse_lattice(&volume.grid, mask, coarse)?;
+    let dims = coarse_grid.dims;
     let mut samples = Vec::with_capacity(dims.iter().product());
     for k in 0..dims[2] {
         for j in 0..dims[1] {
@@ -568,6 +589,36 @@ mod tests {
             "{inside_before} → {inside_after}"
         );
         assert_eq!(outside_before, outside_after);
+    }
+
+    #[test]
+    fn coarse_lattices_finer_than_the_grid_are_refused() {
+        let v = bumpy_sphere(48);
+        let mask = Mask {
+            lo: Vec3::new(-0.5, -0.5, 0.6),
+            hi: Vec3::new(0.5, 0.5, 1.2),
+        };
+        let along = (1.0 / v.grid.spacing) as usize + 1;
+        assert!(coarse_lattice(&v.grid, &mask, along).is_ok());
+        for coarse in [3, along + 1, 3000, 100_000_000, usize::MAX] {
+            let e = repair(&v, &[mask], Restore::Denoise { coarse })
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(&format!("4 to {along} samples")) && e.contains(&format!("{coarse}")),
+                "{e}"
+            );
+        }
+        // A mask far longer than the grid allows many samples along it, but not a lattice
+        // beyond the node limit.
+        let long = Mask {
+            lo: Vec3::new(-1e6, -1e6, -1e6),
+            hi: Vec3::new(1e6, 1e6, 1e6),
+        };
+        let e = coarse_lattice(&v.grid, &long, 1000)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("larger than the"), "{e}");
     }
 
     #[test]

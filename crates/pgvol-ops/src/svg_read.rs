@@ -58,6 +58,9 @@ fn read(text: &str) -> Result<Vec<Layer>, String> {
     if layers.iter().all(|l| l.loops.is_empty()) {
         return Err("no layer with closed contours (<g data-height=...> holding a <path>)".into());
     }
+    if let Some(problem) = crate::layer_frame::layer_coordinate_problem(&layers) {
+        return Err(problem);
+    }
     Ok(layers)
 }
 
@@ -213,6 +216,14 @@ mod tests {
             (
                 "<svg data-u-offset=\"3e38\" data-v-offset=\"0\"><g data-height=\"1\"><path d=\"M3e38 0 L1 0 L1 1 Z\"/></g></svg>",
                 "beyond single precision",
+            ),
+            (
+                "<svg data-u-offset=\"0\" data-v-offset=\"0\"><g data-height=\"1\"><path d=\"M1e20 0 L1 0 L1 1 Z\"/></g></svg>",
+                "coordinate 1e20 in layer 0",
+            ),
+            (
+                "<svg data-u-offset=\"0\" data-v-offset=\"0\"><g data-height=\"-1e21\"><path d=\"M0 0 L1 0 L1 1 Z\"/></g></svg>",
+                "out of range",
             ),
         ] {
             let e = read_svg(bad, name).unwrap_err().to_string();

@@ -5,7 +5,7 @@ use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume};
 use pgvol_sdf::SignMode;
 
-use crate::csg::{covering_grid, load_operands, operand_fields};
+use crate::csg::{check_edit_memory, covering_grid, load_operands, operand_fields, ResultUse};
 use crate::encode::ENCODE_BAND;
 use crate::error::{Error, Result};
 use crate::operand::{Operand, OperandField};
@@ -57,6 +57,8 @@ pub struct BlendSettings {
     pub bounds: Option<(Vec3, Vec3)>,
     /// How inside is told from outside in mesh primaries (default [`SignMode::Auto`]).
     pub sign: SignMode,
+    /// What becomes of the result, for the memory estimate (default kept as a volume).
+    pub result: ResultUse,
 }
 
 impl Default for BlendSettings {
@@ -65,6 +67,7 @@ impl Default for BlendSettings {
             res: crate::CSG_RES,
             bounds: None,
             sign: SignMode::Auto,
+            result: ResultUse::Volume,
         }
     }
 }
@@ -105,13 +108,28 @@ pub fn blend(
             check_lambda(*lambda)?;
             bounds.to_vec()
         }
-        BlendOperator::IPatch { bounds, .. } => bounds.clone(),
+        BlendOperator::IPatch {
+            bounds, weights, ..
+        } => {
+            pgvol_ops::check_ipatch(
+                primaries.len(),
+                bounds.len(),
+                weights.as_ref().map(|w| w.0.len()),
+            )
+            .map_err(crate::csg::ops_error)?;
+            bounds.clone()
+        }
     };
     let needed = match operator {
         BlendOperator::IPatch { .. } => primaries.len().max(2),
         _ => 2,
     };
-    if primaries.len() != needed || (extra.len() != needed && extra.len() != 1) {
+    // Liming has its one cutting surface; the others one bound per primary.
+    let wanted_extra = match operator {
+        BlendOperator::Liming { .. } => 1,
+        _ => needed,
+    };
+    if primaries.len() != needed || extra.len() != wanted_extra {
         return Err(Error::parameter(format!(
             "this blend needs {needed} primaries{}, got {} primaries and {} bounds",
             match operator {
@@ -131,6 +149,7 @@ pub fn blend(
         settings.res,
     )?;
     let reach = BLEND_REACH * grid.spacing;
+    check_edit_memory("a blend", &loaded, &grid, reach, settings.result)?;
     let fields = operand_fields(&all, &loaded, grid, reach, settings.sign, progress)?;
     let (prim, rest) = fields.split_at(primaries.len());
     let value =

@@ -25,6 +25,56 @@ pub(crate) fn ops_error(e: pgvol_ops::OpsError) -> Error {
 /// Grid nodes per axis of a Boolean's result, unless given.
 pub const CSG_RES: usize = 128;
 
+/// What the caller does with an edit's result, so that the memory estimate made before any
+/// work counts it too.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ResultUse {
+    /// Kept as the sparse coefficient volume returned.
+    #[default]
+    Volume,
+    /// Written dense ([`crate::DERIVED_STORAGE`]): every coefficient of the grid as f32.
+    DenseFile,
+    /// Contoured into a mesh on its own grid.
+    Mesh,
+}
+
+/// Refuses an edit on `grid` whose estimated peak would exceed the memory limit, before any
+/// operand is placed on the grid: the operands' fields, the brick-by-brick sampling of the
+/// whole grid with the bricks near the surface (estimated from the operands' areas), and what
+/// `result` adds.
+pub(crate) fn check_edit_memory(
+    job: &str,
+    operands: &[LoadedOperand],
+    grid: &Grid,
+    reach: f32,
+    result: ResultUse,
+) -> Result<()> {
+    let bricks = grid.dims.iter().fold(1u64, |n, &d| {
+        n.saturating_mul(d.div_ceil(pgvol_core::BRICK_EDGE) as u64)
+    });
+    let area: f64 = operands.iter().map(|o| o.surface_area(grid)).sum();
+    let near = crate::memory::band_bricks(area, grid.spacing, ENCODE_BAND).min(bricks);
+    let fields = operands
+        .iter()
+        .fold(0u64, |n, o| n.saturating_add(o.field_bytes(grid, reach)));
+    let sampling = bricks
+        .saturating_mul(crate::memory::BYTES_PER_SAMPLED_BRICK)
+        .saturating_add(near.saturating_mul(crate::memory::BYTES_PER_BAND_BRICK));
+    let output = match result {
+        ResultUse::Volume => 0,
+        ResultUse::DenseFile => {
+            crate::memory::grid_bytes(grid.len(), crate::memory::BYTES_PER_DENSE_FILE_NODE)
+        }
+        ResultUse::Mesh => near.saturating_mul(crate::memory::BYTES_PER_CONTOUR_BRICK),
+    };
+    let [nx, ny, nz] = grid.dims;
+    crate::memory::check_memory(
+        &format!("{job} on a {nx} x {ny} x {nz} grid"),
+        fields.saturating_add(sampling).saturating_add(output),
+        "lower the resolution",
+    )
+}
+
 /// What to compute.
 #[derive(Clone, Copy, Debug)]
 pub struct CsgSettings {
@@ -40,6 +90,8 @@ pub struct CsgSettings {
     pub bounds: Option<(Vec3, Vec3)>,
     /// How inside is told from outside in mesh operands (default [`SignMode::Auto`]).
     pub sign: SignMode,
+    /// What becomes of the result, for the memory estimate (default kept as a volume).
+    pub result: ResultUse,
 }
 
 impl Default for CsgSettings {
@@ -50,6 +102,7 @@ impl Default for CsgSettings {
             res: CSG_RES,
             bounds: None,
             sign: SignMode::Auto,
+            result: ResultUse::Volume,
         }
     }
 }
@@ -153,6 +206,7 @@ pub fn csg(
     };
     let loaded = load_operands(operands)?;
     let grid = covering_grid(&loaded, settings.bounds, radius, settings.res)?;
+    check_edit_memory("a Boolean", &loaded, &grid, radius, settings.result)?;
     let fields = operand_fields(operands, &loaded, grid, radius, settings.sign, progress)?;
     progress.stage("combining the fields");
     let band = ENCODE_BAND * grid.spacing;

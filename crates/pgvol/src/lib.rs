@@ -87,7 +87,8 @@ mod slice;
 
 pub use blend::{blend, BlendOperator, BlendSettings, Blended, DEFAULT_LAMBDA};
 pub use csg::{
-    covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings, CSG_RES,
+    covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings,
+    ResultUse, CSG_RES,
 };
 pub use decode::{decode, decode_shape, DecodeOptions, SPECK_VOXELS};
 pub use distance::{

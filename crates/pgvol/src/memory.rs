@@ -34,6 +34,16 @@ pub const BYTES_PER_SDF_NODE: u64 = 8;
 /// sample from 2 to 4 million samples).
 pub const BYTES_PER_SAMPLE: u64 = 120;
 
+/// Bytes per brick of 8³ nodes of the whole grid while an edit samples its result brick by
+/// brick: the list of bricks (24), the result of each (40) and the sparse grid's slot and side
+/// bits until its tiles are compacted.
+pub const BYTES_PER_SAMPLED_BRICK: u64 = 72;
+
+/// Bytes per grid node of a dense `.pgv` written from a sparse volume: the dense coefficients,
+/// their little-endian bytes and the file's bytes, 4 each (peak RSS of a 600³ union written
+/// dense: 8.3 bytes per node).
+pub const BYTES_PER_DENSE_FILE_NODE: u64 = 12;
+
 /// 0 means no limit was set: the memory the machine has available is the limit.
 static LIMIT: AtomicU64 = AtomicU64::new(0);
 
@@ -126,7 +136,7 @@ pub(crate) fn check_sparse_encode(
 }
 
 /// The surface area of `mesh`.
-fn mesh_area(mesh: &pgvol_core::Mesh) -> f64 {
+pub(crate) fn mesh_area(mesh: &pgvol_core::Mesh) -> f64 {
     mesh.triangles
         .iter()
         .map(|t| {

@@ -207,6 +207,51 @@ impl LoadedOperand {
         }
     }
 
+    /// An upper estimate of the operand's surface area inside `grid`'s box, for memory
+    /// estimates: exact for spheres and boxes, a bound on the box's sections for planes, a
+    /// cylinder's side along the box's diagonal, a mesh's area, and a field's from its stored
+    /// bricks.
+    pub fn surface_area(&self, grid: &Grid) -> f64 {
+        let e = (grid.max_corner() - grid.origin).as_dvec3();
+        match self {
+            LoadedOperand::Primary(Primary::Sphere(s)) => {
+                4.0 * std::f64::consts::PI * (s.radius as f64).powi(2)
+            }
+            LoadedOperand::Primary(Primary::Box(b)) => {
+                let h = b.half.as_dvec3();
+                8.0 * (h.x * h.y + h.y * h.z + h.z * h.x)
+            }
+            // A section S of the box with unit normal n projects onto the face normal to axis
+            // i with area S·|nᵢ| ≤ that face's area Aᵢ, so S² = Σ (S·nᵢ)² ≤ Σ Aᵢ².
+            LoadedOperand::Primary(Primary::Plane(_)) => {
+                ((e.y * e.z).powi(2) + (e.z * e.x).powi(2) + (e.x * e.y).powi(2)).sqrt()
+            }
+            LoadedOperand::Primary(Primary::Cylinder(c)) => {
+                2.0 * std::f64::consts::PI * c.radius as f64 * e.length()
+            }
+            LoadedOperand::Mesh(mesh) => crate::memory::mesh_area(mesh),
+            LoadedOperand::Field(shape) => {
+                // A surface crosses about 1.5 bricks per brick face of area.
+                let side = 8.0 * shape.volume.grid.spacing as f64;
+                shape.volume.coeffs.stored_count() as f64 * side * side / 1.5
+            }
+        }
+    }
+
+    /// Estimated peak bytes of [`Self::field`] on `grid` with `reach`, the field kept.
+    pub fn field_bytes(&self, grid: &Grid, reach: f32) -> u64 {
+        match self {
+            LoadedOperand::Primary(_) => 0,
+            LoadedOperand::Field(shape) => shape.volume.coeffs.memory_bytes() as u64,
+            LoadedOperand::Mesh(mesh) => crate::memory::sparse_encode_bytes(
+                crate::memory::mesh_area(mesh),
+                mesh.triangles.len(),
+                grid,
+                ENCODE_BAND + reach / grid.spacing,
+            ),
+        }
+    }
+
     /// The field on `grid`: meshes are encoded onto it with exact distances `reach` beyond the
     /// usual band; `.pgv` files keep their own grid and are refused when their band is too
     /// narrow for `reach`. `sign` applies to meshes.

@@ -169,7 +169,8 @@ const BYTES_PER_BRICK: u64 = crate::memory::BYTES_PER_BAND_BRICK;
 /// Bytes per point: the point, normal, index, neighbour lists and constraints.
 const BYTES_PER_POINT: u64 = 200;
 
-/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid`.
+/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid`, taking
+/// them as samples of a surface.
 pub fn points_bytes(
     points: usize,
     spacing: f32,
@@ -178,6 +179,71 @@ pub fn points_bytes(
 ) -> u64 {
     let area = points as f64 * f64::from(spacing).powi(2);
     let bricks = crate::memory::band_bricks(area, grid.spacing, options.band);
+    bricks_bytes(bricks, points, spacing, grid, options)
+}
+
+/// The bricks of `grid` a reconstruction of `points` stores: those within `band` spacings (and
+/// one more) of a point, as the band sampling takes them, grown by their 26 neighbours, as the
+/// sparse fit's coefficients are. Counted on bitsets of the grid's bricks: on a fine grid
+/// points far apart each hold a blob of their own, many more bricks than a surface of the
+/// cloud's area would.
+fn cloud_bricks(points: &[Vec3], grid: &pgvol_core::Grid, band: f32) -> u64 {
+    use pgvol_core::BRICK_EDGE;
+    let counts = grid.dims.map(|d| d.div_ceil(BRICK_EDGE));
+    let flat = |b: [usize; 3]| b[0] + counts[0] * (b[1] + counts[1] * b[2]);
+    let total = counts.iter().product::<usize>();
+    let mut near = vec![0u64; total.div_ceil(64)];
+    let brick = |x: Vec3| {
+        let g = grid.to_grid(x).max(Vec3::ZERO).to_array();
+        [0, 1, 2].map(|a| (g[a] as usize / BRICK_EDGE).min(counts[a] - 1))
+    };
+    let reach = band * grid.spacing;
+    for &p in points {
+        let (lo, hi) = (brick(p - reach), brick(p + reach + grid.spacing));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let i = flat([x, y, z]);
+                    near[i / 64] |= 1 << (i % 64);
+                }
+            }
+        }
+    }
+    let mut grown = vec![0u64; near.len()];
+    for (w, &word) in near.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let i = w * 64 + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let b = [
+                i % counts[0],
+                i / counts[0] % counts[1],
+                i / (counts[0] * counts[1]),
+            ];
+            let range = |a: usize| b[a].saturating_sub(1)..=(b[a] + 1).min(counts[a] - 1);
+            for z in range(2) {
+                for y in range(1) {
+                    for x in range(0) {
+                        let j = flat([x, y, z]);
+                        grown[j / 64] |= 1 << (j % 64);
+                    }
+                }
+            }
+        }
+    }
+    grown.iter().map(|w| u64::from(w.count_ones())).sum()
+}
+
+/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid` storing
+/// `bricks` bricks.
+fn bricks_bytes(
+    bricks: u64,
+    points: usize,
+    spacing: f32,
+    grid: &pgvol_core::Grid,
+    options: &PointsOptions,
+) -> u64 {
+    let area = points as f64 * f64::from(spacing).powi(2);
     let mut bytes =
         bricks.saturating_mul(BYTES_PER_BRICK) + (points as u64).saturating_mul(BYTES_PER_POINT);
     match options.method {
@@ -275,6 +341,13 @@ fn fit_on_grid(
     progress: &dyn Progress,
 ) -> Result<Reconstructed> {
     let spacing = pgvol_points::mean_spacing(&cloud.points);
+    // The cloud's own count, unless its area says more (the area also sizes the fit's work).
+    let area = cloud.points.len() as f64 * f64::from(spacing).powi(2);
+    let bricks = crate::memory::band_bricks(area, grid.spacing, options.band).max(cloud_bricks(
+        &cloud.points,
+        &grid,
+        options.band,
+    ));
     let [nx, ny, nz] = grid.dims;
     crate::memory::check_memory(
         &format!(
@@ -282,7 +355,7 @@ fn fit_on_grid(
             cloud.points.len(),
             options.method.name()
         ),
-        points_bytes(cloud.points.len(), spacing, &grid, options),
+        bricks_bytes(bricks, cloud.points.len(), spacing, &grid, options),
         if options.method == Method::Tangent {
             "lower the resolution or thin the cloud"
         } else {
@@ -367,6 +440,10 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
             "no closed contours",
         ));
     }
+    // The CLI and SVG readers check this themselves; the JSON one does not.
+    if let Some(problem) = pgvol_ops::layer_coordinate_problem(&layers) {
+        return Err(Error::file(ErrorKind::InputFile, path, problem));
+    }
     Ok(layers)
 }
 
@@ -399,6 +476,10 @@ pub fn contours(
         .collect();
     if planes.is_empty() {
         return Err(Error::new(ErrorKind::InputFile, "no closed contours"));
+    }
+    // Layers given directly, not read from a file, are checked here.
+    if let Some(problem) = pgvol_ops::layer_coordinate_problem(layers) {
+        return Err(Error::parameter(problem));
     }
     planes.sort_by(|x, y| x.height.total_cmp(&y.height));
     // The box of the loops, grown by the caps' half layers.
@@ -582,6 +663,41 @@ mod tests {
         let mut uneven = heights.clone();
         uneven[3] += 0.3 * gap;
         assert_eq!(planes_on_nodes(grid, &uneven, 2, (lo, hi)).unwrap(), grid);
+    }
+
+    #[test]
+    fn layer_files_and_layers_beyond_the_mesh_limit_are_refused() {
+        let far = pgvol_ops::Layer {
+            height: 0.5,
+            loops: vec![pgvol_ops::Loop {
+                points: vec![[0.0, 0.0], [1e20, 0.0], [0.0, 1.0]],
+                hole: false,
+            }],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("far.json");
+        pgvol_ops::write_slice_json(&path, std::slice::from_ref(&far)).unwrap();
+        let e = read_layers(&path).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::InputFile, "{e}");
+        assert_eq!(e.path(), Some(path.as_path()));
+        assert!(e.message().contains("coordinate 1e20 in layer 0"), "{e}");
+        let options = PointsOptions::default();
+        let e = contours(&[far], pgvol_ops::Axis::Z, &options, &crate::Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(e.message().contains("out of range"), "{e}");
+    }
+
+    #[test]
+    fn isolated_points_count_their_own_blobs_of_bricks() {
+        let grid = pgvol_core::Grid::cube_res(Vec3::ZERO, Vec3::ONE, 512).unwrap();
+        let one = cloud_bricks(&[Vec3::splat(0.5)], &grid, 4.0);
+        // 2 or 3 band bricks per axis, grown by one on each side.
+        assert!((64..=125).contains(&one), "{one}");
+        let far = [Vec3::splat(0.25), Vec3::splat(0.75)];
+        let apart = cloud_bricks(&far[..1], &grid, 4.0) + cloud_bricks(&far[1..], &grid, 4.0);
+        assert_eq!(cloud_bricks(&far, &grid, 4.0), apart);
+        // A point at the grid's corner stays within it.
+        assert!(cloud_bricks(&[grid.origin], &grid, 4.0) <= 8);
     }
 
     #[test]

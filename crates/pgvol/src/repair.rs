@@ -89,6 +89,7 @@ pub fn repair(
             )));
         }
     }
+    check_repair_memory(&shape.volume, masks, restore)?;
     progress.stage("restoring the masks");
     let repaired =
         pgvol_ops::repair(&shape.volume, masks, restore).map_err(crate::csg::ops_error)?;
@@ -102,6 +103,36 @@ pub fn repair(
     };
     require_surface(Sides::of_volume(&repaired.0), &why)?;
     Ok(repaired)
+}
+
+/// Bytes per mask node of a Laplace fill: the solver's f64 vectors and the system's indices.
+const BYTES_PER_FILL_NODE: u64 = 64;
+
+/// Refuses a repair whose largest mask would not fit in memory, before any work: the field's
+/// copy, and the mask's solve or its coarse lattice (samples, coefficients and the prefilter's
+/// copy, as in encoding). Masks and lattices over their node limit are refused by name.
+fn check_repair_memory(volume: &CoefficientVolume, masks: &[Mask], restore: Restore) -> Result<()> {
+    let mut largest = 0u64;
+    for mask in masks {
+        let nodes = pgvol_ops::mask_nodes(&volume.grid, mask).map_err(crate::csg::ops_error)?;
+        let bytes = match restore {
+            Restore::Protrusion { .. } => {
+                (nodes.count() as u64).saturating_mul(BYTES_PER_FILL_NODE)
+            }
+            Restore::Denoise { coarse } => {
+                let lattice = pgvol_ops::coarse_lattice(&volume.grid, mask, coarse)
+                    .map_err(crate::csg::ops_error)?;
+                crate::memory::grid_bytes(lattice.len(), crate::memory::BYTES_PER_NODE)
+                    .saturating_add(nodes.count() as u64 * 4)
+            }
+        };
+        largest = largest.max(bytes);
+    }
+    crate::memory::check_memory(
+        &format!("restoring {} mask(s)", masks.len()),
+        largest.saturating_add(volume.coeffs.memory_bytes() as u64),
+        "use smaller masks or fewer coarse samples",
+    )
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Booleans of fields against analytic truths: the rounded union's fillet radius, its bound
 //! against the sharp union, and operands read from files.
 
-use pgvol::glam::Vec3;
+use pgvol::glam::{DVec3, Vec3};
 use pgvol::mesh::shapes;
 use pgvol::{Blend, BoolOp, CoefficientVolume, CsgSettings, EncodeOptions, ErrorKind, GridSpec};
 use pgvol::{Operand, Silent};
@@ -163,4 +163,33 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
     // Too few operands are refused.
     let e = pgvol::blend(&planes[..1], &operator, &settings, &Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter);
+}
+
+#[test]
+fn an_ipatch_with_fewer_bounds_than_primaries_is_refused() {
+    let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
+    let settings = pgvol::BlendSettings {
+        res: 16,
+        bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+        ..pgvol::BlendSettings::default()
+    };
+    for weights in [Some((vec![1.0, 1.0], -0.5)), None] {
+        let operator = pgvol::BlendOperator::IPatch {
+            bounds: operands(&["plane:-1,0,0,1"]),
+            points: vec![DVec3::new(-0.5, -0.5, 0.0); 4],
+            weights,
+        };
+        let e = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(e.message().contains("one bound per primary"), "{e}");
+        assert!(!e.message().contains("--"), "{e}");
+    }
+    // Weights that do not pair with the primaries are refused the same way.
+    let operator = pgvol::BlendOperator::IPatch {
+        bounds: operands(&["plane:-1,0,0,1", "plane:0,-1,0,1"]),
+        weights: Some((vec![1.0], -0.5)),
+        points: Vec::new(),
+    };
+    let e = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap_err();
+    assert!(e.message().contains("needs 2 weights"), "{e}");
 }

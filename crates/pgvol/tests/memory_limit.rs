@@ -1,10 +1,40 @@
-//! Jobs are refused before they allocate when their estimate exceeds the memory limit. One test
-//! per process state: the limit is global, so this file holds a single test.
+//! Jobs are refused before they allocate when their estimate exceeds the memory limit. The
+//! limit is global to the process, so the tests take turns through one lock.
 
+use std::sync::{Mutex, MutexGuard};
+
+use pgvol::glam::Vec3;
 use pgvol::{EncodeOptions, ErrorKind, GridSpec, Silent, StorageOptions};
+
+static LIMIT: Mutex<()> = Mutex::new(());
+
+/// Holds the memory limit for one test; the default returns when it is dropped.
+struct Limit(#[allow(dead_code)] MutexGuard<'static, ()>);
+
+impl Limit {
+    fn take() -> Self {
+        Limit(LIMIT.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+}
+
+impl Drop for Limit {
+    fn drop(&mut self) {
+        pgvol::set_memory_limit(None);
+    }
+}
+
+fn sphere_shape(res: usize) -> pgvol::Shape {
+    let options = EncodeOptions {
+        grid: GridSpec::Res(res),
+        ..Default::default()
+    };
+    let encoded = pgvol::encode(&pgvol::mesh::shapes::octasphere(3), &options, &Silent).unwrap();
+    pgvol::Shape::from_file(encoded.file)
+}
 
 #[test]
 fn jobs_over_the_limit_are_refused_before_allocating() {
+    let _limit = Limit::take();
     let mesh = pgvol::mesh::shapes::octasphere(2);
     let options = EncodeOptions {
         grid: GridSpec::Res(32),
@@ -75,4 +105,161 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     .unwrap_err();
     assert_eq!(dense.kind(), ErrorKind::ResourceLimit, "{dense}");
     assert!(dense.message().contains("893.4 GB"), "{dense}");
+}
+
+#[test]
+fn denoising_lattices_are_range_checked_and_estimated_before_work() {
+    let _limit = Limit::take();
+    let shape = sphere_shape(48);
+    let mask = pgvol::parse_mask("-0.5,-0.5,0.5,0.5,0.5,1.2").unwrap();
+    // Lattices finer than the field's grid are refused by their range, however large.
+    for coarse in [3000, 100_000_000] {
+        let restore = pgvol::Restore::Denoise { coarse };
+        let e = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(
+            e.message().contains("the coarse resolution must be 4 to"),
+            "{e}"
+        );
+    }
+    // A lattice in range but over the limit is refused with its figure.
+    let restore = pgvol::Restore::Denoise { coarse: 20 };
+    pgvol::set_memory_limit(Some(10_000));
+    let e = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+    assert!(
+        e.message().contains("restoring 1 mask(s) needs about"),
+        "{e}"
+    );
+    assert!(e.message().contains("10.0 kB allowed"), "{e}");
+    pgvol::set_memory_limit(None);
+    let (repaired, _) = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap();
+    assert!(repaired.value(Vec3::ZERO) < 0.0);
+}
+
+/// Records the stages a call starts: none means it was refused before any work.
+#[derive(Default)]
+struct Stages(Mutex<Vec<String>>);
+
+impl pgvol::Progress for Stages {
+    fn stage(&self, name: &str) {
+        self.0.lock().unwrap().push(name.to_string());
+    }
+}
+
+/// The bytes a refusal says the job needs ("needs about 2.6 GB of memory").
+fn needed_bytes(message: &str) -> f64 {
+    let rest = &message[message.find("needs about ").expect(message) + 12..];
+    let mut words = rest.split_whitespace();
+    let value: f64 = words.next().unwrap().parse().unwrap();
+    let unit = match words.next().unwrap() {
+        "B" => 1.0,
+        "kB" => 1e3,
+        "MB" => 1e6,
+        "GB" => 1e9,
+        "TB" => 1e12,
+        other => panic!("unit {other}"),
+    };
+    value * unit
+}
+
+#[test]
+fn edits_count_their_output_and_refuse_before_any_work() {
+    let _limit = Limit::take();
+    let dir = tempfile::tempdir().unwrap();
+    let ball = dir.path().join("ball.stl");
+    pgvol::write_mesh(&ball, &pgvol::mesh::shapes::octasphere(3)).unwrap();
+    let operands: Vec<pgvol::Operand> = [ball.to_str().unwrap(), "sphere:0.5,0,0,0.8"]
+        .iter()
+        .map(|t| pgvol::parse_operand(t).unwrap())
+        .collect();
+    // Written dense, every node of a 600³ grid costs its coefficient three times over.
+    let dense = pgvol::CsgSettings {
+        res: 600,
+        result: pgvol::ResultUse::DenseFile,
+        ..Default::default()
+    };
+    pgvol::set_memory_limit(Some(100_000_000));
+    let stages = Stages::default();
+    let e = pgvol::csg(&operands, &dense, &stages).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+    assert!(
+        e.message().contains("a Boolean on a 600 x 600 x 600 grid"),
+        "{e}"
+    );
+    assert!(e.message().contains("100.0 MB allowed"), "{e}");
+    assert!(needed_bytes(e.message()) >= 600f64.powi(3) * 12.0, "{e}");
+    assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+
+    // Blends of unbounded primaries at 2048³: the dense file alone is 100 GB, and even kept
+    // as a volume the sampling's bookkeeping of 256³ bricks exceeds 1 GB.
+    let planes: Vec<pgvol::Operand> = ["plane:1,0,0,0", "plane:0,1,0,0"]
+        .iter()
+        .map(|t| pgvol::parse_operand(t).unwrap())
+        .collect();
+    let operator = pgvol::BlendOperator::Liming {
+        cut: pgvol::parse_operand("plane:-1,-1,0,0.5").unwrap(),
+        lambda: 0.5,
+    };
+    pgvol::set_memory_limit(Some(1_000_000_000));
+    for (result, at_least) in [
+        (pgvol::ResultUse::DenseFile, 2048f64.powi(3) * 12.0),
+        (pgvol::ResultUse::Volume, 256f64.powi(3) * 64.0),
+        (pgvol::ResultUse::Mesh, 256f64.powi(3) * 64.0),
+    ] {
+        let settings = pgvol::BlendSettings {
+            res: 2048,
+            bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+            result,
+            ..Default::default()
+        };
+        let stages = Stages::default();
+        let e = pgvol::blend(&planes, &operator, &settings, &stages).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+        assert!(
+            e.message().contains("a blend on a 2048 x 2048 x 2048 grid"),
+            "{e}"
+        );
+        assert!(needed_bytes(e.message()) >= at_least, "{result:?}: {e}");
+        assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+    }
+
+    // Within the limit the same jobs run.
+    let small = pgvol::CsgSettings { res: 48, ..dense };
+    let v = pgvol::csg(&operands, &small, &Silent).unwrap();
+    assert!(v.value(Vec3::new(1.2, 0.0, 0.0)) < 0.0);
+}
+
+#[test]
+fn clouds_of_isolated_points_on_a_fine_grid_are_estimated_by_their_bricks() {
+    let _limit = Limit::take();
+    // 3000 points scattered through the unit cube, 0.04 apart, on a grid of spacing 0.002: each
+    // point holds its own blob of band bricks, and its coefficients the blob grown by one
+    // brick all round.
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let points: Vec<Vec3> = (0..3000)
+        .map(|_| Vec3::new(next(), next(), next()))
+        .collect();
+    let cloud = pgvol::PointCloud {
+        points,
+        normals: None,
+    };
+    let options = pgvol::PointsOptions {
+        grid: GridSpec::Voxel(0.002),
+        ..Default::default()
+    };
+    pgvol::set_memory_limit(Some(1000));
+    let stages = Stages::default();
+    let e = pgvol::points(&cloud, &options, &stages).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
+    assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+    // The fit of this cloud passes 1.7 GB within 20 seconds; a surface of the cloud's area
+    // (3000 × 0.04²) would be estimated at 1.1 GB.
+    assert!(needed_bytes(e.message()) >= 2.5e9, "{e}");
 }

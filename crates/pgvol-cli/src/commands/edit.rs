@@ -36,7 +36,17 @@ pub(super) fn write_edited(
     Ok(mesh.triangles.len())
 }
 
-/// A box from `x0,y0,z0,x1,y1,z1`.
+/// What the output's extension makes of an edit's result, for the library's memory estimate.
+pub(super) fn result_use(output: &Path) -> pgvol::ResultUse {
+    if pgvol::is_pgv(output) {
+        pgvol::ResultUse::DenseFile
+    } else {
+        pgvol::ResultUse::Mesh
+    }
+}
+
+/// A box from `x0,y0,z0,x1,y1,z1`. Options taking such comma lists set `allow_hyphen_values`:
+/// a list starting `-1,…` is not one number, so `allow_negative_numbers` would not admit it.
 pub(super) fn parse_box(text: &str) -> Result<(pgvol::glam::Vec3, pgvol::glam::Vec3), String> {
     let v: Vec<f32> = text
         .split(',')
@@ -94,7 +104,7 @@ pub struct CsgArgs {
     pub radius: Option<f32>,
     /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: every bounded operand's box,
     /// grown by the radius); needed when every operand is a plane or cylinder.
-    #[arg(long = "box", value_parser = parse_box, allow_negative_numbers = true)]
+    #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
     pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
@@ -119,6 +129,7 @@ pub fn csg(a: CsgArgs) -> Result<()> {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
+        result: result_use(&a.output),
     };
     let volume = pgvol::csg(&a.operands, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * volume.grid.spacing;
@@ -135,6 +146,18 @@ fn parse_face(s: &str) -> Result<pgvol::Face, String> {
     pgvol::parse_face(s).map_err(|e| e.to_string())
 }
 
+/// Coarse samples: at least 4, and never more than a grid may have nodes along an axis (the
+/// library refuses lattices finer than the field's own grid once it is read).
+fn parse_coarse(s: &str) -> Result<usize, String> {
+    let max = pgvol::MAX_RES as usize;
+    match s.trim().parse::<usize>() {
+        Ok(n) if (4..=max).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected 4 to {max} samples along the mask's longest side, got '{s}'"
+        )),
+    }
+}
+
 #[derive(Args)]
 #[command(
     after_help = "Examples:\n  pgvol repair part.pgv -o fixed.pgv --mask -5,-5,20,5,5,32 --face -z\n  \
@@ -149,7 +172,7 @@ pub struct RepairArgs {
     pub output: PathArg,
     /// An axis-aligned box x0,y0,z0,x1,y1,z1 in model units to restore; repeat for more.
     /// Coefficients whose support misses every mask stay bit-identical.
-    #[arg(long, required = true, value_parser = parse_mask, allow_negative_numbers = true)]
+    #[arg(long, required = true, value_parser = parse_mask, allow_hyphen_values = true)]
     pub mask: Vec<pgvol::Mask>,
     /// Protrusion removal: the mask's face the protrusion's base crosses (+x, -x, +y, -y, +z,
     /// -z), where the new field joins the body.
@@ -164,7 +187,7 @@ pub struct RepairArgs {
     #[arg(long)]
     pub denoise: bool,
     /// Coarse samples along a mask's longest side when denoising (fewer smooth more).
-    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, requires = "denoise")]
+    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, value_parser = parse_coarse, requires = "denoise")]
     pub coarse: usize,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
@@ -261,13 +284,13 @@ pub struct BlendArgs {
     #[arg(long, default_value_t = pgvol::DEFAULT_LAMBDA)]
     pub lambda: f32,
     /// I-patch weights w1,..,wn,w.
-    #[arg(long, allow_negative_numbers = true, conflicts_with = "points")]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "points")]
     pub weights: Option<String>,
     /// I-patch: a CSV of points (x,y,z per line) on the wanted surface, to fit the weights.
     #[arg(long)]
     pub points: Option<PathArg>,
     /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: the bounded primaries' box).
-    #[arg(long = "box", value_parser = parse_box, allow_negative_numbers = true)]
+    #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
     pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
@@ -299,6 +322,14 @@ pub fn blend(a: BlendArgs) -> Result<()> {
             }
         }
         BlendKind::Ipatch => {
+            if a.bound.len() != a.primaries.len() {
+                anyhow::bail!(
+                    "ipatch needs one --bound per primary, in order: got {} --bound for {} \
+                     primaries",
+                    a.bound.len(),
+                    a.primaries.len()
+                );
+            }
             let parsed = match &a.weights {
                 Some(text) => {
                     Some(parse_weights(text).map_err(|e| anyhow::anyhow!("--weights: {e}"))?)
@@ -328,6 +359,7 @@ pub fn blend(a: BlendArgs) -> Result<()> {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
+        result: result_use(&a.output),
     };
     let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;

@@ -275,7 +275,7 @@ pub struct ShellArgs {
     /// A drain hole through the wall (and the infill), with --hollow or --infill:
     /// `x,y,z,dx,dy,dz,diameter` (a point inside the cavity, the direction out through the wall,
     /// the hole's diameter). Repeat for more holes.
-    #[arg(long, value_parser = parse_drain)]
+    #[arg(long, value_parser = parse_drain, allow_hyphen_values = true)]
     pub drain: Vec<pgvol::Drain>,
     /// Hollow and fill the cavity with this lattice: gyroid, schwarz-p, diamond or neovius
     /// (see `pgvol lattice`).
