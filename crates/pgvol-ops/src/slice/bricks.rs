@@ -85,15 +85,19 @@ impl<'a> BrickLayer<'a> {
             self.occupied.push(at as u32);
         }
         self.states[at] = self.bricks.len() as u32;
-        let stride = [1, BRICK_EDGE, BRICK_EDGE * BRICK_EDGE][axis];
         let mut ranges = [[f32::INFINITY, f32::NEG_INFINITY]; BRICK_EDGE];
-        for (i, &x) in values.iter().enumerate() {
-            let r = &mut ranges[i / stride % BRICK_EDGE];
-            if x < r[0] {
-                r[0] = x;
-            }
-            if x > r[1] {
-                r[1] = x;
+        let rows = values.chunks_exact(BRICK_EDGE);
+        for (row, xs) in rows.enumerate() {
+            // Row `row` runs along x at y = row % E, z = row / E.
+            let at = [0, row % BRICK_EDGE, row / BRICK_EDGE];
+            for (x, &v) in xs.iter().enumerate() {
+                let r = &mut ranges[if axis == 0 { x } else { at[axis] }];
+                if v < r[0] {
+                    r[0] = v;
+                }
+                if v > r[1] {
+                    r[1] = v;
+                }
             }
         }
         self.ranges.push(ranges);

@@ -396,17 +396,27 @@ impl Plane {
     }
 }
 
+/// Root finding along an edge ends when its estimate moves less than this fraction of the edge:
+/// far below the simplification tolerance (a tenth of a spacing by default).
+const ROOT_STEP: f32 = 1e-5;
+
 /// The zero of `g` on [0, 1] given `g(0) = va`, `g(1) = vb` of opposite signs: regula falsi with
-/// the Illinois modification, which keeps the bracket and converges superlinearly.
+/// the Illinois modification, which keeps the bracket and converges superlinearly. It stops once
+/// an estimate moves less than [`ROOT_STEP`] of the edge.
 fn edge_root(g: &dyn Fn(f32) -> f32, va: f32, vb: f32) -> f32 {
     let (mut t0, mut f0, mut t1, mut f1) = (0.0f32, va, 1.0f32, vb);
     let mut side = 0i8;
     let mut t = f0 / (f0 - f1);
+    let mut last = f32::NAN;
     for _ in 0..12 {
         t = t0 - f0 * (t1 - t0) / (f1 - f0);
         if !t.is_finite() {
             return 0.5 * (t0 + t1);
         }
+        if (t - last).abs() < ROOT_STEP {
+            break;
+        }
+        last = t;
         let ft = g(t);
         if ft == 0.0 || (t1 - t0) < 1e-6 || !ft.is_finite() {
             break;
