@@ -195,6 +195,31 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #[test]
+        fn corrupted_files_never_panic_and_what_reads_is_what_was_written(
+            pos in 0usize..100_000,
+            val in proptest::prelude::any::<u8>(),
+            cut in 0usize..100_000,
+        ) {
+            let good = file_bytes();
+            let mut bytes = good.clone();
+            let n = bytes.len();
+            bytes[pos % n] = val;
+            bytes.truncate(cut % (n + 1));
+            let path = Path::new("c.pgv");
+            if let Ok(Some(reader)) = SlabReader::open(&bytes, path) {
+                // Both checksums passed: the bytes are the file written.
+                proptest::prop_assert_eq!(&bytes, &good);
+                for axis in 0..3 {
+                    for s in 0..reader.brick_counts()[axis] + 1 {
+                        reader.slab(axis, s).unwrap();
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn damaged_files_are_refused_on_opening() {
         let mut bytes = file_bytes();
