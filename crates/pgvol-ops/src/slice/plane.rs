@@ -10,7 +10,7 @@ use crate::slice::MAX_LAYER_NODES;
 use crate::OpsError;
 
 /// Cells per block edge.
-pub(crate) const BLOCK: usize = 4;
+pub(crate) const BLOCK: usize = 8;
 
 /// Vertices keep this fraction of their grid edge from its ends, so no segment touches a node
 /// and segments of different cells meet only at shared vertices.
