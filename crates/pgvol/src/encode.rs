@@ -81,9 +81,11 @@ impl EncodeOptions {
             )));
         }
         if let FitMethod::Iso { z_step: Some(z) } = self.fit {
-            if !(z.is_finite() && z > 0.0) {
+            let max = pgvol_field::MAX_Z_STEP;
+            if !(z.is_finite() && z > 0.0 && z <= max) {
                 return Err(Error::parameter(format!(
-                    "the isosurface step must be a positive number of grid spacings, got {z}"
+                    "the isosurface step must be in (0, {max}] grid spacings, got {z}: the \
+                     iso fit needs an isosurface within half a spacing of every node"
                 )));
             }
         }

@@ -326,15 +326,15 @@ fn bad_options_are_parameter_errors() {
         ErrorKind::BadParameter,
         None,
     );
-    let bad_step = EncodeOptions {
-        fit: FitMethod::Iso { z_step: Some(0.0) },
-        ..encode_options(16)
-    };
-    assert_error(
-        pgvol::encode(&mesh, &bad_step, &Silent),
-        ErrorKind::BadParameter,
-        None,
-    );
+    for z in [0.0, 1.5, 2.0] {
+        let bad_step = EncodeOptions {
+            fit: FitMethod::Iso { z_step: Some(z) },
+            ..encode_options(16)
+        };
+        let e = pgvol::encode(&mesh, &bad_step, &Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(e.to_string().contains("(0, 1] grid spacings"), "{e}");
+    }
     assert_error(
         pgvol::encode(&mesh, &encode_options(1), &Silent),
         ErrorKind::BadParameter,

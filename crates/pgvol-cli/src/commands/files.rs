@@ -41,7 +41,8 @@ pub struct EncodeArgs {
     /// How inside is told from outside.
     #[arg(long, value_enum, default_value_t)]
     pub sign: SignArg,
-    /// For --fit iso: the isosurface step in grid spacings (searched when not given).
+    /// For --fit iso: the isosurface step in grid spacings, at most 1 (the method needs an
+    /// isosurface within half a spacing of every node) [default: searched in 0.05..1].
     #[arg(long)]
     pub z_step: Option<f32>,
     /// Coefficient precision in the file; `auto` picks the smallest that keeps the stored
