@@ -219,9 +219,16 @@ fn offsets_and_shells_within_the_band_succeed_and_beyond_it_are_refused() {
         };
         let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
         let h = file.volume.grid.spacing;
-        let shape = Shape::from_file(file);
         // The cubic B-spline reaches two spacings past the level set it shapes.
         let reach = (band - 2.0) * h;
+        // What `pgvol info` shows as the usable reach is the one the operations enforce.
+        let shown = pgvol::exact_reach(&file);
+        assert!(
+            (shown - reach).abs() <= 1e-5 * reach,
+            "{shown} against {reach}"
+        );
+        let shape = Shape::from_file(file);
+        assert_eq!(shape.exact_band(), shown);
         for amount in [0.5 * reach, -0.5 * reach, 0.95 * reach] {
             let grown = pgvol::offset(&shape, amount).unwrap();
             // The surface moved: the old surface point is now `amount` inside.

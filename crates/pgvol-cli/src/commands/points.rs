@@ -59,7 +59,9 @@ pub struct PointsArgs {
     /// spacings].
     #[arg(long)]
     pub support: Option<f32>,
-    /// Node values kept within W grid spacings of the points, clamped beyond.
+    /// Node values kept within W grid spacings of the points, clamped beyond. Offsets, shells
+    /// and levels read from the file are exact within W − 2 spacings (the cubic B-spline's
+    /// support blends in the clamp), as `pgvol info` shows.
     #[arg(long, value_name = "W", default_value_t = pgvol::ENCODE_BAND)]
     pub band: f32,
     /// Contouring method for mesh outputs.
