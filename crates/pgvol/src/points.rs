@@ -169,22 +169,37 @@ const BYTES_PER_BRICK: u64 = crate::memory::BYTES_PER_BAND_BRICK;
 /// Bytes per point: the point, normal, index, neighbour lists and constraints.
 const BYTES_PER_POINT: u64 = 200;
 
-/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid`.
+/// Bytes per stored brick held beside the least-squares fit's vectors: the starting
+/// coefficients and the result's copy of them (8³ f32 each).
+const BYTES_PER_COPY: u64 = 2 * 2048;
+
+/// Estimated peak bytes of reconstructing `points` (mean spacing `spacing`) on `grid`, from the
+/// bricks the band around them will really store (counted here, a byte per brick of the grid).
 pub fn points_bytes(
-    points: usize,
+    points: &[Vec3],
     spacing: f32,
     grid: &pgvol_core::Grid,
     options: &PointsOptions,
 ) -> u64 {
-    let area = points as f64 * f64::from(spacing).powi(2);
-    let bricks = crate::memory::band_bricks(area, grid.spacing, options.band);
-    let mut bytes =
-        bricks.saturating_mul(BYTES_PER_BRICK) + (points as u64).saturating_mul(BYTES_PER_POINT);
+    let n = points.len() as u64;
+    let bricks =
+        pgvol_points::band::band_bricks(grid, points, options.band * grid.spacing).len() as u64;
+    let flags = grid
+        .dims
+        .iter()
+        .map(|&d| d.div_ceil(8) as u64)
+        .product::<u64>();
+    let mut bytes = bricks
+        .saturating_mul(BYTES_PER_BRICK)
+        .saturating_add(n.saturating_mul(BYTES_PER_POINT))
+        .saturating_add(flags);
     match options.method {
         Method::Tangent => {}
-        // The least-squares fit over the band's bricks, two constraints per point.
+        // The least-squares fit over the band's bricks, two constraints per point, beside the
+        // starting volume and its copy for the result.
         Method::Spline => {
-            bytes += pgvol_points::spline_fit::fit_bytes(bricks, 2 * points as u64);
+            bytes += pgvol_points::spline_fit::fit_bytes(bricks, 2 * n)
+                + bricks.saturating_mul(BYTES_PER_COPY);
         }
         Method::RbfWendland => {
             let support = options
@@ -193,18 +208,19 @@ pub fn points_bytes(
             // Clouds denser than a third of the support are thinned to one point per cell of
             // that size; two centres per kept point, each row seeing both layers of a sheet
             // within the support.
+            let area = n as f64 * f64::from(spacing).powi(2);
             let kept_spacing = f64::from(spacing.max(support / pgvol_points::SUPPORT_SPACINGS));
-            let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
+            let kept = (area / (kept_spacing * kept_spacing)).min(n as f64);
             let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
             let entries = 2.0 * kept * per_row;
             let matrix = (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
             // The spline fit it corrects comes first, and its memory is freed before.
-            bytes += matrix.max(pgvol_points::spline_fit::fit_bytes(
-                bricks,
-                2 * points as u64,
-            ));
+            bytes += matrix.max(
+                pgvol_points::spline_fit::fit_bytes(bricks, 2 * n)
+                    + bricks.saturating_mul(BYTES_PER_COPY),
+            );
         }
-        Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
+        Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * n as usize),
     }
     bytes
 }
@@ -282,7 +298,7 @@ fn fit_on_grid(
             cloud.points.len(),
             options.method.name()
         ),
-        points_bytes(cloud.points.len(), spacing, &grid, options),
+        points_bytes(&cloud.points, spacing, &grid, options),
         if options.method == Method::Tangent {
             "lower the resolution or thin the cloud"
         } else {
