@@ -79,6 +79,7 @@ mod operand;
 mod perturb;
 mod pgv_io;
 mod points;
+mod points_warnings;
 mod progress;
 mod remesh;
 mod repair;

@@ -291,6 +291,8 @@ fn fit_on_grid(
     progress: &dyn Progress,
 ) -> Result<Reconstructed> {
     let spacing = pgvol_points::mean_spacing(&cloud.points);
+    pgvol_points::check_spacing(&cloud.points, spacing, &grid)
+        .map_err(|e| Error::new(ErrorKind::BadParameter, e.to_string()).caused_by(e))?;
     let [nx, ny, nz] = grid.dims;
     crate::memory::check_memory(
         &format!(
@@ -316,11 +318,13 @@ fn fit_on_grid(
     .map_err(|e| {
         let kind = match e {
             pgvol_points::PointsError::TooManyForCubic { .. } => ErrorKind::ResourceLimit,
+            pgvol_points::PointsError::TooSparse { .. } => ErrorKind::BadParameter,
             pgvol_points::PointsError::Field(_) => ErrorKind::Internal,
             _ => ErrorKind::InputFile,
         };
         Error::new(kind, e.to_string()).caused_by(e)
     })?;
+    crate::points_warnings::warn_about(&report, grid.spacing, progress);
     let mut header = pgvol_format::header_for(&volume, options.method.name(), None);
     header.source_bounds = Some([lo.to_array(), hi.to_array()]);
     header

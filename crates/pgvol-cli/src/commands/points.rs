@@ -106,7 +106,10 @@ pub fn run(a: PointsArgs) -> Result<()> {
             "output": a.output, "grid": grid, "method": r.method, "points": r.points,
             "normals_estimated": r.normals_estimated, "spacing": r.spacing, "offset": r.offset,
             "centres": r.centres, "support": r.support, "iterations": r.iterations,
-            "residual": r.residual, "matrix_entries": r.matrix_entries, "bricks": r.bricks,
+            "residual": r.residual, "converged": r.converged,
+            "normals_reoriented": r.orientation.reoriented,
+            "normals_flipped": r.orientation.flipped,
+            "matrix_entries": r.matrix_entries, "bricks": r.bricks,
             "triangles": triangles,
             "seconds": {
                 "read": read_seconds, "normals": r.seconds_normals, "solve": r.seconds_solve,
