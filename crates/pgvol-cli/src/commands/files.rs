@@ -223,12 +223,6 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             report.z_step.map(|z| format!(", z_step {z:.4} k")).unwrap_or_default()
         );
     }
-    if !report.converged && !quiet {
-        eprintln!(
-            "warning: the {} solver did not converge (relative residual {:.3e})",
-            report.solver, report.residual
-        );
-    }
     if report.spurious_sign_changes > 0 && !quiet {
         eprintln!(
             "warning: {} nodes farther than one spacing from the surface have the wrong sign: the field has spurious surface pieces",
