@@ -263,3 +263,20 @@ def test_a_drain_outside_the_cavity_is_refused(pgvol, tmp_path):
             assert r.returncode == 0, r.describe()
         else:
             assert r.returncode == 1 and "drain 1" in r.stderr and "outside the shape" in r.stderr, r.describe()
+
+
+def test_info_shows_the_reach_offsets_may_use(pgvol, mesh_path, tmp_path):
+    """`--band W` keeps exact distances for offsets to W − 2 spacings: `info` says so, and an
+    offset just inside that reach is accepted, one just beyond it refused."""
+    pgv = tmp_path / "spot-band6.pgv"
+    helpers.run_ok([pgvol, "encode", mesh_path("spot"), "-o", pgv, "--res", 48, "--band", 6, "-q"])
+    info = helpers.run_json([pgvol, "info", pgv, "--json"])
+    spacing = info["header"]["grid"]["spacing"]
+    reach = info["exact_reach"]
+    assert abs(reach - 4 * spacing) <= 1e-4 * spacing, (reach, spacing)
+    text = helpers.run_ok([pgvol, "info", pgv]).stdout
+    assert "exact reach" in text and "(4.00 spacings)" in text, text
+    out = tmp_path / "spot-band6-offset.pgv"
+    helpers.run_ok([pgvol, "offset", pgv, "-o", out, "--distance", 0.95 * reach, "-q"])
+    refused = helpers.run([pgvol, "offset", pgv, "-o", out, "--distance", 1.05 * reach])
+    assert refused.returncode != 0 and "--band" in refused.stderr, refused.stderr

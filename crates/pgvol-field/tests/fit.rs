@@ -141,6 +141,29 @@ fn iso_step_search_picks_a_step_in_range() {
 }
 
 #[test]
+fn iso_step_longer_than_the_spacing_is_refused() {
+    let g = grid(12);
+    let opts = FitOptions::default();
+    let run = |z: f32| {
+        fit(
+            g,
+            Basis::Bspline3,
+            FitMethod::Iso { z_step: Some(z) },
+            &sphere(),
+            &opts,
+        )
+    };
+    assert_eq!(run(1.0).unwrap().1.z_step, Some(1.0));
+    for z in [1.01, 1.5, 2.0] {
+        let e = run(z).unwrap_err().to_string();
+        assert!(
+            e.contains("(0, 1] grid spacings") && e.contains(&z.to_string()),
+            "{e}"
+        );
+    }
+}
+
+#[test]
 fn weighted_fit_beats_node_interpolation_on_the_surface() {
     let g = grid(16);
     let torus = Torus {

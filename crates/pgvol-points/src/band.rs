@@ -23,7 +23,7 @@ pub fn sample_band(
     field: &(dyn Fn(Vec3, f32) -> f32 + Sync),
 ) -> SparseGrid {
     let mut values = SparseGrid::new(grid.dims, Background::clamp(band));
-    let bricks = band_bricks(grid, points, band, values.brick_counts());
+    let bricks = band_bricks(grid, points, band);
     let filled: Vec<([usize; 3], Box<[f32; BRICK_NODES]>)> = bricks
         .par_iter()
         .map_init(Vec::new, |scratch, &b| {
@@ -146,36 +146,40 @@ fn spread_sides(brick: &mut [f32; BRICK_NODES], band: f32, side: impl Fn(usize) 
     }
 }
 
-/// The bricks with a node within `band` of a point (by the box around it), sorted.
-fn band_bricks(grid: &Grid, points: &[Vec3], band: f32, counts: [usize; 3]) -> Vec<[usize; 3]> {
+/// The bricks of `grid` with a node within `band` of a point (by the box around it), z slowest.
+/// One flag per brick of the grid rather than a list per point: the flags take a byte per
+/// 512 nodes, the lists 24 bytes for each of the up to 27 bricks of every point.
+pub fn band_bricks(grid: &Grid, points: &[Vec3], band: f32) -> Vec<[usize; 3]> {
+    let counts = grid.dims.map(|d| d.div_ceil(BRICK_EDGE));
     let to_brick = |x: Vec3| {
-        let g = grid.to_grid(x);
-        [g.x, g.y, g.z]
-            .map(|c| c.max(0.0))
-            .iter()
-            .zip(&counts)
-            .map(|(&c, &n)| ((c as usize) / BRICK_EDGE).min(n - 1))
-            .collect::<Vec<_>>()
-    };
-    let mut keys: Vec<[usize; 3]> = points
-        .par_iter()
-        .flat_map_iter(|&p| {
-            let lo = to_brick(p - band);
-            let hi = to_brick(p + band + grid.spacing);
-            let mut out = Vec::new();
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        out.push([x, y, z]);
-                    }
-                }
-            }
-            out
+        let g = grid.to_grid(x).to_array();
+        std::array::from_fn::<usize, 3, _>(|a| {
+            ((g[a].max(0.0) as usize) / BRICK_EDGE).min(counts[a].max(1) - 1)
         })
-        .collect();
-    keys.par_sort_unstable();
-    keys.dedup();
-    keys
+    };
+    let mut flags = vec![false; counts.iter().product()];
+    for &p in points {
+        let lo = to_brick(p - band);
+        let hi = to_brick(p + band + grid.spacing);
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                let row = counts[0] * (y + counts[1] * z);
+                flags[row + lo[0]..=row + hi[0]].fill(true);
+            }
+        }
+    }
+    flags
+        .iter()
+        .enumerate()
+        .filter(|(_, &f)| f)
+        .map(|(i, _)| {
+            [
+                i % counts[0],
+                i / counts[0] % counts[1],
+                i / (counts[0] * counts[1]),
+            ]
+        })
+        .collect()
 }
 
 /// Marks every absent brick not reachable from the grid's border through absent bricks as

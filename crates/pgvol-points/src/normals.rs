@@ -34,7 +34,7 @@ pub fn estimate_normals(points: &[Vec3], spacing: f32) -> Vec<Vec3> {
     normals
 }
 
-fn far_reach(points: &[Vec3]) -> f32 {
+pub(crate) fn far_reach(points: &[Vec3]) -> f32 {
     let (lo, hi) = crate::index::bounds(points);
     (hi - lo).length() * 2.0 + 1.0
 }
@@ -101,7 +101,7 @@ pub fn smallest_eigenvector(m: DMat3) -> DVec3 {
 
 /// Flips normals so neighbours agree: Prim's tree from the topmost unvisited point of each
 /// connected part, its normal turned to +z (the topmost point of a closed surface faces up).
-fn orient(points: &[Vec3], neighbours: &[Vec<u32>], normals: &mut [Vec3]) {
+pub(crate) fn orient(points: &[Vec3], neighbours: &[Vec<u32>], normals: &mut [Vec3]) {
     let n = points.len();
     let mut done = vec![false; n];
     let mut by_height: Vec<u32> = (0..n as u32).collect();

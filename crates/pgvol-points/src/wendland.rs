@@ -40,6 +40,13 @@ pub struct WendlandFit<'a> {
     pub entries: usize,
 }
 
+impl WendlandFit<'_> {
+    /// Whether the residual reached [`CG_TOLERANCE`] before the iteration cap.
+    pub fn converged(&self) -> bool {
+        self.residual <= CG_TOLERANCE
+    }
+}
+
 /// Bytes of the stored matrix per entry (u32 column, f32 value).
 pub const BYTES_PER_ENTRY: u64 = 8;
 

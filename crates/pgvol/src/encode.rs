@@ -81,9 +81,11 @@ impl EncodeOptions {
             )));
         }
         if let FitMethod::Iso { z_step: Some(z) } = self.fit {
-            if !(z.is_finite() && z > 0.0) {
+            let max = pgvol_field::MAX_Z_STEP;
+            if !(z.is_finite() && z > 0.0 && z <= max) {
                 return Err(Error::parameter(format!(
-                    "the isosurface step must be a positive number of grid spacings, got {z}"
+                    "the isosurface step must be in (0, {max}] grid spacings, got {z}: the \
+                     iso fit needs an isosurface within half a spacing of every node"
                 )));
             }
         }
@@ -114,6 +116,9 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     }
     let mut timings = Timings::default();
     let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
+    if let Some(message) = unconverged(&fitted.report) {
+        progress.warn(&message);
+    }
     let sides = Sides::of_volume(&fitted.volume);
     let why = IfEmpty {
         result: "the encoded field",
@@ -130,6 +135,19 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
         file,
         fit: fitted.report,
         timings,
+    })
+}
+
+/// What to say of a fit whose solver stopped at its iteration cap, `None` when it converged.
+fn unconverged(report: &FitReport) -> Option<String> {
+    (!report.converged).then(|| {
+        format!(
+            "the {} fit's {} solver stopped at its iteration cap without converging ({} \
+             iterations, relative residual {:.1e}), so the field may miss the surface; the \
+             interp fit of the B-spline bases solves no system, and a coarser grid converges in \
+             fewer iterations",
+            report.method, report.solver, report.iterations, report.residual
+        )
     })
 }
 
@@ -340,5 +358,40 @@ pub fn check_pgv_name(path: &Path) -> Result<()> {
         Ok(())
     } else {
         Err(Error::new(ErrorKind::OutputFile, "expected a .pgv file name").at(path))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unconverged_fit_is_said_with_its_figures_and_a_converged_one_is_not() {
+        let mut report = FitReport {
+            method: "wls".into(),
+            solver: "cgls".into(),
+            iterations: 500,
+            residual: 3e-3,
+            converged: true,
+            seconds: 1.0,
+            spurious_sign_changes: 0,
+            z_step: None,
+            initial_residual: None,
+            normal_residual: None,
+            unknowns: 1000,
+            rows: 2000,
+            stages: Default::default(),
+        };
+        assert_eq!(unconverged(&report), None);
+        report.converged = false;
+        let message = unconverged(&report).expect("a warning");
+        assert!(
+            message.contains("wls") && message.contains("500 iterations"),
+            "{message}"
+        );
+        assert!(
+            message.contains("3.0e-3") && !message.contains("--"),
+            "{message}"
+        );
     }
 }

@@ -79,6 +79,7 @@ mod operand;
 mod perturb;
 mod pgv_io;
 mod points;
+mod points_warnings;
 mod progress;
 mod remesh;
 mod repair;
@@ -136,8 +137,8 @@ pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
 pub use shape::{
-    check_offset, check_thickness, growth, offset, operation_name, parse_drain, shell, Shape,
-    ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
+    check_offset, check_thickness, exact_reach, growth, offset, operation_name, parse_drain, shell,
+    Shape, ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
 };
 pub use slice::{
     layer_frame, slice, slice_file, write_layers, LayerFormat, SliceSettings, Sliced,

@@ -169,88 +169,37 @@ const BYTES_PER_BRICK: u64 = crate::memory::BYTES_PER_BAND_BRICK;
 /// Bytes per point: the point, normal, index, neighbour lists and constraints.
 const BYTES_PER_POINT: u64 = 200;
 
-/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid`, taking
-/// them as samples of a surface.
+/// Bytes per stored brick held beside the least-squares fit's vectors: the starting
+/// coefficients and the result's copy of them (8³ f32 each).
+const BYTES_PER_COPY: u64 = 2 * 2048;
+
+/// Estimated peak bytes of reconstructing `points` (mean spacing `spacing`) on `grid`, from the
+/// bricks the band around them will really store (counted here, a byte per brick of the grid).
 pub fn points_bytes(
-    points: usize,
+    points: &[Vec3],
     spacing: f32,
     grid: &pgvol_core::Grid,
     options: &PointsOptions,
 ) -> u64 {
-    let area = points as f64 * f64::from(spacing).powi(2);
-    let bricks = crate::memory::band_bricks(area, grid.spacing, options.band);
-    bricks_bytes(bricks, points, spacing, grid, options)
-}
-
-/// The bricks of `grid` a reconstruction of `points` stores: those within `band` spacings (and
-/// one more) of a point, as the band sampling takes them, grown by their 26 neighbours, as the
-/// sparse fit's coefficients are. Counted on bitsets of the grid's bricks: on a fine grid
-/// points far apart each hold a blob of their own, many more bricks than a surface of the
-/// cloud's area would.
-fn cloud_bricks(points: &[Vec3], grid: &pgvol_core::Grid, band: f32) -> u64 {
-    use pgvol_core::BRICK_EDGE;
-    let counts = grid.dims.map(|d| d.div_ceil(BRICK_EDGE));
-    let flat = |b: [usize; 3]| b[0] + counts[0] * (b[1] + counts[1] * b[2]);
-    let total = counts.iter().product::<usize>();
-    let mut near = vec![0u64; total.div_ceil(64)];
-    let brick = |x: Vec3| {
-        let g = grid.to_grid(x).max(Vec3::ZERO).to_array();
-        [0, 1, 2].map(|a| (g[a] as usize / BRICK_EDGE).min(counts[a] - 1))
-    };
-    let reach = band * grid.spacing;
-    for &p in points {
-        let (lo, hi) = (brick(p - reach), brick(p + reach + grid.spacing));
-        for z in lo[2]..=hi[2] {
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    let i = flat([x, y, z]);
-                    near[i / 64] |= 1 << (i % 64);
-                }
-            }
-        }
-    }
-    let mut grown = vec![0u64; near.len()];
-    for (w, &word) in near.iter().enumerate() {
-        let mut bits = word;
-        while bits != 0 {
-            let i = w * 64 + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let b = [
-                i % counts[0],
-                i / counts[0] % counts[1],
-                i / (counts[0] * counts[1]),
-            ];
-            let range = |a: usize| b[a].saturating_sub(1)..=(b[a] + 1).min(counts[a] - 1);
-            for z in range(2) {
-                for y in range(1) {
-                    for x in range(0) {
-                        let j = flat([x, y, z]);
-                        grown[j / 64] |= 1 << (j % 64);
-                    }
-                }
-            }
-        }
-    }
-    grown.iter().map(|w| u64::from(w.count_ones())).sum()
-}
-
-/// Estimated peak bytes of reconstructing `points` points `spacing` apart on `grid` storing
-/// `bricks` bricks.
-fn bricks_bytes(
-    bricks: u64,
-    points: usize,
-    spacing: f32,
-    grid: &pgvol_core::Grid,
-    options: &PointsOptions,
-) -> u64 {
-    let area = points as f64 * f64::from(spacing).powi(2);
-    let mut bytes =
-        bricks.saturating_mul(BYTES_PER_BRICK) + (points as u64).saturating_mul(BYTES_PER_POINT);
+    let n = points.len() as u64;
+    let bricks =
+        pgvol_points::band::band_bricks(grid, points, options.band * grid.spacing).len() as u64;
+    let flags = grid
+        .dims
+        .iter()
+        .map(|&d| d.div_ceil(8) as u64)
+        .product::<u64>();
+    let mut bytes = bricks
+        .saturating_mul(BYTES_PER_BRICK)
+        .saturating_add(n.saturating_mul(BYTES_PER_POINT))
+        .saturating_add(flags);
     match options.method {
         Method::Tangent => {}
-        // The least-squares fit over the band's bricks, two constraints per point.
+        // The least-squares fit over the band's bricks, two constraints per point, beside the
+        // starting volume and its copy for the result.
         Method::Spline => {
-            bytes += pgvol_points::spline_fit::fit_bytes(bricks, 2 * points as u64);
+            bytes += pgvol_points::spline_fit::fit_bytes(bricks, 2 * n)
+                + bricks.saturating_mul(BYTES_PER_COPY);
         }
         Method::RbfWendland => {
             let support = options
@@ -259,18 +208,19 @@ fn bricks_bytes(
             // Clouds denser than a third of the support are thinned to one point per cell of
             // that size; two centres per kept point, each row seeing both layers of a sheet
             // within the support.
+            let area = n as f64 * f64::from(spacing).powi(2);
             let kept_spacing = f64::from(spacing.max(support / pgvol_points::SUPPORT_SPACINGS));
-            let kept = (area / (kept_spacing * kept_spacing)).min(points as f64);
+            let kept = (area / (kept_spacing * kept_spacing)).min(n as f64);
             let per_row = 2.0 * std::f64::consts::PI * (f64::from(support) / kept_spacing).powi(2);
             let entries = 2.0 * kept * per_row;
             let matrix = (entries * pgvol_points::wendland::BYTES_PER_ENTRY as f64) as u64;
             // The spline fit it corrects comes first, and its memory is freed before.
-            bytes += matrix.max(pgvol_points::spline_fit::fit_bytes(
-                bricks,
-                2 * points as u64,
-            ));
+            bytes += matrix.max(
+                pgvol_points::spline_fit::fit_bytes(bricks, 2 * n)
+                    + bricks.saturating_mul(BYTES_PER_COPY),
+            );
         }
-        Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * points),
+        Method::RbfCubic => bytes += pgvol_points::cubic::cubic_bytes(2 * n as usize),
     }
     bytes
 }
@@ -341,13 +291,8 @@ fn fit_on_grid(
     progress: &dyn Progress,
 ) -> Result<Reconstructed> {
     let spacing = pgvol_points::mean_spacing(&cloud.points);
-    // The cloud's own count, unless its area says more (the area also sizes the fit's work).
-    let area = cloud.points.len() as f64 * f64::from(spacing).powi(2);
-    let bricks = crate::memory::band_bricks(area, grid.spacing, options.band).max(cloud_bricks(
-        &cloud.points,
-        &grid,
-        options.band,
-    ));
+    pgvol_points::check_spacing(&cloud.points, spacing, &grid)
+        .map_err(|e| Error::new(ErrorKind::BadParameter, e.to_string()).caused_by(e))?;
     let [nx, ny, nz] = grid.dims;
     crate::memory::check_memory(
         &format!(
@@ -355,7 +300,7 @@ fn fit_on_grid(
             cloud.points.len(),
             options.method.name()
         ),
-        bricks_bytes(bricks, cloud.points.len(), spacing, &grid, options),
+        points_bytes(&cloud.points, spacing, &grid, options),
         if options.method == Method::Tangent {
             "lower the resolution or thin the cloud"
         } else {
@@ -373,11 +318,13 @@ fn fit_on_grid(
     .map_err(|e| {
         let kind = match e {
             pgvol_points::PointsError::TooManyForCubic { .. } => ErrorKind::ResourceLimit,
+            pgvol_points::PointsError::TooSparse { .. } => ErrorKind::BadParameter,
             pgvol_points::PointsError::Field(_) => ErrorKind::Internal,
             _ => ErrorKind::InputFile,
         };
         Error::new(kind, e.to_string()).caused_by(e)
     })?;
+    crate::points_warnings::warn_about(&report, grid.spacing, progress);
     let mut header = pgvol_format::header_for(&volume, options.method.name(), None);
     header.source_bounds = Some([lo.to_array(), hi.to_array()]);
     header
@@ -685,19 +632,6 @@ mod tests {
         let e = contours(&[far], pgvol_ops::Axis::Z, &options, &crate::Silent).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
         assert!(e.message().contains("out of range"), "{e}");
-    }
-
-    #[test]
-    fn isolated_points_count_their_own_blobs_of_bricks() {
-        let grid = pgvol_core::Grid::cube_res(Vec3::ZERO, Vec3::ONE, 512).unwrap();
-        let one = cloud_bricks(&[Vec3::splat(0.5)], &grid, 4.0);
-        // 2 or 3 band bricks per axis, grown by one on each side.
-        assert!((64..=125).contains(&one), "{one}");
-        let far = [Vec3::splat(0.25), Vec3::splat(0.75)];
-        let apart = cloud_bricks(&far[..1], &grid, 4.0) + cloud_bricks(&far[1..], &grid, 4.0);
-        assert_eq!(cloud_bricks(&far, &grid, 4.0), apart);
-        // A point at the grid's corner stays within it.
-        assert!(cloud_bricks(&[grid.origin], &grid, 4.0) <= 8);
     }
 
     #[test]

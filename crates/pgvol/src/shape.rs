@@ -149,10 +149,7 @@ impl Shape {
     /// recorded band (or, for files without a record, the largest node value) less the reach of
     /// the basis support, which blends in the clamped values beyond it.
     pub fn exact_band(&self) -> f32 {
-        let band = self
-            .band
-            .unwrap_or_else(|| pgvol_ops::stored_band(&self.volume));
-        band - pgvol_ops::support_reach(&self.volume)
+        reach_within(self.band, &self.volume)
     }
 
     /// The `.pgv` file of a field derived from this shape by `operation`.
@@ -163,6 +160,20 @@ impl Shape {
             .insert("operation".into(), operation.to_string());
         PgvFile { header, volume }
     }
+}
+
+/// The distance from the surface, in model units, within which the field of `file` is an exact
+/// distance for offsets, shells, levels and evaluation: the band recorded in the file (or the
+/// largest node value) less the reach of the basis support (2 spacings for the B-splines). A
+/// band of W spacings thus serves offsets up to W − 2 spacings; 0 when nothing is exact.
+pub fn exact_reach(file: &PgvFile) -> f32 {
+    reach_within(recorded_band(file), &file.volume).max(0.0)
+}
+
+/// `band` (or the largest node value) less the basis support's reach.
+fn reach_within(band: Option<f32>, volume: &CoefficientVolume) -> f32 {
+    let band = band.unwrap_or_else(|| pgvol_ops::stored_band(volume));
+    band - pgvol_ops::support_reach(volume)
 }
 
 /// A drain hole from `x,y,z,dx,dy,dz,diameter`: a point inside the cavity, the direction out

@@ -219,9 +219,16 @@ fn offsets_and_shells_within_the_band_succeed_and_beyond_it_are_refused() {
         };
         let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
         let h = file.volume.grid.spacing;
-        let shape = Shape::from_file(file);
         // The cubic B-spline reaches two spacings past the level set it shapes.
         let reach = (band - 2.0) * h;
+        // What `pgvol info` shows as the usable reach is the one the operations enforce.
+        let shown = pgvol::exact_reach(&file);
+        assert!(
+            (shown - reach).abs() <= 1e-5 * reach,
+            "{shown} against {reach}"
+        );
+        let shape = Shape::from_file(file);
+        assert_eq!(shape.exact_band(), shown);
         for amount in [0.5 * reach, -0.5 * reach, 0.95 * reach] {
             let grown = pgvol::offset(&shape, amount).unwrap();
             // The surface moved: the old surface point is now `amount` inside.
@@ -326,15 +333,15 @@ fn bad_options_are_parameter_errors() {
         ErrorKind::BadParameter,
         None,
     );
-    let bad_step = EncodeOptions {
-        fit: FitMethod::Iso { z_step: Some(0.0) },
-        ..encode_options(16)
-    };
-    assert_error(
-        pgvol::encode(&mesh, &bad_step, &Silent),
-        ErrorKind::BadParameter,
-        None,
-    );
+    for z in [0.0, 1.5, 2.0] {
+        let bad_step = EncodeOptions {
+            fit: FitMethod::Iso { z_step: Some(z) },
+            ..encode_options(16)
+        };
+        let e = pgvol::encode(&mesh, &bad_step, &Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(e.to_string().contains("(0, 1] grid spacings"), "{e}");
+    }
     assert_error(
         pgvol::encode(&mesh, &encode_options(1), &Silent),
         ErrorKind::BadParameter,

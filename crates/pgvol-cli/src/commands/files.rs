@@ -34,14 +34,16 @@ pub struct EncodeArgs {
     /// How the coefficients are found.
     #[arg(long, value_enum, default_value_t)]
     pub fit: FitArg,
-    /// Exact distances within W grid spacings of the surface (--fit interp); wider bands let
-    /// `pgvol offset` and `pgvol shell` work from the file over larger distances.
+    /// Node values are exact distances within W grid spacings of the surface (--fit interp),
+    /// clamped beyond. Offsets, shells and levels read from the file are exact within W − 2
+    /// spacings (the cubic B-spline's support blends in the clamp), as `pgvol info` shows.
     #[arg(long, value_name = "W", default_value_t = pgvol::ENCODE_BAND, value_parser = parse_band)]
     pub band: f32,
     /// How inside is told from outside.
     #[arg(long, value_enum, default_value_t)]
     pub sign: SignArg,
-    /// For --fit iso: the isosurface step in grid spacings (searched when not given).
+    /// For --fit iso: the isosurface step in grid spacings, at most 1 (the method needs an
+    /// isosurface within half a spacing of every node) [default: searched in 0.05..1].
     #[arg(long)]
     pub z_step: Option<f32>,
     /// Coefficient precision in the file; `auto` picks the smallest that keeps the stored
@@ -221,12 +223,6 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             report.z_step.map(|z| format!(", z_step {z:.4} k")).unwrap_or_default()
         );
     }
-    if !report.converged && !quiet {
-        eprintln!(
-            "warning: the {} solver did not converge (relative residual {:.3e})",
-            report.solver, report.residual
-        );
-    }
     if report.spurious_sign_changes > 0 && !quiet {
         eprintln!(
             "warning: {} nodes farther than one spacing from the surface have the wrong sign: the field has spurious surface pieces",
@@ -322,6 +318,9 @@ struct Info<'a> {
     bytes_header: usize,
     bytes_index: usize,
     bytes_payload: usize,
+    /// Distance from the surface (model units) within which offsets, shells, levels and
+    /// evaluation read exact distances.
+    exact_reach: f32,
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
@@ -343,6 +342,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
         bytes_header: parts.bytes_header,
         bytes_index: parts.bytes_index,
         bytes_payload: parts.bytes_payload,
+        exact_reach: pgvol::exact_reach(&file),
     };
     if a.out.json {
         return print_json(&info);
@@ -398,6 +398,12 @@ pub fn info(a: InfoArgs) -> Result<()> {
         range[0],
         range[1],
         if list { " (resampled)" } else { "" }
+    );
+    outln!(
+        "exact reach   {} ({:.2} spacings): offsets, shells, levels and eval are exact within \
+         this distance of the surface",
+        info.exact_reach,
+        info.exact_reach / g.spacing
     );
     if let Some([lo, hi]) = h.source_bounds {
         outln!("source box    {lo:?} .. {hi:?}");

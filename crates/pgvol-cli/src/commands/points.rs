@@ -59,7 +59,9 @@ pub struct PointsArgs {
     /// spacings].
     #[arg(long)]
     pub support: Option<f32>,
-    /// Node values kept within W grid spacings of the points, clamped beyond.
+    /// Node values kept within W grid spacings of the points, clamped beyond. Offsets, shells
+    /// and levels read from the file are exact within W − 2 spacings (the cubic B-spline's
+    /// support blends in the clamp), as `pgvol info` shows.
     #[arg(long, value_name = "W", default_value_t = pgvol::ENCODE_BAND)]
     pub band: f32,
     /// Contouring method for mesh outputs.
@@ -104,7 +106,10 @@ pub fn run(a: PointsArgs) -> Result<()> {
             "output": a.output, "grid": grid, "method": r.method, "points": r.points,
             "normals_estimated": r.normals_estimated, "spacing": r.spacing, "offset": r.offset,
             "centres": r.centres, "support": r.support, "iterations": r.iterations,
-            "residual": r.residual, "matrix_entries": r.matrix_entries, "bricks": r.bricks,
+            "residual": r.residual, "converged": r.converged,
+            "normals_reoriented": r.orientation.reoriented,
+            "normals_flipped": r.orientation.flipped,
+            "matrix_entries": r.matrix_entries, "bricks": r.bricks,
             "triangles": triangles,
             "seconds": {
                 "read": read_seconds, "normals": r.seconds_normals, "solve": r.seconds_solve,

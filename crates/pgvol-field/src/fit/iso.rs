@@ -16,6 +16,11 @@ use crate::basis::Basis;
 use crate::distance::SignedDistance;
 use crate::volume::FieldError;
 
+/// The longest isosurface step, in grid spacings. The method requires the step to be at most
+/// the grid spacing k, so that every node has an isosurface within k/2 and its collocation
+/// point stays near it; longer steps leave nodes between isosurfaces far apart.
+pub const MAX_Z_STEP: f32 = 1.0;
+
 pub(crate) fn fit(
     grid: &Grid,
     basis: Basis,
@@ -36,10 +41,12 @@ pub(crate) fn fit(
         span.map(|s| s.part(i / solves as f64, (i + 1.0) / solves as f64))
     };
     let z = match z_step {
-        Some(z) if z.is_finite() && z > 0.0 && z <= 2.0 => z,
+        Some(z) if z.is_finite() && z > 0.0 && z <= MAX_Z_STEP => z,
         Some(z) => {
             return Err(FieldError::BadFit(format!(
-                "iso z_step must be in (0, 2] spacings, got {z}"
+                "the isosurface step must be in (0, {MAX_Z_STEP}] grid spacings, got {z}: a \
+                 longer step moves nodes farther than half a spacing to their isosurface, \
+                 which the method does not allow"
             )))
         }
         None => search(grid, basis, nodes, sdf, &warm, options, &part),
@@ -108,7 +115,7 @@ fn solve_step(
     )
 }
 
-/// Golden-section search of `z_step` in [0.05, 1] spacings for the smallest RMS of `f − SDF` at
+/// Golden-section search of `z_step` in [0.05, [`MAX_Z_STEP`]] spacings for the smallest RMS of `f − SDF` at
 /// the cell centres within two spacings of the surface and at the nodes' nearest surface points.
 fn search<'a>(
     grid: &Grid,
@@ -159,5 +166,10 @@ fn search<'a>(
             f64::INFINITY
         }
     };
-    golden_section(|z| cost(z as f32), 0.05, 1.0, options.z_step_evaluations) as f32
+    golden_section(
+        |z| cost(z as f32),
+        0.05,
+        MAX_Z_STEP as f64,
+        options.z_step_evaluations,
+    ) as f32
 }

@@ -26,6 +26,7 @@ mod wls;
 pub use crate::distance::{ClosestFn, ClosestPoint, SdfFn, SignedDistance, SurfaceOf};
 pub use golden::golden_section;
 pub use interp::{collocation_is_spd, lattice_symbol_min};
+pub use iso::MAX_Z_STEP;
 pub use node_values::node_values;
 pub use options::{FitMethod, FitOptions};
 pub use report::{FitReport, FitStages};
