@@ -401,9 +401,13 @@ pub fn contours(
         return Err(Error::new(ErrorKind::InputFile, "no closed contours"));
     }
     planes.sort_by(|x, y| x.height.total_cmp(&y.height));
-    // The box of the loops, grown by the caps' half layers.
+    // The box of the loops, grown by the caps half the outermost layer distances out.
     let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
-    let (lo, hi) = pgvol_points::index::bounds(&outline.points);
+    let (mut lo, mut hi) = pgvol_points::index::bounds(&outline.points);
+    if let [first, second, .., before_last, last] = planes.as_slice() {
+        lo[a] -= 0.5 * (second.height - first.height);
+        hi[a] += 0.5 * (last.height - before_last.height);
+    }
     crate::frame::require_near_box(lo, hi, "reconstruction from contours")?;
     let grid = options.grid.grid_for_box(lo, hi)?;
     if options.method != Method::Spline {
