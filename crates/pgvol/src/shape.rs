@@ -16,6 +16,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridSpec;
 use crate::pgv_io::{read_pgv, recorded_band};
 use crate::progress::Progress;
+use crate::resolution::{check_pieces, check_wall};
 use crate::{mesh_io, Timings};
 
 /// Grid nodes per axis when a mesh is encoded on the fly for an offset or a shell.
@@ -233,14 +234,19 @@ pub fn check_thickness(thickness: f32) -> Result<()> {
     Ok(())
 }
 
-/// The shape grown (`distance` > 0) or shrunk by `distance`.
+/// The shape grown (`distance` > 0) or shrunk by `distance`; refused when the result breaks
+/// into far more pieces than the shape (see [`check_pieces`]).
 pub fn offset(shape: &Shape, distance: f32) -> Result<CoefficientVolume> {
     check_offset(distance)?;
     shape.check_reach(distance)?;
-    Ok(pgvol_ops::offset(&shape.volume, distance)?)
+    let volume = pgvol_ops::offset(&shape.volume, distance)?;
+    check_pieces("the offset", &shape.volume, &volume)?;
+    Ok(volume)
 }
 
-/// A wall of `thickness` around the surface, or the shape hollowed with drain holes.
+/// A wall of `thickness` around the surface, or the shape hollowed with drain holes. A wall
+/// thinner than the grid resolves is refused before the work (see [`check_wall`]), a result
+/// broken into far more pieces than the shape after it.
 pub fn shell(
     shape: &Shape,
     thickness: f32,
@@ -252,6 +258,7 @@ pub fn shell(
     if !drains.is_empty() && kind != ShellKind::Hollow {
         return Err(Error::parameter("drain holes apply to hollowing only"));
     }
+    check_wall("the wall thickness", thickness, &shape.volume.grid)?;
     shape.check_reach(thickness)?;
     // Drain points are world coordinates; the field's are local.
     let drains: Vec<Drain> = drains
@@ -264,10 +271,18 @@ pub fn shell(
     if kind == ShellKind::Hollow {
         check_drains(shape, thickness, &drains, progress)?;
     }
-    Ok(match kind {
-        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, &drains)?,
-        ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,
-    })
+    let (volume, operation) = match kind {
+        ShellKind::Hollow => (
+            pgvol_ops::hollow(&shape.volume, thickness, &drains)?,
+            "the hollowing",
+        ),
+        ShellKind::Wall(side) => (
+            pgvol_ops::shell(&shape.volume, thickness, side)?,
+            "the shell",
+        ),
+    };
+    check_pieces(operation, &shape.volume, &volume)?;
+    Ok(volume)
 }
 
 /// Warns when hollowing an open mesh, and refuses a drain whose point is not in the cavity

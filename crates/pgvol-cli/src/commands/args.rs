@@ -197,6 +197,26 @@ pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
     }
 }
 
+/// A library error reported against `input` (see [`at_input`]), saying which `--res` gives the
+/// grid the library names when the grid was too coarse.
+pub fn grid_error(e: pgvol::Error, input: &std::path::Path) -> anyhow::Error {
+    let e = at_input(e, input);
+    let Some(nodes) = e.resolution() else {
+        return e.into();
+    };
+    let hint = if nodes > pgvol::MAX_RES as usize {
+        format!(
+            "that is more than the largest --res ({}): make it thicker",
+            pgvol::MAX_RES
+        )
+    } else if pgvol::is_pgv(input) {
+        format!("encode the mesh again with --res {nodes} and the band it needs, or pass the mesh with --res {nodes}")
+    } else {
+        format!("run again with --res {nodes}")
+    };
+    anyhow::anyhow!("{e}; {hint}")
+}
+
 /// A finite number of at least zero.
 pub fn non_negative(text: &str) -> std::result::Result<f32, String> {
     match text.parse::<f32>() {

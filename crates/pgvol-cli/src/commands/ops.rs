@@ -8,7 +8,8 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{
-    at_input, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg, SignArg,
+    at_input, grid_error, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg,
+    SignArg,
 };
 use super::lattice::{build_lattice, write_solid, GradeArgs, StyleArg};
 use crate::output::outln;
@@ -233,7 +234,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     let shape = a
         .shape
         .load(&a.input, a.distance.max(0.0), a.distance.abs(), &bars)?;
-    let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
+    let volume = pgvol::offset(&shape, a.distance).map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(None, a.distance);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
@@ -262,7 +263,8 @@ pub struct ShellArgs {
     /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
     pub output: PathArg,
-    /// Wall thickness in model units.
+    /// Wall thickness in model units: at least two grid spacings (a thinner wall is refused,
+    /// naming the --res that holds it).
     #[arg(long)]
     pub thickness: f32,
     /// Where the wall lies relative to the surface (ignored with --hollow, which keeps the
@@ -317,7 +319,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
     let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
-        .map_err(|e| at_input(e, &a.input))?;
+        .map_err(|e| grid_error(e, &a.input))?;
     let stages = [
         ("load", loaded),
         ("infill", start.elapsed().as_secs_f64() - loaded),
@@ -364,7 +366,7 @@ pub fn shell(a: ShellArgs) -> Result<()> {
     let grow = pgvol::growth(kind, a.thickness);
     let shape = a.shape.load(&a.input, grow, a.thickness, &bars)?;
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
-        .map_err(|e| at_input(e, &a.input))?;
+        .map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
