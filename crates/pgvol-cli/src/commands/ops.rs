@@ -7,13 +7,11 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{
-    at_input, grid_error, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg,
-    SignArg,
-};
+use super::args::{at_input, grid_error, non_negative, MethodArg, OutputArgs, PathArg, SignArg};
 use super::lattice::{build_lattice, write_solid, GradeArgs, StyleArg};
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::{self, Seconds};
 
 /// Writes a derived volume as .pgv, or contours it into a mesh file, by the output's extension;
 /// returns the triangles written (0 for a .pgv).
@@ -152,10 +150,12 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         .map(|l| l.points.len())
         .sum();
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "layers": layers.len(), "loops": loops, "points": points,
-            "seconds": { "slice": slice_seconds, "total": start.elapsed().as_secs_f64() },
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "layers": layers.len(), "loops": loops, "points": points,
+            }),
+            &Seconds::since(start).stage("slice", slice_seconds),
+        );
     }
     if !a.out.quiet {
         outln!(
@@ -379,10 +379,10 @@ pub(super) fn report(
     start: Instant,
 ) -> Result<()> {
     if out.json {
-        print_json(&serde_json::json!({
-            "output": output, "triangles": triangles,
-            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
-        }))?;
+        report::print(
+            &serde_json::json!({ "output": output, "triangles": triangles }),
+            &Seconds::since(start),
+        )?;
     } else if !out.quiet {
         if triangles > 0 {
             outln!("{}: {} triangles", output.display(), triangles);
