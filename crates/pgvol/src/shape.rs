@@ -65,11 +65,28 @@ impl Shape {
         sign: SignMode,
         progress: &dyn Progress,
     ) -> Result<Shape> {
+        Shape::encode_mesh(mesh, res, grow, reach, None, sign, progress)
+    }
+
+    /// [`Shape::from_mesh`], refusing a grid that cannot hold walls as thin as `wall` (see
+    /// [`check_wall`]) before the mesh is encoded.
+    fn encode_mesh(
+        mesh: Mesh,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        wall: Option<f32>,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
         let (lo, hi) = mesh
             .bounds()
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
         let pad = Vec3::splat(grow.max(0.0));
         let grid = Grid::cube_res(lo - pad, hi + pad, res)?.with_offset(mesh.offset);
+        if let Some(wall) = wall {
+            check_wall("the wall thickness", wall, &grid)?;
+        }
         let options = EncodeOptions {
             grid: GridSpec::Res(res),
             basis: Basis::Bspline3,
@@ -98,21 +115,53 @@ impl Shape {
         sign: SignMode,
         progress: &dyn Progress,
     ) -> Result<Shape> {
+        Shape::load_inner(path, res, grow, reach, None, sign, progress)
+    }
+
+    /// [`Shape::load`] for an operation making walls as thin as `wall`: a grid that cannot
+    /// hold them (see [`check_wall`]) is refused before a mesh is encoded on it.
+    pub fn load_walled(
+        path: &Path,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        wall: f32,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        Shape::load_inner(path, res, grow, reach, Some(wall), sign, progress)
+    }
+
+    fn load_inner(
+        path: &Path,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        wall: Option<f32>,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        let at_path = |e: Error| match e.path() {
+            Some(_) => e,
+            None => e.at(path),
+        };
         if is_pgv(path) {
             if sign != SignMode::Auto {
                 return Err(Error::new(
                     ErrorKind::BadParameter,
-                    "a sign method applies to mesh inputs; a .pgv file stores its field's signs                      (pass the mesh to choose how they are found)",
+                    "a sign method applies to mesh inputs; a .pgv file stores its field's signs \
+                     (pass the mesh to choose how they are found)",
                 )
                 .at(path));
             }
-            return Ok(Shape::from_file(read_pgv(path)?));
+            let shape = Shape::from_file(read_pgv(path)?);
+            if let Some(wall) = wall {
+                check_wall("the wall thickness", wall, &shape.volume.grid).map_err(at_path)?;
+            }
+            return Ok(shape);
         }
         let (mesh, _) = mesh_io::read_mesh(path)?;
-        Shape::from_mesh(mesh, res, grow, reach, sign, progress).map_err(|e| match e.path() {
-            Some(_) => e,
-            None => e.at(path),
-        })
+        Shape::encode_mesh(mesh, res, grow, reach, wall, sign, progress).map_err(at_path)
     }
 
     /// Refuses an operation reaching `reach` from the surface when the field is not an exact

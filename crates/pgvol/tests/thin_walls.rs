@@ -2,8 +2,9 @@
 //! hold them; a result broken into far more pieces than its input is refused after it.
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 
-use pgvol::{ErrorKind, Shape, ShellKind, ShellSide, SignMode, Silent};
+use pgvol::{ErrorKind, Progress, Shape, ShellKind, ShellSide, SignMode, Silent};
 
 /// The shared mesh corpus: `PGVOL_SHARED_MESHES`, or `../shared/meshes` beside the repository.
 fn shared_mesh(name: &str) -> PathBuf {
@@ -16,14 +17,46 @@ fn shared_mesh(name: &str) -> PathBuf {
     path
 }
 
-/// The rocker arm scaled to 100 units along its longest side, encoded at the default 128
-/// nodes per axis (spacing 0.86) with distances exact `reach` out.
-fn rocker(reach: f32) -> Shape {
+/// The rocker arm scaled to 100 units along its longest side.
+fn rocker_mesh() -> pgvol::Mesh {
     let (mut mesh, _) = pgvol::read_mesh(&shared_mesh("rocker-arm")).unwrap();
     let (lo, hi) = mesh.bounds().unwrap();
     let scale = 100.0 / (hi - lo).max_element();
     mesh.positions.iter_mut().for_each(|p| *p *= scale);
-    Shape::from_mesh(mesh, 128, 0.0, reach, SignMode::Auto, &Silent).unwrap()
+    mesh
+}
+
+/// The 100-unit rocker arm encoded at the default 128 nodes per axis (spacing 0.86) with
+/// distances exact `reach` out.
+fn rocker(reach: f32) -> Shape {
+    Shape::from_mesh(rocker_mesh(), 128, 0.0, reach, SignMode::Auto, &Silent).unwrap()
+}
+
+/// The stages a call began.
+#[derive(Default)]
+struct Stages(Mutex<Vec<String>>);
+
+impl Progress for Stages {
+    fn stage(&self, name: &str) {
+        self.0.lock().unwrap().push(name.to_string());
+    }
+}
+
+#[test]
+fn a_mesh_is_not_encoded_for_a_wall_its_grid_cannot_hold() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rocker.stl");
+    pgvol::write_mesh(&path, &rocker_mesh()).unwrap();
+    let stages = Stages::default();
+    let e = Shape::load_walled(&path, 128, 0.0, 0.5, 0.5, SignMode::Auto, &stages).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Unresolved, "{e}");
+    assert_eq!(e.path(), Some(path.as_path()));
+    assert!(stages.0.lock().unwrap().is_empty(), "work began");
+    // At the grid it names the mesh is encoded.
+    let nodes = e.resolution().unwrap();
+    let shape = Shape::load_walled(&path, nodes, 0.0, 0.5, 0.5, SignMode::Auto, &stages).unwrap();
+    assert!(shape.volume.grid.spacing <= 0.25);
+    assert!(!stages.0.lock().unwrap().is_empty());
 }
 
 #[test]

@@ -207,6 +207,22 @@ impl ShapeOutputArgs {
             bars,
         )
     }
+
+    /// [`ShapeOutputArgs::load`] for an operation making walls as thin as `wall`: a grid too
+    /// coarse for them is refused before a mesh is encoded, naming the --res that holds them.
+    pub fn load_walled(
+        &self,
+        input: &Path,
+        grow: f32,
+        reach: f32,
+        wall: f32,
+        bars: &Bars,
+    ) -> Result<pgvol::Shape> {
+        let sign = self.sign.into();
+        let res = self.res as usize;
+        pgvol::Shape::load_walled(input, res, grow, reach, wall, sign, bars)
+            .map_err(|e| grid_error(e, input))
+    }
 }
 
 #[derive(Args)]
@@ -316,7 +332,9 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
         .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, a.thickness);
-    let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
+    let shape = a
+        .shape
+        .load_walled(&a.input, 0.0, reach, a.thickness, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
         .map_err(|e| grid_error(e, &a.input))?;
@@ -364,7 +382,9 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         })
     };
     let grow = pgvol::growth(kind, a.thickness);
-    let shape = a.shape.load(&a.input, grow, a.thickness, &bars)?;
+    let shape = a
+        .shape
+        .load_walled(&a.input, grow, a.thickness, a.thickness, &bars)?;
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
         .map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
