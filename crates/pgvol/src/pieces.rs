@@ -39,15 +39,30 @@ impl Labels {
     }
 }
 
-/// The pieces of `volume`'s inside at its grid nodes. Absent bricks take their background's
-/// side throughout.
+/// The pieces of `volume`'s inside at its grid nodes. The field at the nodes is a blur of
+/// the coefficients one node wide: bricks away from every stored brick take their
+/// background's side throughout.
 pub(crate) fn count_pieces(volume: &CoefficientVolume) -> usize {
     let coeffs = &volume.coeffs;
     let bricks: Vec<[usize; 3]> = coeffs.all_bricks().collect();
+    let [bx, by, bz] = coeffs.brick_counts();
+    let index = |b: [usize; 3]| b[0] + bx * (b[1] + by * b[2]);
+    // Stored bricks and their neighbours see stored coefficients.
+    let mut touched = vec![false; bricks.len()];
+    for (b, _) in coeffs.stored() {
+        for k in b[2].saturating_sub(1)..(b[2] + 2).min(bz) {
+            for j in b[1].saturating_sub(1)..(b[1] + 2).min(by) {
+                for i in b[0].saturating_sub(1)..(b[0] + 2).min(bx) {
+                    touched[index([i, j, k])] = true;
+                }
+            }
+        }
+    }
     let labels: Vec<Labels> = bricks
         .par_iter()
-        .map(|&b| {
-            if coeffs.is_stored(b) {
+        .zip(&touched)
+        .map(|(&b, &touched)| {
+            if touched {
                 label_brick(volume, b)
             } else if coeffs.background_of(b) < 0.0 {
                 Labels::Inside
@@ -63,8 +78,6 @@ pub(crate) fn count_pieces(volume: &CoefficientVolume) -> usize {
         total += l.count();
     }
     let mut parent: Vec<usize> = (0..total).collect();
-    let [bx, by, _] = coeffs.brick_counts();
-    let index = |b: [usize; 3]| b[0] + bx * (b[1] + by * b[2]);
     for (i, &b) in bricks.iter().enumerate() {
         let (_, n) = coeffs.brick_extent(b);
         for axis in 0..3 {
@@ -102,23 +115,26 @@ pub(crate) fn count_pieces(volume: &CoefficientVolume) -> usize {
     (0..total).filter(|&k| find(&mut parent, k) == k).count()
 }
 
-/// The inside nodes of stored brick `b` labelled by 6-connected piece within the brick.
+/// The inside nodes of brick `b` labelled by 6-connected piece within the brick.
 fn label_brick(volume: &CoefficientVolume, b: [usize; 3]) -> Labels {
-    let (lo, n) = volume.coeffs.brick_extent(b);
+    let (_, n) = volume.coeffs.brick_extent(b);
+    let values = pgvol_field::fit::brick_node_values(volume, b);
     let mut inside = [false; BRICK_NODES];
-    let mut any = false;
+    let mut count_in = 0;
     for k in 0..n[2] {
         for j in 0..n[1] {
             for i in 0..n[0] {
-                let p = volume.grid.point(lo[0] + i, lo[1] + j, lo[2] + k);
-                let is_in = volume.value(p) < 0.0;
-                inside[brick_offset([i, j, k])] = is_in;
-                any |= is_in;
+                let o = brick_offset([i, j, k]);
+                inside[o] = values[o] < 0.0;
+                count_in += usize::from(inside[o]);
             }
         }
     }
-    if !any {
+    if count_in == 0 {
         return Labels::Outside;
+    }
+    if count_in == n[0] * n[1] * n[2] {
+        return Labels::Inside;
     }
     let mut labels = Box::new([OUT; BRICK_NODES]);
     let mut count = 0u16;
