@@ -24,7 +24,10 @@ pub const EXTRA_PIECES: usize = 4;
 /// `x` to four significant digits, for a person reading the message.
 fn figure(x: f32) -> String {
     let digits = 3 - x.abs().log10().floor() as i32;
-    format!("{:.*}", digits.clamp(0, 12) as usize, x)
+    if !x.is_normal() || digits > 9 {
+        return format!("{x:.3e}");
+    }
+    format!("{:.*}", digits.max(0) as usize, x)
 }
 
 /// Nodes per axis of a grid over `grid`'s box with spacing at most `spacing`.
@@ -37,7 +40,17 @@ fn nodes_for(grid: &Grid, spacing: f32) -> usize {
         .unwrap_or(2)
         .saturating_sub(1);
     let side = grid.spacing * cells as f32;
-    (side / spacing).ceil() as usize + 1
+    ((side / spacing).ceil() as usize).saturating_add(1)
+}
+
+/// How a grid of `nodes` per axis is named: its count, or past the largest grid, that.
+fn grid_size(nodes: usize) -> String {
+    let max = crate::grid::MAX_RES as usize;
+    if nodes > max {
+        format!("more than the {max} nodes per axis a grid may have")
+    } else {
+        format!("{nodes} nodes per axis over the same box")
+    }
 }
 
 /// Refuses `what` (a sentence subject, "the wall") of `thickness` on `grid` when it is thinner
@@ -52,13 +65,15 @@ pub fn check_wall(what: &str, thickness: f32, grid: &Grid) -> Result<()> {
     Err(Error::new(
         ErrorKind::Unresolved,
         format!(
-            "{what} {thickness} is thinner than the grid resolves: a wall needs \
+            "{what} {} is thinner than the grid resolves: a wall needs \
              {MIN_WALL_SPACINGS} grid spacings ({}, the spacing being {}) or it breaks into \
-             pieces; a grid of spacing {} or finer ({nodes} nodes per axis over the same box) \
-             would resolve it, as would a wall of {} or more",
+             pieces; a grid of spacing {} or finer ({}) would resolve it, as would a wall of {} \
+             or more",
+            figure(thickness),
             figure(least),
             figure(grid.spacing),
             figure(needed),
+            grid_size(nodes),
             figure(least),
         ),
     )
@@ -84,9 +99,9 @@ pub fn check_pieces(
         format!(
             "{operation}: the result breaks into {after} pieces where the shape has {before}: \
              parts of it are thinner than the grid resolves ({MIN_WALL_SPACINGS} spacings of \
-             {}); a grid twice as fine ({nodes} nodes per axis over the same box) would hold \
-             parts half as thin",
-            figure(grid.spacing)
+             {}); a grid twice as fine ({}) would hold parts half as thin",
+            figure(grid.spacing),
+            grid_size(nodes)
         ),
     )
     .needing_resolution(nodes))
@@ -108,5 +123,9 @@ mod tests {
         let finer = Grid::cube_res(glam::Vec3::ZERO, glam::Vec3::splat(100.0), nodes).unwrap();
         check_wall("the wall", 0.5, &finer).unwrap();
         assert!(e.message().contains("0.25"), "{e}");
+        // A wall no grid holds is named so, without overflowing.
+        let e = check_wall("the wall", 1e-30, &grid).unwrap_err();
+        assert!(e.message().contains("more than the 2048 nodes"), "{e}");
+        assert!(e.resolution().unwrap() > 2048);
     }
 }

@@ -17,18 +17,27 @@ fn circle() -> pgvol::ops::Loop {
     }
 }
 
-/// The decoded stack of unit circles at `heights`, every piece kept, and the volume of the
-/// cylinder they stack into: the caps lie half the outermost layer distances beyond the
-/// outermost planes.
-fn stack(heights: &[f32]) -> (pgvol::core::MeshStats, f64) {
-    let layers: Vec<Layer> = heights
+fn layers(heights: &[f32]) -> Vec<Layer> {
+    heights
         .iter()
         .map(|&height| Layer {
             height,
             loops: vec![circle()],
         })
-        .collect();
-    let fit = pgvol::contours(&layers, Axis::Z, &PointsOptions::default(), &Silent).unwrap();
+        .collect()
+}
+
+/// The decoded stack of unit circles at `heights`, every piece kept, and the volume of the
+/// cylinder they stack into: the caps lie half the outermost layer distances beyond the
+/// outermost planes.
+fn stack(heights: &[f32]) -> (pgvol::core::MeshStats, f64) {
+    let fit = pgvol::contours(
+        &layers(heights),
+        Axis::Z,
+        &PointsOptions::default(),
+        &Silent,
+    )
+    .unwrap();
     let options = DecodeOptions {
         min_component: Some(0.0),
         ..DecodeOptions::default()
@@ -58,4 +67,17 @@ fn unevenly_spaced_planes_give_one_solid_without_cavities() {
             "{heights:?}: volume {ratio:.3} of the cylinder's"
         );
     }
+}
+
+#[test]
+fn two_layers_at_one_height_are_refused_by_name() {
+    let e = pgvol::contours(
+        &layers(&[0.0, 0.5, 0.5, 1.0]),
+        Axis::Z,
+        &PointsOptions::default(),
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), pgvol::ErrorKind::InputFile);
+    assert!(e.message().contains("height 0.5"), "{e}");
 }

@@ -199,15 +199,11 @@ pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
 /// grid the library names when the grid was too coarse.
 pub fn grid_error(e: pgvol::Error, input: &std::path::Path) -> anyhow::Error {
     let e = at_input(e, input);
-    let Some(nodes) = e.resolution() else {
+    // Past the largest grid the library's message already says so.
+    let Some(nodes) = e.resolution().filter(|&n| n <= pgvol::MAX_RES as usize) else {
         return e.into();
     };
-    let hint = if nodes > pgvol::MAX_RES as usize {
-        format!(
-            "that is more than the largest --res ({}): make it thicker",
-            pgvol::MAX_RES
-        )
-    } else if pgvol::is_pgv(input) {
+    let hint = if pgvol::is_pgv(input) {
         format!("encode the mesh again with --res {nodes} and the band it needs, or pass the mesh with --res {nodes}")
     } else {
         format!("run again with --res {nodes}")
