@@ -200,7 +200,7 @@ def test_decode_refuses_a_level_beyond_the_stored_band(knot_pgv, tmp_path, pgvol
 def test_eval_reads_a_byte_order_mark_and_refuses_half_numbers(knot_pgv, tmp_path, pgvol):
     points = tmp_path / "bom.csv"
     points.write_bytes(b"\xef\xbb\xbf0,0,0\n1,0,0\n")
-    rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
+    rows = helpers.run_json([pgvol, "eval", knot_pgv, points, "--json"])["points"]
     assert len(rows) == 2, "the first row behind a byte-order mark was dropped"
     for text in ["0,0,0\n1,2,3a\n", "x,y,z\n3e19,0,0\n", "x,y,z\nnan,0,0\n"]:
         points.write_text(text)
@@ -219,14 +219,14 @@ def test_eval_flags_values_that_are_not_distances(knot_pgv, tmp_path, pgvol):
     points.write_text("".join(f"{x},{y},{z}\n" for x, y, z in [corner, outside_box]))
     # A corner of the grid cube is far from the knot's tube: beyond the band, so the value is
     # a clamp; beyond the box it is an extrapolation.
-    rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
+    rows = helpers.run_json([pgvol, "eval", knot_pgv, points, "--json"])["points"]
     assert [r["exact"] for r in rows] == [False, False], rows
     # Points on the decoded surface are within the band.
     surface = tmp_path / "k.glb"
     helpers.run_ok([pgvol, "decode", knot_pgv, "-o", surface])
     mesh = helpers.load_output(surface)
     points.write_text("".join(f"{x},{y},{z}\n" for x, y, z in mesh.vertices[:50]))
-    rows = json.loads(helpers.run_ok([pgvol, "eval", knot_pgv, points, "--json"]).stdout)
+    rows = helpers.run_json([pgvol, "eval", knot_pgv, points, "--json"])["points"]
     assert all(r["exact"] for r in rows)
 
 

@@ -87,7 +87,7 @@ def test_eval_matches_decoded_surface(pgvol, encoded, work_dir):
     picks = mesh.vertices[rng.choice(len(mesh.vertices), 200, replace=False)]
     points = work_dir / "encode" / "points.csv"
     points.write_text("x,y,z\n" + "".join(f"{x},{y},{z}\n" for x, y, z in picks))
-    rows = json.loads(helpers.run_ok([pgvol, "eval", pgv, points, "--json"]).stdout)
+    rows = helpers.run_json([pgvol, "eval", pgv, points, "--json"])["points"]
     assert len(rows) == 200
     values = np.array([r["value"] for r in rows])
     grads = np.array([r["gradient"] for r in rows])

@@ -256,7 +256,7 @@ def test_a_drain_outside_the_cavity_is_refused(pgvol, tmp_path):
     for point, ok in [(inside, True), (outside, False)]:
         drain = ",".join(f"{c}" for c in [*point, 0, 0, 1, 0.1])
         r = helpers.run(
-            [pgvol, "shell", spot, "-o", out, "--thickness", 0.05, "--hollow", "--drain", drain, "--res", 64],
+            [pgvol, "shell", spot, "-o", out, "--thickness", 0.05, "--hollow", "--drain", drain, "--res", 96],
             timeout=300,
         )
         if ok:

@@ -53,6 +53,7 @@ impl pgvol::Progress for Bars {
     }
 
     fn warn(&self, message: &str) {
+        crate::report::record(message);
         if !self.quiet {
             self.with_bar(|bar| match bar {
                 Some(pb) => pb.suspend(|| eprintln!("warning: {message}")),

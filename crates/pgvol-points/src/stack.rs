@@ -49,26 +49,22 @@ pub fn stack_samples(planes: &[ContourPlane], axis: usize, grid: &Grid, band: f3
     // the outermost plane's values to the cap's within less than a node.
     let end_gap = |g: Option<&f32>| g.copied().unwrap_or(0.0).max(2.0 * grid.spacing);
     let (g_lo, g_hi) = (end_gap(gaps.first()), end_gap(gaps.last()));
-    let last = planes.len() - 1;
+    let (h_lo, h_hi) = (planes[0].height, planes[planes.len() - 1].height);
+    let (cap_lo, cap_hi) = (h_lo - 0.5 * g_lo, h_hi + 0.5 * g_hi);
     let fields: Vec<Vec<f32>> = planes
         .par_iter()
-        .enumerate()
-        .map(|(k, p)| {
+        .map(|p| {
             let mut values = plane_distance(p, &lattice, reach);
-            // The outermost planes are no deeper than their cap; limited before the fit
-            // through the loops, which the limit would otherwise undo near them.
-            let floor = match (k == 0, k == last) {
-                (true, true) => -0.5 * g_lo.min(g_hi),
-                (true, false) => -0.5 * g_lo,
-                (false, true) => -0.5 * g_hi,
-                (false, false) => f32::NEG_INFINITY,
-            };
+            // No plane is deeper than its distance to the nearer cap: a plane close to an end
+            // would otherwise keep its full 2D depth next to the shallow end plane, and the
+            // cubic through that jump over a short gap swings across zero between the planes.
+            // Limited before the fit through the loops, which the limit would otherwise undo.
+            let floor = -(p.height - cap_lo).min(cap_hi - p.height);
             values.iter_mut().for_each(|v| *v = v.max(floor));
             pass_through_loops(&mut values, p, &lattice);
             values
         })
         .collect();
-    let (h_lo, h_hi) = (planes[0].height, planes[planes.len() - 1].height);
     let mut knots: Vec<f32> = [2.0, 1.0, 0.5].iter().map(|s| h_lo - s * g_lo).collect();
     knots.extend(planes.iter().map(|p| p.height));
     knots.extend([0.5, 1.0, 2.0].iter().map(|s| h_hi + s * g_hi));
@@ -312,7 +308,7 @@ impl Column {
         // Data: the knots, and the natural cubic spline through them at every node between
         // (weight NODE_WEIGHT), which decides the shape where the knots leave it open and keeps
         // the fit from ringing where the planes are closer than the nodes.
-        let second = natural_second_derivatives(knots, &values);
+        let slopes = akima_slopes(knots, &values);
         let mut data: Vec<(f64, f64, f64)> = knots
             .iter()
             .zip(&values)
@@ -320,7 +316,7 @@ impl Column {
             .collect();
         for k in lo..=hi {
             let h = nodes.origin + nodes.spacing * k as f32;
-            if let Some(v) = natural_value(knots, &values, &second, h) {
+            if let Some(v) = interpolant_value(knots, &values, &slopes, h) {
                 data.push((k as f64, f64::from(v), NODE_WEIGHT));
             }
         }
@@ -429,47 +425,61 @@ fn fit_coefficients(data: &[(f64, f64, f64)], lo: usize, hi: usize) -> Vec<f64> 
     rhs
 }
 
-/// The natural cubic spline through (`x`, `y`) with second derivatives `m` at `h`; `None`
-/// outside the knots.
-fn natural_value(x: &[f32], y: &[f32], m: &[f32], h: f32) -> Option<f32> {
+/// The piecewise cubic through (`x`, `y`) with slopes `slope` at `h`; `None` outside the knots.
+fn interpolant_value(x: &[f32], y: &[f32], slope: &[f32], h: f32) -> Option<f32> {
     let n = x.len();
     if !(h > x[0] && h < x[n - 1]) {
         return None;
     }
     let k = x.partition_point(|&v| v <= h).clamp(1, n - 1) - 1;
     let w = x[k + 1] - x[k];
-    let a = (x[k + 1] - h) / w;
-    let b = 1.0 - a;
+    let t = (h - x[k]) / w;
+    // Cubic Hermite basis on the interval.
+    let (t2, t3) = (t * t, t * t * t);
     Some(
-        a * y[k]
-            + b * y[k + 1]
-            + ((a * a * a - a) * m[k] + (b * b * b - b) * m[k + 1]) * w * w / 6.0,
+        (2.0 * t3 - 3.0 * t2 + 1.0) * y[k]
+            + (t3 - 2.0 * t2 + t) * w * slope[k]
+            + (-2.0 * t3 + 3.0 * t2) * y[k + 1]
+            + (t3 - t2) * w * slope[k + 1],
     )
 }
 
-/// Second derivatives of the natural cubic spline through (`x`, `y`) (tridiagonal solve).
-fn natural_second_derivatives(x: &[f32], y: &[f32]) -> Vec<f32> {
+/// Slopes at the knots (`x`, `y`) of the modified Akima interpolant: each a weighted mean of
+/// the secants on either side, weighted towards the side whose neighbourhood bends less. It
+/// follows smooth data like a cubic spline, but stays flat between equal values and does not
+/// ring where the knots are unevenly spaced (planes 0.01 apart next to gaps of 0.5, a steep
+/// cap next to a flat side), which a natural spline turns into crossings between the planes.
+fn akima_slopes(x: &[f32], y: &[f32]) -> Vec<f32> {
     let n = x.len();
-    let mut m = vec![0.0f32; n];
-    if n < 3 {
-        return m;
+    if n < 2 {
+        return vec![0.0; n];
     }
-    let mut c_prime = vec![0.0f32; n];
-    let mut d_prime = vec![0.0f32; n];
-    for i in 1..n - 1 {
-        let (h0, h1) = (x[i] - x[i - 1], x[i + 1] - x[i]);
-        let a = h0 / 6.0;
-        let b = (h0 + h1) / 3.0;
-        let c = h1 / 6.0;
-        let d = (y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0;
-        let denom = b - a * c_prime[i - 1];
-        c_prime[i] = c / denom;
-        d_prime[i] = (d - a * d_prime[i - 1]) / denom;
+    // Secants, continued linearly by two on either side.
+    let mut m = Vec::with_capacity(n + 3);
+    m.extend([0.0, 0.0]);
+    m.extend((0..n - 1).map(|i| (y[i + 1] - y[i]) / (x[i + 1] - x[i])));
+    if n == 2 {
+        return vec![m[2]; 2];
     }
-    for i in (1..n - 1).rev() {
-        m[i] = d_prime[i] - c_prime[i] * m[i + 1];
-    }
-    m
+    m[1] = 2.0 * m[2] - m[3];
+    m[0] = 2.0 * m[1] - m[2];
+    let last = m.len() - 1;
+    m.push(2.0 * m[last] - m[last - 1]);
+    m.push(2.0 * m[last + 1] - m[last]);
+    // Knot i lies between secants m[i + 1] (left) and m[i + 2] (right).
+    (0..n)
+        .map(|i| {
+            let (a, b, c, d) = (m[i], m[i + 1], m[i + 2], m[i + 3]);
+            let w_left = (d - c).abs() + 0.5 * (d + c).abs();
+            let w_right = (b - a).abs() + 0.5 * (b + a).abs();
+            let sum = w_left + w_right;
+            if sum > 0.0 {
+                (w_left * b + w_right * c) / sum
+            } else {
+                0.5 * (b + c)
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -34,7 +34,8 @@ pub(crate) fn to_py(py: Python<'_>, e: pgvol::Error) -> PyErr {
         K::InputFile if path.as_ref().is_some_and(|p| !p.exists()) => "MissingFileError",
         K::InputFile => "InputFileError",
         K::OutputFile => "OutputFileError",
-        K::BadParameter => "ParameterError",
+        // A grid too coarse is a parameter to change: the resolution.
+        K::BadParameter | K::Unresolved => "ParameterError",
         K::ResourceLimit => "ResourceLimitError",
         K::EmptyResult => "EmptyResultError",
         K::Cancelled => "CancelledError",

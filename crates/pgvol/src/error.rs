@@ -17,6 +17,10 @@ pub enum ErrorKind {
     ResourceLimit,
     /// The result would be empty: nothing inside, or inside everywhere with no surface.
     EmptyResult,
+    /// The grid is too coarse for what was asked: a wall thinner than it resolves, or a result
+    /// that breaks into far more pieces than its input. [`Error::resolution`] gives the grid
+    /// that would work.
+    Unresolved,
     /// The caller's [`Progress`](crate::Progress) asked to stop.
     Cancelled,
     /// A stage failed on valid input: a defect in the library.
@@ -32,6 +36,7 @@ impl ErrorKind {
             ErrorKind::BadParameter => "bad parameter",
             ErrorKind::ResourceLimit => "resource limit",
             ErrorKind::EmptyResult => "empty result",
+            ErrorKind::Unresolved => "unresolved",
             ErrorKind::Cancelled => "cancelled",
             ErrorKind::Internal => "internal",
         }
@@ -45,6 +50,7 @@ pub struct Error {
     kind: ErrorKind,
     path: Option<PathBuf>,
     message: String,
+    resolution: Option<usize>,
     source: Option<Box<dyn std::error::Error + Send + Sync + 'static>>,
 }
 
@@ -58,6 +64,7 @@ impl Error {
             kind,
             path: None,
             message: message.into(),
+            resolution: None,
             source: None,
         }
     }
@@ -77,6 +84,18 @@ impl Error {
     pub fn caused_by(mut self, source: impl std::error::Error + Send + Sync + 'static) -> Self {
         self.source = Some(Box::new(source));
         self
+    }
+
+    /// The same error with the nodes per axis (over the same box) of a grid that would work.
+    pub fn needing_resolution(mut self, nodes: usize) -> Self {
+        self.resolution = Some(nodes);
+        self
+    }
+
+    /// Nodes per axis of a grid over the same box that would work, for an
+    /// [`ErrorKind::Unresolved`] error.
+    pub fn resolution(&self) -> Option<usize> {
+        self.resolution
     }
 
     /// What kind of failure this is.

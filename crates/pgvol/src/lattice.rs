@@ -115,6 +115,7 @@ pub fn infill(
     progress: &dyn Progress,
 ) -> Result<LatticeSolid> {
     check_thickness(wall)?;
+    crate::resolution::check_wall("the wall thickness", wall, &shape.volume.grid)?;
     crate::frame::require_near(shape.volume.grid.offset, "an infill")?;
     check_resolution(shape, lattice)?;
     shape.check_reach(lattice_reach(lattice, wall))?;

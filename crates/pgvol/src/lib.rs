@@ -78,11 +78,13 @@ mod mesh_io;
 mod operand;
 mod perturb;
 mod pgv_io;
+mod pieces;
 mod points;
 mod points_warnings;
 mod progress;
 mod remesh;
 mod repair;
+mod resolution;
 mod shape;
 mod slice;
 
@@ -136,6 +138,7 @@ pub use points::{
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
+pub use resolution::{check_pieces, check_wall, EXTRA_PIECES, MIN_WALL_SPACINGS, PIECES_FACTOR};
 pub use shape::{
     check_offset, check_thickness, exact_reach, growth, offset, operation_name, parse_drain, shell,
     Shape, ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,

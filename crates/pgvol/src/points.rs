@@ -1,6 +1,7 @@
 //! Point clouds → coefficient volumes: the readers for point files, the options with their
 //! defaults, the memory estimate and the call into `pgvol-points`.
 
+use std::cmp::Ordering::Greater;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
@@ -429,9 +430,27 @@ pub fn contours(
         return Err(Error::parameter(problem));
     }
     planes.sort_by(|x, y| x.height.total_cmp(&y.height));
-    // The box of the loops, grown by the caps' half layers.
+    // The field across the planes takes one value per plane and height.
+    let rising = |w: &[pgvol_points::contours::ContourPlane]| {
+        w[1].height.partial_cmp(&w[0].height) == Some(Greater)
+    };
+    if let Some(w) = planes.windows(2).find(|w| !rising(w)) {
+        return Err(Error::new(
+            ErrorKind::InputFile,
+            format!(
+                "two layers lie at height {}: a stack needs one layer per height (put both \
+                 layers' loops in one layer)",
+                w[0].height
+            ),
+        ));
+    }
+    // The box of the loops, grown by the caps half the outermost layer distances out.
     let outline = pgvol_points::contours::contour_points(&planes, a, f32::INFINITY);
-    let (lo, hi) = pgvol_points::index::bounds(&outline.points);
+    let (mut lo, mut hi) = pgvol_points::index::bounds(&outline.points);
+    if let [first, second, .., before_last, last] = planes.as_slice() {
+        lo[a] -= 0.5 * (second.height - first.height);
+        hi[a] += 0.5 * (last.height - before_last.height);
+    }
     crate::frame::require_near_box(lo, hi, "reconstruction from contours")?;
     let grid = options.grid.grid_for_box(lo, hi)?;
     if options.method != Method::Spline {

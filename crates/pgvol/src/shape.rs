@@ -16,6 +16,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridSpec;
 use crate::pgv_io::{read_pgv, recorded_band};
 use crate::progress::Progress;
+use crate::resolution::{check_pieces, check_wall};
 use crate::{mesh_io, Timings};
 
 /// Grid nodes per axis when a mesh is encoded on the fly for an offset or a shell.
@@ -64,11 +65,28 @@ impl Shape {
         sign: SignMode,
         progress: &dyn Progress,
     ) -> Result<Shape> {
+        Shape::encode_mesh(mesh, res, grow, reach, None, sign, progress)
+    }
+
+    /// [`Shape::from_mesh`], refusing a grid that cannot hold walls as thin as `wall` (see
+    /// [`check_wall`]) before the mesh is encoded.
+    fn encode_mesh(
+        mesh: Mesh,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        wall: Option<f32>,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
         let (lo, hi) = mesh
             .bounds()
             .ok_or_else(|| Error::new(ErrorKind::InputFile, "the mesh has no triangles"))?;
         let pad = Vec3::splat(grow.max(0.0));
         let grid = Grid::cube_res(lo - pad, hi + pad, res)?.with_offset(mesh.offset);
+        if let Some(wall) = wall {
+            check_wall("the wall thickness", wall, &grid)?;
+        }
         let options = EncodeOptions {
             grid: GridSpec::Res(res),
             basis: Basis::Bspline3,
@@ -97,21 +115,53 @@ impl Shape {
         sign: SignMode,
         progress: &dyn Progress,
     ) -> Result<Shape> {
+        Shape::load_inner(path, res, grow, reach, None, sign, progress)
+    }
+
+    /// [`Shape::load`] for an operation making walls as thin as `wall`: a grid that cannot
+    /// hold them (see [`check_wall`]) is refused before a mesh is encoded on it.
+    pub fn load_walled(
+        path: &Path,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        wall: f32,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        Shape::load_inner(path, res, grow, reach, Some(wall), sign, progress)
+    }
+
+    fn load_inner(
+        path: &Path,
+        res: usize,
+        grow: f32,
+        reach: f32,
+        wall: Option<f32>,
+        sign: SignMode,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        let at_path = |e: Error| match e.path() {
+            Some(_) => e,
+            None => e.at(path),
+        };
         if is_pgv(path) {
             if sign != SignMode::Auto {
                 return Err(Error::new(
                     ErrorKind::BadParameter,
-                    "a sign method applies to mesh inputs; a .pgv file stores its field's signs                      (pass the mesh to choose how they are found)",
+                    "a sign method applies to mesh inputs; a .pgv file stores its field's signs \
+                     (pass the mesh to choose how they are found)",
                 )
                 .at(path));
             }
-            return Ok(Shape::from_file(read_pgv(path)?));
+            let shape = Shape::from_file(read_pgv(path)?);
+            if let Some(wall) = wall {
+                check_wall("the wall thickness", wall, &shape.volume.grid).map_err(at_path)?;
+            }
+            return Ok(shape);
         }
         let (mesh, _) = mesh_io::read_mesh(path)?;
-        Shape::from_mesh(mesh, res, grow, reach, sign, progress).map_err(|e| match e.path() {
-            Some(_) => e,
-            None => e.at(path),
-        })
+        Shape::encode_mesh(mesh, res, grow, reach, wall, sign, progress).map_err(at_path)
     }
 
     /// Refuses an operation reaching `reach` from the surface when the field is not an exact
@@ -244,14 +294,19 @@ pub fn check_thickness(thickness: f32) -> Result<()> {
     Ok(())
 }
 
-/// The shape grown (`distance` > 0) or shrunk by `distance`.
+/// The shape grown (`distance` > 0) or shrunk by `distance`; refused when the result breaks
+/// into far more pieces than the shape (see [`check_pieces`]).
 pub fn offset(shape: &Shape, distance: f32) -> Result<CoefficientVolume> {
     check_offset(distance)?;
     shape.check_reach(distance)?;
-    Ok(pgvol_ops::offset(&shape.volume, distance)?)
+    let volume = pgvol_ops::offset(&shape.volume, distance)?;
+    check_pieces("the offset", &shape.volume, &volume)?;
+    Ok(volume)
 }
 
-/// A wall of `thickness` around the surface, or the shape hollowed with drain holes.
+/// A wall of `thickness` around the surface, or the shape hollowed with drain holes. A wall
+/// thinner than the grid resolves is refused before the work (see [`check_wall`]), a result
+/// broken into far more pieces than the shape after it.
 pub fn shell(
     shape: &Shape,
     thickness: f32,
@@ -263,6 +318,7 @@ pub fn shell(
     if !drains.is_empty() && kind != ShellKind::Hollow {
         return Err(Error::parameter("drain holes apply to hollowing only"));
     }
+    check_wall("the wall thickness", thickness, &shape.volume.grid)?;
     shape.check_reach(thickness)?;
     // Drain points are world coordinates; the field's are local.
     let drains: Vec<Drain> = drains
@@ -275,10 +331,18 @@ pub fn shell(
     if kind == ShellKind::Hollow {
         check_drains(shape, thickness, &drains, progress)?;
     }
-    Ok(match kind {
-        ShellKind::Hollow => pgvol_ops::hollow(&shape.volume, thickness, &drains)?,
-        ShellKind::Wall(side) => pgvol_ops::shell(&shape.volume, thickness, side)?,
-    })
+    let (volume, operation) = match kind {
+        ShellKind::Hollow => (
+            pgvol_ops::hollow(&shape.volume, thickness, &drains)?,
+            "the hollowing",
+        ),
+        ShellKind::Wall(side) => (
+            pgvol_ops::shell(&shape.volume, thickness, side)?,
+            "the shell",
+        ),
+    };
+    check_pieces(operation, &shape.volume, &volume)?;
+    Ok(volume)
 }
 
 /// Warns when hollowing an open mesh, and refuses a drain whose point is not in the cavity

@@ -231,11 +231,11 @@ fn edits_count_their_output_and_refuse_before_any_work() {
 }
 
 #[test]
-fn clouds_of_isolated_points_on_a_fine_grid_are_estimated_by_their_bricks() {
+fn clouds_of_isolated_points_on_a_fine_grid_are_refused_before_work() {
     let _limit = Limit::take();
     // 3000 points scattered through the unit cube, 0.04 apart, on a grid of spacing 0.002: each
-    // point holds its own blob of band bricks, and its coefficients the blob grown by one
-    // brick all round.
+    // point would hold its own blob of band bricks (the fit passes 1.7 GB within 20 seconds),
+    // and the band would have holes between them.
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = || {
         state ^= state << 13;
@@ -257,9 +257,9 @@ fn clouds_of_isolated_points_on_a_fine_grid_are_estimated_by_their_bricks() {
     pgvol::set_memory_limit(Some(1000));
     let stages = Stages::default();
     let e = pgvol::points(&cloud, &options, &stages).unwrap_err();
-    assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
     assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
-    // The fit of this cloud passes 1.7 GB within 20 seconds; a surface of the cloud's area
-    // (3000 × 0.04²) would be estimated at 1.1 GB.
-    assert!(needed_bytes(e.message()) >= 2.5e9, "{e}");
+    // Refused for its spacing, which comes before the memory estimate, with the grid that works.
+    assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+    assert!(e.message().contains("too sparse for the grid"), "{e}");
+    assert!(e.message().contains("grid spacing of at least"), "{e}");
 }

@@ -4,7 +4,6 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
-use crate::output::outln;
 use pgvol::Basis;
 
 /// Grid size options shared by the commands that sample a mesh.
@@ -132,7 +131,8 @@ impl From<MethodArg> for pgvol::Method {
 /// Output options shared by every command.
 #[derive(Args, Clone, Copy, Debug)]
 pub struct OutputArgs {
-    /// Print the results as one JSON object on standard output.
+    /// Print the results as one JSON object on standard output, with `warnings` (a list, empty
+    /// when none) and `seconds` (stage times and their `total`).
     #[arg(long)]
     pub json: bool,
     /// No progress bars or notes on standard error.
@@ -166,27 +166,25 @@ impl OutputArgs {
 
 pub type PathArg = PathBuf;
 
-/// Reads a mesh through the library, saying on standard error what cleaning removed unless
-/// `quiet`. Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
+/// Reads a mesh through the library, warning of what cleaning removed (on standard error unless
+/// `quiet`, and in the report). Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
 pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
     let (mesh, report) = pgvol::read_mesh(path)?;
     let is_stl = matches!(pgvol::mesh_format(path), Ok(pgvol::mesh::MeshFormat::Stl));
     let merged = if is_stl { 0 } else { report.vertices_merged };
-    if !quiet && (merged > 0 || report.degenerate_dropped > 0 || report.duplicates_dropped > 0) {
-        eprintln!(
-            "{}: merged {merged} duplicate vertices, dropped {} degenerate and {} repeated triangles",
-            path.display(),
-            report.degenerate_dropped,
-            report.duplicates_dropped
+    if merged > 0 || report.degenerate_dropped > 0 || report.duplicates_dropped > 0 {
+        crate::report::warn(
+            quiet,
+            &format!(
+                "{}: merged {merged} duplicate vertices, dropped {} degenerate and {} repeated \
+                 triangles",
+                path.display(),
+                report.degenerate_dropped,
+                report.duplicates_dropped
+            ),
         );
     }
     Ok(mesh)
-}
-
-/// Prints `value` as pretty JSON on standard output.
-pub fn print_json(value: &impl serde::Serialize) -> Result<()> {
-    outln!("{}", serde_json::to_string_pretty(value)?);
-    Ok(())
 }
 
 /// A library error without a file, reported against the input that caused it.
@@ -197,20 +195,26 @@ pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
     }
 }
 
+/// A library error reported against `input` (see [`at_input`]), saying which `--res` gives the
+/// grid the library names when the grid was too coarse.
+pub fn grid_error(e: pgvol::Error, input: &std::path::Path) -> anyhow::Error {
+    let e = at_input(e, input);
+    // Past the largest grid the library's message already says so.
+    let Some(nodes) = e.resolution().filter(|&n| n <= pgvol::MAX_RES as usize) else {
+        return e.into();
+    };
+    let hint = if pgvol::is_pgv(input) {
+        format!("encode the mesh again with --res {nodes} and the band it needs, or pass the mesh with --res {nodes}")
+    } else {
+        format!("run again with --res {nodes}")
+    };
+    anyhow::anyhow!("{e}; {hint}")
+}
+
 /// A finite number of at least zero.
 pub fn non_negative(text: &str) -> std::result::Result<f32, String> {
     match text.parse::<f32>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!("expected a number of at least 0, got '{text}'")),
     }
-}
-
-/// The `seconds` object every `--json` report carries: the total and each stage, by name.
-pub fn seconds_json(stages: &[(&str, f64)], total: f64) -> serde_json::Value {
-    let mut map = serde_json::Map::new();
-    for (name, s) in stages {
-        map.insert((*name).into(), (*s).into());
-    }
-    map.insert("total".into(), total.into());
-    serde_json::Value::Object(map)
 }

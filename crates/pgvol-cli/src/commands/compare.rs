@@ -3,8 +3,9 @@
 use anyhow::Result;
 use clap::Args;
 
-use super::args::{load_mesh, print_json, OutputArgs, PathArg};
+use super::args::{load_mesh, OutputArgs, PathArg};
 use crate::output::outln;
+use crate::report::{self, Seconds};
 
 #[derive(Args)]
 #[command(
@@ -30,12 +31,13 @@ pub struct CompareArgs {
 }
 
 pub fn run(a: CompareArgs) -> Result<()> {
+    let start = std::time::Instant::now();
     let quiet = a.out.silent();
     let ma = load_mesh(&a.a, quiet)?;
     let mb = load_mesh(&a.b, quiet)?;
     let c = pgvol::compare(&ma, &mb, a.samples as usize, a.seed)?;
     if a.out.json {
-        return print_json(&c);
+        return report::print(&c, &Seconds::since(start));
     }
     outln!("A: {}\nB: {}", a.a.display(), a.b.display());
     outln!("samples per mesh      {}", c.samples);

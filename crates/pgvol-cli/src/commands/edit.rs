@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 use super::args::{OutputArgs, PathArg};
 use super::ops::{check_output_name, report, ShapeOutputArgs};
 use crate::progress::Bars;
+use crate::report::Seconds;
 
 /// Writes an edited volume as .pgv, or contours it into a mesh file, by the output's
 /// extension; returns the triangles written (0 for a .pgv).
@@ -229,10 +230,10 @@ pub fn repair(a: RepairArgs) -> Result<()> {
                 })
             })
             .collect();
-        return super::args::print_json(&serde_json::json!({
-            "output": a.output, "triangles": triangles, "masks": masks,
-            "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
-        }));
+        return crate::report::print(
+            &serde_json::json!({ "output": a.output, "triangles": triangles, "masks": masks }),
+            &Seconds::since(start),
+        );
     }
     report(&a.out, &a.output, triangles, start)
 }
@@ -366,11 +367,13 @@ pub fn blend(a: BlendArgs) -> Result<()> {
     let operation = format!("blend {:?}", a.kind).to_lowercase();
     let triangles = write_edited(&a.output, blended.volume, &operation, band, &a.shape, &bars)?;
     if a.out.json {
-        return super::args::print_json(&serde_json::json!({
-            "output": a.output, "triangles": triangles,
-            "weights": blended.weights.map(|(w, w0)| serde_json::json!({"w": w, "w0": w0})),
-            "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
-        }));
+        return crate::report::print(
+            &serde_json::json!({
+                "output": a.output, "triangles": triangles,
+                "weights": blended.weights.map(|(w, w0)| serde_json::json!({"w": w, "w0": w0})),
+            }),
+            &Seconds::since(start),
+        );
     }
     report(&a.out, &a.output, triangles, start)
 }

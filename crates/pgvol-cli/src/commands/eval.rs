@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::Args;
 
 use super::args::{OutputArgs, PathArg};
-use crate::output::outln;
+use crate::report::{self, Seconds};
 
 #[derive(Args)]
 #[command(after_help = "Example: pgvol eval part.pgv points.csv -o values.csv")]
@@ -27,6 +27,7 @@ pub struct EvalArgs {
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
+    let start = std::time::Instant::now();
     let shape = pgvol::Shape::from_file(pgvol::read_pgv(&a.input)?);
     let points = pgvol::read_points_file(&a.points)?;
     let results = pgvol::eval(&shape, &points);
@@ -36,8 +37,10 @@ pub fn run(a: EvalArgs) -> Result<()> {
             .zip(&results)
             .map(|(p, e)| serde_json::json!({ "point": pgvol::point_json(&shape, *p), "value": e.value, "gradient": e.gradient, "exact": e.exact }))
             .collect();
-        outln!("{}", serde_json::to_string(&rows)?);
-        return Ok(());
+        return report::print(
+            &serde_json::json!({ "points": rows }),
+            &Seconds::since(start),
+        );
     }
     let text = pgvol::eval_csv(&shape, &points, &results);
     match &a.output {

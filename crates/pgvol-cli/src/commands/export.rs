@@ -3,8 +3,9 @@
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{print_json, seconds_json, OutputArgs, PathArg};
+use super::args::{OutputArgs, PathArg};
 use crate::output::outln;
+use crate::report::{self, Seconds};
 
 #[derive(Args)]
 #[command(after_help = "Example: pgvol export part.pgv -o part.3mf --res 256")]
@@ -51,10 +52,12 @@ pub fn run(a: ExportArgs) -> Result<()> {
     let bytes = std::fs::metadata(&a.output)?.len();
     let unit = (kind == pgvol::ExportKind::ThreeMf).then_some(a.unit.as_str());
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "what": what, "grid": grid, "bytes": bytes, "unit": unit,
-            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "what": what, "grid": grid, "bytes": bytes, "unit": unit,
+            }),
+            &Seconds::since(start),
+        );
     }
     if !a.out.quiet {
         let [nx, ny, nz] = grid.dims;

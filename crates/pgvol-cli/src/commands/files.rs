@@ -7,11 +7,11 @@ use clap::Args;
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, non_negative, print_json, seconds_json, BasisArgs, GridArgs, MethodArg,
-    OutputArgs, PathArg, SignArg,
+    at_input, load_mesh, non_negative, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::{self, Seconds};
 use clap::ValueEnum;
 
 #[derive(Args)]
@@ -146,6 +146,7 @@ impl PrecisionArg {
 
 /// `encode --from`: a coefficient NRRD to .pgv, copied bit for bit unless a precision is given.
 fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
+    let start = Instant::now();
     let file = pgvol::read_coefficients_nrrd(from)?;
     let precision = a.precision.and_then(PrecisionArg::precision);
     let storage = match (a.dense_file, a.precision) {
@@ -163,10 +164,13 @@ fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
     let bytes = std::fs::metadata(&a.output)?.len();
     let grid = file.volume.grid;
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "from": from, "grid": grid, "basis": file.volume.basis,
-            "bytes": bytes, "dense": stored.is_none(),
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "from": from, "grid": grid, "basis": file.volume.basis,
+                "bytes": bytes, "dense": stored.is_none(),
+            }),
+            &Seconds::since(start),
+        );
     }
     if !a.out.quiet {
         outln!(
@@ -223,10 +227,15 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             report.z_step.map(|z| format!(", z_step {z:.4} k")).unwrap_or_default()
         );
     }
-    if report.spurious_sign_changes > 0 && !quiet {
-        eprintln!(
-            "warning: {} nodes farther than one spacing from the surface have the wrong sign: the field has spurious surface pieces",
-            report.spurious_sign_changes
+    // An unconverged fit is warned of by the library, through the progress bars.
+    if report.spurious_sign_changes > 0 {
+        report::warn(
+            quiet,
+            &format!(
+                "{} nodes farther than one spacing from the surface have the wrong sign: the \
+                 field has spurious surface pieces",
+                report.spurious_sign_changes
+            ),
         );
     }
     let storage = pgvol::StorageOptions {
@@ -245,11 +254,14 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
                 "precision": r.precision, "max_quantisation_error": r.max_quantisation_error,
             })
         });
-        return print_json(&serde_json::json!({
-            "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
-            "storage": storage, "fit": report,
-            "seconds": { "sdf": encoded.timings.sdf, "fit": encoded.timings.fit, "total": start.elapsed().as_secs_f64() },
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
+                "storage": storage, "fit": report,
+            }),
+            &Seconds::since(start)
+                .stages([("sdf", encoded.timings.sdf), ("fit", encoded.timings.fit)]),
+        );
     }
     if !a.out.quiet {
         let detail = match &stored {
@@ -289,10 +301,13 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
     drop(shape);
     pgvol::write_mesh(&a.output, &mesh)?;
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "triangles": mesh.triangles.len(), "vertices": mesh.positions.len(),
-            "seconds": seconds_json(&[("contour", seconds)], start.elapsed().as_secs_f64()),
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "triangles": mesh.triangles.len(),
+                "vertices": mesh.positions.len(),
+            }),
+            &Seconds::since(start).stage("contour", seconds),
+        );
     }
     if !a.out.quiet {
         outln!(
@@ -324,6 +339,7 @@ struct Info<'a> {
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
+    let start = Instant::now();
     let raw = pgvol::core::read_input(&a.input)?;
     let parts = pgvol::pgv_info(&raw, &a.input)?;
     let file = pgvol::read_pgv_bytes(&raw, &a.input)?;
@@ -345,7 +361,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
         exact_reach: pgvol::exact_reach(&file),
     };
     if a.out.json {
-        return print_json(&info);
+        return report::print(&info, &Seconds::since(start));
     }
     let h = &file.header;
     let g = h.grid;

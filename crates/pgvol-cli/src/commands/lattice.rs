@@ -7,10 +7,11 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{at_input, print_json, seconds_json, OutputArgs, PathArg};
+use super::args::{at_input, OutputArgs, PathArg};
 use super::ops::{check_output_name, ShapeOutputArgs};
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::Seconds;
 
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
 pub enum StyleArg {
@@ -195,12 +196,15 @@ pub fn write_solid(
     };
     let write = t.elapsed().as_secs_f64();
     if out.json {
-        let mut seconds = stages.to_vec();
-        seconds.extend([("contour", contour), ("measure", measure), ("write", write)]);
-        return print_json(&serde_json::json!({
-            "output": output, "triangles": triangles, "solid": report,
-            "seconds": seconds_json(&seconds, start.elapsed().as_secs_f64()),
-        }));
+        let seconds = Seconds::since(start).stages(stages).stages([
+            ("contour", contour),
+            ("measure", measure),
+            ("write", write),
+        ]);
+        return crate::report::print(
+            &serde_json::json!({ "output": output, "triangles": triangles, "solid": report }),
+            &seconds,
+        );
     }
     if !out.quiet {
         outln!(

@@ -7,12 +7,11 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{
-    at_input, non_negative, print_json, seconds_json, MethodArg, OutputArgs, PathArg, SignArg,
-};
+use super::args::{at_input, grid_error, non_negative, MethodArg, OutputArgs, PathArg, SignArg};
 use super::lattice::{build_lattice, write_solid, GradeArgs, StyleArg};
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::{self, Seconds};
 
 /// Writes a derived volume as .pgv, or contours it into a mesh file, by the output's extension;
 /// returns the triangles written (0 for a .pgv).
@@ -151,10 +150,12 @@ pub fn slice(a: SliceArgs) -> Result<()> {
         .map(|l| l.points.len())
         .sum();
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "layers": layers.len(), "loops": loops, "points": points,
-            "seconds": { "slice": slice_seconds, "total": start.elapsed().as_secs_f64() },
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "layers": layers.len(), "loops": loops, "points": points,
+            }),
+            &Seconds::since(start).stage("slice", slice_seconds),
+        );
     }
     if !a.out.quiet {
         outln!(
@@ -206,6 +207,22 @@ impl ShapeOutputArgs {
             bars,
         )
     }
+
+    /// [`ShapeOutputArgs::load`] for an operation making walls as thin as `wall`: a grid too
+    /// coarse for them is refused before a mesh is encoded, naming the --res that holds them.
+    pub fn load_walled(
+        &self,
+        input: &Path,
+        grow: f32,
+        reach: f32,
+        wall: f32,
+        bars: &Bars,
+    ) -> Result<pgvol::Shape> {
+        let sign = self.sign.into();
+        let res = self.res as usize;
+        pgvol::Shape::load_walled(input, res, grow, reach, wall, sign, bars)
+            .map_err(|e| grid_error(e, input))
+    }
 }
 
 #[derive(Args)]
@@ -233,7 +250,7 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     let shape = a
         .shape
         .load(&a.input, a.distance.max(0.0), a.distance.abs(), &bars)?;
-    let volume = pgvol::offset(&shape, a.distance).map_err(|e| at_input(e, &a.input))?;
+    let volume = pgvol::offset(&shape, a.distance).map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(None, a.distance);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
@@ -262,7 +279,8 @@ pub struct ShellArgs {
     /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
     pub output: PathArg,
-    /// Wall thickness in model units.
+    /// Wall thickness in model units: at least two grid spacings (a thinner wall is refused,
+    /// naming the --res that holds it).
     #[arg(long)]
     pub thickness: f32,
     /// Where the wall lies relative to the surface (ignored with --hollow, which keeps the
@@ -314,10 +332,12 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
         .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, a.thickness);
-    let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
+    let shape = a
+        .shape
+        .load_walled(&a.input, 0.0, reach, a.thickness, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
     let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
-        .map_err(|e| at_input(e, &a.input))?;
+        .map_err(|e| grid_error(e, &a.input))?;
     let stages = [
         ("load", loaded),
         ("infill", start.elapsed().as_secs_f64() - loaded),
@@ -362,9 +382,11 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         })
     };
     let grow = pgvol::growth(kind, a.thickness);
-    let shape = a.shape.load(&a.input, grow, a.thickness, &bars)?;
+    let shape = a
+        .shape
+        .load_walled(&a.input, grow, a.thickness, a.thickness, &bars)?;
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
-        .map_err(|e| at_input(e, &a.input))?;
+        .map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
     let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
@@ -377,10 +399,10 @@ pub(super) fn report(
     start: Instant,
 ) -> Result<()> {
     if out.json {
-        print_json(&serde_json::json!({
-            "output": output, "triangles": triangles,
-            "seconds": seconds_json(&[], start.elapsed().as_secs_f64()),
-        }))?;
+        report::print(
+            &serde_json::json!({ "output": output, "triangles": triangles }),
+            &Seconds::since(start),
+        )?;
     } else if !out.quiet {
         if triangles > 0 {
             outln!("{}: {} triangles", output.display(), triangles);

@@ -6,11 +6,10 @@ use anyhow::Result;
 use clap::Args;
 use serde::Serialize;
 
-use super::args::{
-    at_input, load_mesh, non_negative, print_json, seconds_json, OutputArgs, PathArg,
-};
+use super::args::{at_input, load_mesh, non_negative, OutputArgs, PathArg};
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::Seconds;
 
 #[derive(Args)]
 #[command(
@@ -68,7 +67,6 @@ struct Report<'a> {
     triangles: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     components: Option<usize>,
-    seconds: serde_json::Value,
 }
 
 pub fn run(a: PerturbArgs) -> Result<()> {
@@ -126,7 +124,6 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         bytes = Some(std::fs::metadata(&a.output)?.len());
     }
     let write = t.elapsed().as_secs_f64() - contour;
-    let total = start.elapsed().as_secs_f64();
     let r = &perturbed.report;
     let report = Report {
         input: &a.input,
@@ -140,19 +137,16 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         bytes,
         triangles,
         components,
-        seconds: seconds_json(
-            &[
-                ("read", read),
-                ("perturb", built),
-                ("resample", resampled),
-                ("contour", contour),
-                ("write", write),
-            ],
-            total,
-        ),
     };
     if a.out.json {
-        return print_json(&report);
+        let seconds = Seconds::since(start).stages([
+            ("read", read),
+            ("perturb", built),
+            ("resample", resampled),
+            ("contour", contour),
+            ("write", write),
+        ]);
+        return crate::report::print(&report, &seconds);
     }
     if !a.out.quiet {
         outln!(

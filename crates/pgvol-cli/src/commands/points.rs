@@ -5,9 +5,10 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{at_input, print_json, GridArgs, MethodArg, OutputArgs, PathArg};
+use super::args::{at_input, GridArgs, MethodArg, OutputArgs, PathArg};
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::{self, Seconds};
 
 /// The field through the points.
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
@@ -102,21 +103,24 @@ pub fn run(a: PointsArgs) -> Result<()> {
     let write_seconds = t.elapsed().as_secs_f64();
     let grid = fitted.file.volume.grid;
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "grid": grid, "method": r.method, "points": r.points,
-            "normals_estimated": r.normals_estimated, "spacing": r.spacing, "offset": r.offset,
-            "centres": r.centres, "support": r.support, "iterations": r.iterations,
-            "residual": r.residual, "converged": r.converged,
-            "normals_reoriented": r.orientation.reoriented,
-            "normals_flipped": r.orientation.flipped,
-            "matrix_entries": r.matrix_entries, "bricks": r.bricks,
-            "triangles": triangles,
-            "seconds": {
-                "read": read_seconds, "normals": r.seconds_normals, "solve": r.seconds_solve,
-                "fit": fit_seconds, "write": write_seconds,
-                "total": start.elapsed().as_secs_f64(),
-            },
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "grid": grid, "method": r.method, "points": r.points,
+                "normals_estimated": r.normals_estimated, "spacing": r.spacing,
+                "offset": r.offset, "centres": r.centres, "support": r.support,
+                "iterations": r.iterations, "residual": r.residual, "converged": r.converged,
+                "normals_reoriented": r.orientation.reoriented,
+                "normals_flipped": r.orientation.flipped,
+                "matrix_entries": r.matrix_entries, "bricks": r.bricks, "triangles": triangles,
+            }),
+            &Seconds::since(start).stages([
+                ("read", read_seconds),
+                ("normals", r.seconds_normals),
+                ("solve", r.seconds_solve),
+                ("fit", fit_seconds),
+                ("write", write_seconds),
+            ]),
+        );
     }
     if !a.out.quiet {
         let solve = if r.centres > 0 {
@@ -192,17 +196,21 @@ pub fn contours(a: ContoursArgs) -> Result<()> {
         super::ops::AxisArg::Y => pgvol::Axis::Y,
         super::ops::AxisArg::Z => pgvol::Axis::Z,
     };
+    let t = Instant::now();
     let fitted =
         pgvol::contours(&layers, axis, &options, &bars).map_err(|e| at_input(e, &a.input))?;
+    let fit_seconds = t.elapsed().as_secs_f64();
     let triangles = write_output(&a.output, &fitted, a.contour, &bars)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
     if a.out.json {
-        return print_json(&serde_json::json!({
-            "output": a.output, "grid": fitted.file.volume.grid, "layers": layers.len(),
-            "loops": loops, "points": fitted.report.points, "method": fitted.report.method,
-            "triangles": triangles,
-            "seconds": { "total": start.elapsed().as_secs_f64() },
-        }));
+        return report::print(
+            &serde_json::json!({
+                "output": a.output, "grid": fitted.file.volume.grid, "layers": layers.len(),
+                "loops": loops, "points": fitted.report.points, "method": fitted.report.method,
+                "triangles": triangles,
+            }),
+            &Seconds::since(start).stage("fit", fit_seconds),
+        );
     }
     if !a.out.quiet {
         outln!(

@@ -7,11 +7,11 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, non_negative, print_json, seconds_json, BasisArgs, GridArgs, MethodArg,
-    OutputArgs, PathArg, SignArg,
+    at_input, load_mesh, non_negative, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::Seconds;
 
 /// Which field the vertices are placed on.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -62,7 +62,6 @@ struct Report<'a> {
     input_triangles: usize,
     triangles: usize,
     vertices: usize,
-    seconds: serde_json::Value,
 }
 
 pub fn run(a: RemeshArgs) -> Result<()> {
@@ -107,19 +106,16 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         input_triangles: mesh.triangles.len(),
         triangles: remeshed.mesh.triangles.len(),
         vertices: remeshed.mesh.positions.len(),
-        seconds: seconds_json(
-            &[
-                ("read", seconds.read),
-                ("sdf", seconds.sdf),
-                ("fit", seconds.fit),
-                ("contour", seconds.contour),
-                ("write", seconds.write),
-            ],
-            total,
-        ),
     };
     if a.out.json {
-        return print_json(&report);
+        let seconds = Seconds::since(start).stages([
+            ("read", seconds.read),
+            ("sdf", seconds.sdf),
+            ("fit", seconds.fit),
+            ("contour", seconds.contour),
+            ("write", seconds.write),
+        ]);
+        return crate::report::print(&report, &seconds);
     }
     if !a.out.quiet {
         outln!(

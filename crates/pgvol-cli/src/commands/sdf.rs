@@ -4,11 +4,10 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::args::{
-    at_input, load_mesh, print_json, seconds_json, GridArgs, OutputArgs, PathArg, SignArg,
-};
+use super::args::{at_input, load_mesh, GridArgs, OutputArgs, PathArg, SignArg};
 use crate::output::outln;
 use crate::progress::Bars;
+use crate::report::Seconds;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
 pub enum GridFormat {
@@ -70,12 +69,14 @@ pub fn run(a: SdfArgs) -> Result<()> {
         band: a.band,
         exact_nodes: sampled.exact_nodes,
         samples: values.len(),
-        seconds: seconds_json(&[("sdf", sampled.seconds)], start.elapsed().as_secs_f64()),
         samples_per_second: values.len() as f64 / sampled.seconds.max(1e-9),
         inside: values.iter().filter(|v| **v < 0.0).count(),
     };
     if a.out.json {
-        return print_json(&report);
+        return crate::report::print(
+            &report,
+            &Seconds::since(start).stage("sdf", sampled.seconds),
+        );
     }
     if !a.out.quiet {
         outln!(
@@ -84,7 +85,7 @@ pub fn run(a: SdfArgs) -> Result<()> {
             report.grid.dims[0],
             report.sign,
             report.exact_nodes,
-            report.seconds,
+            sampled.seconds,
             report.samples_per_second,
             report.inside
         );
@@ -99,7 +100,6 @@ struct Report {
     band: Option<f32>,
     exact_nodes: usize,
     samples: usize,
-    seconds: serde_json::Value,
     samples_per_second: f64,
     inside: usize,
 }
