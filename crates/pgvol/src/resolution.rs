@@ -125,7 +125,8 @@ mod tests {
         assert!(e.message().contains("0.25"), "{e}");
         // A wall no grid holds is named so, without overflowing.
         let e = check_wall("the wall", 1e-30, &grid).unwrap_err();
-        assert!(e.message().contains("more than the 2048 nodes"), "{e}");
-        assert!(e.resolution().unwrap() > 2048);
+        let most = crate::MAX_RES as usize;
+        assert!(e.message().contains(&format!("more than the {most} nodes")), "{e}");
+        assert!(e.resolution().unwrap() > most);
     }
 }
