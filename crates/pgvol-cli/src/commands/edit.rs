@@ -311,13 +311,11 @@ pub fn blend(a: BlendArgs) -> Result<()> {
             lambda: a.lambda,
         },
         BlendKind::Spline => {
-            let [b1, b2]: [pgvol::Operand; 2] = a
-                .bound
-                .clone()
-                .try_into()
-                .map_err(|_| anyhow::anyhow!("spline needs --bound twice, one per primary"))?;
+            if a.bound.len() != 2 || a.primaries.len() != 2 {
+                anyhow::bail!("spline needs two primaries and --bound twice, one per primary");
+            }
             pgvol::BlendOperator::Spline {
-                bounds: [b1, b2],
+                bounds: a.bound.clone(),
                 lambda: a.lambda,
             }
         }
@@ -341,17 +339,15 @@ pub fn blend(a: BlendArgs) -> Result<()> {
                 Some(w) => anyhow::bail!("--weights: expected w1,..,wn,w, got {} numbers", w.len()),
                 None => None,
             };
-            let points = match &a.points {
-                Some(p) => pgvol::read_points_file(p)?,
-                None if weights.is_none() => {
-                    anyhow::bail!("ipatch needs --weights or --points to fit them to")
-                }
-                None => Vec::new(),
+            let weights = match (weights, &a.points) {
+                (Some((w, w0)), _) => pgvol::IPatchWeights::Given(w, w0),
+                (None, Some(p)) => pgvol::IPatchWeights::Fitted(pgvol::read_points_file(p)?),
+                (None, None) => anyhow::bail!("ipatch needs --weights or --points to fit them to"),
             };
             pgvol::BlendOperator::IPatch {
                 bounds: a.bound.clone(),
                 weights,
-                points,
+                continuity: pgvol::Continuity::G1,
             }
         }
     };
