@@ -66,7 +66,7 @@ pub(super) fn parse_box(text: &str) -> Result<(pgvol::glam::Vec3, pgvol::glam::V
     ))
 }
 
-fn parse_operand(text: &str) -> Result<pgvol::Operand, String> {
+pub(super) fn parse_operand(text: &str) -> Result<pgvol::Operand, String> {
     pgvol::parse_operand(text).map_err(|e| e.to_string())
 }
 
@@ -231,140 +231,6 @@ pub fn repair(a: RepairArgs) -> Result<()> {
             .collect();
         return super::args::print_json(&serde_json::json!({
             "output": a.output, "triangles": triangles, "masks": masks,
-            "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
-        }));
-    }
-    report(&a.out, &a.output, triangles, start)
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug)]
-pub enum BlendKind {
-    /// Liming rounding (1 − λ)·P1·P2 + λ·C² of two primaries with a cutting surface (--cut).
-    Liming,
-    /// Functional spline (1 − λ)·P1·P2 + λ·B1²·B2² with one bound per primary (--bound twice).
-    Spline,
-    /// I-patch Σ wi·Pi·Π(j≠i) Bj² + w·Π Bi², one bound per primary; weights by --weights or
-    /// fitted by least squares to --points.
-    Ipatch,
-}
-
-fn parse_weights(text: &str) -> Result<Vec<f32>, String> {
-    text.split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<f32>()
-                .map_err(|_| format!("'{x}' is not a number"))
-        })
-        .collect()
-}
-
-#[derive(Args)]
-#[command(
-    after_help = "Operands as for `pgvol csg`. Fields are negative inside; the edge blends \
-round the edge of the two primaries' intersection where every bound (or the cut) is negative.\n\n\
-Example: pgvol blend liming plane:1,0,0,0 plane:0,1,0,0 --cut plane:-1,-1,0,0.5 --box -1,-1,-1,1,1,1 -o round.stl"
-)]
-pub struct BlendArgs {
-    /// The blend.
-    #[arg(value_enum)]
-    pub kind: BlendKind,
-    /// The primaries (two; two or more for an I-patch).
-    #[arg(required = true, num_args = 2.., value_parser = parse_operand)]
-    pub primaries: Vec<pgvol::Operand>,
-    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
-    #[arg(short, long)]
-    pub output: PathArg,
-    /// Liming's cutting surface (negative on the edge's side).
-    #[arg(long, value_parser = parse_operand)]
-    pub cut: Option<pgvol::Operand>,
-    /// A bound per primary, in order (spline, ipatch).
-    #[arg(long, value_parser = parse_operand)]
-    pub bound: Vec<pgvol::Operand>,
-    /// λ in (0, 1) for liming and spline: larger moves the blend away from the edge.
-    #[arg(long, default_value_t = pgvol::DEFAULT_LAMBDA)]
-    pub lambda: f32,
-    /// I-patch weights w1,..,wn,w.
-    #[arg(long, allow_hyphen_values = true, conflicts_with = "points")]
-    pub weights: Option<String>,
-    /// I-patch: a CSV of points (x,y,z per line) on the wanted surface, to fit the weights.
-    #[arg(long)]
-    pub points: Option<PathArg>,
-    /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: the bounded primaries' box).
-    #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
-    pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
-    #[command(flatten)]
-    pub shape: ShapeOutputArgs,
-    #[command(flatten)]
-    pub out: OutputArgs,
-}
-
-pub fn blend(a: BlendArgs) -> Result<()> {
-    let start = Instant::now();
-    check_output_name(&a.output)?;
-    let bars = Bars::new(a.out.silent());
-    let operator = match a.kind {
-        BlendKind::Liming => pgvol::BlendOperator::Liming {
-            cut: a
-                .cut
-                .clone()
-                .ok_or_else(|| anyhow::anyhow!("liming needs --cut, the cutting surface"))?,
-            lambda: a.lambda,
-        },
-        BlendKind::Spline => {
-            if a.bound.len() != 2 || a.primaries.len() != 2 {
-                anyhow::bail!("spline needs two primaries and --bound twice, one per primary");
-            }
-            pgvol::BlendOperator::Spline {
-                bounds: a.bound.clone(),
-                lambda: a.lambda,
-            }
-        }
-        BlendKind::Ipatch => {
-            if a.bound.len() != a.primaries.len() {
-                anyhow::bail!(
-                    "ipatch needs one --bound per primary, in order: got {} --bound for {} \
-                     primaries",
-                    a.bound.len(),
-                    a.primaries.len()
-                );
-            }
-            let parsed = match &a.weights {
-                Some(text) => {
-                    Some(parse_weights(text).map_err(|e| anyhow::anyhow!("--weights: {e}"))?)
-                }
-                None => None,
-            };
-            let weights = match &parsed {
-                Some(w) if w.len() >= 2 => Some((w[..w.len() - 1].to_vec(), w[w.len() - 1])),
-                Some(w) => anyhow::bail!("--weights: expected w1,..,wn,w, got {} numbers", w.len()),
-                None => None,
-            };
-            let weights = match (weights, &a.points) {
-                (Some((w, w0)), _) => pgvol::IPatchWeights::Given(w, w0),
-                (None, Some(p)) => pgvol::IPatchWeights::Fitted(pgvol::read_points_file(p)?),
-                (None, None) => anyhow::bail!("ipatch needs --weights or --points to fit them to"),
-            };
-            pgvol::BlendOperator::IPatch {
-                bounds: a.bound.clone(),
-                weights,
-                continuity: pgvol::Continuity::G1,
-            }
-        }
-    };
-    let settings = pgvol::BlendSettings {
-        res: a.shape.res as usize,
-        bounds: a.bounds,
-        sign: a.shape.sign.into(),
-        result: result_use(&a.output),
-    };
-    let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
-    let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;
-    let operation = format!("blend {:?}", a.kind).to_lowercase();
-    let triangles = write_edited(&a.output, blended.volume, &operation, band, &a.shape, &bars)?;
-    if a.out.json {
-        return super::args::print_json(&serde_json::json!({
-            "output": a.output, "triangles": triangles,
-            "weights": blended.weights.map(|(w, w0)| serde_json::json!({"w": w, "w0": w0})),
             "seconds": super::args::seconds_json(&[], start.elapsed().as_secs_f64()),
         }));
     }
