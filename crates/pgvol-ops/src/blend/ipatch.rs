@@ -129,7 +129,7 @@ mod tests {
         let mut sum = 0.0;
         let mut binomial = 1.0;
         for j in 0..=k {
-            let sign = if (k - j) % 2 == 0 { 1.0 } else { -1.0 };
+            let sign = (-1.0f64).powi((k - j) as i32);
             sum += sign * binomial * f(t + side * j as f64 * h);
             binomial = binomial * (k - j) as f64 / (j + 1) as f64;
         }
