@@ -219,4 +219,110 @@ mod tests {
         assert!(e.contains("one --bound per primary"), "{e}");
         assert!(!out.exists());
     }
+
+    /// Runs `pgvol blend` with `args` into `out` (quietly, on the unit box at a small grid).
+    fn run_blend(args: &[&str], out: &std::path::Path) -> anyhow::Result<()> {
+        let mut words = vec!["pgvol", "blend"];
+        words.extend_from_slice(args);
+        words.extend(["--box=-1,-1,-1,1,1,1", "--res", "40", "--quiet", "-o"]);
+        words.push(out.to_str().unwrap());
+        let cli = Cli::try_parse_from(&words).map_err(anyhow::Error::from)?;
+        commands::run(cli.command)
+    }
+
+    #[test]
+    fn continuity_orders_out_of_range_are_refused_by_the_parser() {
+        for order in ["0", "5", "-1", "x"] {
+            let line = format!(
+                "pgvol blend ipatch plane:1,0,0,0 plane:0,1,0,0 --bound plane:-1,0,0,1 \
+                 --bound plane:0,-1,0,1 --weights 1,1,-0.5 --continuity={order} -o b.stl"
+            );
+            let e = Cli::try_parse_from(line.split_whitespace())
+                .err()
+                .unwrap_or_else(|| panic!("--continuity {order} parsed"))
+                .to_string();
+            assert!(e.contains("--continuity"), "{e}");
+        }
+    }
+
+    #[test]
+    fn an_ipatch_through_a_point_of_order_two_passes_through_it() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("b.pgv");
+        let ipatch = [
+            "ipatch",
+            "plane:1,0,0,0",
+            "plane:0,1,0,0",
+            "--bound",
+            "plane:-1,0,0,0.8",
+            "--bound",
+            "plane:0,-1,0,0.8",
+            "--continuity",
+            "2",
+            "--through=-0.25,-0.35,0.1",
+        ];
+        run_blend(&ipatch, &out).unwrap();
+        let shape = pgvol::Shape::from_file(pgvol::read_pgv(&out).unwrap());
+        let at = pgvol::glam::DVec3::new(-0.25, -0.35, 0.1);
+        let v = pgvol::eval(&shape, &[at])[0].value;
+        assert!(v.abs() < 0.02, "{v}");
+        // Weights with --through are w1..wn only: n + 1 numbers are refused by name.
+        let mut wrong = ipatch.to_vec();
+        wrong.extend(["--weights", "1,1,0.5"]);
+        let e = run_blend(&wrong, &out).unwrap_err().to_string();
+        assert!(e.contains("--weights with --through"), "{e}");
+        // The order belongs to I-patches.
+        let e = run_blend(
+            &[
+                "spline",
+                "plane:1,0,0,0",
+                "plane:0,1,0,0",
+                "--bound",
+                "plane:-1,-1,0,1",
+                "--continuity",
+                "2",
+            ],
+            &out,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("ipatch only"), "{e}");
+    }
+
+    #[test]
+    fn a_spline_of_three_primaries_and_one_bound_runs() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("v.pgv");
+        run_blend(
+            &[
+                "spline",
+                "plane:1,0,0,0",
+                "plane:0,1,0,0",
+                "plane:0,0,1,0",
+                "--bound=plane:-1,-1,-1,1",
+            ],
+            &out,
+        )
+        .unwrap();
+        let shape = pgvol::Shape::from_file(pgvol::read_pgv(&out).unwrap());
+        // The vertex is cut off; deep in the octant is inside.
+        let values: Vec<f32> = pgvol::eval(
+            &shape,
+            &[
+                pgvol::glam::DVec3::splat(-0.02),
+                pgvol::glam::DVec3::splat(-0.5),
+            ],
+        )
+        .iter()
+        .map(|e| e.value)
+        .collect();
+        assert!(values[0] > 0.0 && values[1] < 0.0, "{values:?}");
+        // No bound is refused by name.
+        let e = run_blend(&["spline", "plane:1,0,0,0", "plane:0,1,0,0"], &out)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--bound"), "{e}");
+    }
 }

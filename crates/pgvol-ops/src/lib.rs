@@ -39,8 +39,8 @@ mod svg_read;
 mod write;
 
 pub use blend::{
-    check_ipatch, edge_blend, fit_ipatch_weights, functional_spline, ipatch, ipatch_terms, liming,
-    renormalised,
+    check_ipatch, check_spline, edge_blend, fit_ipatch_weights, functional_spline, ipatch,
+    ipatch_terms, liming, renormalised, weight_through_point, Continuity, MAX_CONTINUITY,
 };
 pub use booleans::{check_blend, combine, intersection, sample_bricks, union, Blend, BoolOp};
 pub use cli_file::{write_cli, write_cli_in, write_cli_with, CliEncoding, MAX_BINARY_ROUNDING};

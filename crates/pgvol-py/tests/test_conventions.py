@@ -102,7 +102,7 @@ def test_bad_meshes_are_value_errors_that_say_why(small_mesh):
 def test_bad_options_are_value_errors(small_mesh, small_field):
     v, t = small_mesh
     for kwargs, message in [
-        ({"res": 3}, "res must be from 4 to 2048"),
+        ({"res": 3}, f"res must be from 4 to {pgvol.MAX_RES}"),
         ({"res": 16, "voxel": 0.1}, "not both"),
         ({"res": None, "voxel": -1.0}, "voxel must be a positive number"),
         ({"basis": "cubic"}, "unknown basis 'cubic'"),

@@ -28,24 +28,37 @@ pub enum BlendOperator {
         /// λ in (0, 1): larger moves the blend away from the edge.
         lambda: f32,
     },
-    /// `(1 − λ)·P₁·P₂ + λ·B₁²·B₂²` with one bound per primary.
+    /// `(1 − λ)·ΠPᵢ + λ·ΠBⱼ²` of two or more primaries with one or more bounds (the slides'
+    /// n primaries and m bounds; the usual form has one bound per primary).
     Spline {
-        /// One bound per primary.
-        bounds: [Operand; 2],
+        /// The bounds, negative on the side of the edge to round.
+        bounds: Vec<Operand>,
         /// λ in (0, 1).
         lambda: f32,
     },
-    /// `Σ wᵢ Pᵢ Π_{j≠i} Bⱼ² + w·ΠBᵢ²`, one bound per primary; the weights given, or fitted by
-    /// least squares to `points` on the wanted surface (first weight 1).
+    /// `Σ wᵢ Pᵢ Π_{j≠i} Bⱼᵉ + w·ΠBᵢᵉ`, one bound per primary, `e = n + 1` for Gⁿ continuity
+    /// with the primaries along the boundary curves.
     IPatch {
         /// One bound per primary.
         bounds: Vec<Operand>,
-        /// `w₁..wₙ` and `w`, when given.
-        weights: Option<(Vec<f32>, f32)>,
-        /// Points on the wanted surface (world coordinates, as [`crate::read_points`] gives
-        /// them), to fit the weights when not given.
-        points: Vec<glam::DVec3>,
+        /// How the weights are set.
+        weights: IPatchWeights,
+        /// The order n of the continuity, G¹ (squared bounds) by default.
+        continuity: pgvol_ops::Continuity,
     },
+}
+
+/// How an I-patch's weights are set.
+#[derive(Clone, Debug)]
+pub enum IPatchWeights {
+    /// `w₁..wₙ` and `w` as given.
+    Given(Vec<f32>, f32),
+    /// Least squares of the patch at points on the wanted surface (world coordinates, as
+    /// [`crate::read_points`] gives them), with `w₁ = 1`.
+    Fitted(Vec<glam::DVec3>),
+    /// `w₁..wₙ` as given and `w` from the one-point formula, so that the patch passes through
+    /// the point (world coordinates).
+    Through(Vec<f32>, glam::DVec3),
 }
 
 /// Grid and box of a blend's result.
@@ -90,7 +103,7 @@ fn check_lambda(lambda: f32) -> Result<()> {
     Ok(())
 }
 
-/// The blend of `primaries` (two for Liming and functional splines, two or more for
+/// The blend of `primaries` (two for Liming, two or more for functional splines and
 /// I-patches), renormalised to a distance-like field near its surface and re-fitted in the
 /// cubic B-spline brick by brick.
 pub fn blend(
@@ -99,47 +112,7 @@ pub fn blend(
     settings: &BlendSettings,
     progress: &dyn Progress,
 ) -> Result<Blended> {
-    let extra: Vec<Operand> = match operator {
-        BlendOperator::Liming { cut, lambda } => {
-            check_lambda(*lambda)?;
-            vec![cut.clone()]
-        }
-        BlendOperator::Spline { bounds, lambda } => {
-            check_lambda(*lambda)?;
-            bounds.to_vec()
-        }
-        BlendOperator::IPatch {
-            bounds, weights, ..
-        } => {
-            pgvol_ops::check_ipatch(
-                primaries.len(),
-                bounds.len(),
-                weights.as_ref().map(|w| w.0.len()),
-            )
-            .map_err(crate::csg::ops_error)?;
-            bounds.clone()
-        }
-    };
-    let needed = match operator {
-        BlendOperator::IPatch { .. } => primaries.len().max(2),
-        _ => 2,
-    };
-    // Liming has its one cutting surface; the others one bound per primary.
-    let wanted_extra = match operator {
-        BlendOperator::Liming { .. } => 1,
-        _ => needed,
-    };
-    if primaries.len() != needed || extra.len() != wanted_extra {
-        return Err(Error::parameter(format!(
-            "this blend needs {needed} primaries{}, got {} primaries and {} bounds",
-            match operator {
-                BlendOperator::Liming { .. } => " and one cutting surface".to_string(),
-                _ => format!(" and {needed} bounds"),
-            },
-            primaries.len(),
-            extra.len()
-        )));
-    }
+    let extra = check_operands(primaries, operator)?;
     let all: Vec<Operand> = primaries.iter().chain(&extra).cloned().collect();
     let loaded = load_operands(&all)?;
     let grid = covering_grid(
@@ -156,41 +129,33 @@ pub fn blend(
         |f: &[OperandField], p: Vec3| -> Vec<f32> { f.iter().map(|x| x.value(p)).collect() };
     let weights = match operator {
         BlendOperator::IPatch {
-            weights: Some(w), ..
+            weights,
+            continuity,
+            ..
         } => {
-            if w.0.len() != prim.len() || w.0.iter().chain([&w.1]).any(|x| !x.is_finite()) {
-                return Err(Error::parameter(format!(
-                    "an I-patch of {} primaries needs {} finite weights and w, got {}",
-                    prim.len(),
-                    prim.len(),
-                    w.0.len()
-                )));
-            }
-            Some(w.clone())
-        }
-        BlendOperator::IPatch { points, .. } => {
-            let terms: Vec<Vec<f64>> = points
-                .iter()
+            let terms = |p: glam::DVec3| {
                 // Operands are near the origin (far ones are refused), so world is local.
-                .map(|&p| p.as_vec3())
-                .map(|p| pgvol_ops::ipatch_terms(&value(prim, p), &value(rest, p)))
-                .collect();
-            Some(pgvol_ops::fit_ipatch_weights(&terms).map_err(crate::csg::ops_error)?)
+                let p = p.as_vec3();
+                let f64s = |f: &[OperandField]| -> Vec<f64> {
+                    f.iter().map(|x| x.value(p) as f64).collect()
+                };
+                pgvol_ops::ipatch_terms(&f64s(prim), &f64s(rest), *continuity)
+            };
+            Some(ipatch_weights(weights, prim.len(), terms)?)
         }
         _ => None,
     };
+    // Only I-patches read these.
+    let (w, w0) = weights.clone().unwrap_or_default();
     progress.stage("blending");
     let step = 0.5 * grid.spacing;
     let raw = |p: Vec3| -> f32 {
         let (pv, bv) = (value(prim, p), value(rest, p));
         match operator {
             BlendOperator::Liming { lambda, .. } => pgvol_ops::liming(pv[0], pv[1], bv[0], *lambda),
-            BlendOperator::Spline { lambda, .. } => {
-                pgvol_ops::functional_spline([pv[0], pv[1]], [bv[0], bv[1]], *lambda)
-            }
-            BlendOperator::IPatch { .. } => {
-                let (w, w0) = weights.as_ref().expect("weights set above");
-                pgvol_ops::ipatch(&pv, &bv, w, *w0)
+            BlendOperator::Spline { lambda, .. } => pgvol_ops::functional_spline(&pv, &bv, *lambda),
+            BlendOperator::IPatch { continuity, .. } => {
+                pgvol_ops::ipatch(&pv, &bv, &w, w0, *continuity)
             }
         }
     };
@@ -200,9 +165,7 @@ pub fn blend(
             _ => {
                 let (pv, bv) = (value(prim, p), value(rest, p));
                 let region = bv.iter().all(|&b| b < 0.0);
-                pgvol_ops::edge_blend(pv[0], pv[1], region, || {
-                    pgvol_ops::renormalised(&raw, p, step)
-                })
+                pgvol_ops::edge_blend(&pv, region, || pgvol_ops::renormalised(&raw, p, step))
             }
         }
     };
@@ -213,4 +176,74 @@ pub fn blend(
         .map_err(crate::csg::ops_error)?;
     crate::progress::check(progress)?;
     Ok(Blended { volume, weights })
+}
+
+/// Refuses operands that do not fit the blend; returns its operands besides the primaries.
+fn check_operands(primaries: &[Operand], operator: &BlendOperator) -> Result<Vec<Operand>> {
+    match operator {
+        BlendOperator::Liming { cut, lambda } => {
+            check_lambda(*lambda)?;
+            if primaries.len() != 2 {
+                return Err(Error::parameter(format!(
+                    "Liming rounding needs 2 primaries and one cutting surface, got {} primaries",
+                    primaries.len()
+                )));
+            }
+            Ok(vec![cut.clone()])
+        }
+        BlendOperator::Spline { bounds, lambda } => {
+            check_lambda(*lambda)?;
+            pgvol_ops::check_spline(primaries.len(), bounds.len())
+                .map_err(crate::csg::ops_error)?;
+            Ok(bounds.clone())
+        }
+        BlendOperator::IPatch {
+            bounds, weights, ..
+        } => {
+            let given = match weights {
+                IPatchWeights::Given(w, _) | IPatchWeights::Through(w, _) => Some(w.len()),
+                IPatchWeights::Fitted(_) => None,
+            };
+            pgvol_ops::check_ipatch(primaries.len(), bounds.len(), given)
+                .map_err(crate::csg::ops_error)?;
+            Ok(bounds.clone())
+        }
+    }
+}
+
+/// The I-patch's `w₁..wₙ` and `w`; `terms` gives [`pgvol_ops::ipatch_terms`] at a point.
+fn ipatch_weights(
+    weights: &IPatchWeights,
+    primaries: usize,
+    terms: impl Fn(glam::DVec3) -> Vec<f64>,
+) -> Result<(Vec<f32>, f32)> {
+    let finite = |w: &[f32]| w.iter().all(|x| x.is_finite());
+    match weights {
+        IPatchWeights::Given(w, w0) => {
+            if w.len() != primaries || !finite(w) || !w0.is_finite() {
+                return Err(Error::parameter(format!(
+                    "an I-patch of {primaries} primaries needs {primaries} finite weights and w, \
+                     got {}",
+                    w.len()
+                )));
+            }
+            Ok((w.clone(), *w0))
+        }
+        IPatchWeights::Fitted(points) => {
+            let terms: Vec<Vec<f64>> = points.iter().map(|&p| terms(p)).collect();
+            pgvol_ops::fit_ipatch_weights(&terms).map_err(crate::csg::ops_error)
+        }
+        IPatchWeights::Through(w, point) => {
+            let limit = f64::from(pgvol_mesh::MAX_COORDINATE);
+            if !point.is_finite() || point.abs().max_element() >= limit {
+                return Err(Error::parameter(format!(
+                    "the point the patch passes through must be finite and within {limit:e} of \
+                     the origin, got {point}"
+                )));
+            }
+            let w0 = pgvol_ops::weight_through_point(&terms(*point), w)
+                .map_err(crate::csg::ops_error)?;
+            Ok((w.clone(), w0))
+        }
+    }
 }

@@ -88,7 +88,7 @@ mod resolution;
 mod shape;
 mod slice;
 
-pub use blend::{blend, BlendOperator, BlendSettings, Blended, DEFAULT_LAMBDA};
+pub use blend::{blend, BlendOperator, BlendSettings, Blended, IPatchWeights, DEFAULT_LAMBDA};
 pub use csg::{
     covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings,
     ResultUse, CSG_RES,
@@ -166,8 +166,9 @@ pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
 pub use pgvol_ops::{
-    Axis, Blend, BoolOp, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Layer,
-    LayerFrame, Mask, MaskReport, Ramp, Restore, ShellSide, Tpms, TPMS_NAMES,
+    Axis, Blend, BoolOp, Continuity, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle,
+    Layer, LayerFrame, Mask, MaskReport, Ramp, Restore, ShellSide, Tpms, MAX_CONTINUITY,
+    TPMS_NAMES,
 };
 pub use pgvol_points::{PointCloud, PointsReport};
 pub use pgvol_sdf::SignMode;

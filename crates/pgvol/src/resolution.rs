@@ -126,7 +126,10 @@ mod tests {
         // A wall no grid holds is named so, without overflowing.
         let e = check_wall("the wall", 1e-30, &grid).unwrap_err();
         let most = crate::MAX_RES as usize;
-        assert!(e.message().contains(&format!("more than the {most} nodes")), "{e}");
+        assert!(
+            e.message().contains(&format!("more than the {most} nodes")),
+            "{e}"
+        );
         assert!(e.resolution().unwrap() > most);
     }
 }

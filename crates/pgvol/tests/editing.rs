@@ -4,7 +4,7 @@
 use pgvol::glam::{DVec3, Vec3};
 use pgvol::mesh::shapes;
 use pgvol::{Blend, BoolOp, CoefficientVolume, CsgSettings, EncodeOptions, ErrorKind, GridSpec};
-use pgvol::{Operand, Silent};
+use pgvol::{Continuity, IPatchWeights, Operand, Silent};
 
 fn operands(texts: &[&str]) -> Vec<Operand> {
     texts
@@ -173,11 +173,14 @@ fn an_ipatch_with_fewer_bounds_than_primaries_is_refused() {
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
         ..pgvol::BlendSettings::default()
     };
-    for weights in [Some((vec![1.0, 1.0], -0.5)), None] {
+    for weights in [
+        IPatchWeights::Given(vec![1.0, 1.0], -0.5),
+        IPatchWeights::Fitted(vec![DVec3::new(-0.5, -0.5, 0.0); 4]),
+    ] {
         let operator = pgvol::BlendOperator::IPatch {
             bounds: operands(&["plane:-1,0,0,1"]),
-            points: vec![DVec3::new(-0.5, -0.5, 0.0); 4],
             weights,
+            continuity: Continuity::G1,
         };
         let e = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
@@ -187,9 +190,170 @@ fn an_ipatch_with_fewer_bounds_than_primaries_is_refused() {
     // Weights that do not pair with the primaries are refused the same way.
     let operator = pgvol::BlendOperator::IPatch {
         bounds: operands(&["plane:-1,0,0,1", "plane:0,-1,0,1"]),
-        weights: Some((vec![1.0], -0.5)),
-        points: Vec::new(),
+        weights: IPatchWeights::Given(vec![1.0], -0.5),
+        continuity: Continuity::G1,
     };
     let e = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap_err();
     assert!(e.message().contains("needs 2 weights"), "{e}");
+}
+
+fn blend_settings(res: usize) -> pgvol::BlendSettings {
+    pgvol::BlendSettings {
+        res,
+        bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
+        ..pgvol::BlendSettings::default()
+    }
+}
+
+#[test]
+fn g1_blends_keep_the_values_they_had_before_orders_and_more_operands() {
+    // Bit patterns of the re-fitted fields at four points, recorded before I-patches took an
+    // order and functional splines any number of operands: the defaults must not move.
+    let primaries = operands(&["plane:1,0,0,0", "sphere:0.2,0.1,0,0.9"]);
+    let bounds = operands(&["plane:-1,0,0,0.8", "plane:0,-1,0.2,0.7"]);
+    let ipatch = pgvol::BlendOperator::IPatch {
+        bounds: bounds.clone(),
+        weights: IPatchWeights::Given(vec![1.0, 1.5], -0.7),
+        continuity: Continuity::default(),
+    };
+    let spline = pgvol::BlendOperator::Spline {
+        bounds,
+        lambda: 0.4,
+    };
+    let points = [
+        Vec3::new(-0.3, -0.2, 0.1),
+        Vec3::new(-0.5, -0.6, 0.0),
+        Vec3::new(0.1, 0.05, -0.2),
+        Vec3::new(-0.7, 0.3, 0.4),
+    ];
+    for (operator, before) in [
+        (ipatch, [3194680684u32, 1022291138, 3200330749, 3200472928]),
+        (spline, [3196500120, 1033848309, 1047626734, 1038211911]),
+    ] {
+        let v = pgvol::blend(&primaries, &operator, &blend_settings(24), &Silent)
+            .unwrap()
+            .volume;
+        let now = points.map(|p| v.value(p).to_bits());
+        assert_eq!(now, before, "{operator:?}");
+    }
+}
+
+/// The zero of the analytic I-patch of the planes x = 0, y = 0 with bounds −x − 0.8, −y − 0.8
+/// and weights (1, 1, w) on the diagonal x = y = −s, by bisection in f64; there
+/// `|B|ᵉ = (0.8 − s)ᵉ`.
+fn diagonal_zero(order: u32, w0: f64) -> f64 {
+    let e = order as i32 + 1;
+    let f = |s: f64| 2.0 * -s * (0.8 - s).powi(e) + w0 * (0.8 - s).powi(2 * e);
+    let (mut a, mut b) = (0.0f64, 0.79f64);
+    assert!(f(a).signum() != f(b).signum(), "order {order}");
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if f(m).signum() == f(a).signum() {
+            a = m
+        } else {
+            b = m
+        }
+    }
+    0.5 * (a + b)
+}
+
+#[test]
+fn higher_order_ipatches_cross_the_diagonal_where_their_formula_does() {
+    let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
+    let bounds = operands(&["plane:-1,0,0,0.8", "plane:0,-1,0,0.8"]);
+    let mut crossings = Vec::new();
+    for order in 1..=3 {
+        let operator = pgvol::BlendOperator::IPatch {
+            bounds: bounds.clone(),
+            weights: IPatchWeights::Given(vec![1.0, 1.0], 0.5),
+            continuity: Continuity::new(order).unwrap(),
+        };
+        let v = pgvol::blend(&planes, &operator, &blend_settings(48), &Silent)
+            .unwrap()
+            .volume;
+        let p = zero_between(&v, Vec3::new(-0.02, -0.02, 0.0), Vec3::new(-0.7, -0.7, 0.0));
+        let s = diagonal_zero(order, 0.5) as f32;
+        assert!(
+            (p.x + s).abs() < 0.01 && (p.y + s).abs() < 0.01,
+            "order {order}: {p} vs −{s}"
+        );
+        crossings.push(s);
+    }
+    // The orders give different surfaces: the test sees the exponent.
+    assert!((crossings[0] - crossings[2]).abs() > 0.03, "{crossings:?}");
+}
+
+#[test]
+fn an_ipatch_through_a_point_passes_through_it_at_every_order() {
+    let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
+    let bounds = operands(&["plane:-1,0,0,0.8", "plane:0,-1,0,0.8"]);
+    let through = Vec3::new(-0.25, -0.35, 0.1);
+    for order in [1, 2, 4] {
+        let operator = pgvol::BlendOperator::IPatch {
+            bounds: bounds.clone(),
+            weights: IPatchWeights::Through(vec![1.0, 1.0], through.as_dvec3()),
+            continuity: Continuity::new(order).unwrap(),
+        };
+        let blended = pgvol::blend(&planes, &operator, &blend_settings(48), &Silent).unwrap();
+        let v = blended.volume.value(through);
+        assert!(v.abs() < 0.01, "order {order}: {v} at {through}");
+        // The weight is the formula's, computed here independently in f64.
+        let e = order as i32 + 1;
+        let (x, y) = (through.x as f64, through.y as f64);
+        let (b1, b2) = ((-x - 0.8).abs(), (-y - 0.8).abs());
+        let want = -(x * b2.powi(e) + y * b1.powi(e)) / (b1 * b2).powi(e);
+        let (_, w0) = blended.weights.unwrap();
+        assert!(
+            (w0 as f64 - want).abs() < 1e-5 * want.abs(),
+            "{w0} vs {want}"
+        );
+    }
+    // A point on a bound fixes no weight; one far away is refused before any work.
+    for point in [DVec3::new(-0.8, -0.3, 0.0), DVec3::new(1e9, 0.0, 0.0)] {
+        let operator = pgvol::BlendOperator::IPatch {
+            bounds: bounds.clone(),
+            weights: IPatchWeights::Through(vec![1.0, 1.0], point),
+            continuity: Continuity::G1,
+        };
+        let e = pgvol::blend(&planes, &operator, &blend_settings(16), &Silent).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+        assert!(!e.message().contains("--"), "{e}");
+    }
+}
+
+#[test]
+fn a_functional_spline_of_three_planes_rounds_their_vertex() {
+    // The octant x, y, z ≤ 0 with the one bound (−x − y − z − 1.2)/√3 (planes are normalised),
+    // λ = ½: on the diagonal x = y = z = −s the blend vanishes where (3s − 1.2)²/3 = s³.
+    let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0", "plane:0,0,1,0"]);
+    let operator = pgvol::BlendOperator::Spline {
+        bounds: operands(&["plane:-1,-1,-1,1.2"]),
+        lambda: 0.5,
+    };
+    let v = pgvol::blend(&planes, &operator, &blend_settings(48), &Silent)
+        .unwrap()
+        .volume;
+    let p = zero_between(&v, Vec3::splat(-0.01), Vec3::splat(-0.6));
+    let cubic = |s: f64| (3.0 * s - 1.2).powi(2) / 3.0 - s.powi(3);
+    let (mut a, mut b) = (0.0f64, 0.4f64);
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if cubic(m) > 0.0 {
+            a = m
+        } else {
+            b = m
+        }
+    }
+    let s = (0.5 * (a + b)) as f32;
+    assert!(
+        (p - Vec3::splat(-s)).abs().max_element() < 0.01,
+        "{p} vs −{s}"
+    );
+    // Away from the bound the faces are unchanged; beyond two faces is outside.
+    let q = zero_between(&v, Vec3::new(0.3, -0.7, -0.7), Vec3::new(-0.3, -0.7, -0.7));
+    assert!(q.x.abs() < 1e-3, "{q}");
+    assert!(v.value(Vec3::new(0.2, 0.2, -0.3)) > 0.0);
+    // One primary has no edge to round.
+    let e = pgvol::blend(&planes[..1], &operator, &blend_settings(16), &Silent).unwrap_err();
+    assert!(e.message().contains("two or more primaries"), "{e}");
 }

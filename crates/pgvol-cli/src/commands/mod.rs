@@ -1,6 +1,7 @@
 //! The subcommands and their arguments.
 
 mod args;
+mod blend;
 mod compare;
 mod edit;
 mod eval;
@@ -102,7 +103,7 @@ pub enum Command {
     /// Primaries are analytic (plane, sphere, cylinder, box), .pgv files or meshes. The result is
     /// renormalised near its surface (value over gradient length) so it is distance-like again,
     /// and re-fitted into one coefficient volume.
-    Blend(edit::BlendArgs),
+    Blend(blend::BlendArgs),
     /// Converts a mesh into an implicit surface of quadric perturbations.
     ///
     /// A base quadric fitted by least squares plus local bumps f·Q³ (each quadric Q through ten
@@ -134,7 +135,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Lattice(a) => lattice::lattice(a),
         Command::Csg(a) => edit::csg(a),
         Command::Repair(a) => edit::repair(a),
-        Command::Blend(a) => edit::blend(a),
+        Command::Blend(a) => blend::blend(a),
         Command::Perturb(a) => perturb::run(a),
     }
 }
