@@ -24,6 +24,10 @@ pub const BYTES_PER_PLAN_NODE: f64 = 3.0 / 64.0;
 /// RSS of the whole decode of the bunny at 1024³: 1.0 GB for 134 k stored bricks).
 pub const BYTES_PER_CONTOUR_BRICK: u64 = 8 * 1024;
 
+/// Bytes per node of a grid finer than the volume's inside its stored bricks while contouring:
+/// the active blocks' samples (9³ f32 per 8³ nodes) and their crossings.
+pub const BYTES_PER_RESAMPLED_NODE: f64 = 8.0;
+
 /// Bytes per triangle of the input mesh with its distance queries (BVH, winding tree).
 pub const BYTES_PER_TRIANGLE: u64 = 400;
 
@@ -147,17 +151,26 @@ pub(crate) fn mesh_area(mesh: &pgvol_core::Mesh) -> f64 {
 }
 
 /// Refuses contouring `volume` on `grid` when it would not fit in memory: the work follows the
-/// stored bricks, scaled by the surface's growth on a finer grid.
+/// stored bricks, scaled by the surface's growth on a finer grid. On a grid much finer than the
+/// volume's, the blocks whose coefficient support straddles the level fill the volume's
+/// straddling bricks rather than a surface through them, so the estimate is at least every
+/// node inside the stored bricks at [`BYTES_PER_RESAMPLED_NODE`].
 pub(crate) fn check_contour(
     volume: &pgvol_field::CoefficientVolume,
     grid: &pgvol_core::Grid,
 ) -> Result<()> {
     let [nx, ny, nz] = grid.dims;
     let scale = (volume.grid.spacing / grid.spacing).max(1.0) as f64;
-    let bricks = volume.coeffs.stored_count() as f64 * scale * scale;
+    let stored = volume.coeffs.stored_count() as f64;
+    let surface = stored * scale * scale * BYTES_PER_CONTOUR_BRICK as f64;
+    let filled = if scale > 1.0 {
+        stored * (8.0 * scale).powi(3) * BYTES_PER_RESAMPLED_NODE
+    } else {
+        0.0
+    };
     check_memory(
         &format!("contouring on a {nx} x {ny} x {nz} grid"),
-        (bricks * BYTES_PER_CONTOUR_BRICK as f64) as u64,
+        surface.max(filled).min(u64::MAX as f64) as u64,
         "lower the resolution",
     )
 }

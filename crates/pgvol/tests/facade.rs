@@ -414,8 +414,9 @@ fn bad_options_are_parameter_errors() {
 #[test]
 fn grids_beyond_the_node_limit_are_resource_errors() {
     let mesh = sphere();
-    // 3000³ and a spacing of 1e-4 over a side of 2.2 both exceed 2³³ nodes.
-    for grid in [GridSpec::Res(3000), GridSpec::Voxel(1e-4)] {
+    // 5000³ and a spacing of 1e-4 over a side of 2.2 both exceed the 2³⁶ nodes (4096³) a
+    // grid may have.
+    for grid in [GridSpec::Res(5000), GridSpec::Voxel(1e-4)] {
         let options = EncodeOptions {
             grid,
             ..EncodeOptions::default()
