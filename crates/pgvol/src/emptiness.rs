@@ -125,16 +125,52 @@ pub(crate) fn require_surface(sides: Sides, why: &IfEmpty<'_>) -> Result<()> {
     Err(Error::new(ErrorKind::EmptyResult, message))
 }
 
+/// Vertices this close to one plane, relative to the mesh's extent, make it flat: f32
+/// positions round a tilted plane by about 1e-7 of the extent.
+const FLAT: f32 = 1e-6;
+
+/// Whether every vertex of `mesh` lies in one plane (any orientation), so it encloses no volume
+/// at any resolution. Cheap enough to ask before any distance is sampled: a mesh with depth
+/// answers at its first vertex off the plane.
+pub(crate) fn is_flat(mesh: &Mesh) -> bool {
+    let Some((lo, hi)) = mesh.bounds() else {
+        return false;
+    };
+    let extent = (hi - lo).max_element();
+    let p = &mesh.positions;
+    // The normal of the largest triangle among the first ones is the plane's, if there is one.
+    let normal = mesh
+        .triangles
+        .iter()
+        .take(64)
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
+            (b - a).cross(c - a)
+        })
+        .max_by(|x, y| x.length_squared().total_cmp(&y.length_squared()))
+        .and_then(|n| n.try_normalize());
+    let Some(n) = normal else {
+        return false;
+    };
+    let origin = p[mesh.triangles[0][0] as usize];
+    mesh.triangles
+        .iter()
+        .flatten()
+        .all(|&i| (p[i as usize] - origin).dot(n).abs() <= FLAT * extent)
+}
+
+/// Why a flat mesh's field is empty.
+pub(crate) const FLAT_MESH: &str = "the mesh is flat (all its vertices lie in one plane), so it \
+     encloses no volume and a finer grid would not help; give it a thickness";
+
 /// Why the field of `mesh` on a grid of `spacing` has no inside, and what would give one: a
 /// mesh without thickness encloses nothing at any resolution; a thin closed one needs a finer
 /// grid.
 pub(crate) fn mesh_without_inside(mesh: &Mesh, spacing: f32) -> String {
     let stats = mesh.stats();
     let extent = mesh.bounds().map_or(Default::default(), |(lo, hi)| hi - lo);
-    if extent.min_element() <= 1e-6 * extent.max_element() {
-        "the mesh is flat (it has no extent along one axis), so it encloses no volume and a \
-         finer grid would not help; give it a thickness"
-            .into()
+    if extent.min_element() <= FLAT * extent.max_element() || is_flat(mesh) {
+        FLAT_MESH.into()
     } else if !stats.watertight {
         format!(
             "the mesh is an open surface ({} boundary edges) with no thickness, so it encloses \

@@ -14,7 +14,7 @@ use pgvol_sdf::SignMode;
 
 use crate::distance::{mesh_sdf, sample, sample_sparse, MeshDistance};
 use crate::emptiness::{
-    mesh_without_inside, require_surface, IfEmpty, Sides, MESH_WITHOUT_OUTSIDE,
+    is_flat, mesh_without_inside, require_surface, IfEmpty, Sides, FLAT_MESH, MESH_WITHOUT_OUTSIDE,
 };
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
@@ -108,6 +108,14 @@ pub struct Encoded {
 pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> Result<Encoded> {
     options.validate()?;
     let grid = options.grid.grid_for(mesh)?;
+    // Known empty before any distance is sampled (which for an open sheet on a fine grid costs
+    // minutes of winding numbers).
+    if is_flat(mesh) {
+        return Err(Error::new(
+            ErrorKind::EmptyResult,
+            format!("the encoded field would be empty: {FLAT_MESH}"),
+        ));
+    }
     match options.fit {
         FitMethod::Interp => {
             crate::memory::check_sparse_encode("encoding", mesh, &grid, options.band)?

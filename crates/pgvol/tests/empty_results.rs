@@ -59,6 +59,16 @@ fn tilted(n: u32) -> Mesh {
         .0
 }
 
+/// Counts the stages a call starts.
+#[derive(Default)]
+struct Stages(std::sync::Mutex<usize>);
+
+impl pgvol::Progress for Stages {
+    fn stage(&self, _name: &str) {
+        *self.0.lock().unwrap() += 1;
+    }
+}
+
 #[test]
 fn booleans_with_nothing_inside_are_refused_with_their_reason() {
     let settings = |op| CsgSettings {
@@ -122,15 +132,27 @@ fn sheets_without_thickness_encode_and_perturb_to_an_error_saying_so() {
     assert_empty(
         pgvol::encode(&sheet(10), &options, &Silent),
         &[
-            "the encoded field is empty",
+            "the encoded field would be empty",
             "flat",
             "finer grid would not help",
         ],
     );
+    // A flat sheet in any orientation is refused before any work, even on the largest grid.
+    let stages = Stages::default();
+    let finest = EncodeOptions {
+        grid: GridSpec::Res(pgvol::MAX_RES as usize),
+        ..EncodeOptions::default()
+    };
     assert_empty(
-        pgvol::encode(&tilted(16), &options, &Silent),
-        &["open surface", "no thickness", "finer grid would not help"],
+        pgvol::encode(&tilted(100), &finest, &stages),
+        &[
+            "flat",
+            "all its vertices lie in one plane",
+            "finer grid would not help",
+        ],
     );
+    assert_eq!(*stages.0.lock().unwrap(), 0, "a stage ran");
+
     let perturb = PerturbOptions {
         max_functions: 20,
         ..PerturbOptions::default()
