@@ -14,18 +14,24 @@ use crate::index::PointIndex;
 /// Neighbours per point for the plane fit and the orientation graph.
 pub const NORMAL_NEIGHBOURS: usize = 12;
 
-/// Unit normals of `points`, estimated and consistently oriented (outward for a closed cloud
-/// sampled densely enough that the neighbour graph does not jump between sheets).
-pub fn estimate_normals(points: &[Vec3], spacing: f32) -> Vec<Vec3> {
+/// The [`NORMAL_NEIGHBOURS`] nearest points of each of `points` (mean spacing `spacing`), the
+/// point itself included.
+pub(crate) fn nearest_neighbours(points: &[Vec3], spacing: f32) -> Vec<Vec<u32>> {
     let index = PointIndex::new(points, spacing.max(f32::MIN_POSITIVE) * 2.0);
     let reach = far_reach(points);
-    let neighbours: Vec<Vec<u32>> = points
+    points
         .par_iter()
         .map_init(Vec::new, |near, &p| {
             index.nearest(p, NORMAL_NEIGHBOURS + 1, reach, near);
             near.iter().map(|&(_, j)| j).collect()
         })
-        .collect();
+        .collect()
+}
+
+/// Unit normals of `points`, estimated and consistently oriented (outward for a closed cloud
+/// sampled densely enough that the neighbour graph does not jump between sheets).
+pub fn estimate_normals(points: &[Vec3], spacing: f32) -> Vec<Vec3> {
+    let neighbours = nearest_neighbours(points, spacing);
     let mut normals: Vec<Vec3> = neighbours
         .par_iter()
         .map(|near| plane_normal(points, near))

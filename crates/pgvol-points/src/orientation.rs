@@ -6,8 +6,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::index::PointIndex;
-use crate::normals::{far_reach, orient, NORMAL_NEIGHBOURS};
+use crate::normals::{nearest_neighbours, orient};
 
 /// Share of neighbour pairs on one sheet with opposite normals above which the normals are
 /// re-oriented. Consistent normals give none on smooth parts; a sharp edge of less than 90°
@@ -43,15 +42,7 @@ impl Orientation {
 /// Makes the given unit `normals` of `points` (mean spacing `spacing`) agree with their
 /// neighbours and point outward, keeping each one's direction up to sign.
 pub fn check_orientation(points: &[Vec3], normals: &mut [Vec3], spacing: f32) -> Orientation {
-    let index = PointIndex::new(points, spacing.max(f32::MIN_POSITIVE) * 2.0);
-    let reach = far_reach(points);
-    let neighbours: Vec<Vec<u32>> = points
-        .par_iter()
-        .map_init(Vec::new, |near, &p| {
-            index.nearest(p, NORMAL_NEIGHBOURS + 1, reach, near);
-            near.iter().map(|&(_, j)| j).collect()
-        })
-        .collect();
+    let neighbours = nearest_neighbours(points, spacing);
     let (pairs, disagreeing) = neighbours
         .par_iter()
         .enumerate()

@@ -185,6 +185,27 @@ pub(crate) fn mesh_without_inside(mesh: &Mesh, spacing: f32) -> String {
     }
 }
 
+/// Refuses `result`, a field of `mesh` on a grid of `spacing` whose nodes lie on `sides`, when
+/// it has no inside or no outside, saying why in the mesh's terms.
+pub(crate) fn require_mesh_surface(
+    sides: Sides,
+    result: &str,
+    mesh: &Mesh,
+    spacing: f32,
+) -> Result<()> {
+    let no_inside = if sides.inside {
+        String::new()
+    } else {
+        mesh_without_inside(mesh, spacing)
+    };
+    let why = IfEmpty {
+        result,
+        no_inside: &no_inside,
+        no_outside: MESH_WITHOUT_OUTSIDE,
+    };
+    require_surface(sides, &why)
+}
+
 /// Why every node of a mesh's grid is inside it.
 pub(crate) const MESH_WITHOUT_OUTSIDE: &str =
     "the mesh's faces may point inward; reversed, they would enclose the mesh's volume";

@@ -13,9 +13,7 @@ use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 
 use crate::distance::{mesh_sdf, sample, sample_sparse, MeshDistance};
-use crate::emptiness::{
-    is_flat, mesh_without_inside, require_surface, IfEmpty, Sides, FLAT_MESH, MESH_WITHOUT_OUTSIDE,
-};
+use crate::emptiness::{is_flat, require_mesh_surface, Sides, FLAT_MESH};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::memory::{check_grid, BYTES_PER_NODE};
@@ -128,16 +126,7 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
         progress.warn(&message);
     }
     let sides = Sides::of_volume(&fitted.volume);
-    let why = IfEmpty {
-        result: "the encoded field",
-        no_inside: &if sides.inside {
-            String::new()
-        } else {
-            mesh_without_inside(mesh, grid.spacing)
-        },
-        no_outside: MESH_WITHOUT_OUTSIDE,
-    };
-    require_surface(sides, &why)?;
+    require_mesh_surface(sides, "the encoded field", mesh, grid.spacing)?;
     let file = encoded_file(mesh, fitted.volume, &fitted.report, fitted.band);
     Ok(Encoded {
         file,

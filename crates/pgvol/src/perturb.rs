@@ -17,9 +17,7 @@ use pgvol_sdf::SignMode;
 
 use crate::decode::{decode, DecodeOptions};
 use crate::distance::{mesh_sdf, sample};
-use crate::emptiness::{
-    mesh_without_inside, require_surface, IfEmpty, Sides, MESH_WITHOUT_OUTSIDE,
-};
+use crate::emptiness::{require_mesh_surface, Sides};
 use crate::encode::{BAND_KEY, ENCODE_BAND};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
@@ -104,16 +102,7 @@ pub fn perturb_on(
     let (field, cleanup) =
         perturb::clear_points(&field, &check_points(&grid, &truth)).map_err(cannot_clear)?;
     let (field, strays, sides) = clear_strays(field, &grid, &truth, progress)?;
-    let why = IfEmpty {
-        result: "the perturbation field",
-        no_inside: &if sides.inside {
-            String::new()
-        } else {
-            mesh_without_inside(mesh, grid.spacing)
-        },
-        no_outside: MESH_WITHOUT_OUTSIDE,
-    };
-    require_surface(sides, &why)?;
+    require_mesh_surface(sides, "the perturbation field", mesh, grid.spacing)?;
     Ok(Perturbed {
         field,
         report,
