@@ -75,6 +75,8 @@ impl SlotMap {
 
 /// The blocks of a grid and the active ones among them.
 pub(crate) struct Blocks {
+    /// Blocks per axis.
+    pub counts: [usize; 3],
     /// Ids (x fastest) of the active blocks, ascending.
     pub active: Vec<u32>,
     slots: SlotMap,
@@ -88,7 +90,11 @@ impl Blocks {
         for (slot, &id) in active.iter().enumerate() {
             slots.set(coords(counts, id), slot as u32);
         }
-        Self { active, slots }
+        Self {
+            counts,
+            active,
+            slots,
+        }
     }
 
     /// Position in [`Self::active`] of the block owning node `n`, or [`INACTIVE`].

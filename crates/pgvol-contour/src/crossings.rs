@@ -143,6 +143,12 @@ impl Crossings {
         self.vertices[slot].positions.len()
     }
 
+    /// The global indices of the crossings owned by the active block at `slot`.
+    pub fn block_vertices(&self, slot: usize) -> std::ops::Range<u32> {
+        let first = self.base[slot];
+        first..first + self.vertices[slot].positions.len() as u32
+    }
+
     /// Lower node and axis of the edge holding global vertex `g`.
     pub fn locate(&self, g: u32) -> ([usize; 3], usize) {
         let slot = self.base.partition_point(|&b| b <= g) - 1;

@@ -54,6 +54,7 @@ mod qef;
 mod quads;
 mod quality;
 mod root;
+mod runs;
 mod samples;
 mod sparse_sample;
 mod support;
@@ -70,7 +71,8 @@ pub use field::Field;
 pub use marching::{marching_cubes, marching_cubes_on_field, marching_cubes_with};
 pub use pgvol_core::progress::Report;
 pub use quality::min_angle_histogram;
+pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
 pub use volume::{
     contour_field, contour_field_reporting, contour_sampled, contour_volume,
-    contour_volume_reporting, resampled_grid, Method,
+    contour_volume_reporting, resampled_grid, resampled_grid_of, Method,
 };

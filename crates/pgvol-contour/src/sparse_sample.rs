@@ -66,11 +66,25 @@ impl VolumeNodes {
     ///
     /// Rows of bricks done are reported through `span`.
     pub fn new(volume: &CoefficientVolume, grid: &Grid, iso: f32, span: Option<Span>) -> Self {
-        let sampler = Sampler::new(volume, grid, iso);
+        Self::layers(volume, grid, iso, [0, grid.dims[2] + 1], span)
+    }
+
+    /// [`Self::new`] for the padded node layers `layers[0]..=layers[1]` alone: only the bricks
+    /// holding them are sorted and evaluated, and only the blocks owning one of them (their
+    /// boxes cut at those layers) are candidates. Nodes outside the layers must not be read.
+    pub fn layers(
+        volume: &CoefficientVolume,
+        grid: &Grid,
+        iso: f32,
+        layers: [usize; 2],
+        span: Option<Span>,
+    ) -> Self {
+        let zb = sorted_bricks(grid.dims[2], layers);
+        let sampler = Sampler::new(volume, grid, iso, zb.clone());
         let brick_counts = sampler.brick_counts;
-        let [bx, by, bz] = brick_counts;
-        let counter = span.map(|s| s.counter(by * bz));
-        let rows: Vec<Row> = (0..by * bz)
+        let [bx, by, _] = brick_counts;
+        let counter = span.map(|s| s.counter(by * zb.len()));
+        let rows: Vec<Row> = (0..by * zb.len())
             .into_par_iter()
             .map(|r| {
                 tick(counter.as_ref());
@@ -78,14 +92,20 @@ impl VolumeNodes {
             })
             .collect();
         let mut exact = SparseGrid::new(grid.dims, Background::clamp(0.0));
-        let mut sides = Vec::with_capacity(bx * by * bz);
+        let mut sides = Vec::with_capacity(bx * by * zb.len());
         for (r, row) in rows.into_iter().enumerate() {
             sides.extend_from_slice(&row.sides);
             for (bi, values) in row.exact {
-                exact.insert([bi, r % by, r / by], values);
+                exact.insert([bi, r % by, zb.start + r / by], values);
             }
         }
-        let (candidates, touched) = candidate_blocks(grid.dims, brick_counts, &sides, &exact);
+        let reach = Reach {
+            inner: grid.dims,
+            brick_counts,
+            layers,
+            bricks: zb,
+        };
+        let (candidates, touched) = candidate_blocks(&reach, &sides, &exact);
         drop(sides);
         let brick = |id: usize| [id % bx, (id / bx) % by, id / (bx * by)];
         let fills: Vec<(usize, Option<f32>)> = touched
@@ -126,6 +146,27 @@ impl VolumeNodes {
     }
 }
 
+/// The brick layers along z holding the padded node layers `layers[0]..=layers[1]` of a
+/// sampling grid of `nz` layers (padded layer `k` is sampling layer `k - 1`; the padding
+/// itself needs no brick).
+fn sorted_bricks(nz: usize, layers: [usize; 2]) -> Range<usize> {
+    let (first, last) = (layers[0].max(1) - 1, layers[1].min(nz).max(1) - 1);
+    first / BRICK_EDGE..last / BRICK_EDGE + 1
+}
+
+/// The first and last coefficient layer along z of a volume on `volume_grid` that
+/// [`VolumeNodes::layers`] on `grid` reads for the padded node `layers`.
+pub(crate) fn coefficient_layers(
+    volume_grid: &Grid,
+    grid: &Grid,
+    layers: [usize; 2],
+) -> [usize; 2] {
+    let bricks = sorted_bricks(grid.dims[2], layers);
+    let first = bricks.start * BRICK_EDGE;
+    let last = (bricks.end * BRICK_EDGE).min(grid.dims[2]) - 1;
+    coefficient_ranges(volume_grid, grid.point(0, 0, first), grid.point(0, 0, last))[2]
+}
+
 /// The sides of one row of bricks, and the values of those evaluated and kept.
 struct Row {
     sides: Vec<u8>,
@@ -138,25 +179,36 @@ struct Sampler<'a> {
     grid: &'a Grid,
     iso: f32,
     brick_counts: [usize; 3],
-    /// Per axis and brick index: the coefficient nodes that can weigh on its nodes.
+    /// The brick layers along z being sorted.
+    layers: Range<usize>,
+    /// Per axis and brick index (along z, from `layers.start`): the coefficient nodes that can
+    /// weigh on its nodes.
     ranges: [Vec<[usize; 2]>; 3],
     /// Per brick, the kinds of the coefficient bricks its nodes' support reaches; empty for
     /// bases whose values are not convex combinations of their coefficients.
     supports: Vec<u8>,
+    /// Whether the nodes are the volume's own with a separable basis, where evaluating a brick
+    /// (a 3-tap blur of its coefficients) costs less than bounding its support.
+    on_own_grid: bool,
 }
 
 impl<'a> Sampler<'a> {
-    fn new(volume: &'a CoefficientVolume, grid: &'a Grid, iso: f32) -> Self {
+    fn new(volume: &'a CoefficientVolume, grid: &'a Grid, iso: f32, layers: Range<usize>) -> Self {
         let brick_counts = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
         // Points differing only off axis `a` give the same range along it.
         let ranges = [0, 1, 2].map(|a| -> Vec<[usize; 2]> {
-            (0..brick_counts[a])
+            let bricks = if a == 2 {
+                layers.clone()
+            } else {
+                0..brick_counts[a]
+            };
+            bricks
                 .map(|b| {
                     let first = b * BRICK_EDGE;
                     let last = (first + BRICK_EDGE).min(grid.dims[a]) - 1;
                     let lo = grid.point(first, first, first);
                     let hi = grid.point(last, last, last);
-                    coefficient_ranges(volume, lo, hi)[a]
+                    coefficient_ranges(&volume.grid, lo, hi)[a]
                 })
                 .collect()
         });
@@ -170,8 +222,10 @@ impl<'a> Sampler<'a> {
             grid,
             iso,
             brick_counts,
+            layers,
             ranges,
             supports,
+            on_own_grid: *grid == volume.grid && volume.basis.is_separable(),
         }
     }
 
@@ -179,11 +233,15 @@ impl<'a> Sampler<'a> {
     /// the absent coefficient bricks its support reaches, else from the coefficients.
     fn bound(&self, b: [usize; 3]) -> Option<f32> {
         let [bx, by, _] = self.brick_counts;
-        let kinds = *self.supports.get(b[0] + bx * (b[1] + by * b[2]))?;
+        let z = b[2] - self.layers.start;
+        let kinds = *self.supports.get(b[0] + bx * (b[1] + by * z))?;
         if kinds & STORED == 0 {
             background_bound(self.volume.coeffs.background(), kinds, self.iso)
+        } else if self.on_own_grid {
+            None
         } else {
-            let ranges = [0, 1, 2].map(|a| self.ranges[a][b[a]]);
+            let at = [b[0], b[1], z];
+            let ranges = [0, 1, 2].map(|a| self.ranges[a][at[a]]);
             gathered_bound(self.volume, ranges, self.iso)
         }
     }
@@ -198,7 +256,7 @@ impl<'a> Sampler<'a> {
             exact: Vec::new(),
         };
         for bi in 0..bx {
-            let b = [bi, r % by, r / by];
+            let b = [bi, r % by, self.layers.start + r / by];
             if let Some(bound) = self.bound(b) {
                 row.sides.push(side(bound, self.iso));
                 continue;
@@ -326,40 +384,57 @@ fn brick_extent(grid: &Grid, b: [usize; 3]) -> ([usize; 3], [usize; 3]) {
     (lo, n)
 }
 
-/// The blocks of the padded grid whose box may hold both sides, ascending, and the ids of the
-/// bricks their boxes reach that were not evaluated, ascending.
+/// Which node layers a [`VolumeNodes`] holds, and the bricks it sorted.
+struct Reach {
+    /// Nodes of the sampling grid per axis.
+    inner: [usize; 3],
+    brick_counts: [usize; 3],
+    /// First and last padded node layer along z.
+    layers: [usize; 2],
+    /// Brick layers along z sorted (their sides are given from `bricks.start`).
+    bricks: Range<usize>,
+}
+
+/// The blocks of the padded grid owning one of `reach`'s node layers whose box (cut at those
+/// layers) may hold both sides, ascending, and the ids of the bricks their boxes reach that
+/// were not evaluated, ascending. `sides` holds a brick's sides for the bricks sorted.
 ///
 /// Contour block `c` owns padded nodes from `BLOCK * c`, inner nodes from `BLOCK * c - 1`, so
 /// its box reaches bricks `c - 1` and `c` along each axis, and the padding at the grid's ends.
-fn candidate_blocks(
-    inner: [usize; 3],
-    brick_counts: [usize; 3],
-    sides: &[u8],
-    exact: &SparseGrid,
-) -> (Vec<u32>, Vec<usize>) {
+fn candidate_blocks(reach: &Reach, sides: &[u8], exact: &SparseGrid) -> (Vec<u32>, Vec<usize>) {
+    let inner = reach.inner;
     let counts = inner.map(|n| (n + 2).div_ceil(BLOCK));
-    // Per axis and block: the bricks its box reaches, and whether it reaches the padding.
-    let reach = |a: usize| -> (Vec<Range<usize>>, Vec<bool>) {
+    let [z0, z1] = reach.layers;
+    let first_layer = z0 / BLOCK;
+    let block_layers = first_layer..z1 / BLOCK + 1;
+    // Per axis and block: the bricks its box reaches, and whether it reaches the padding. Along
+    // z the box is cut at the layers held, and bricks count from the first sorted.
+    let reach_along = |a: usize, blocks: Range<usize>, cut: [usize; 2], shift: usize| {
         let n = inner[a];
-        (0..counts[a])
+        blocks
             .map(|c| {
-                let (first, last) = ((BLOCK * c).max(1), (BLOCK * c + BLOCK).min(n));
+                let (lo, hi) = ((BLOCK * c).max(cut[0]), (BLOCK * c + BLOCK).min(cut[1]));
+                let (first, last) = (lo.max(1), hi.min(n));
                 let bricks = if first <= last {
-                    (first - 1) / BRICK_EDGE..(last - 1) / BRICK_EDGE + 1
+                    (first - 1) / BRICK_EDGE - shift..(last - 1) / BRICK_EDGE + 1 - shift
                 } else {
                     0..0
                 };
-                (bricks, c == 0 || BLOCK * c + BLOCK > n)
+                (bricks, lo == 0 || hi > n)
             })
-            .unzip()
+            .unzip::<_, _, Vec<Range<usize>>, Vec<bool>>()
     };
-    let [(xs, xpad), (ys, ypad), (zs, zpad)] = [0, 1, 2].map(reach);
-    let reached = or_over_boxes(sides, brick_counts, [&xs, &ys, &zs]);
+    let whole = |a: usize| [0, inner[a] + 1];
+    let (xs, xpad) = reach_along(0, 0..counts[0], whole(0), 0);
+    let (ys, ypad) = reach_along(1, 0..counts[1], whole(1), 0);
+    let (zs, zpad) = reach_along(2, block_layers, reach.layers, reach.bricks.start);
+    let [bx, by, _] = reach.brick_counts;
+    let reached = or_over_boxes(sides, [bx, by, reach.bricks.len()], [&xs, &ys, &zs]);
     let layers: Vec<Vec<u32>> = reached
         .par_chunks(counts[0] * counts[1])
         .enumerate()
         .map(|(cz, layer)| {
-            let first = cz * counts[0] * counts[1];
+            let first = (first_layer + cz) * counts[0] * counts[1];
             layer
                 .iter()
                 .enumerate()
@@ -372,16 +447,17 @@ fn candidate_blocks(
         })
         .collect();
     let candidates = layers.concat();
-    let [bx, by, _] = brick_counts;
+    let shift = reach.bricks.start;
     let mut touched: Vec<usize> = candidates
         .iter()
         .flat_map(|&id| {
             let c = crate::blocks::coords(counts, id);
-            let (xs, ys, zs) = (xs[c[0]].clone(), ys[c[1]].clone(), zs[c[2]].clone());
+            let zs = zs[c[2] - first_layer].clone();
+            let (xs, ys) = (xs[c[0]].clone(), ys[c[1]].clone());
             zs.flat_map(move |k| {
                 let xs = xs.clone();
                 ys.clone()
-                    .flat_map(move |j| xs.clone().map(move |i| [i, j, k]))
+                    .flat_map(move |j| xs.clone().map(move |i| [i, j, k + shift]))
             })
         })
         .filter(|&b| !exact.is_stored(b))

@@ -15,7 +15,7 @@ use std::ops::Range;
 
 use glam::Vec3;
 use pgvol_core::{Background, SparseGrid, BRICK_EDGE};
-use pgvol_field::CoefficientVolume;
+use pgvol_field::{CoefficientVolume, Grid};
 use rayon::prelude::*;
 
 use crate::window_or::or_over_boxes;
@@ -25,13 +25,9 @@ pub(crate) const OUTSIDE_BACKGROUND: u8 = 1;
 pub(crate) const INSIDE_BACKGROUND: u8 = 2;
 pub(crate) const STORED: u8 = 4;
 
-/// First and last coefficient node per axis that can weigh on a point of the box `[lo, hi]`.
-pub(crate) fn coefficient_ranges(
-    volume: &CoefficientVolume,
-    lo: Vec3,
-    hi: Vec3,
-) -> [[usize; 2]; 3] {
-    let g = &volume.grid;
+/// First and last coefficient node per axis of a volume on grid `g` that can weigh on a point
+/// of the box `[lo, hi]`.
+pub(crate) fn coefficient_ranges(g: &Grid, lo: Vec3, hi: Vec3) -> [[usize; 2]; 3] {
     let (ulo, uhi) = (g.to_grid(lo), g.to_grid(hi));
     // Every basis here reaches at most 2 nodes from the cell holding the point; mirrored indices
     // beyond the border repeat coefficients inside it, so the clamped range covers them.
@@ -44,16 +40,17 @@ pub(crate) fn coefficient_ranges(
     })
 }
 
-/// The kind of every coefficient brick (x fastest), one byte each.
-pub(crate) fn brick_kinds(coeffs: &SparseGrid) -> Vec<u8> {
-    let [bx, by, bz] = coeffs.brick_counts();
-    let mut kinds = vec![0u8; bx * by * bz];
+/// The kind of every coefficient brick in the brick layers `layers` along z (x fastest), one
+/// byte each.
+fn brick_kinds(coeffs: &SparseGrid, layers: Range<usize>) -> Vec<u8> {
+    let [bx, by, _] = coeffs.brick_counts();
+    let mut kinds = vec![0u8; bx * by * layers.len()];
     kinds
         .par_chunks_mut(bx * by)
         .enumerate()
         .for_each(|(k, layer)| {
             for (at, kind) in layer.iter_mut().enumerate() {
-                let b = [at % bx, at / bx, k];
+                let b = [at % bx, at / bx, layers.start + k];
                 *kind = if coeffs.is_stored(b) {
                     STORED
                 } else if coeffs.is_inside(b) {
@@ -67,17 +64,25 @@ pub(crate) fn brick_kinds(coeffs: &SparseGrid) -> Vec<u8> {
 }
 
 /// For boxes that are products of per-axis coefficient node ranges (`ranges[a][s]`, first and
-/// last node), the OR of the kinds of the coefficient bricks each reaches (x fastest).
+/// last node), the OR of the kinds of the coefficient bricks each reaches (x fastest). Only
+/// the brick layers the boxes reach along z are read, so a run of sampling layers costs its
+/// own share of the grid.
 pub(crate) fn support_kinds(coeffs: &SparseGrid, ranges: [&[[usize; 2]]; 3]) -> Vec<u8> {
-    let bricks = ranges.map(|r| -> Vec<Range<usize>> {
+    let mut bricks = ranges.map(|r| -> Vec<Range<usize>> {
         r.iter()
             .map(|&[first, last]| first / BRICK_EDGE..last / BRICK_EDGE + 1)
             .collect()
     });
-    let kinds = brick_kinds(coeffs);
+    let lo = bricks[2].iter().map(|r| r.start).min().unwrap_or(0);
+    let hi = bricks[2].iter().map(|r| r.end).max().unwrap_or(lo);
+    for r in &mut bricks[2] {
+        *r = r.start - lo..r.end - lo;
+    }
+    let kinds = brick_kinds(coeffs, lo..hi);
+    let [bx, by, _] = coeffs.brick_counts();
     or_over_boxes(
         &kinds,
-        coeffs.brick_counts(),
+        [bx, by, hi - lo],
         [&bricks[0], &bricks[1], &bricks[2]],
     )
 }

@@ -29,17 +29,22 @@ pub enum Method {
 /// The grid of `volume` resampled with `res` nodes along its longest side, same origin and box.
 /// `None` when the grid would exceed [`pgvol_field::MAX_GRID_NODES`].
 pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
-    let side = volume.grid.max_corner() - volume.grid.origin;
+    resampled_grid_of(&volume.grid, res)
+}
+
+/// [`resampled_grid`] of a volume on `grid`.
+pub fn resampled_grid_of(grid: &Grid, res: usize) -> Option<Grid> {
+    let side = grid.max_corner() - grid.origin;
     let spacing = side.max_element() / (res.max(2) - 1) as f32;
     let dims = side
         .to_array()
         .map(|s| ((s / spacing).round() as usize + 1).max(2));
     let total = dims.iter().map(|&d| d as u128).product::<u128>();
     (total <= pgvol_field::MAX_GRID_NODES).then_some(Grid {
-        origin: volume.grid.origin,
+        origin: grid.origin,
         spacing,
         dims,
-        offset: volume.grid.offset,
+        offset: grid.offset,
     })
 }
 
@@ -73,6 +78,18 @@ pub fn contour_volume_reporting(
     method: Method,
     report: Report,
 ) -> pgvol_core::Mesh {
+    if method == Method::MarchingCubes {
+        let mut mesh = pgvol_core::Mesh::default();
+        let collect = &mut |part: crate::runs::RunPart| {
+            mesh.positions.extend_from_slice(&part.positions);
+            mesh.triangles.extend_from_slice(&part.triangles);
+            Ok(())
+        };
+        return match crate::runs::contour_runs(&mut { volume }, grid, iso, report, collect) {
+            Ok(()) => in_frame_of(grid, mesh),
+            Err(crate::runs::RunsError::TooManyVertices) => panic!("too many vertices"),
+        };
+    }
     let span = Span::whole(report);
     let sampling = Some(span.part(0.0, SAMPLING_PART));
     let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso, sampling);
@@ -98,7 +115,7 @@ pub(crate) fn contour_samples(
 }
 
 /// `grid` with one more node layer on every side: the grid of the padded samples.
-fn padded(grid: &Grid) -> Grid {
+pub(crate) fn padded(grid: &Grid) -> Grid {
     Grid {
         origin: grid.origin - Vec3::splat(grid.spacing),
         spacing: grid.spacing,
@@ -203,16 +220,7 @@ fn contour_nodes(
         return pgvol_core::Mesh::default();
     };
     let samples = samples.reporting(span);
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let in_box = |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-    let refine = |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-        if in_box(a) && in_box(b) {
-            volume_edge_root(volume, a, va, b, vb, iso)
-        } else {
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            a + (b - a) * t
-        }
-    };
+    let refine = volume_refine(volume, iso);
     match method {
         Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
@@ -228,6 +236,24 @@ fn contour_nodes(
             dual_contour_with(&samples, volume, &options, &place)
         }
         Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
+    }
+}
+
+/// Places the crossing of an edge on the continuous field of `volume` where both ends lie in
+/// its box, and linearly elsewhere (where values are artificial padding).
+pub(crate) fn volume_refine(
+    volume: &CoefficientVolume,
+    iso: f32,
+) -> impl Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + '_ {
+    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    let in_box = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    move |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
+        if in_box(a) && in_box(b) {
+            volume_edge_root(volume, a, va, b, vb, iso)
+        } else {
+            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+            a + (b - a) * t
+        }
     }
 }
 

@@ -20,35 +20,50 @@ pub fn face_normal(tri: [Vec3; 3]) -> Vec3 {
 pub fn vertex_normals(mesh: &Mesh) -> Vec<Vec3> {
     let n = mesh.positions.len();
     let mut sums = vec![DVec3::ZERO; n];
-    let mut fallback: Vec<Option<DVec3>> = vec![None; n];
-    for tri in &mesh.triangles {
+    // The first face with area at each vertex, by index: a normal per vertex would take eight
+    // times the room, for the rare vertex whose sum vanishes.
+    let mut fallback = vec![NO_FACE; n];
+    let corners = |tri: &[u32; 3]| {
         let idx = tri.map(|i| i as usize);
-        if idx.iter().any(|&i| i >= n) {
-            continue;
-        }
-        let p = idx.map(|i| mesh.positions[i].as_dvec3());
-        // Length is twice the area, so this is the area-weighted direction.
-        let area_normal = (p[1] - p[0]).cross(p[2] - p[0]);
-        let Some(face_dir) = unit(area_normal) else {
+        (idx.iter().all(|&i| i < n)).then(|| (idx, idx.map(|i| mesh.positions[i].as_dvec3())))
+    };
+    for (f, tri) in mesh.triangles.iter().enumerate() {
+        let Some((idx, p)) = corners(tri) else {
             continue;
         };
+        // Length is twice the area, so this is the area-weighted direction.
+        let area_normal = (p[1] - p[0]).cross(p[2] - p[0]);
+        if unit(area_normal).is_none() {
+            continue;
+        }
         for k in 0..3 {
             let e1 = p[(k + 1) % 3] - p[k];
             let e2 = p[(k + 2) % 3] - p[k];
             let angle = e1.angle_between(e2);
             let angle = if angle.is_finite() { angle } else { 0.0 };
             sums[idx[k]] += area_normal * angle;
-            fallback[idx[k]].get_or_insert(face_dir);
+            if fallback[idx[k]] == NO_FACE {
+                fallback[idx[k]] = f as u32;
+            }
         }
     }
+    let face_dir = |f: u32| {
+        let (_, p) = corners(&mesh.triangles[f as usize])?;
+        unit((p[1] - p[0]).cross(p[2] - p[0]))
+    };
     sums.iter()
         .zip(&fallback)
         .map(|(&s, &f)| {
-            let dir = unit(s).or(f).unwrap_or(DVec3::Z);
+            let dir = unit(s)
+                .or_else(|| (f != NO_FACE).then(|| face_dir(f)).flatten())
+                .unwrap_or(DVec3::Z);
             renormalise(dir.as_vec3())
         })
         .collect()
 }
+
+/// No face yet, in [`vertex_normals`]' table of first faces.
+const NO_FACE: u32 = u32::MAX;
 
 /// Direction of `v` in f64, `None` if it has none (zero, denormal-small or non-finite).
 fn unit(v: DVec3) -> Option<DVec3> {

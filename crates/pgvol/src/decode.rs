@@ -63,15 +63,20 @@ impl Default for DecodeOptions {
 
 /// `volume`'s own grid, or one of `res` nodes along its longest side over the same box.
 pub(crate) fn target_grid(volume: &CoefficientVolume, res: Option<usize>) -> Result<Grid> {
+    target_grid_of(&volume.grid, res)
+}
+
+/// [`target_grid`] of a volume on `grid`.
+pub(crate) fn target_grid_of(grid: &Grid, res: Option<usize>) -> Result<Grid> {
     let min = crate::grid::MIN_RES as usize;
     match res {
-        None => Ok(volume.grid),
+        None => Ok(*grid),
         // A grid this coarse holds no surface; it would only be reported as an empty level set.
         Some(n) if n < min => Err(Error::parameter(format!(
             "the resampling resolution must be at least {min} nodes along the longest side, \
              got {n}"
         ))),
-        Some(n) => pgvol_contour::resampled_grid(volume, n).ok_or_else(|| {
+        Some(n) => pgvol_contour::resampled_grid_of(grid, n).ok_or_else(|| {
             Error::new(
                 ErrorKind::ResourceLimit,
                 format!("a resampling at {n} nodes gives a grid larger than the limit"),

@@ -61,6 +61,7 @@
 mod blend;
 mod csg;
 mod decode;
+mod decode_file;
 mod distance;
 pub mod distributed;
 mod emptiness;
@@ -94,6 +95,7 @@ pub use csg::{
     ResultUse, CSG_RES,
 };
 pub use decode::{decode, decode_shape, DecodeOptions, SPECK_VOXELS};
+pub use decode_file::decode_file;
 pub use distance::{
     mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
 };

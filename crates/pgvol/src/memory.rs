@@ -159,9 +159,14 @@ pub(crate) fn check_contour(
     volume: &pgvol_field::CoefficientVolume,
     grid: &pgvol_core::Grid,
 ) -> Result<()> {
+    check_contour_of(volume.coeffs.stored_count(), volume.grid.spacing, grid)
+}
+
+/// [`check_contour`] for a volume of `stored` stored bricks on a grid of `spacing`.
+pub(crate) fn check_contour_of(stored: usize, spacing: f32, grid: &pgvol_core::Grid) -> Result<()> {
     let [nx, ny, nz] = grid.dims;
-    let scale = (volume.grid.spacing / grid.spacing).max(1.0) as f64;
-    let stored = volume.coeffs.stored_count() as f64;
+    let scale = (spacing / grid.spacing).max(1.0) as f64;
+    let stored = stored as f64;
     let surface = stored * scale * scale * BYTES_PER_CONTOUR_BRICK as f64;
     let filled = if scale > 1.0 {
         stored * (8.0 * scale).powi(3) * BYTES_PER_RESAMPLED_NODE

@@ -128,9 +128,14 @@ pub fn pgv_info(bytes: &[u8], name: &Path) -> Result<PgvInfo> {
 /// The distance from the surface within which `file`'s field is exact, when its header records
 /// one that makes sense (finite, positive, at most the grid's extent).
 pub fn recorded_band(file: &PgvFile) -> Option<f32> {
-    let g = file.volume.grid;
+    header_band(&file.header)
+}
+
+/// [`recorded_band`] from the header alone.
+pub(crate) fn header_band(header: &PgvHeader) -> Option<f32> {
+    let g = header.grid;
     let extent = g.spacing * g.dims.iter().copied().max().unwrap_or(0) as f32;
-    file.header
+    header
         .metadata
         .get(BAND_KEY)
         .and_then(|b| b.parse::<f32>().ok())

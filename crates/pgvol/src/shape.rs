@@ -168,21 +168,8 @@ impl Shape {
     /// distance that far out: the recorded band less the basis support, or, for files without
     /// a record, the band measured from the coefficients.
     pub fn check_reach(&self, reach: f32) -> Result<()> {
-        let band = self.exact_band();
-        if reach.abs() >= band {
-            let spacing = self.volume.grid.spacing;
-            let support = pgvol_ops::support_reach(&self.volume);
-            let needed = ((reach.abs() + support) / spacing).ceil() + 1.0;
-            return Err(Error::new(
-                ErrorKind::BadParameter,
-                format!(
-                    "the field is an exact distance only within {band:.4} of the surface, too \
-                     narrow for {reach}; encode it again with `--band {needed}` (grid \
-                     spacings) or wider, or pass the mesh"
-                ),
-            ));
-        }
-        Ok(())
+        let support = pgvol_ops::support_reach(&self.volume);
+        check_reach_within(self.exact_band(), support, self.volume.grid.spacing, reach)
     }
 
     /// Points given in world coordinates, in the field's local frame (the offset subtracted in
@@ -210,6 +197,23 @@ impl Shape {
             .insert("operation".into(), operation.to_string());
         PgvFile { header, volume }
     }
+}
+
+/// Refuses reaching `reach` from the surface of a field that is an exact distance only within
+/// `band`, whose basis support reaches `support`, on a grid of `spacing`.
+pub(crate) fn check_reach_within(band: f32, support: f32, spacing: f32, reach: f32) -> Result<()> {
+    if reach.abs() >= band {
+        let needed = ((reach.abs() + support) / spacing).ceil() + 1.0;
+        return Err(Error::new(
+            ErrorKind::BadParameter,
+            format!(
+                "the field is an exact distance only within {band:.4} of the surface, too \
+                 narrow for {reach}; encode it again with `--band {needed}` (grid \
+                 spacings) or wider, or pass the mesh"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The distance from the surface, in model units, within which the field of `file` is an exact

@@ -849,3 +849,51 @@ fn a_file_sliced_slab_by_slab_gives_the_layers_of_the_whole_field() {
     assert_eq!(e.kind(), ErrorKind::InputFile);
     assert!(e.to_string().contains("s.pgv"), "{e}");
 }
+
+#[test]
+fn a_file_decoded_window_by_window_gives_the_mesh_of_the_whole_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("d.pgv");
+    // 150 layers along z: three runs of contouring, each from its own window of slabs.
+    let file = encoded(150).file;
+    pgvol::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
+    let shape = Shape::from_file(pgvol::read_pgv(&path).unwrap());
+    let h = shape.volume.grid.spacing;
+    for (iso, res) in [(0.0, None), (h, None), (0.0, Some(97))] {
+        let options = DecodeOptions {
+            iso,
+            res,
+            ..Default::default()
+        };
+        let whole = pgvol::decode_shape(&shape, &options, &Silent).unwrap();
+        let streamed = pgvol::decode_file(&path, &options, &Silent).unwrap();
+        assert_eq!(streamed.positions, whole.positions, "iso {iso} res {res:?}");
+        assert_eq!(streamed.triangles, whole.triangles, "iso {iso} res {res:?}");
+        let s = streamed.stats();
+        assert!(s.watertight && s.winding_consistent, "{s:?}");
+        // The offset surface encloses the mesh's volume plus about its area times the level.
+        let mesh = sphere().stats();
+        let exact = mesh.volume + mesh.area * f64::from(iso);
+        assert!(
+            (s.volume - exact).abs() < 0.01 * exact,
+            "{} vs {exact}",
+            s.volume
+        );
+    }
+    // A level past the recorded band is refused, as for the whole field.
+    let far = DecodeOptions {
+        iso: 0.4,
+        ..Default::default()
+    };
+    let e = pgvol::decode_file(&path, &far, &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+    assert!(pgvol::decode_shape(&shape, &far, &Silent).is_err());
+    // A damaged file is refused, naming it.
+    let mut bytes = std::fs::read(&path).unwrap();
+    let n = bytes.len();
+    bytes[n / 2] ^= 0x10;
+    std::fs::write(&path, &bytes).unwrap();
+    let e = pgvol::decode_file(&path, &Default::default(), &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::InputFile);
+    assert!(e.to_string().contains("d.pgv"), "{e}");
+}

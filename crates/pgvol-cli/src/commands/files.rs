@@ -286,7 +286,6 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
 pub fn decode(a: DecodeArgs) -> Result<()> {
     let start = Instant::now();
     pgvol::mesh_format(&a.output)?;
-    let shape = pgvol::Shape::from_file(pgvol::read_pgv(&a.input)?);
     let t = Instant::now();
     let options = pgvol::DecodeOptions {
         iso: a.iso,
@@ -294,11 +293,9 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
         res: a.res.map(|r| r as usize),
         min_component: a.min_component,
     };
-    let mesh = pgvol::decode_shape(&shape, &options, &Bars::new(a.out.silent()))
+    let mesh = pgvol::decode_file(&a.input, &options, &Bars::new(a.out.silent()))
         .map_err(|e| at_input(e, &a.input))?;
     let seconds = t.elapsed().as_secs_f64();
-    // The coefficients are not needed to write the mesh: free them first.
-    drop(shape);
     pgvol::write_mesh(&a.output, &mesh)?;
     if a.out.json {
         return report::print(
