@@ -277,6 +277,13 @@ impl<'a> Sampler<'a> {
     fn evaluate(&self, b: [usize; 3]) -> Box<BrickValues> {
         let (lo, n) = brick_extent(self.grid, b);
         let mut out = Box::new([0.0; BRICK_NODES]);
+        if *self.grid == self.volume.grid
+            && self.volume.basis.is_separable()
+            && n == [BRICK_EDGE; 3]
+        {
+            pgvol_field::fit::brick_node_values_into(self.volume, b, &mut out);
+            return out;
+        }
         if *self.grid == self.volume.grid && self.volume.basis.is_separable() {
             let values = pgvol_field::fit::brick_node_values(self.volume, b);
             for k in 0..n[2] {

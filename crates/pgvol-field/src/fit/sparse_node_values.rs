@@ -58,9 +58,16 @@ pub(crate) fn touched_bricks(grid: &SparseGrid) -> Vec<[usize; 3]> {
 /// The field at the nodes of brick `b` of the volume's own grid (nodes past the grid's end hold
 /// the brick's background).
 pub fn brick_node_values(volume: &CoefficientVolume, b: [usize; 3]) -> BrickValues {
+    let mut out = [0.0; BRICK_NODES];
+    brick_node_values_into(volume, b, &mut out);
+    out
+}
+
+/// [`brick_node_values`] into `out`, which a caller can keep on the heap without moving it.
+pub fn brick_node_values_into(volume: &CoefficientVolume, b: [usize; 3], out: &mut BrickValues) {
     let coeffs = &volume.coeffs;
     let (lo, n) = coeffs.brick_extent(b);
-    let mut out = [coeffs.background_of(b); BRICK_NODES];
+    out.fill(coeffs.background_of(b));
     let Some((side, centre)) = taps(volume.basis) else {
         // Radial bases: evaluated directly.
         for k in 0..n[2] {
@@ -71,26 +78,12 @@ pub fn brick_node_values(volume: &CoefficientVolume, b: [usize; 3]) -> BrickValu
                 }
             }
         }
-        return out;
+        return;
     };
-    let dims = coeffs.dims();
-    // The window's nodes per axis, mirrored at the grid's ends as the basis is.
-    let index = |a: usize, t: usize| mirror(lo[a] as i64 - 1 + t as i64, dims[a]);
-    let first = [0, 1, 2].map(|a| lo[a].saturating_sub(1));
-    let last = [0, 1, 2].map(|a| (lo[a] + n[a] + 1).min(dims[a]));
-    let size = [0, 1, 2].map(|a| last[a] - first[a]);
-    let mut gathered = vec![0.0f32; size[0] * size[1] * size[2]];
-    coeffs.gather(first, size, &mut gathered);
     let mut win = [0.0f32; WIN * WIN * WIN];
-    for z in 0..n[2] + 2 {
-        let gz = index(2, z) - first[2];
-        for y in 0..n[1] + 2 {
-            let gy = index(1, y) - first[1];
-            for x in 0..n[0] + 2 {
-                let gx = index(0, x) - first[0];
-                win[x + WIN * (y + WIN * z)] = gathered[gx + size[0] * (gy + size[1] * gz)];
-            }
-        }
+    window(coeffs, b, lo, n, &mut win);
+    if n == [BRICK_EDGE; 3] {
+        return blur_whole(&win, side, centre, out);
     }
     let blur = |a: f32, c: f32, d: f32| side * (a + d) + centre * c;
     let mut xs = [0.0f32; WIN * WIN * WIN];
@@ -121,16 +114,165 @@ pub fn brick_node_values(volume: &CoefficientVolume, b: [usize; 3]) -> BrickValu
             }
         }
     }
-    out
+}
+
+/// The 3-tap blur of a whole brick's window along each axis: [`brick_node_values`]' loops,
+/// in the same arithmetic, over fixed-length rows the compiler turns into vector operations.
+fn blur_whole(win: &Window, side: f32, centre: f32, out: &mut BrickValues) {
+    const E: usize = BRICK_EDGE;
+    let blur = |a: f32, c: f32, d: f32| side * (a + d) + centre * c;
+    let row = |at: usize| -> &[f32; WIN] { win[at..at + WIN].try_into().expect("a window row") };
+    // Along x: every window row, to its brick's E nodes.
+    let mut xs = [[0.0f32; E]; WIN * WIN];
+    for (r, out) in xs.iter_mut().enumerate() {
+        let w = row(WIN * r);
+        for x in 0..E {
+            out[x] = blur(w[x], w[x + 1], w[x + 2]);
+        }
+    }
+    // Along y: rows y - 1, y, y + 1 of each window plane.
+    let mut ys = [[0.0f32; E]; E * WIN];
+    for z in 0..WIN {
+        for y in 0..E {
+            let [a, c, d] = [y, y + 1, y + 2].map(|t| &xs[t + WIN * z]);
+            let out = &mut ys[y + E * z];
+            for x in 0..E {
+                out[x] = blur(a[x], c[x], d[x]);
+            }
+        }
+    }
+    // Along z: planes z - 1, z, z + 1.
+    for z in 0..E {
+        for y in 0..E {
+            let [a, c, d] = [z, z + 1, z + 2].map(|t| &ys[y + E * t]);
+            let at = E * (y + E * z);
+            for x in 0..E {
+                out[at + x] = blur(a[x], c[x], d[x]);
+            }
+        }
+    }
+}
+
+/// Coefficients around one brick, one node either side, x fastest.
+type Window = [f32; WIN * WIN * WIN];
+
+/// The coefficients of brick `b` (lowest node `lo`, `n` nodes per axis) and one node either
+/// side.
+fn window(coeffs: &SparseGrid, b: [usize; 3], lo: [usize; 3], n: [usize; 3], win: &mut Window) {
+    let dims = coeffs.dims();
+    let inner = (0..3).all(|a| n[a] == BRICK_EDGE && lo[a] >= 1 && lo[a] + WIN - 1 <= dims[a]);
+    if inner {
+        inner_window(coeffs, b, win)
+    } else {
+        gathered_window(coeffs, lo, n, win)
+    }
+}
+
+/// [`window`] of a whole brick away from the grid's ends: parts of the brick and its 26
+/// neighbours, each looked up once (a gather looks a brick up per row segment).
+fn inner_window(coeffs: &SparseGrid, b: [usize; 3], win: &mut Window) {
+    // Per axis: neighbour offset, first node in it, nodes taken (all or one), first window node.
+    const PARTS: [(i64, usize, usize, usize); 3] = [
+        (-1, BRICK_EDGE - 1, 1, 0),
+        (0, 0, BRICK_EDGE, 1),
+        (1, 0, 1, WIN - 1),
+    ];
+    for (dz, z0, nz, tz) in PARTS {
+        for (dy, y0, ny, ty) in PARTS {
+            for (dx, x0, nx, tx) in PARTS {
+                let nb = [b[0] as i64 + dx, b[1] as i64 + dy, b[2] as i64 + dz].map(|c| c as usize);
+                let source = coeffs.brick(nb);
+                let fill = coeffs.background_of(nb);
+                for z in 0..nz {
+                    for y in 0..ny {
+                        let to = tx + WIN * (ty + y + WIN * (tz + z));
+                        let dst = &mut win[to..to + nx];
+                        match (source, nx) {
+                            (Some(v), BRICK_EDGE) => {
+                                // A whole row at a fixed length: moved inline, not by a call.
+                                let from = BRICK_EDGE * (y0 + y + BRICK_EDGE * (z0 + z));
+                                let row: &[f32; BRICK_EDGE] =
+                                    v[from..from + BRICK_EDGE].try_into().expect("a brick row");
+                                let dst: &mut [f32; BRICK_EDGE] =
+                                    dst.try_into().expect("a window row");
+                                *dst = *row;
+                            }
+                            (Some(v), _) => {
+                                // One node of a neighbour's face: a load, not a copy call.
+                                dst[0] = v[x0 + BRICK_EDGE * (y0 + y + BRICK_EDGE * (z0 + z))];
+                            }
+                            (None, _) => dst.fill(fill),
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// [`window`] anywhere, its nodes mirrored at the grid's ends as the basis is.
+fn gathered_window(coeffs: &SparseGrid, lo: [usize; 3], n: [usize; 3], win: &mut Window) {
+    let dims = coeffs.dims();
+    let index = |a: usize, t: usize| mirror(lo[a] as i64 - 1 + t as i64, dims[a]);
+    let first = [0, 1, 2].map(|a| lo[a].saturating_sub(1));
+    let last = [0, 1, 2].map(|a| (lo[a] + n[a] + 1).min(dims[a]));
+    let size = [0, 1, 2].map(|a| last[a] - first[a]);
+    let mut gathered = vec![0.0f32; size[0] * size[1] * size[2]];
+    coeffs.gather(first, size, &mut gathered);
+    for z in 0..n[2] + 2 {
+        let gz = index(2, z) - first[2];
+        for y in 0..n[1] + 2 {
+            let gy = index(1, y) - first[1];
+            for x in 0..n[0] + 2 {
+                let gx = index(0, x) - first[0];
+                win[x + WIN * (y + WIN * z)] = gathered[gx + size[0] * (gy + size[1] * gz)];
+            }
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
     use crate::basis::Basis;
     use crate::fit::node_values;
     use glam::Vec3;
     use pgvol_core::{Background, Grid};
+
+    #[test]
+    fn windows_of_inner_bricks_are_those_gathered() {
+        let dims = [40, 33, 40];
+        let mut g = SparseGrid::new(dims, Background::clamp(0.5));
+        let mut x = 1u32;
+        for b in g.all_bricks().collect::<Vec<_>>() {
+            x = x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            match x >> 30 {
+                0 | 1 => {
+                    let mut v = Box::new([0.0f32; BRICK_NODES]);
+                    for (i, c) in v.iter_mut().enumerate() {
+                        *c = (i as f32 * 0.37 + (x >> 8) as f32).sin();
+                    }
+                    g.insert(b, v);
+                }
+                2 => g.set_inside(b, true),
+                _ => {}
+            }
+        }
+        let mut inner = 0;
+        for b in g.all_bricks().collect::<Vec<_>>() {
+            let (lo, n) = g.brick_extent(b);
+            let mut gathered = [0.0; WIN * WIN * WIN];
+            gathered_window(&g, lo, n, &mut gathered);
+            if (0..3).all(|a| b[a] > 0 && lo[a] + WIN - 1 <= dims[a]) {
+                let mut win = [f32::NAN; WIN * WIN * WIN];
+                inner_window(&g, b, &mut win);
+                assert_eq!(win, gathered, "{b:?}");
+                inner += 1;
+            }
+        }
+        assert!(inner >= 8, "{inner}");
+    }
 
     #[test]
     fn match_the_dense_node_values_for_every_basis_and_leave_far_bricks_alone() {
