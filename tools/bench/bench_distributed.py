@@ -42,7 +42,6 @@ import common  # noqa: E402
 import numpy as np  # noqa: E402
 
 TIME = "/usr/bin/time"
-TARGET_TRIANGLES = 1_000_000
 
 
 def reset_peak() -> int:
@@ -68,12 +67,8 @@ def mesh_arrays(name: str, work: Path):
     """(vertices, faces, path) of a shared mesh, or of one subdivided to 1M triangles."""
     import pgvol
 
-    if name.endswith("-1m"):
-        import trimesh
-
-        v, f = pgvol.read_mesh(common.mesh_file(name[:-3]))
-        while len(f) < TARGET_TRIANGLES:
-            v, f = trimesh.remesh.subdivide(v, f)
+    if name.endswith(common.SUBDIVIDED_SUFFIX):
+        v, f = common.subdivide(*pgvol.read_mesh(common.mesh_file(name[: -len(common.SUBDIVIDED_SUFFIX)])))
         v, f = np.asarray(v, np.float32), np.asarray(f, np.int32)
         path = work / f"{name}.ply"
         pgvol.write_mesh(path, v, f)

@@ -31,10 +31,27 @@ def mesh_file(name: str) -> Path:
     return path
 
 
+# "NAME-1m" is the shared mesh NAME split at its edge midpoints until it has this many triangles
+# or more (the rocker arm's 20,088 become 1,285,632).
+SUBDIVIDED_SUFFIX = "-1m"
+SUBDIVIDED_TRIANGLES = 1_000_000
+
+
+def subdivide(vertices, faces, target: int = SUBDIVIDED_TRIANGLES):
+    """Splits every triangle into four at its edge midpoints (trimesh) until there are at least
+    target triangles."""
+    import trimesh
+
+    while len(faces) < target:
+        vertices, faces = trimesh.remesh.subdivide(vertices, faces)
+    return vertices, faces
+
+
 def source_mesh(name: str, work: Path) -> Path:
-    """A shared mesh by name; "bunny-capped" is the Stanford bunny with its holes closed
-    (tools/meshcap.py), written into work, since OpenVDB's flood-fill sign needs a closed surface."""
-    if name != "bunny-capped":
+    """A shared mesh by name, or one derived from it and written into work as OBJ:
+    "bunny-capped" is the Stanford bunny with its holes closed (tools/meshcap.py), since OpenVDB's
+    flood-fill sign needs a closed surface; "NAME-1m" is NAME subdivided (subdivide above)."""
+    if name != "bunny-capped" and not name.endswith(SUBDIVIDED_SUFFIX):
         return mesh_file(name)
     import sys
 
@@ -42,8 +59,11 @@ def source_mesh(name: str, work: Path) -> Path:
     import meshcap
     from objfile import read_obj
 
-    path = Path(work) / "bunny-capped.obj"
-    meshcap.write_obj(path, *meshcap.cap_holes(*read_obj(mesh_file("stanford-bunny"))))
+    path = Path(work) / f"{name}.obj"
+    if name == "bunny-capped":
+        meshcap.write_obj(path, *meshcap.cap_holes(*read_obj(mesh_file("stanford-bunny"))))
+    else:
+        meshcap.write_obj(path, *subdivide(*read_obj(mesh_file(name[: -len(SUBDIVIDED_SUFFIX)]))))
     return path
 
 

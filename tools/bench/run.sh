@@ -2,9 +2,11 @@
 # Benchmarks pgvol against peer libraries.
 # Usage: bash tools/bench/run.sh [sdf|remesh|all] [--big]
 #        bash tools/bench/run.sh points [--quick]   (surfaces through points and contours)
+#        bash tools/bench/run.sh scale [bench_scale.py options]   (encode / decode against OpenVDB)
 # Sets up tools/.venv-bench (peers that fail to install are reported as n/a),
-# installs Debian's python3-openvdb, libeigen3-dev and libusb-1.0-0 (which Open3D loads) when
-# missing (needs root),
+# installs Debian's python3-openvdb, libeigen3-dev and libusb-1.0-0 (which Open3D loads), and
+# what the C++ OpenVDB driver of bench_scale.py builds with (g++, make, libopenvdb-dev,
+# libboost-dev) and time when missing (needs root),
 # builds pgvol (cargo build --release), and prints markdown tables.
 set -euo pipefail
 
@@ -16,13 +18,13 @@ if [[ $# -gt 0 && "$1" != -* ]]; then
     what="$1"
     shift
 fi
-case "$what" in sdf|remesh|all|points) ;; *) echo "usage: $0 [sdf|remesh|all|points] [--big]" >&2; exit 2 ;; esac
+case "$what" in sdf|remesh|all|points|scale) ;; *) echo "usage: $0 [sdf|remesh|all|points|scale] [--big]" >&2; exit 2 ;; esac
 
 section() { printf '\n==> %s\n' "$*" >&2; }
 
 section "system packages"
 missing=()
-for pkg in python3-openvdb libeigen3-dev libusb-1.0-0; do
+for pkg in python3-openvdb libeigen3-dev libusb-1.0-0 g++ make libopenvdb-dev libboost-dev time; do
     dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
 done
 if [[ ${#missing[@]} -gt 0 ]]; then
@@ -33,7 +35,7 @@ if [[ ${#missing[@]} -gt 0 ]]; then
         echo "warning: not root; install ${missing[*]} by hand for the OpenVDB / pysdf peers" >&2
     fi
 else
-    echo "python3-openvdb and libeigen3-dev present" >&2
+    echo "system packages present" >&2
 fi
 if [[ -d /usr/include/eigen3 ]]; then
     export CPATH="/usr/include/eigen3${CPATH:+:$CPATH}"
@@ -99,4 +101,8 @@ fi
 if [[ "$what" == points ]]; then
     section "points and contours benchmark"
     "$VENV/bin/python" tools/bench/bench_points.py "$@"
+fi
+if [[ "$what" == scale ]]; then
+    section "encode / decode scaling against OpenVDB"
+    "$VENV/bin/python" tools/bench/bench_scale.py "$@"
 fi
