@@ -68,15 +68,17 @@ pub fn sparse_sign_contradictions_in(
     let broken = |a: f32, b: f32| (a < 0.0) != (b < 0.0) && a.abs() + b.abs() > limit;
     let [bx, by, bz] = values.brick_counts();
     let ys = ys.start.min(by)..ys.end.min(by);
-    let bricks: Vec<[usize; 3]> = (zs.start.min(bz)..zs.end.min(bz))
-        .flat_map(|k| {
-            ys.clone()
-                .flat_map(move |j| (0..bx).map(move |i| [i, j, k]))
-        })
-        .collect();
-    bricks
-        .par_iter()
-        .map(|&b| {
+    let zs = zs.start.min(bz)..zs.end.min(bz);
+    // Bricks by number, not listed: a list would hold 24 bytes per brick of the grid.
+    let rows = ys.len();
+    (0..bx * rows * zs.len())
+        .into_par_iter()
+        .map(|at| {
+            let b = [
+                at % bx,
+                ys.start + (at / bx) % rows,
+                zs.start + at / (bx * rows),
+            ];
             let (lo, n) = values.brick_extent(b);
             let stored = values.is_stored(b);
             let mut count = 0;

@@ -112,6 +112,26 @@ fn cut_row(
     };
     let mut brick = [0.0f32; BRICK_NODES];
     for gi in 0..nx.div_ceil(BRICK_EDGE) {
+        let i0 = gi * BRICK_EDGE;
+        let ni = (i0 + BRICK_EDGE).min(nx) - i0;
+        let small = i0 / BRICK..(i0 + ni).div_ceil(BRICK);
+        let b = [gi, gj, gk];
+        // A grid brick whose small bricks all hold one value keeps only its side.
+        let first = pieces.first().and_then(|(_, row)| row.uniform[small.start]);
+        let one_value = first.filter(|&v| {
+            pieces
+                .iter()
+                .all(|(_, row)| row.uniform[small.clone()].iter().all(|&u| u == Some(v)))
+        });
+        if let Some(v) = one_value {
+            if v.abs() < clamp {
+                brick.fill(v);
+                out.stored.push((b, Box::new(brick)));
+            } else if v < 0.0 {
+                out.inside.push(b);
+            }
+            continue;
+        }
         brick.fill(clamp);
         let (mut near, mut inside, mut outside) = (false, false, false);
         for ([dj, dk], row) in pieces {
@@ -120,16 +140,16 @@ fn cut_row(
                 (gk * BRICK_EDGE / BRICK + dk) * BRICK,
             );
             let (nj, nk) = ((j0 + BRICK).min(ny) - j0, (k0 + BRICK).min(nz) - k0);
-            let i0 = gi * BRICK_EDGE;
-            let ni = (i0 + BRICK_EDGE).min(nx) - i0;
             for k in 0..nk {
                 for j in 0..nj {
                     let src = i0 + nx * (j + nj * k);
                     let dst = BRICK_EDGE * (dj * BRICK + j + BRICK_EDGE * (dk * BRICK + k));
-                    for (d, &v) in brick[dst..dst + ni]
+                    for (x, (d, &v)) in brick[dst..dst + ni]
                         .iter_mut()
                         .zip(&row.values[src..src + ni])
+                        .enumerate()
                     {
+                        let v = row.uniform[(i0 + x) / BRICK].unwrap_or(v);
                         *d = v;
                         near |= v.abs() < clamp;
                         inside |= v < 0.0;
@@ -138,7 +158,6 @@ fn cut_row(
                 }
             }
         }
-        let b = [gi, gj, gk];
         if near || (inside && outside) {
             out.stored.push((b, Box::new(brick)));
         } else if inside {
@@ -167,8 +186,26 @@ struct Plan<'a> {
 /// The values of one row of bricks: nodes `(i, j, k)` of the row's `j` and `k` ranges, x
 /// fastest, then j, then k.
 struct RowValues {
+    /// The written values; the nodes of uniform bricks are left as they were.
     values: Vec<f32>,
     exact: usize,
+    /// Per brick along x, its value when every node has it (and it was not written).
+    uniform: Vec<Option<f32>>,
+}
+
+impl RowValues {
+    /// Writes the uniform bricks' values into `values`, for a row of `nx` nodes in bricks of
+    /// `brick` nodes, `layers` node rows (`j` then `k`) thick.
+    fn fill_uniform(&mut self, nx: usize, brick: usize) {
+        let layers = self.values.len() / nx;
+        for (bi, value) in self.uniform.iter().enumerate() {
+            let Some(v) = *value else { continue };
+            let (i0, i1) = (bi * brick, (bi * brick + brick).min(nx));
+            for line in self.values.chunks_exact_mut(nx).take(layers) {
+                line[i0..i1].fill(v);
+            }
+        }
+    }
 }
 
 impl MeshSdf {
@@ -340,7 +377,8 @@ impl MeshSdf {
         let results: Vec<RowValues> = (0..rows)
             .into_par_iter()
             .map_init(row::Scratch::default, |scratch, r| {
-                let out = self.sample_row(&plan, r, scratch);
+                let mut out = self.sample_row(&plan, r, scratch);
+                out.fill_uniform(nx, brick);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(64) || n == rows {
                     progress(n as f64 / rows as f64);

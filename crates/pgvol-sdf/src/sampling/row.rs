@@ -54,6 +54,11 @@ impl RowOut<'_> {
     }
 }
 
+/// How a brick of a row came out: one value at every node, recorded once instead of written
+/// node by node (far from a small surface almost every brick of a large grid is one), or
+/// values written into the row.
+type Filled = Option<f32>;
+
 impl MeshSdf {
     pub(super) fn sample_row(&self, plan: &Plan, row: usize, scratch: &mut Scratch) -> RowValues {
         let grid = plan.grid;
@@ -71,9 +76,10 @@ impl MeshSdf {
             k0,
         };
         let mut exact = 0;
+        let mut uniform = vec![None; plan.bricks[0]];
         let mut carry = WindingCarry::default();
         let mut previous_far = false;
-        for bi in 0..plan.bricks[0] {
+        for (bi, filled) in uniform.iter_mut().enumerate() {
             let b = plan.flags.index([bi, bj, bk]);
             let brick = Brick::new(
                 grid,
@@ -81,16 +87,15 @@ impl MeshSdf {
                 [(bi * size + size).min(nx), j1, k1],
             );
             let far = plan.near.as_ref().is_some_and(|near| !near.get(b));
-            if far {
+            *filled = if far {
                 match plan.regions.as_ref().and_then(|r| r.get(b)) {
                     Some(inside) => {
-                        let v = if inside { -plan.clamp } else { plan.clamp };
-                        brick.for_each_node(grid, |at, _| out.put(at, v));
                         // A whole winding number carries across any distance without drift
                         // (only crossings change it); otherwise the next brick starts afresh.
                         if !self.winding_is_whole() {
                             carry.forget();
                         }
+                        Some(if inside { -plan.clamp } else { plan.clamp })
                     }
                     // Two neighbouring far bricks: no triangle meets either, so nothing is
                     // crossed between them.
@@ -99,11 +104,17 @@ impl MeshSdf {
                     }
                 }
             } else {
-                exact += self.near_brick(&brick, plan, &mut carry, scratch, &mut out);
-            }
+                let (filled, n) = self.near_brick(&brick, plan, &mut carry, scratch, &mut out);
+                exact += n;
+                filled
+            };
             previous_far = far;
         }
-        RowValues { values, exact }
+        RowValues {
+            values,
+            exact,
+            uniform,
+        }
     }
 
     /// A brick with no surface in it and every node farther than the clamp: only signs.
@@ -116,7 +127,7 @@ impl MeshSdf {
         entry_is_clear: bool,
         scratch: &mut Scratch,
         out: &mut RowOut,
-    ) {
+    ) -> Filled {
         let grid = plan.grid;
         let clamp = plan.clamp;
         let signed = |inside: bool| if inside { -clamp } else { clamp };
@@ -125,13 +136,12 @@ impl MeshSdf {
             // winding number decides, per brick when clear, else per node.
             let w = self.winding_number(Vec3::from(brick.centre()));
             if (w - 0.5).abs() >= REGION_SIGN_MARGIN {
-                brick.for_each_node(grid, |at, _| out.put(at, signed(w > 0.5)));
-            } else {
-                brick.for_each_node(grid, |at, p| {
-                    out.put(at, signed(self.winding_number(Vec3::from(p)) > 0.5))
-                });
+                return Some(signed(w > 0.5));
             }
-            return;
+            brick.for_each_node(grid, |at, p| {
+                out.put(at, signed(self.winding_number(Vec3::from(p)) > 0.5))
+            });
+            return None;
         }
         let gradient = self.gradient_towards(plan, brick, carry, &mut scratch.tiles);
         let segment = BrickSegment {
@@ -146,9 +156,7 @@ impl MeshSdf {
         let drift = segment.gradient * brick.half_diagonal();
         let centre = carry.winding_at(self, brick.centre(), &segment, drift);
         if (centre.value - 0.5).abs() > centre.error + drift {
-            let v = signed(centre.value > 0.5);
-            brick.for_each_node(grid, |at, _| out.put(at, v));
-            return;
+            return Some(signed(centre.value > 0.5));
         }
         brick.for_each_node(grid, |at, p| {
             out.put(
@@ -156,6 +164,7 @@ impl MeshSdf {
                 signed(carry.winding_near(self, p, &segment).value > 0.5),
             );
         });
+        None
     }
 
     /// A bound on the winding number's gradient over the brick and the segment entering it.
@@ -192,7 +201,7 @@ impl MeshSdf {
     }
 
     /// A brick within the band of some triangle (or of a dense grid): exact distances where
-    /// they are within the clamp. Returns how many are.
+    /// they are within the clamp. Returns how the brick was filled and how many nodes are.
     fn near_brick(
         &self,
         brick: &Brick,
@@ -200,7 +209,7 @@ impl MeshSdf {
         carry: &mut WindingCarry,
         scratch: &mut Scratch,
         out: &mut RowOut,
-    ) -> usize {
+    ) -> (Filled, usize) {
         let bvh = self.bvh();
         let grid = plan.grid;
         let clamp = plan.clamp;
@@ -217,14 +226,11 @@ impl MeshSdf {
         let brick_sign =
             (surface_free && !winding).then(|| self.is_inside_near(centre.into(), &seed));
         if centre_distance - half_diagonal > clamp {
-            match brick_sign {
-                Some(inside) => {
-                    let v = if inside { -clamp } else { clamp };
-                    brick.for_each_node(grid, |at, _| out.put(at, v));
-                }
+            let filled = match brick_sign {
+                Some(inside) => Some(if inside { -clamp } else { clamp }),
                 None => self.signs_only(brick, plan, carry, false, scratch, out),
-            }
-            return 0;
+            };
+            return (filled, 0);
         }
         // With the winding sign, nodes beyond the band need no closest point: triangles farther
         // than the clamp are not looked for. The slack keeps every distance whose square root
@@ -282,6 +288,6 @@ impl MeshSdf {
             let d = d.min(clamp);
             out.put(at, if inside { -d } else { d });
         });
-        exact
+        (None, exact)
     }
 }
