@@ -156,7 +156,7 @@ pub enum PointsError {
     BadNormal(usize),
     #[error(
         "rbf-cubic solves a dense system of 2 centres per point and takes at most {max} centres \
-         ({} points); this cloud has {points} points: use --method rbf-wendland or spline, \
+         ({} points); this cloud has {points} points: use the rbf-wendland or spline method, \
          which are sparse",
         max / 2
     )]
@@ -571,5 +571,9 @@ pub(crate) mod tests {
         };
         let err = reconstruct(&cloud, grid, &options).unwrap_err();
         assert!(matches!(err, PointsError::TooManyForCubic { .. }), "{err}");
+        assert!(
+            !err.to_string().contains("--"),
+            "the library names no flags: {err}"
+        );
     }
 }

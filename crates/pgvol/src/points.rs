@@ -400,7 +400,7 @@ fn fit_on_grid(
         if options.method == Method::Tangent {
             "lower the resolution or thin the cloud"
         } else {
-            "lower the resolution, thin the cloud, or use --method tangent (no system to solve)"
+            "lower the resolution, thin the cloud, or use the tangent method (no system to solve)"
         },
     )?;
     let fit_options = pgvol_points::PointsOptions {
