@@ -325,4 +325,120 @@ mod tests {
             .to_string();
         assert!(e.contains("--bound"), "{e}");
     }
+
+    /// A text cloud of `n` points on the unit sphere with outward normals, in `dir`.
+    fn sphere_cloud(dir: &std::path::Path, n: usize) -> std::path::PathBuf {
+        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        let mut text = String::new();
+        for i in 0..n {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let rho = (1.0 - y * y).sqrt();
+            let phi = golden * i as f32;
+            let (x, z) = (rho * phi.cos(), rho * phi.sin());
+            text.push_str(&format!("{x} {y} {z} {x} {y} {z}\n"));
+        }
+        let path = dir.join("sphere.xyz");
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    #[test]
+    fn sections_parse_as_an_axis_and_heights() {
+        let parse = |extra: &[&str]| {
+            let mut words = vec!["pgvol", "points", "c.xyz", "-o", "c.pgv"];
+            words.extend_from_slice(extra);
+            Cli::try_parse_from(&words).map(|cli| match cli.command {
+                commands::Command::Points(a) => (a.sections, a.sections_out),
+                _ => unreachable!(),
+            })
+        };
+        let (sections, out) = parse(&["--sections", "z:-0.5,0, 0.5"]).unwrap();
+        let sections = sections.unwrap();
+        assert_eq!(sections.axis, pgvol::Axis::Z);
+        assert_eq!(sections.heights, [-0.5, 0.0, 0.5]);
+        assert_eq!(out, None);
+        let (sections, out) = parse(&["--sections=X:-2", "--sections-out", "a.svg"]).unwrap();
+        assert_eq!(sections.unwrap().axis, pgvol::Axis::X);
+        assert_eq!(out.unwrap(), std::path::Path::new("a.svg"));
+        for (bad, says) in [
+            ("w:0", "the axis must be x, y or z"),
+            ("0,1", "expected AXIS:H1,H2"),
+            ("z:", "no heights after 'z:'"),
+            ("z:0,,1", "the height ''"),
+            ("y:inf", "not a finite number below 1e8"),
+            ("y:1e9", "not a finite number below 1e8"),
+            ("z:0,abc", "the height 'abc'"),
+        ] {
+            let e = parse(&["--sections", bad]).err().unwrap().to_string();
+            assert!(e.contains("--sections") && e.contains(says), "{bad}: {e}");
+        }
+        // The output and the resolution need the sections.
+        for extra in [
+            ["--sections-out", "a.json"],
+            ["--sections-resolution", "0.1"],
+        ] {
+            let e = parse(&extra).err().unwrap().to_string();
+            assert!(e.contains("--sections <AXIS:H1,H2,...>"), "{e}");
+        }
+    }
+
+    #[test]
+    fn sections_are_written_beside_the_output_and_heights_outside_the_box_refused() {
+        let _turn = RUN.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = tempfile::tempdir().unwrap();
+        let cloud = sphere_cloud(dir.path(), 2000);
+        let out = dir.path().join("s.pgv");
+        let run = |sections: &str, extra: &[&str]| {
+            let mut words = vec![
+                "pgvol",
+                "points",
+                cloud.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--res",
+                "40",
+                "--quiet",
+                "--sections",
+                sections,
+            ];
+            words.extend_from_slice(extra);
+            commands::run(Cli::try_parse_from(&words).unwrap().command)
+        };
+        // Refused before the fit, naming the option, the height and the box.
+        let e = run("z:0,3", &[]).unwrap_err().to_string();
+        assert!(
+            e.contains("--sections:") && e.contains("z = 3") && e.contains("outside the grid box"),
+            "{e}"
+        );
+        assert!(!out.exists());
+        let e = run("z:0", &["--sections-out", "a.txt"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--sections-out") && e.contains(".json"), "{e}");
+        let e = run("z:0", &["--sections-resolution", "0"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--sections-resolution"), "{e}");
+        assert!(!out.exists());
+        // Written to the default path, one layer per height, the empty one kept.
+        run("z:0.5,-0.5,1.05", &[]).unwrap();
+        let layers = pgvol::ops::read_slice_json(&dir.path().join("s.sections.json")).unwrap();
+        let heights: Vec<f32> = layers.iter().map(|l| l.height).collect();
+        assert_eq!(heights, [-0.5, 0.5, 1.05]);
+        let loops: Vec<usize> = layers.iter().map(|l| l.loops.len()).collect();
+        assert_eq!(loops, [1, 1, 0]);
+        let area = std::f64::consts::PI * 0.75;
+        assert!(
+            (layers[0].area() - area).abs() < 0.01 * area,
+            "{}",
+            layers[0].area()
+        );
+        // And to a file of another format.
+        let svg = dir.path().join("cuts.svg");
+        run("x:0", &["--sections-out", svg.to_str().unwrap()]).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        let layers = pgvol::ops::read_svg(&text, &svg).unwrap();
+        assert_eq!(layers.len(), 1);
+        assert!((layers[0].area() - std::f64::consts::PI).abs() < 0.02 * std::f64::consts::PI);
+    }
 }

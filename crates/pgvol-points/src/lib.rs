@@ -28,6 +28,7 @@ pub mod index;
 pub mod normals;
 pub mod orientation;
 pub mod plane_fit;
+pub mod sections;
 pub mod spline_fit;
 pub mod stack;
 pub mod tangent;
@@ -155,7 +156,7 @@ pub enum PointsError {
     BadNormal(usize),
     #[error(
         "rbf-cubic solves a dense system of 2 centres per point and takes at most {max} centres \
-         ({} points); this cloud has {points} points: use --method rbf-wendland or spline, \
+         ({} points); this cloud has {points} points: use the rbf-wendland or spline method, \
          which are sparse",
         max / 2
     )]
@@ -286,6 +287,25 @@ pub fn reconstruct(
     grid: Grid,
     options: &PointsOptions,
 ) -> Result<(CoefficientVolume, PointsReport), PointsError> {
+    reconstruct_with(cloud, grid, options, &mut |_| {})
+}
+
+/// A continuous field through the points, as [`reconstruct_with`] hands it over.
+pub type PointField<'a> = dyn Fn(Vec3) -> f32 + Sync + 'a;
+
+/// [`reconstruct`], handing `visit` the method's own field through the points, continuous and
+/// defined everywhere, before it is sampled at the grid nodes (once, after the solve): for
+/// `rbf-wendland` the least-squares spline plus the Wendland RBFs, which interpolate the
+/// constraints; for `rbf-cubic` the cubic RBF interpolant; for `tangent` the blended
+/// tangent-plane distance (beyond its reach, the band with the side of the nearest point's
+/// tangent plane); for `spline` the fitted B-spline, which is the result itself. Cross-sections
+/// of this field ([`sections`]) are those of the interpolant, not of its B-spline resampling.
+pub fn reconstruct_with(
+    cloud: &PointCloud,
+    grid: Grid,
+    options: &PointsOptions,
+    visit: &mut dyn FnMut(&PointField),
+) -> Result<(CoefficientVolume, PointsReport), PointsError> {
     let cloud = dedup(cloud);
     let points = &cloud.points;
     if points.len() < MIN_POINTS {
@@ -346,9 +366,19 @@ pub fn reconstruct(
             let fit = cubic::fit(&centres, &values).ok_or(PointsError::Singular)?;
             report.centres = centres.len();
             report.seconds_solve = t.elapsed().as_secs_f64();
+            visit(&|x| fit.value(x));
             band::sample_band(&grid, points, &tangent, options.band, &|x, _| fit.value(x))
         }
-        Method::Spline | Method::Tangent | Method::RbfWendland => {
+        Method::Tangent => {
+            let band = options.band;
+            visit(&|x| {
+                tangent
+                    .value(x, &mut Vec::new())
+                    .unwrap_or_else(|| band.copysign(tangent.far_side(x)))
+            });
+            band::sample_band(&grid, points, &tangent, band, &|_, t| t)
+        }
+        Method::Spline | Method::RbfWendland => {
             band::sample_band(&grid, points, &tangent, options.band, &|_, t| t)
         }
     };
@@ -373,6 +403,9 @@ pub fn reconstruct(
         report.converged = fit.converged;
         volume = CoefficientVolume::from_sparse(grid, Basis::Bspline3, coeffs)?;
         report.seconds_solve = t.elapsed().as_secs_f64();
+        if options.method == Method::Spline {
+            visit(&|x| volume.value(x));
+        }
     }
     if options.method == Method::RbfWendland {
         // The RBFs correct the least-squares spline, so that the field interpolates the
@@ -390,8 +423,10 @@ pub fn reconstruct(
         report.converged &= fit.converged();
         report.matrix_entries = fit.entries;
         report.support = support;
-        let samples = band::resample(&grid, &samples, options.band, &|x| base(x) + fit.value(x));
+        let field = |x: Vec3| base(x) + fit.value(x);
+        let samples = band::resample(&grid, &samples, options.band, &field);
         report.seconds_solve += t.elapsed().as_secs_f64();
+        visit(&field);
         let t = Instant::now();
         volume = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?.0;
         report.seconds_fit += t.elapsed().as_secs_f64();
@@ -536,5 +571,9 @@ pub(crate) mod tests {
         };
         let err = reconstruct(&cloud, grid, &options).unwrap_err();
         assert!(matches!(err, PointsError::TooManyForCubic { .. }), "{err}");
+        assert!(
+            !err.to_string().contains("--"),
+            "the library names no flags: {err}"
+        );
     }
 }

@@ -316,6 +316,84 @@ impl Field {
         Ok(Field::from_file(encoded.file, false))
     }
 
+    /// A smooth closed surface through a point cloud (normals estimated when not given), and
+    /// with `sections=(axis, heights)` its cross-sections cut from the method's own field.
+    #[staticmethod]
+    #[pyo3(signature = (points, normals=None, *, res=None, voxel=None, method="spline", band=pgvol::ENCODE_BAND, support=None, sections=None, section_resolution=None, progress=None))]
+    fn from_points(
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        normals: Option<&Bound<'_, PyAny>>,
+        res: Option<usize>,
+        voxel: Option<f32>,
+        method: &str,
+        band: f32,
+        support: Option<f32>,
+        sections: Option<&Bound<'_, PyAny>>,
+        section_resolution: Option<f32>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        let single = |v: Vec<glam::DVec3>| -> Vec<glam::Vec3> {
+            v.into_iter().map(|p| p.as_vec3()).collect()
+        };
+        let cloud = pgvol::PointCloud {
+            points: single(arrays::world_points(points, "points")?),
+            normals: normals
+                .map(|n| arrays::world_points(n, "normals"))
+                .transpose()?
+                .map(single),
+        };
+        if let Some(n) = &cloud.normals {
+            if n.len() != cloud.points.len() {
+                return Err(errors::parameter(
+                    py,
+                    format!(
+                        "{} normals for {} points: give one normal per point, or none",
+                        n.len(),
+                        cloud.points.len()
+                    ),
+                ));
+            }
+        }
+        let options = pgvol::PointsOptions {
+            grid: grid_spec(py, res, voxel)?,
+            method: names::points_method(py, method)?,
+            band,
+            support,
+        };
+        let Some(sections) = sections else {
+            if section_resolution.is_some() {
+                return Err(errors::parameter(
+                    py,
+                    "section_resolution applies only with sections",
+                ));
+            }
+            let fitted = run(py, progress, |p| pgvol::points(&cloud, &options, p))?;
+            return Ok(Py::new(py, Field::from_file(fitted.file, false))?.into_any());
+        };
+        let (axis, heights) = sections.extract::<(String, Vec<f32>)>().map_err(|_| {
+            errors::parameter(
+                py,
+                "sections must be (axis, heights), e.g. (\"z\", [0.0, 0.5])",
+            )
+        })?;
+        let settings = pgvol::SectionSettings {
+            axis: names::axis(py, &axis)?,
+            heights,
+            resolution: section_resolution,
+        };
+        let (fitted, cut) = run(py, progress, |p| {
+            pgvol::points_with_sections(&cloud, &options, &settings, p)
+        })?;
+        let field = Py::new(py, Field::from_file(fitted.file, false))?;
+        let layers: Vec<Layer> = cut
+            .layers
+            .into_iter()
+            .map(|l| Layer::from_layer(py, l))
+            .collect();
+        Ok((field, layers).into_pyobject(py)?.into_any().unbind())
+    }
+
     /// Encodes a `trimesh.Trimesh` (or anything with `vertices` and `faces`); the keywords are
     /// those of `from_mesh`.
     #[staticmethod]

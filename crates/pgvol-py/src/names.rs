@@ -79,6 +79,24 @@ pub(crate) fn axis(py: Python<'_>, name: &str) -> PyResult<pgvol::Axis> {
     })
 }
 
+/// "spline", "tangent", "rbf-wendland" or "rbf-cubic".
+pub(crate) fn points_method(py: Python<'_>, name: &str) -> PyResult<pgvol::PointsMethod> {
+    Ok(match name {
+        "spline" => pgvol::PointsMethod::Spline,
+        "tangent" => pgvol::PointsMethod::Tangent,
+        "rbf-wendland" => pgvol::PointsMethod::RbfWendland,
+        "rbf-cubic" => pgvol::PointsMethod::RbfCubic,
+        _ => {
+            return Err(unknown(
+                py,
+                "method",
+                name,
+                "spline, tangent, rbf-wendland or rbf-cubic",
+            ))
+        }
+    })
+}
+
 /// "inner", "outer" or "centred".
 pub(crate) fn side(py: Python<'_>, name: &str) -> PyResult<pgvol::ShellSide> {
     Ok(match name {

@@ -134,8 +134,9 @@ pub use pgvol_field::perturb::{
     Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason, Strays, DESCENT_STEPS,
 };
 pub use points::{
-    contours, points, points_bytes, read_cloud_text, read_layers, read_point_cloud, PointsMethod,
-    PointsOptions, Reconstructed, MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
+    contours, points, points_bytes, points_with_sections, read_cloud_text, read_layers,
+    read_point_cloud, PointsMethod, PointsOptions, Reconstructed, SectionSettings, Sections,
+    MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
 };
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};

@@ -6,7 +6,11 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use glam::Vec3;
+use std::time::Instant;
+
 use pgvol_format::PgvFile;
+use pgvol_ops::{Axis, Layer};
+use pgvol_points::sections::SectionPlanes;
 use pgvol_points::{Method, PointCloud, PointsReport};
 
 use crate::encode::{BAND_KEY, ENCODE_BAND};
@@ -226,6 +230,43 @@ pub fn points_bytes(
     bytes
 }
 
+/// Cross-sections of the field through a point cloud in planes normal to an axis, cut from the
+/// field itself (see [`points_with_sections`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionSettings {
+    /// The axis the planes are normal to.
+    pub axis: Axis,
+    /// Plane positions along the axis, in the cloud's units, within the grid's box.
+    pub heights: Vec<f32>,
+    /// Spacing of each plane's sampling grid; `None` (the default) for the grid spacing.
+    pub resolution: Option<f32>,
+}
+
+impl SectionSettings {
+    /// Planes at `heights` along `axis`, sampled at the grid spacing.
+    pub fn new(axis: Axis, heights: Vec<f32>) -> Self {
+        Self {
+            axis,
+            heights,
+            resolution: None,
+        }
+    }
+}
+
+/// The cross-sections [`points_with_sections`] cut.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sections {
+    /// One layer per distinct height, bottom first, in the planes' coordinates (see [`Axis`]).
+    pub layers: Vec<Layer>,
+    /// The heights whose plane misses the surface (their layers hold no loop); each was also
+    /// warned of through the progress.
+    pub empty: Vec<f32>,
+    /// Spacing of the planes' sampling grids.
+    pub resolution: f32,
+    /// Seconds spent cutting them.
+    pub seconds: f64,
+}
+
 /// Fits a coefficient volume whose zero set passes through `cloud` (normals estimated and
 /// oriented when it has none; see `report.normals_estimated`).
 pub fn points(
@@ -233,6 +274,35 @@ pub fn points(
     options: &PointsOptions,
     progress: &dyn Progress,
 ) -> Result<Reconstructed> {
+    Ok(reconstruct_points(cloud, options, None, progress)?.0)
+}
+
+/// [`points`], and cross-sections of the field through the points in the planes of `sections`,
+/// cut from the field the method builds before it is sampled on the grid (as the RBF method's
+/// output is): for `RbfWendland` the least-squares spline plus the Wendland RBFs, for `RbfCubic`
+/// the cubic RBF, for `Tangent` the blended tangent-plane distance, for `Spline` the fitted
+/// B-spline (the result itself). Each plane is contoured on a 2D grid over the grid box's
+/// cross-section, every vertex on the field's zero set, and simplified to a tenth of the
+/// resolution. The heights are checked against the grid's box before the fit; a height whose
+/// plane misses the surface gives an empty layer, listed in `empty` and warned of.
+pub fn points_with_sections(
+    cloud: &PointCloud,
+    options: &PointsOptions,
+    sections: &SectionSettings,
+    progress: &dyn Progress,
+) -> Result<(Reconstructed, Sections)> {
+    let (fitted, sections) = reconstruct_points(cloud, options, Some(sections), progress)?;
+    let sections =
+        sections.ok_or_else(|| Error::new(ErrorKind::Internal, "the sections were not cut"))?;
+    Ok((fitted, sections))
+}
+
+fn reconstruct_points(
+    cloud: &PointCloud,
+    options: &PointsOptions,
+    sections: Option<&SectionSettings>,
+    progress: &dyn Progress,
+) -> Result<(Reconstructed, Option<Sections>)> {
     if !(options.band.is_finite() && options.band >= crate::encode::MIN_BAND) {
         return Err(Error::parameter(format!(
             "the band must be at least {} grid spacings, got {}",
@@ -250,10 +320,33 @@ pub fn points(
     if cloud.points.is_empty() {
         return Err(Error::new(ErrorKind::InputFile, "the cloud has no points"));
     }
+    // Clouds given directly, not read from a file, are checked here.
+    let max = pgvol_mesh::MAX_COORDINATE;
+    if let Some(i) =
+        (cloud.points.iter()).position(|p| !(p.is_finite() && p.abs().max_element() < max))
+    {
+        return Err(Error::parameter(format!(
+            "point {i}: coordinates must be finite and below {max:e} in magnitude, got {}",
+            cloud.points[i]
+        )));
+    }
     check_distinct(&cloud.points)?;
     let (lo, hi) = pgvol_points::index::bounds(&cloud.points);
+    crate::frame::require_near_box(lo, hi, "reconstruction from points")?;
     let grid = options.grid.grid_for_box(lo, hi)?;
-    fit_on_grid(cloud, grid, options, (lo, hi), progress)
+    let planes = sections.map(|s| section_planes(s, &grid)).transpose()?;
+    fit_on_grid(cloud, grid, options, (lo, hi), planes.as_ref(), progress)
+}
+
+/// The planes of `settings` on `grid`, checked before any work.
+fn section_planes(settings: &SectionSettings, grid: &pgvol_core::Grid) -> Result<SectionPlanes> {
+    let resolution = settings.resolution.unwrap_or(grid.spacing);
+    let planes = SectionPlanes::new(settings.axis, settings.heights.clone(), resolution);
+    pgvol_points::sections::check(grid, &planes).map_err(|e| match e {
+        pgvol_ops::OpsError::BadParameter(message) => Error::parameter(message),
+        e => e.into(),
+    })?;
+    Ok(planes)
 }
 
 /// Refuses a cloud of fewer distinct points than a fit needs, saying so (its box, a point, would
@@ -283,14 +376,16 @@ fn check_distinct(points: &[Vec3]) -> Result<()> {
     ))
 }
 
-/// The reconstruction of `cloud` on `grid`; `bounds` is the box recorded as the source's.
+/// The reconstruction of `cloud` on `grid`, with the sections of its field by `planes` when
+/// given; `bounds` is the box recorded as the source's.
 fn fit_on_grid(
     cloud: &PointCloud,
     grid: pgvol_core::Grid,
     options: &PointsOptions,
     (lo, hi): (Vec3, Vec3),
+    planes: Option<&SectionPlanes>,
     progress: &dyn Progress,
-) -> Result<Reconstructed> {
+) -> Result<(Reconstructed, Option<Sections>)> {
     let spacing = pgvol_points::mean_spacing(&cloud.points);
     pgvol_points::check_spacing(&cloud.points, spacing, &grid)
         .map_err(|e| Error::new(ErrorKind::BadParameter, e.to_string()).caused_by(e))?;
@@ -305,7 +400,7 @@ fn fit_on_grid(
         if options.method == Method::Tangent {
             "lower the resolution or thin the cloud"
         } else {
-            "lower the resolution, thin the cloud, or use --method tangent (no system to solve)"
+            "lower the resolution, thin the cloud, or use the tangent method (no system to solve)"
         },
     )?;
     let fit_options = pgvol_points::PointsOptions {
@@ -313,8 +408,16 @@ fn fit_on_grid(
         band: options.band * grid.spacing,
         support: options.support,
     };
+    // The sections are cut from the method's field while the fit holds it.
+    let mut cut: Option<(std::result::Result<Vec<Layer>, pgvol_ops::OpsError>, f64)> = None;
     let (volume, report) = progress::stage(progress, "fit", |_| {
-        pgvol_points::reconstruct(cloud, grid, &fit_options)
+        pgvol_points::reconstruct_with(cloud, grid, &fit_options, &mut |field| {
+            if let Some(planes) = planes {
+                let t = Instant::now();
+                let layers = pgvol_points::sections::sections(field, &grid, planes);
+                cut = Some((layers, t.elapsed().as_secs_f64()));
+            }
+        })
     })?
     .map_err(|e| {
         let kind = match e {
@@ -326,6 +429,35 @@ fn fit_on_grid(
         Error::new(kind, e.to_string()).caused_by(e)
     })?;
     crate::points_warnings::warn_about(&report, grid.spacing, progress);
+    let sections = match (planes, cut) {
+        (None, _) => None,
+        (Some(_), None) => {
+            return Err(Error::new(
+                ErrorKind::Internal,
+                "the fit did not hand over its field",
+            ))
+        }
+        (Some(planes), Some((layers, seconds))) => {
+            let layers = layers?;
+            let empty: Vec<f32> = layers
+                .iter()
+                .filter(|l| l.loops.is_empty())
+                .map(|l| l.height)
+                .collect();
+            let axis = pgvol_points::sections::axis_name(planes.axis);
+            for h in &empty {
+                progress.warn(&format!(
+                    "the section at {axis} = {h} is empty: the plane misses the surface"
+                ));
+            }
+            Some(Sections {
+                layers,
+                empty,
+                resolution: planes.resolution,
+                seconds,
+            })
+        }
+    };
     let mut header = pgvol_format::header_for(&volume, options.method.name(), None);
     header.source_bounds = Some([lo.to_array(), hi.to_array()]);
     header
@@ -343,15 +475,18 @@ fn fit_on_grid(
         }
         .into(),
     );
-    Ok(Reconstructed {
-        file: PgvFile { header, volume },
-        report,
-    })
+    Ok((
+        Reconstructed {
+            file: PgvFile { header, volume },
+            report,
+        },
+        sections,
+    ))
 }
 
 /// Reads a stack of planar contours: the JSON, Common Layer Interface (ASCII or binary) or SVG
 /// layer files `pgvol slice` writes, by extension.
-pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
+pub fn read_layers(path: &Path) -> Result<Vec<Layer>> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -404,15 +539,15 @@ pub fn read_layers(path: &Path) -> Result<Vec<pgvol_ops::Layer>> {
 /// neighbour does not cover. Holes and several loops per plane are allowed (even-odd). See
 /// `docs/points.md` for the measurements and the limits.
 pub fn contours(
-    layers: &[pgvol_ops::Layer],
-    axis: pgvol_ops::Axis,
+    layers: &[Layer],
+    axis: Axis,
     options: &PointsOptions,
     progress: &dyn Progress,
 ) -> Result<Reconstructed> {
     let a = match axis {
-        pgvol_ops::Axis::X => 0,
-        pgvol_ops::Axis::Y => 1,
-        pgvol_ops::Axis::Z => 2,
+        Axis::X => 0,
+        Axis::Y => 1,
+        Axis::Z => 2,
     };
     let mut planes: Vec<pgvol_points::contours::ContourPlane> = layers
         .iter()
@@ -456,7 +591,7 @@ pub fn contours(
     if options.method != Method::Spline {
         // Samples at half the grid spacing: every cell the surface crosses holds several.
         let cloud = pgvol_points::contours::contour_points(&planes, a, 0.5 * grid.spacing);
-        return fit_on_grid(&cloud, grid, options, (lo, hi), progress);
+        return Ok(fit_on_grid(&cloud, grid, options, (lo, hi), None, progress)?.0);
     }
     let heights: Vec<f32> = planes.iter().map(|p| p.height).collect();
     let grid = planes_on_nodes(grid, &heights, a, (lo, hi))?;
@@ -633,7 +768,7 @@ mod tests {
 
     #[test]
     fn layer_files_and_layers_beyond_the_mesh_limit_are_refused() {
-        let far = pgvol_ops::Layer {
+        let far = Layer {
             height: 0.5,
             loops: vec![pgvol_ops::Loop {
                 points: vec![[0.0, 0.0], [1e20, 0.0], [0.0, 1.0]],
@@ -648,7 +783,7 @@ mod tests {
         assert_eq!(e.path(), Some(path.as_path()));
         assert!(e.message().contains("coordinate 1e20 in layer 0"), "{e}");
         let options = PointsOptions::default();
-        let e = contours(&[far], pgvol_ops::Axis::Z, &options, &crate::Silent).unwrap_err();
+        let e = contours(&[far], Axis::Z, &options, &crate::Silent).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
         assert!(e.message().contains("out of range"), "{e}");
     }

@@ -40,9 +40,56 @@ impl From<PointsMethodArg> for pgvol::PointsMethod {
     }
 }
 
+/// The planes of `--sections`: an axis and the heights along it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionsArg {
+    pub axis: pgvol::Axis,
+    pub heights: Vec<f32>,
+}
+
+/// Parses `AXIS:H1,H2,...` (axis x, y or z; heights finite and below 1e8 in magnitude).
+fn parse_sections(s: &str) -> Result<SectionsArg, String> {
+    let (name, list) = s
+        .split_once(':')
+        .ok_or_else(|| format!("expected AXIS:H1,H2,... (e.g. z:0,0.5), got '{s}'"))?;
+    let name = name.trim().to_ascii_lowercase();
+    let axis = match name.as_str() {
+        "x" => pgvol::Axis::X,
+        "y" => pgvol::Axis::Y,
+        "z" => pgvol::Axis::Z,
+        other => return Err(format!("the axis must be x, y or z, got '{other}'")),
+    };
+    if list.trim().is_empty() {
+        return Err(format!("no heights after '{name}:' (e.g. {name}:0,0.5)"));
+    }
+    let heights = list
+        .split(',')
+        .map(|h| {
+            let h = h.trim();
+            match h.parse::<f32>() {
+                Ok(v) if v.is_finite() && v.abs() < pgvol::ops::MAX_LAYER_COORDINATE => Ok(v),
+                _ => Err(format!(
+                    "the height '{h}' is not a finite number below 1e8 in magnitude"
+                )),
+            }
+        })
+        .collect::<Result<Vec<f32>, String>>()?;
+    Ok(SectionsArg { axis, heights })
+}
+
+/// Where the sections go when --sections-out is not given: the output's name with
+/// `.sections.json` in place of its extension.
+pub fn default_sections_path(output: &std::path::Path) -> std::path::PathBuf {
+    output.with_extension("sections.json")
+}
+
 #[derive(Args)]
 #[command(
-    after_help = "Example: pgvol points scan.ply -o scan.glb --res 192 --method rbf-wendland"
+    after_help = "Examples:\n  pgvol points scan.ply -o scan.glb --res 192 --method rbf-wendland\n  \
+                  pgvol points scan.ply -o scan.pgv --method rbf-wendland --sections z:0,0.5,1   \
+                  (also writes scan.sections.json)\n  \
+                  pgvol points scan.xyz -o scan.pgv --method rbf-cubic --sections x:-2,2 \
+                  --sections-out cuts.svg"
 )]
 pub struct PointsArgs {
     /// Point cloud: PLY (vertices, with nx ny nz if present) or text .xyz/.csv/.txt/.pts
@@ -68,6 +115,21 @@ pub struct PointsArgs {
     /// Contouring method for mesh outputs.
     #[arg(long = "contour", value_enum, default_value_t)]
     pub contour: MethodArg,
+    /// Also write cross-sections in planes normal to AXIS (x, y or z) at heights H1, H2, ...
+    /// (the cloud's units, within the grid's box), cut from the method's own field before it
+    /// is resampled on the grid: the spline fit plus the Wendland RBFs for rbf-wendland, the
+    /// cubic RBF for rbf-cubic, the tangent-plane field for tangent, the fitted B-spline for
+    /// spline. A height whose plane misses the surface is warned of and written empty.
+    #[arg(long, value_name = "AXIS:H1,H2,...", value_parser = parse_sections, allow_hyphen_values = true)]
+    pub sections: Option<SectionsArg>,
+    /// Layer file for --sections: .json, .svg or .cli (ASCII), as `pgvol slice` writes them
+    /// [default: the output's name with .sections.json for its extension].
+    #[arg(long, value_name = "FILE", requires = "sections")]
+    pub sections_out: Option<PathArg>,
+    /// Spacing of each section plane's 2D sampling grid, in the cloud's units [default: the
+    /// grid spacing]; contours are simplified to a tenth of it.
+    #[arg(long, value_name = "H", requires = "sections")]
+    pub sections_resolution: Option<f32>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -77,6 +139,20 @@ pub fn run(a: PointsArgs) -> Result<()> {
     if !pgvol::is_pgv(&a.output) {
         pgvol::mesh_format(&a.output)?;
     }
+    let sections_out = a.sections.as_ref().map(|_| {
+        a.sections_out
+            .clone()
+            .unwrap_or_else(|| default_sections_path(&a.output))
+    });
+    let sections_format = match &sections_out {
+        Some(path) => {
+            let format = pgvol::LayerFormat::from_path(path, false)
+                .map_err(|e| anyhow::anyhow!("--sections-out: {e}"))?;
+            a.out.check(path)?;
+            Some(format)
+        }
+        None => None,
+    };
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
     let cloud = pgvol::read_point_cloud(&a.input)?;
@@ -88,8 +164,24 @@ pub fn run(a: PointsArgs) -> Result<()> {
         support: a.support,
     };
     let t = Instant::now();
-    let fitted = pgvol::points(&cloud, &options, &bars).map_err(|e| at_input(e, &a.input))?;
-    let fit_seconds = t.elapsed().as_secs_f64();
+    let (fitted, sections) = match &a.sections {
+        Some(s) => {
+            let settings = pgvol::SectionSettings {
+                axis: s.axis,
+                heights: s.heights.clone(),
+                resolution: a.sections_resolution,
+            };
+            let (fitted, sections) =
+                pgvol::points_with_sections(&cloud, &options, &settings, &bars)
+                    .map_err(|e| sections_error(e, &a.input))?;
+            (fitted, Some(sections))
+        }
+        None => (
+            pgvol::points(&cloud, &options, &bars).map_err(|e| at_input(e, &a.input))?,
+            None,
+        ),
+    };
+    let fit_seconds = t.elapsed().as_secs_f64() - sections.as_ref().map_or(0.0, |s| s.seconds);
     let r = &fitted.report;
     if r.normals_estimated && !quiet {
         eprintln!(
@@ -100,9 +192,35 @@ pub fn run(a: PointsArgs) -> Result<()> {
     }
     let t = Instant::now();
     let triangles = write_output(&a.output, &fitted, a.contour, &bars)?;
-    let write_seconds = t.elapsed().as_secs_f64();
     let grid = fitted.file.volume.grid;
+    if let (Some(s), Some(path), Some(format), Some(arg)) =
+        (&sections, &sections_out, sections_format, &a.sections)
+    {
+        let frame = pgvol::LayerFrame::new(arg.axis, grid.offset);
+        pgvol::write_layers(path, &s.layers, format, pgvol::DEFAULT_UNITS_MM, &frame)?;
+    }
+    let write_seconds = t.elapsed().as_secs_f64();
+    let sections_json = match (&sections, &sections_out, &a.sections) {
+        (Some(s), Some(path), Some(arg)) => {
+            let heights: Vec<f32> = s.layers.iter().map(|l| l.height).collect();
+            let loops: Vec<usize> = s.layers.iter().map(|l| l.loops.len()).collect();
+            serde_json::json!({
+                "output": path, "axis": arg.axis, "heights": heights, "loops": loops,
+                "empty": s.empty, "resolution": s.resolution,
+            })
+        }
+        _ => serde_json::Value::Null,
+    };
     if a.out.json {
+        let mut seconds = Seconds::since(start).stages([
+            ("read", read_seconds),
+            ("normals", r.seconds_normals),
+            ("solve", r.seconds_solve),
+            ("fit", fit_seconds),
+        ]);
+        if let Some(s) = &sections {
+            seconds = seconds.stage("sections", s.seconds);
+        }
         return report::print(
             &serde_json::json!({
                 "output": a.output, "grid": grid, "method": r.method, "points": r.points,
@@ -112,14 +230,9 @@ pub fn run(a: PointsArgs) -> Result<()> {
                 "normals_reoriented": r.orientation.reoriented,
                 "normals_flipped": r.orientation.flipped,
                 "matrix_entries": r.matrix_entries, "bricks": r.bricks, "triangles": triangles,
+                "sections": sections_json,
             }),
-            &Seconds::since(start).stages([
-                ("read", read_seconds),
-                ("normals", r.seconds_normals),
-                ("solve", r.seconds_solve),
-                ("fit", fit_seconds),
-                ("write", write_seconds),
-            ]),
+            &seconds.stage("write", write_seconds),
         );
     }
     if !a.out.quiet {
@@ -149,8 +262,33 @@ pub fn run(a: PointsArgs) -> Result<()> {
             grid.dims[0],
             start.elapsed().as_secs_f64()
         );
+        if let (Some(s), Some(path)) = (&sections, &sections_out) {
+            let loops: usize = s.layers.iter().map(|l| l.loops.len()).sum();
+            let n = s.layers.len();
+            outln!(
+                "{}: {n} section{}, {loops} loops, cut from the {} field in {:.2} s",
+                path.display(),
+                if n == 1 { "" } else { "s" },
+                r.method,
+                s.seconds
+            );
+        }
     }
     Ok(())
+}
+
+/// A library error of a fit with sections: problems with the planes name the option, the others
+/// the input.
+fn sections_error(e: pgvol::Error, input: &std::path::Path) -> anyhow::Error {
+    let about =
+        |what: &str| e.kind() == pgvol::ErrorKind::BadParameter && e.message().contains(what);
+    if about("sections' resolution") || about("nodes per plane") {
+        anyhow::anyhow!("--sections-resolution: {e}")
+    } else if about("section height") {
+        anyhow::anyhow!("--sections: {e}")
+    } else {
+        at_input(e, input).into()
+    }
 }
 
 #[derive(Args)]

@@ -1,7 +1,19 @@
 """Type stubs of the pgvol extension module."""
 
 import os
-from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union, final
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    List,
+    Literal,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+    final,
+    overload,
+)
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +54,7 @@ while it runs, and at its end (1.0). An exception it raises stops the call and p
 _MeshLike = Union[Tuple[_Points, _Faces], Any]
 """A (vertices, faces) pair, or an object with .vertices and .faces (a trimesh.Trimesh)."""
 _Vec3 = Tuple[float, float, float]
+_PointsMethod = Literal["spline", "tangent", "rbf-wendland", "rbf-cubic"]
 _Drain = Union[Sequence[float], Tuple[Sequence[float], Sequence[float], float]]
 """(x, y, z, dx, dy, dz, diameter) or ((x, y, z), (dx, dy, dz), diameter): a point inside the
 cavity, the direction out through the wall, and the hole's diameter."""
@@ -115,6 +128,52 @@ class Field:
         ``band`` grid spacings of the surface (widen it for larger offsets and shells) and
         fitted with ``basis`` ("bspline3", "bspline2", "trilinear", "pg" or "pg-n<N>-r<R>").
         Vertices are welded and degenerate triangles dropped as when reading a file.
+        """
+    @overload
+    @staticmethod
+    def from_points(
+        points: _Points,
+        normals: Optional[_Points] = None,
+        *,
+        res: Optional[int] = None,
+        voxel: Optional[float] = None,
+        method: _PointsMethod = "spline",
+        band: float = 4.0,
+        support: Optional[float] = None,
+        sections: None = None,
+        section_resolution: None = None,
+        progress: Optional[_Progress] = None,
+    ) -> "Field": ...
+    @overload
+    @staticmethod
+    def from_points(
+        points: _Points,
+        normals: Optional[_Points] = None,
+        *,
+        res: Optional[int] = None,
+        voxel: Optional[float] = None,
+        method: _PointsMethod = "spline",
+        band: float = 4.0,
+        support: Optional[float] = None,
+        sections: Tuple[Literal["x", "y", "z"], Sequence[float]],
+        section_resolution: Optional[float] = None,
+        progress: Optional[_Progress] = None,
+    ) -> Tuple["Field", List[Layer]]:
+        """A smooth closed surface through a point cloud: ``points`` (N, 3) with optional
+        outward unit ``normals`` (N, 3), estimated and oriented when not given.
+
+        The grid is a cube of side 1.1 x the cloud's longest extent with ``res`` nodes per
+        axis (default 128) or spacing ``voxel``. ``method``: "spline" (least-squares B-spline
+        fit), "tangent" (tangent-plane distance), "rbf-wendland" (compactly supported RBFs of
+        radius ``support`` correcting the spline fit) or "rbf-cubic" (global r^3 RBF, at most
+        2000 points). Node values are kept within ``band`` grid spacings of the points.
+
+        With ``sections=(axis, heights)``, e.g. ``("z", [0.0, 0.5])``, returns ``(field,
+        layers)``: cross-sections in the planes normal to ``axis`` at ``heights`` (within the
+        grid's box), cut from the method's own field before it is resampled on the grid (for
+        the RBF methods, the RBF interpolant), one Layer per distinct height, bottom first,
+        sampled every ``section_resolution`` (default: the grid spacing). A plane that misses
+        the surface gives a Layer without loops and a PgvolWarning.
         """
     @staticmethod
     def from_trimesh(mesh: Any, **kwargs: Any) -> "Field":
