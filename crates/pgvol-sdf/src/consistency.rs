@@ -9,7 +9,8 @@
 
 use rayon::prelude::*;
 
-use pgvol_core::SparseGrid;
+use pgvol_core::sparse::BrickValues;
+use pgvol_core::{SparseGrid, BRICK_EDGE};
 
 use crate::grid::Grid;
 
@@ -98,20 +99,35 @@ pub fn sparse_sign_contradictions_in(
                 }
                 // Pairs (node, node + 1 along `axis`) with the first node in this brick; an
                 // absent brick only pairs across its face.
+                // Both bricks are looked up once; their nodes are read by offset.
                 let first = if stored { 0 } else { n[axis] - 1 };
+                let node = |brick: Option<&BrickValues>, fill: f32, l: [usize; 3]| {
+                    brick.map_or(fill, |v| v[l[0] + BRICK_EDGE * (l[1] + BRICK_EDGE * l[2])])
+                };
+                let (here, here_fill) = (values.brick(b), values.background_of(b));
+                let (there, there_fill) = if neighbour_in_grid {
+                    (values.brick(next), values.background_of(next))
+                } else {
+                    (None, 0.0)
+                };
                 for k in 0..n[2] {
                     for j in 0..n[1] {
                         for i in 0..n[0] {
-                            let local = [i, j, k];
-                            if local[axis] < first {
+                            let mut l = [i, j, k];
+                            if l[axis] < first {
                                 continue;
                             }
-                            let mut p = [lo[0] + i, lo[1] + j, lo[2] + k];
-                            let v = values.get(p);
-                            p[axis] += 1;
-                            if p[axis] < dims[axis] {
-                                count += usize::from(broken(v, values.get(p)));
-                            }
+                            let v = node(here, here_fill, l);
+                            l[axis] += 1;
+                            let w = if l[axis] < n[axis] {
+                                node(here, here_fill, l)
+                            } else if neighbour_in_grid {
+                                l[axis] = 0;
+                                node(there, there_fill, l)
+                            } else {
+                                continue;
+                            };
+                            count += usize::from(broken(v, w));
                         }
                     }
                 }

@@ -71,7 +71,9 @@ pub(crate) fn encode_bricks(
     let encoded: Vec<Option<(Vec<u8>, f32)>> = s
         .kept
         .par_iter()
-        .map(|k| encode_brick(s, sp, level, k))
+        .map_init(Vec::new, |scratch, k| {
+            encode_brick(s, sp, level, k, scratch)
+        })
         .collect::<Result<_, String>>()?;
     let mut blobs = Vec::with_capacity(encoded.len());
     let mut worst = 0.0f32;
@@ -92,6 +94,7 @@ fn encode_brick(
     sp: &SparseParams,
     level: i32,
     kept: &KeptBrick,
+    scratch: &mut Vec<u8>,
 ) -> Result<Option<(Vec<u8>, f32)>, String> {
     let (lo, n) = s.bricks.extent(kept.index);
     let mut values = vec![0.0f32; n[0] * n[1] * n[2]];
@@ -113,8 +116,14 @@ fn encode_brick(
     let raw = brick_raw(&params, &words, n, sp);
     let blob = match sp.compression {
         Compression::None => raw,
-        Compression::Zstd => zstd::bulk::compress(&raw, level)
-            .map_err(|e| format!("zstd compression failed: {e}"))?,
+        Compression::Zstd => {
+            // Compressed into room for the worst case, then kept at its own length: a blob
+            // is a tenth of that room, and every stored brick's blob is held until written.
+            scratch.resize(zstd::zstd_safe::compress_bound(raw.len()), 0);
+            let n = zstd::bulk::compress_to_buffer(&raw, scratch, level)
+                .map_err(|e| format!("zstd compression failed: {e}"))?;
+            scratch[..n].to_vec()
+        }
     };
     Ok(Some((blob, worst)))
 }

@@ -203,8 +203,9 @@ fn near_zero_nodes(
             v
         }
     };
-    let near: Box<[bool]> = values.iter().map(|v| v.abs() <= limit).collect();
-    near.iter().any(|&x| x).then_some(near)
+    // Most bricks have no node near zero: decide that in one vectorised pass first.
+    let closest = values.iter().fold(f32::INFINITY, |m, v| m.min(v.abs()));
+    (closest <= limit).then(|| values.iter().map(|v| v.abs() <= limit).collect())
 }
 
 /// The B-spline field at the box of `n` nodes from `lo` (x fastest): the 3-tap kernel along x,
