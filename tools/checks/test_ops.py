@@ -8,6 +8,7 @@ import json
 import manifold3d
 import numpy as np
 import pytest
+import trimesh
 
 import helpers
 
@@ -153,6 +154,57 @@ def test_sparse_file_decodes_like_the_dense_one(pgvol, mesh_path, work_dir):
         )["chamfer_l1"]
     a, b = chamfer.values()
     assert abs(a - b) <= 0.01 * b, chamfer
+
+
+def eval_values(pgvol, pgv, points_csv, out_csv):
+    """The field values `pgvol eval` gives at the points of `points_csv`."""
+    helpers.run_ok([pgvol, "eval", pgv, points_csv, "-o", out_csv, "-q"])
+    return np.loadtxt(out_csv, delimiter=",", skiprows=1, dtype=np.float64)[:, 3]
+
+
+def test_derived_files_are_sparse_like_encoded_ones(pgvol, mesh_path, reference_mesh, work_dir):
+    """`pgvol offset` writes a .pgv as `encode` does: sparse bricks at the automatic precision,
+    about the size of the encoded file and decoding within its quantisation of the dense result
+    near the surface; --dense-file writes every coefficient as f32."""
+    folder = work_dir / "ops"
+    folder.mkdir(parents=True, exist_ok=True)
+    res = 64
+    encoded = folder / "spot-derived-encoded.pgv"
+    helpers.run_ok([pgvol, "encode", mesh_path("spot"), "-o", encoded, "--res", res, "-q"])
+    sparse, dense = folder / "spot-grown.pgv", folder / "spot-grown-dense.pgv"
+    spacing = helpers.run_json([pgvol, "info", encoded, "--json"])["header"]["grid"]["spacing"]
+    distance = 1.5 * spacing
+    for out, extra in [(sparse, []), (dense, ["--dense-file"])]:
+        helpers.run_ok(
+            [pgvol, "offset", mesh_path("spot"), "-o", out, "--distance", distance, "--res", res, "-q", *extra]
+        )
+    info = {f: helpers.run_json([pgvol, "info", f, "--json"]) for f in (sparse, dense)}
+    assert info[sparse]["header"]["encoding"] == "sparse-bricks"
+    assert info[sparse]["precision"] == "fixed"
+    assert info[sparse]["bricks_stored"] < info[sparse]["bricks_total"]
+    assert info[dense]["header"]["encoding"] == "dense-f32"
+    assert dense.stat().st_size > 4 * res**3
+    assert sparse.stat().st_size <= 3 * encoded.stat().st_size, (sparse.stat().st_size, encoded.stat().st_size)
+    # The band recorded is the one the offset is exact in: the mesh's encoding band.
+    band = float(info[sparse]["header"]["metadata"]["band"])
+    assert band == pytest.approx(float(info[dense]["header"]["metadata"]["band"]))
+    grid_spacing = info[sparse]["header"]["grid"]["spacing"]
+    assert band == pytest.approx(4 * grid_spacing, rel=1e-4)
+    # Near the offset surface the two files give the same field up to the quantisation.
+    ref = reference_mesh("spot")
+    rng = np.random.default_rng(3)
+    points, faces = trimesh.sample.sample_surface(ref, 3000, seed=3)
+    points = points + ref.face_normals[faces] * (distance + rng.uniform(-1.5, 1.5, (len(points), 1)) * grid_spacing)
+    csv = folder / "spot-derived-points.csv"
+    np.savetxt(csv, points, delimiter=",", fmt="%.9g")
+    want = eval_values(pgvol, dense, csv, folder / "spot-derived-dense.csv")
+    got = eval_values(pgvol, sparse, csv, folder / "spot-derived-sparse.csv")
+    near = np.abs(want) < band - 2 * grid_spacing
+    assert near.mean() > 0.5
+    assert np.abs(got - want)[near].max() < 0.01 * grid_spacing
+    # A mesh output has no coefficients to write densely.
+    refused = helpers.run([pgvol, "offset", mesh_path("spot"), "-o", folder / "x.glb", "--distance", distance, "--dense-file"])
+    assert refused.returncode != 0 and "--dense-file" in refused.stderr, refused.stderr
 
 
 def parse_cli_ascii(text: str):

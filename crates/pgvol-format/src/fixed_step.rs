@@ -94,7 +94,9 @@ impl FixedScale {
     }
 
     /// The word nearest to `v` on this scale, or `None` if there is none (beyond 31 bits, or a
-    /// non-finite value either way).
+    /// non-finite value either way). A value some word decodes to gets that word back, so
+    /// quantising decoded values gives their words again (far beyond 2²³ fine steps, where the
+    /// estimate in f64 may miss by one, the neighbours are tried).
     pub fn word(&self, v: f32) -> Option<u32> {
         let a = (v as f64 / self.step as f64).abs();
         let k = self.knee as f64;
@@ -107,7 +109,18 @@ impl FixedScale {
             return None;
         }
         let q = if v < 0.0 { -(m as i32) } else { m as i32 };
-        self.value(q as u32).is_finite().then_some(q as u32)
+        let value = self.value(q as u32);
+        if !value.is_finite() {
+            return None;
+        }
+        if value != v {
+            for r in [q.checked_sub(1), q.checked_add(1)].into_iter().flatten() {
+                if r != i32::MIN && self.value(r as u32) == v {
+                    return Some(r as u32);
+                }
+            }
+        }
+        Some(q as u32)
     }
 }
 

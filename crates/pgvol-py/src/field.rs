@@ -133,17 +133,14 @@ impl Layer {
 pub(crate) struct Field {
     shape: pgvol::Shape,
     header: pgvol::PgvHeader,
-    /// Made by an operation (offset, shell): saved dense, as the tool saves such files.
-    derived: bool,
 }
 
 impl Field {
-    pub(crate) fn from_file(file: pgvol::PgvFile, derived: bool) -> Self {
+    pub(crate) fn from_file(file: pgvol::PgvFile) -> Self {
         let header = file.header.clone();
         Self {
             shape: pgvol::Shape::from_file(file),
             header,
-            derived,
         }
     }
 
@@ -165,11 +162,7 @@ impl Field {
         dense: Option<bool>,
         precision: Option<&str>,
     ) -> PyResult<pgvol::StorageOptions> {
-        let mut storage = if self.derived {
-            pgvol::DERIVED_STORAGE
-        } else {
-            pgvol::StorageOptions::default()
-        };
+        let mut storage = pgvol::StorageOptions::default();
         if let Some(dense) = dense {
             storage.dense = dense;
         }
@@ -182,8 +175,10 @@ impl Field {
         Ok(storage)
     }
 
-    fn derive(&self, volume: pgvol::CoefficientVolume, operation: &str) -> Field {
-        Field::from_file(self.shape.derived_file(volume, operation), true)
+    /// The field `operation` made from this one, moving the surface by up to `shift` (see
+    /// `pgvol::Shape::derived_file`).
+    fn derive(&self, volume: pgvol::CoefficientVolume, operation: &str, shift: f32) -> Field {
+        Field::from_file(self.shape.derived_file(volume, operation, shift))
     }
 }
 
@@ -313,7 +308,7 @@ impl Field {
             let (mesh, _) = pgvol::mesh_from_world(&positions, triangles)?;
             pgvol::encode(&mesh, &options, p)
         })?;
-        Ok(Field::from_file(encoded.file, false))
+        Ok(Field::from_file(encoded.file))
     }
 
     /// A smooth closed surface through a point cloud (normals estimated when not given), and
@@ -369,7 +364,7 @@ impl Field {
                 ));
             }
             let fitted = run(py, progress, |p| pgvol::points(&cloud, &options, p))?;
-            return Ok(Py::new(py, Field::from_file(fitted.file, false))?.into_any());
+            return Ok(Py::new(py, Field::from_file(fitted.file))?.into_any());
         };
         let (axis, heights) = sections.extract::<(String, Vec<f32>)>().map_err(|_| {
             errors::parameter(
@@ -385,7 +380,7 @@ impl Field {
         let (fitted, cut) = run(py, progress, |p| {
             pgvol::points_with_sections(&cloud, &options, &settings, p)
         })?;
-        let field = Py::new(py, Field::from_file(fitted.file, false))?;
+        let field = Py::new(py, Field::from_file(fitted.file))?;
         let layers: Vec<Layer> = cut
             .layers
             .into_iter()
@@ -412,7 +407,7 @@ impl Field {
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Field> {
         let file = quiet(py, || pgvol::read_pgv(&path))?;
-        Ok(Field::from_file(file, false))
+        Ok(Field::from_file(file))
     }
 
     /// Decodes the bytes of a `.pgv` file.
@@ -428,10 +423,12 @@ impl Field {
                 _ => e,
             })
         })?;
-        Ok(Field::from_file(file, false))
+        Ok(Field::from_file(file))
     }
 
-    /// Writes the field to a `.pgv` file, atomically.
+    /// Writes the field to a `.pgv` file, atomically: sparse compressed bricks at the automatic
+    /// precision unless `dense` or `precision` say otherwise. A field loaded from a file and
+    /// saved with the same options gives the same bytes.
     #[pyo3(signature = (path, *, dense=None, precision=None))]
     fn save(
         &self,
@@ -586,7 +583,8 @@ impl Field {
     /// The shape grown (distance > 0) or shrunk (distance < 0) by `distance`.
     fn offset(&self, py: Python<'_>, distance: f32) -> PyResult<Field> {
         let volume = quiet(py, || pgvol::offset(&self.shape, distance))?;
-        Ok(self.derive(volume, &pgvol::operation_name(None, distance)))
+        let shift = pgvol::operation_shift(None, distance);
+        Ok(self.derive(volume, &pgvol::operation_name(None, distance), shift))
     }
 
     /// A wall of `thickness` around the surface (`side` "inner", "outer" or "centred"), or with
@@ -615,7 +613,9 @@ impl Field {
         let volume = run(py, progress, |p| {
             pgvol::shell(&self.shape, thickness, kind, &drains, p)
         })?;
-        Ok(self.derive(volume, &pgvol::operation_name(Some(kind), thickness)))
+        let operation = pgvol::operation_name(Some(kind), thickness);
+        let shift = pgvol::operation_shift(Some(kind), thickness);
+        Ok(self.derive(volume, &operation, shift))
     }
 
     /// The part cut by a triply periodic lattice: `surface` "gyroid", "schwarz-p", "diamond" or
@@ -642,7 +642,7 @@ impl Field {
         let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
         let solid = run(py, progress, |p| pgvol::lattice(&self.shape, &lattice, p))?;
         let operation = format!("lattice {surface} cell {cell} thickness {thickness}");
-        Ok(self.derive(solid.volume, &operation))
+        Ok(self.derive(solid.volume, &operation, 0.0))
     }
 
     /// The shape hollowed to walls of `wall` thickness with the cavity filled by a lattice (the
@@ -675,7 +675,7 @@ impl Field {
             pgvol::infill(&self.shape, wall, &lattice, &drains, p)
         })?;
         let operation = format!("hollow {wall} infill {surface} cell {cell} thickness {thickness}");
-        Ok(self.derive(solid.volume, &operation))
+        Ok(self.derive(solid.volume, &operation, wall))
     }
 
     /// Layers of closed contours `layer_height` apart along `axis`.

@@ -179,7 +179,7 @@ pub(crate) fn assemble_encode(
         let slices: Vec<&[u8]> = bricks.iter().map(Vec::as_slice).collect();
         parts::assemble_encode(&mesh, &options, &slices)
     })?;
-    Ok(Field::from_file(encoded.file, false))
+    Ok(Field::from_file(encoded.file))
 }
 
 /// The z cells of each part of contouring `field`.

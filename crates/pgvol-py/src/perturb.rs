@@ -55,10 +55,7 @@ pub(crate) fn perturb<'py>(
         });
         Ok((file, report))
     })?;
-    Ok((
-        Field::from_file(file, false),
-        crate::json_to_py(py, &report)?,
-    ))
+    Ok((Field::from_file(file), crate::json_to_py(py, &report)?))
 }
 
 // Python signatures show literal defaults only; these are the library's.

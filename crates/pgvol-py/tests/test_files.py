@@ -55,6 +55,29 @@ def test_a_file_saved_from_python_decodes_with_the_cli(spot_field, run_cli, tmp_
     np.testing.assert_allclose(np.sort(theirs.vertices, axis=0), np.sort(v, axis=0), atol=1e-6)
 
 
+@pytest.mark.parametrize("precision", [None, "fixed", "q16", "f16", "f32"])
+def test_saving_a_loaded_field_gives_the_same_file(precision, spot_field, spot_trimesh, tmp_path):
+    """save then load keeps the field within the file's quantisation near the surface, and
+    saving the loaded field again, as it was saved or with the defaults, writes the same bytes."""
+    first, second = tmp_path / "first.pgv", tmp_path / "second.pgv"
+    spot_field.save(first, precision=precision)
+    loaded = pgvol.Field.load(first)
+    loaded.save(second, precision=precision)
+    assert second.read_bytes() == first.read_bytes()
+    assert loaded.to_bytes() == first.read_bytes()
+    assert pgvol.Field.from_bytes(loaded.to_bytes()).to_bytes() == first.read_bytes()
+    points = near_surface_points(spot_trimesh, 1000, spot_field.exact_band, seed=12)
+    exact = spot_field.is_exact(points)
+    assert exact.mean() > 0.5
+    error = np.abs(loaded(points) - spot_field(points))[exact].max()
+    assert error < 0.01 * spot_field.grid.spacing
+    if precision == "f32":
+        assert error == 0
+    dense = tmp_path / "dense.pgv"
+    spot_field.save(dense, dense=True)
+    assert pgvol.Field.load(dense).to_bytes(dense=True) == dense.read_bytes()
+
+
 def test_dense_and_precise_files_round_trip_bit_exactly(spot_field, spot_trimesh, tmp_path):
     points = near_surface_points(spot_trimesh, 500, spot_field.exact_band, seed=8)
     expected = spot_field(points)

@@ -32,7 +32,10 @@ pub enum ResultUse {
     /// Kept as the sparse coefficient volume returned.
     #[default]
     Volume,
-    /// Written dense ([`crate::DERIVED_STORAGE`]): every coefficient of the grid as f32.
+    /// Written as a sparse file: the stored bricks around the surface, quantised and
+    /// compressed, as [`crate::StorageOptions::default`] writes them.
+    File,
+    /// Written dense: every coefficient of the grid as f32.
     DenseFile,
     /// Contoured into a mesh on its own grid.
     Mesh,
@@ -62,6 +65,7 @@ pub(crate) fn check_edit_memory(
         .saturating_add(near.saturating_mul(crate::memory::BYTES_PER_BAND_BRICK));
     let output = match result {
         ResultUse::Volume => 0,
+        ResultUse::File => crate::memory::sparse_file_bytes(bricks, near),
         ResultUse::DenseFile => {
             crate::memory::grid_bytes(grid.len(), crate::memory::BYTES_PER_DENSE_FILE_NODE)
         }

@@ -143,8 +143,8 @@ pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
 pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
 pub use resolution::{check_pieces, check_wall, EXTRA_PIECES, MIN_WALL_SPACINGS, PIECES_FACTOR};
 pub use shape::{
-    check_offset, check_thickness, exact_reach, growth, offset, operation_name, parse_drain, shell,
-    Shape, ShellKind, DERIVED_STORAGE, SHAPE_RES, SLICE_RES,
+    check_offset, check_thickness, exact_reach, growth, offset, operation_name, operation_shift,
+    parse_drain, shell, Shape, ShellKind, SHAPE_RES, SLICE_RES,
 };
 pub use slice::{
     layer_frame, slice, slice_file, write_layers, LayerFormat, SliceSettings, Sliced,

@@ -48,6 +48,20 @@ pub const BYTES_PER_SAMPLED_BRICK: u64 = 72;
 /// dense: 8.3 bytes per node).
 pub const BYTES_PER_DENSE_FILE_NODE: u64 = 12;
 
+/// Bytes per stored brick of 8³ nodes while a sparse `.pgv` is written from a sparse volume:
+/// the band search's masks of nodes near zero and of needed nodes (a byte per node each), the
+/// compressed blobs and the payload and file assembled from them (under 200 bytes per brick of
+/// the cow at 128³ each), with room for a rough surface's larger blobs.
+pub const BYTES_PER_FILE_BRICK: u64 = 2 * 1024;
+
+/// Peak bytes of writing a sparse `.pgv` of a volume whose grid has `bricks` bricks of 8³
+/// nodes, `near` of them around the surface: [`BYTES_PER_FILE_BRICK`] per brick near the
+/// surface, and a byte per file brick of 16³ nodes for the coverage the band search reads.
+pub fn sparse_file_bytes(bricks: u64, near: u64) -> u64 {
+    near.saturating_mul(BYTES_PER_FILE_BRICK)
+        .saturating_add(bricks.div_ceil(8))
+}
+
 /// 0 means no limit was set: the memory the machine has available is the limit.
 static LIMIT: AtomicU64 = AtomicU64::new(0);
 

@@ -11,7 +11,7 @@ use pgvol_format::PgvFile;
 use pgvol_ops::{Drain, ShellSide};
 use pgvol_sdf::SignMode;
 
-use crate::encode::{fit_volume, is_pgv, EncodeOptions, StorageOptions, ENCODE_BAND};
+use crate::encode::{fit_volume, is_pgv, EncodeOptions, BAND_KEY, ENCODE_BAND};
 use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridSpec;
 use crate::pgv_io::{read_pgv, recorded_band};
@@ -189,12 +189,23 @@ impl Shape {
         reach_within(self.band, &self.volume)
     }
 
-    /// The `.pgv` file of a field derived from this shape by `operation`.
-    pub fn derived_file(&self, volume: CoefficientVolume, operation: &str) -> PgvFile {
+    /// The `.pgv` file of a field derived from this shape by `operation`, which moved the
+    /// surface by up to `shift` from this shape's (see [`operation_shift`]). Its header records
+    /// the band within which its node values are exact distances: this shape's (or, without a
+    /// record, its largest node value) less `shift`, since the operation reads this field that
+    /// much farther out. A sparse write keeps the bricks that band needs.
+    pub fn derived_file(&self, volume: CoefficientVolume, operation: &str, shift: f32) -> PgvFile {
         let mut header = pgvol_format::header_for(&volume, "interp", self.mesh.as_ref());
         header
             .metadata
             .insert("operation".into(), operation.to_string());
+        let band = self
+            .band
+            .unwrap_or_else(|| pgvol_ops::stored_band(&self.volume))
+            - shift.abs();
+        if band.is_finite() && band > 0.0 {
+            header.metadata.insert(BAND_KEY.into(), format!("{band}"));
+        }
         PgvFile { header, volume }
     }
 }
@@ -399,8 +410,12 @@ pub fn operation_name(kind: Option<ShellKind>, amount: f32) -> String {
     }
 }
 
-/// Storage of derived files: the operations change the stored band, so they are written dense.
-pub const DERIVED_STORAGE: StorageOptions = StorageOptions {
-    precision: None,
-    dense: true,
-};
+/// How far from the shape's surface an offset (`kind` `None`, `amount` the distance), a shell
+/// or a hollowing (`amount` the thickness) puts the result's surfaces, for
+/// [`Shape::derived_file`]: the distance, the thickness, half of it for a centred wall.
+pub fn operation_shift(kind: Option<ShellKind>, amount: f32) -> f32 {
+    match kind {
+        Some(ShellKind::Wall(ShellSide::Centred)) => amount.abs() / 2.0,
+        _ => amount.abs(),
+    }
+}

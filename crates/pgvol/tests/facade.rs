@@ -259,6 +259,83 @@ fn offsets_and_shells_within_the_band_succeed_and_beyond_it_are_refused() {
     }
 }
 
+#[test]
+fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
+    let options = EncodeOptions {
+        band: 8.0,
+        ..encode_options(96)
+    };
+    let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
+    let h = file.volume.grid.spacing;
+    let (encoded, _) = pgvol::pgv_bytes(&file, &StorageOptions::default()).unwrap();
+    let shape = Shape::from_file(file);
+    let band = shape.band.unwrap();
+    let dense = StorageOptions {
+        dense: true,
+        ..StorageOptions::default()
+    };
+    for (kind, amount) in [
+        (None, 1.5 * h),
+        (None, -3.0 * h),
+        (Some(ShellKind::Hollow), 2.5 * h),
+        (Some(ShellKind::Wall(ShellSide::Centred)), 3.0 * h),
+    ] {
+        let volume = match kind {
+            None => pgvol::offset(&shape, amount).unwrap(),
+            Some(kind) => pgvol::shell(&shape, amount, kind, &[], &Silent).unwrap(),
+        };
+        let what = pgvol::operation_name(kind, amount);
+        let shift = pgvol::operation_shift(kind, amount);
+        let derived = shape.derived_file(volume.clone(), &what, shift);
+        // The band it is exact in: the shape's less how far the operation reads beyond it.
+        let recorded = pgvol::recorded_band(&derived).unwrap();
+        assert!((recorded - (band - shift)).abs() <= 1e-6 * band, "{what}");
+
+        // Sparse and quantised as `encode` writes, about as small.
+        let (bytes, report) = pgvol::pgv_bytes(&derived, &StorageOptions::default()).unwrap();
+        let report = report.expect("a sparse file");
+        assert_eq!(report.precision, pgvol::Precision::Fixed, "{what}");
+        assert!(
+            report.bricks_stored < report.bricks_total,
+            "{what}: {report:?}"
+        );
+        assert!(
+            bytes.len() <= 3 * encoded.len(),
+            "{what}: {} bytes against encode's {}",
+            bytes.len(),
+            encoded.len()
+        );
+        // Dense on request, every coefficient as it is.
+        let (full, none) = pgvol::pgv_bytes(&derived, &dense).unwrap();
+        assert!(none.is_none() && full.len() > 4 * bytes.len(), "{what}");
+        let name = Path::new("d.pgv");
+        let exact = pgvol::read_pgv_bytes(&full, name).unwrap();
+        assert_eq!(exact.header.encoding, "dense-f32");
+        assert_eq!(exact.volume.dense_coeffs(), volume.dense_coeffs(), "{what}");
+
+        // Within the band the stored bricks keep (the recorded band less a spacing), the sparse
+        // file's field is the dense one's up to the quantisation.
+        let back = pgvol::read_pgv_bytes(&bytes, name).unwrap();
+        let grid = volume.grid;
+        let (want, got) = (volume.sample(&grid), back.volume.sample(&grid));
+        let mut checked = 0;
+        for (a, b) in want.iter().zip(&got) {
+            if a.abs() <= recorded - h {
+                let bound = report.max_quantisation_error + 1e-6 * h;
+                assert!((a - b).abs() <= bound, "{what}: {a} -> {b}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000, "{what}: {checked}");
+        // Read back, the file keeps its band; written again, it is the same file.
+        let reread = Shape::from_file(back.clone());
+        assert_eq!(reread.band, Some(recorded));
+        assert!((reread.exact_band() - (recorded - 2.0 * h)).abs() <= 1e-5 * band);
+        let (again, _) = pgvol::pgv_bytes(&back, &StorageOptions::default()).unwrap();
+        assert!(again == bytes, "{what}: writing the read file changed it");
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Errors: kind and file.
 

@@ -202,8 +202,10 @@ fn edits_count_their_output_and_refuse_before_any_work() {
         lambda: 0.5,
     };
     pgvol::set_memory_limit(Some(1_000_000_000));
+    let mut needed = std::collections::HashMap::new();
     for (result, at_least) in [
         (pgvol::ResultUse::DenseFile, 2048f64.powi(3) * 12.0),
+        (pgvol::ResultUse::File, 256f64.powi(3) * 64.0),
         (pgvol::ResultUse::Volume, 256f64.powi(3) * 64.0),
         (pgvol::ResultUse::Mesh, 256f64.powi(3) * 64.0),
     ] {
@@ -222,7 +224,14 @@ fn edits_count_their_output_and_refuse_before_any_work() {
         );
         assert!(needed_bytes(e.message()) >= at_least, "{result:?}: {e}");
         assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
+        needed.insert(format!("{result:?}"), needed_bytes(e.message()));
     }
+    // A sparse file adds its stored bricks, not the grid: far less than a dense one.
+    let added = |result: &str| needed[result] - needed["Volume"];
+    assert!(
+        0.0 < added("File") && added("File") < 0.1 * added("DenseFile"),
+        "{needed:?}"
+    );
 
     // Within the limit the same jobs run.
     let small = pgvol::CsgSettings { res: 48, ..dense };

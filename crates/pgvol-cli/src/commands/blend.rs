@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 
 use super::args::{OutputArgs, PathArg};
 use super::edit::{parse_box, parse_operand, result_use, write_edited};
-use super::ops::{check_output_name, report, ShapeOutputArgs};
+use super::ops::{report, ShapeOutputArgs};
 use crate::progress::Bars;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -168,14 +168,14 @@ fn operator(a: &BlendArgs) -> Result<pgvol::BlendOperator> {
 
 pub fn blend(a: BlendArgs) -> Result<()> {
     let start = Instant::now();
-    check_output_name(&a.output)?;
+    a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     let operator = operator(&a)?;
     let settings = pgvol::BlendSettings {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
-        result: result_use(&a.output),
+        result: result_use(&a.output, &a.shape),
     };
     let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;

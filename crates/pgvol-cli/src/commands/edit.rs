@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{OutputArgs, PathArg};
-use super::ops::{check_output_name, report, ShapeOutputArgs};
+use super::ops::{report, ShapeOutputArgs};
 use crate::progress::Bars;
 use crate::report::Seconds;
 
@@ -23,7 +23,7 @@ pub(super) fn write_edited(
 ) -> Result<usize> {
     if pgvol::is_pgv(output) {
         let file = pgvol::edited_file(volume, operation, band);
-        pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
+        pgvol::write_pgv(output, &file, &args.storage())?;
         return Ok(0);
     }
     let options = pgvol::DecodeOptions {
@@ -37,12 +37,13 @@ pub(super) fn write_edited(
     Ok(mesh.triangles.len())
 }
 
-/// What the output's extension makes of an edit's result, for the library's memory estimate.
-pub(super) fn result_use(output: &Path) -> pgvol::ResultUse {
-    if pgvol::is_pgv(output) {
-        pgvol::ResultUse::DenseFile
-    } else {
-        pgvol::ResultUse::Mesh
+/// What the output's extension and --dense-file make of an edit's result, for the library's
+/// memory estimate.
+pub(super) fn result_use(output: &Path, args: &ShapeOutputArgs) -> pgvol::ResultUse {
+    match (pgvol::is_pgv(output), args.dense_file) {
+        (true, false) => pgvol::ResultUse::File,
+        (true, true) => pgvol::ResultUse::DenseFile,
+        (false, _) => pgvol::ResultUse::Mesh,
     }
 }
 
@@ -115,7 +116,7 @@ pub struct CsgArgs {
 
 pub fn csg(a: CsgArgs) -> Result<()> {
     let start = Instant::now();
-    check_output_name(&a.output)?;
+    a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     let settings = pgvol::CsgSettings {
         op: match a.op {
@@ -130,7 +131,7 @@ pub fn csg(a: CsgArgs) -> Result<()> {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
-        result: result_use(&a.output),
+        result: result_use(&a.output, &a.shape),
     };
     let volume = pgvol::csg(&a.operands, &settings, &bars)?;
     let band = pgvol::ENCODE_BAND * volume.grid.spacing;
@@ -198,7 +199,7 @@ pub struct RepairArgs {
 
 pub fn repair(a: RepairArgs) -> Result<()> {
     let start = Instant::now();
-    check_output_name(&a.output)?;
+    a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     let restore = match a.face {
         Some(face) if !a.denoise => pgvol::Restore::Protrusion {

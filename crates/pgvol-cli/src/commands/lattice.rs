@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{at_input, OutputArgs, PathArg};
-use super::ops::{check_output_name, ShapeOutputArgs};
+use super::ops::ShapeOutputArgs;
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::Seconds;
@@ -120,7 +120,7 @@ pub struct LatticeArgs {
 
 pub fn lattice(a: LatticeArgs) -> Result<()> {
     let start = Instant::now();
-    check_output_name(&a.output)?;
+    a.shape.check_output(&a.output)?;
     let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::lattice_reach(&lattice, 0.0);
@@ -139,7 +139,7 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
         &a.output,
         volume,
         &shape,
-        &operation,
+        (&operation, 0.0),
         &a.shape,
         &a.out,
         &bars,
@@ -148,13 +148,15 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
 }
 
 /// Writes a lattice solid as .pgv or as a mesh by the output's extension, and reports its
-/// volume fraction and area.
+/// volume fraction and area. `shift` is how far inside the part's surface the solid's own
+/// surfaces reach from the part's field read as a distance: the wall of an infill, 0 for a
+/// lattice cut to the part (see [`pgvol::Shape::derived_file`]).
 #[allow(clippy::too_many_arguments)]
 pub fn write_solid(
     output: &Path,
     solid: pgvol::LatticeSolid,
     shape: &pgvol::Shape,
-    operation: &str,
+    (operation, shift): (&str, f32),
     args: &ShapeOutputArgs,
     out: &OutputArgs,
     progress: &Bars,
@@ -189,8 +191,8 @@ pub fn write_solid(
             mesh.triangles.len()
         }
         None => {
-            let file = shape.derived_file(solid.volume, operation);
-            pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
+            let file = shape.derived_file(solid.volume, operation, shift);
+            pgvol::write_pgv(output, &file, &args.storage())?;
             0
         }
     };

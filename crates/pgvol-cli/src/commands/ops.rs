@@ -14,18 +14,19 @@ use crate::progress::Bars;
 use crate::report::{self, Seconds};
 
 /// Writes a derived volume as .pgv, or contours it into a mesh file, by the output's extension;
-/// returns the triangles written (0 for a .pgv).
+/// returns the triangles written (0 for a .pgv). `shift` is how far the operation moved the
+/// surface (see [`pgvol::Shape::derived_file`]).
 fn write_result(
     output: &Path,
     volume: pgvol::CoefficientVolume,
     shape: &pgvol::Shape,
-    operation: &str,
+    (operation, shift): (&str, f32),
     args: &ShapeOutputArgs,
     progress: &Bars,
 ) -> Result<usize> {
     if pgvol::is_pgv(output) {
-        let file = shape.derived_file(volume, operation);
-        pgvol::write_pgv(output, &file, &pgvol::DERIVED_STORAGE)?;
+        let file = shape.derived_file(volume, operation, shift);
+        pgvol::write_pgv(output, &file, &args.storage())?;
         return Ok(0);
     }
     let options = pgvol::DecodeOptions {
@@ -47,6 +48,22 @@ pub(super) fn check_output_name(output: &Path) -> Result<()> {
         pgvol::mesh_format(output)?;
     }
     Ok(())
+}
+
+/// Refuses --dense-file for an output that is not a .pgv file.
+pub(super) fn check_dense_file(dense_file: bool, output: &Path) -> Result<()> {
+    if dense_file && !pgvol::is_pgv(output) {
+        anyhow::bail!("--dense-file applies to .pgv outputs");
+    }
+    Ok(())
+}
+
+/// Dense f32 with --dense-file, else the sparse bricks at the automatic precision.
+pub(super) fn file_storage(dense_file: bool) -> pgvol::StorageOptions {
+    pgvol::StorageOptions {
+        precision: None,
+        dense: dense_file,
+    }
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
@@ -186,9 +203,25 @@ pub struct ShapeOutputArgs {
     /// How inside is told from outside when the input is a mesh.
     #[arg(long, value_enum, default_value_t)]
     pub sign: SignArg,
+    /// Write a .pgv output with every coefficient as f32 instead of the sparse, compressed
+    /// bricks around the surface.
+    #[arg(long)]
+    pub dense_file: bool,
 }
 
 impl ShapeOutputArgs {
+    /// Refuses an output that is neither .pgv nor a mesh format, and --dense-file for a mesh.
+    pub fn check_output(&self, output: &Path) -> Result<()> {
+        check_output_name(output)?;
+        check_dense_file(self.dense_file, output)
+    }
+
+    /// How a .pgv output is stored: sparse bricks at the automatic precision, as `encode`
+    /// writes them, or dense with --dense-file.
+    pub fn storage(&self) -> pgvol::StorageOptions {
+        file_storage(self.dense_file)
+    }
+
     /// `input` as a shape: a `.pgv` file, or a mesh encoded at `--res` with `--sign` over its
     /// box grown by `grow`, exact `reach` beyond the band (see [`pgvol::Shape::load`]).
     pub fn load(
@@ -244,7 +277,7 @@ pub struct OffsetArgs {
 
 pub fn offset(a: OffsetArgs) -> Result<()> {
     let start = Instant::now();
-    check_output_name(&a.output)?;
+    a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     pgvol::check_offset(a.distance).map_err(|e| anyhow::anyhow!("--distance: {e}"))?;
     let shape = a
@@ -252,7 +285,15 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
         .load(&a.input, a.distance.max(0.0), a.distance.abs(), &bars)?;
     let volume = pgvol::offset(&shape, a.distance).map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(None, a.distance);
-    let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
+    let shift = pgvol::operation_shift(None, a.distance);
+    let triangles = write_result(
+        &a.output,
+        volume,
+        &shape,
+        (&operation, shift),
+        &a.shape,
+        &bars,
+    )?;
     report(&a.out, &a.output, triangles, start)
 }
 
@@ -350,7 +391,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
         &a.output,
         volume,
         &shape,
-        &operation,
+        (&operation, a.thickness),
         &a.shape,
         &a.out,
         &bars,
@@ -360,7 +401,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
 
 pub fn shell(a: ShellArgs) -> Result<()> {
     let start = Instant::now();
-    check_output_name(&a.output)?;
+    a.shape.check_output(&a.output)?;
     pgvol::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
     if let Some(surface) = a.infill {
         return shell_infill(a, surface, start);
@@ -388,7 +429,15 @@ pub fn shell(a: ShellArgs) -> Result<()> {
     let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
         .map_err(|e| grid_error(e, &a.input))?;
     let operation = pgvol::operation_name(Some(kind), a.thickness);
-    let triangles = write_result(&a.output, volume, &shape, &operation, &a.shape, &bars)?;
+    let shift = pgvol::operation_shift(Some(kind), a.thickness);
+    let triangles = write_result(
+        &a.output,
+        volume,
+        &shape,
+        (&operation, shift),
+        &a.shape,
+        &bars,
+    )?;
     report(&a.out, &a.output, triangles, start)
 }
 

@@ -44,6 +44,10 @@ pub struct PerturbArgs {
     #[arg(long, value_name = "RES",
           value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
     pub resample: Option<u32>,
+    /// With --resample and a .pgv output: write every coefficient as f32 instead of the sparse,
+    /// compressed bricks around the surface.
+    #[arg(long, requires = "resample")]
+    pub dense_file: bool,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -75,6 +79,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         // Refuse an unwritable output format before doing the work.
         pgvol::mesh_format(&a.output)?;
     }
+    super::ops::check_dense_file(a.dense_file, &a.output)?;
     let start = Instant::now();
     let quiet = a.out.silent();
     let mesh = load_mesh(&a.input, quiet)?;
@@ -110,7 +115,12 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     match &file {
         None => pgvol::write_perturbation(&a.output, &header, &perturbed.field)?,
         Some(file) if to_pgv => {
-            pgvol::write_pgv(&a.output, file, &pgvol::resampled_storage())?;
+            let storage = if a.dense_file {
+                super::ops::file_storage(true)
+            } else {
+                pgvol::resampled_storage()
+            };
+            pgvol::write_pgv(&a.output, file, &storage)?;
         }
         Some(file) => {
             let out = pgvol::perturbation_mesh(file, &bars)?;

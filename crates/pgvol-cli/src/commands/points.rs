@@ -6,6 +6,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{at_input, GridArgs, MethodArg, OutputArgs, PathArg};
+use super::ops::{check_dense_file, check_output_name, file_storage};
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::{self, Seconds};
@@ -130,15 +131,18 @@ pub struct PointsArgs {
     /// grid spacing]; contours are simplified to a tenth of it.
     #[arg(long, value_name = "H", requires = "sections")]
     pub sections_resolution: Option<f32>,
+    /// Write a .pgv output with every coefficient as f32 instead of the sparse, compressed
+    /// bricks around the surface.
+    #[arg(long)]
+    pub dense_file: bool,
     #[command(flatten)]
     pub out: OutputArgs,
 }
 
 pub fn run(a: PointsArgs) -> Result<()> {
     let start = Instant::now();
-    if !pgvol::is_pgv(&a.output) {
-        pgvol::mesh_format(&a.output)?;
-    }
+    check_output_name(&a.output)?;
+    check_dense_file(a.dense_file, &a.output)?;
     let sections_out = a.sections.as_ref().map(|_| {
         a.sections_out
             .clone()
@@ -191,7 +195,7 @@ pub fn run(a: PointsArgs) -> Result<()> {
         );
     }
     let t = Instant::now();
-    let triangles = write_output(&a.output, &fitted, a.contour, &bars)?;
+    let triangles = write_output(&a.output, &fitted, a.contour, a.dense_file, &bars)?;
     let grid = fitted.file.volume.grid;
     if let (Some(s), Some(path), Some(format), Some(arg)) =
         (&sections, &sections_out, sections_format, &a.sections)
@@ -313,15 +317,18 @@ pub struct ContoursArgs {
     /// Contouring method for mesh outputs.
     #[arg(long = "contour", value_enum, default_value_t)]
     pub contour: MethodArg,
+    /// Write a .pgv output with every coefficient as f32 instead of the sparse, compressed
+    /// bricks around the surface.
+    #[arg(long)]
+    pub dense_file: bool,
     #[command(flatten)]
     pub out: OutputArgs,
 }
 
 pub fn contours(a: ContoursArgs) -> Result<()> {
     let start = Instant::now();
-    if !pgvol::is_pgv(&a.output) {
-        pgvol::mesh_format(&a.output)?;
-    }
+    check_output_name(&a.output)?;
+    check_dense_file(a.dense_file, &a.output)?;
     let bars = Bars::new(a.out.silent());
     let layers = pgvol::read_layers(&a.input)?;
     let options = pgvol::PointsOptions {
@@ -338,7 +345,7 @@ pub fn contours(a: ContoursArgs) -> Result<()> {
     let fitted =
         pgvol::contours(&layers, axis, &options, &bars).map_err(|e| at_input(e, &a.input))?;
     let fit_seconds = t.elapsed().as_secs_f64();
-    let triangles = write_output(&a.output, &fitted, a.contour, &bars)?;
+    let triangles = write_output(&a.output, &fitted, a.contour, a.dense_file, &bars)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
     if a.out.json {
         return report::print(
@@ -363,15 +370,17 @@ pub fn contours(a: ContoursArgs) -> Result<()> {
     Ok(())
 }
 
-/// Writes a fitted volume as .pgv or contours it into a mesh; returns the triangles written.
+/// Writes a fitted volume as .pgv (dense with `dense_file`) or contours it into a mesh; returns
+/// the triangles written.
 fn write_output(
     output: &std::path::Path,
     fitted: &pgvol::Reconstructed,
     contour: MethodArg,
+    dense_file: bool,
     bars: &Bars,
 ) -> Result<usize> {
     if pgvol::is_pgv(output) {
-        pgvol::write_pgv(output, &fitted.file, &pgvol::StorageOptions::default())?;
+        pgvol::write_pgv(output, &fitted.file, &file_storage(dense_file))?;
         return Ok(0);
     }
     let decode = pgvol::DecodeOptions {

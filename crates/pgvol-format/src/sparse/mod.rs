@@ -15,7 +15,10 @@
 //! `stored_band` finds from windows of the sparse grid near its stored bricks (`coverage` says
 //! per file brick which grid bricks are stored and the sides of the others); `kept_bricks` makes
 //! the brick maps, the unstored bricks' sides and clamp; `brick_encoder` encodes the stored
-//! bricks at the precision `precision_choice` picks, behind the index of `index`. Memory follows
+//! bricks at the precision `precision_choice` picks, behind the index of `index`; a volume
+//! decoded from such a file keeps that file's layout (`reencode`), and quantisation maps decoded
+//! values to their own words (`quantise`), so that writing what a file decodes to gives the file
+//! back byte for byte. Memory follows
 //! the stored bricks plus a byte per file brick, and so does time, plus a table look-up per grid
 //! brick. Reading: `index` checks the layout, `brick_read` and `brick_decoder` decode one stored
 //! brick, `payload_read` a whole payload in parallel, `slab_read` one slab of bricks along an
@@ -38,6 +41,7 @@ mod quantise;
 mod read_brick;
 #[cfg(test)]
 mod read_profile;
+mod reencode;
 mod slab_read;
 mod stored_band;
 #[cfg(test)]

@@ -68,14 +68,24 @@ pub(crate) fn fixed_scale(
 
 /// The stored bricks encoded under the precision `opts` asks for or, when it asks for none, the
 /// smallest encoding within [`AUTO_TOLERANCE`] (f32 if none is); `sp` is left set to the
-/// choice. `weight` bounds the basis weights, `scale` is the `fixed` scale.
+/// choice. `weight` bounds the basis weights, `scale` is the `fixed` scale. With no precision
+/// asked for, `prefer` (the precision a decoded file was written in) is taken when it holds
+/// every stored coefficient exactly, so that writing a decoded file again reproduces it.
 pub(crate) fn encode_smallest(
     s: &StoredBricks,
     sp: &mut SparseParams,
     scale: FixedScale,
     opts: &EncodeOptions,
     weight: f32,
+    prefer: Option<Precision>,
 ) -> Result<Encoded, String> {
+    if let (None, Some(p)) = (opts.precision, prefer) {
+        sp.precision = p;
+        sp.fixed = (p == Precision::Fixed).then_some(scale);
+        if let Some((blobs, 0.0)) = encode_bricks(s, sp, opts.zstd_level)? {
+            return Ok((blobs, 0.0));
+        }
+    }
     // `fixed` came out smallest on every volume measured (docs/format.md), so auto tries it first
     // and stops there when it meets the tolerance; the others are tried only when it does not.
     let candidates: Vec<Precision> = match opts.precision {

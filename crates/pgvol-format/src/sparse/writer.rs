@@ -11,6 +11,7 @@ use super::index::brick_index;
 use super::kept_bricks::{background, stored_map, Background};
 use super::options::{EncodeOptions, EncodeReport};
 use super::precision_choice::{basis_weight_bound, encode_smallest, fixed_scale};
+use super::reencode::decoded_layout;
 use super::stored_band::stored_band;
 use crate::container::container;
 use crate::error::{err, FormatError};
@@ -41,10 +42,20 @@ pub fn encode_pgv_with(
     let scale = fixed_scale(opts, g.spacing, weight).map_err(fail)?;
     let bricks = Bricks::new(g.dims, opts.brick);
     let coverage = Coverage::new(&volume.coeffs, &bricks);
-    let kept = stored_band(volume, &bricks, &coverage, opts.band);
-    let stored_bits = stored_map(bricks.total(), &kept);
+    // A decoded file keeps its layout (see `reencode`); anything else takes the band rule.
+    let layout = decoded_layout(&file.header, volume, opts, &bricks, &coverage);
+    let banded;
+    let (kept, prefer) = match &layout {
+        Some(l) => (&l.kept[..], Some(l.precision)),
+        None => {
+            banded = stored_band(volume, &bricks, &coverage, opts.band);
+            (&banded[..], None)
+        }
+    };
+    let stored_bits = stored_map(bricks.total(), kept);
     let Background { inside, clamp } =
         background(volume, &bricks, &coverage, &stored_bits, opts.band);
+    let clamp = layout.as_ref().map_or(clamp, |l| l.clamp);
 
     let mut sp = SparseParams {
         brick: opts.brick,
@@ -61,10 +72,11 @@ pub fn encode_pgv_with(
     let stored = StoredBricks {
         volume,
         bricks: &bricks,
-        kept: &kept,
+        kept,
         tolerance_steps: tolerance_steps(opts, weight),
     };
-    let (blobs, worst) = encode_smallest(&stored, &mut sp, scale, opts, weight).map_err(fail)?;
+    let (blobs, worst) =
+        encode_smallest(&stored, &mut sp, scale, opts, weight, prefer).map_err(fail)?;
 
     let meta = brick_index(&stored_bits, &inside, &blobs);
     let bytes_index = meta.len();

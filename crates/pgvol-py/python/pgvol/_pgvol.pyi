@@ -192,8 +192,9 @@ class Field:
         precision: Optional[Literal["f32", "f16", "q16", "fixed"]] = None,
     ) -> None:
         """Writes a .pgv file atomically: sparse compressed bricks around the surface by
-        default (dense for fields made by offset or shell), every coefficient as float32 with
-        ``dense=True``."""
+        default (fields made by offset, shell, lattice or infill too), every coefficient as
+        float32 with ``dense=True``. A field loaded from a file and saved with the same options
+        gives the same bytes."""
     def to_bytes(
         self,
         *,
