@@ -6,6 +6,7 @@
 mod commands;
 mod output;
 mod progress;
+mod remedy;
 mod report;
 
 use clap::Parser;
@@ -34,7 +35,10 @@ fn main() {
     });
     let cli = Cli::parse();
     if let Err(e) = commands::run(cli.command) {
-        eprintln!("error: {}", message(&e));
+        match remedy::hint_for(&e) {
+            Some(hint) => eprintln!("error: {} ({hint})", message(&e)),
+            None => eprintln!("error: {}", message(&e)),
+        }
         std::process::exit(1);
     }
 }

@@ -141,8 +141,9 @@ pub fn covering_grid(
             .ok_or_else(|| {
                 Error::parameter(
                     "no operand is bounded (planes and cylinders are infinite); give the box \
-                     the result should cover with --box x0,y0,z0,x1,y1,z1",
+                     the result should cover",
                 )
+                .with_remedy(crate::error::Remedy::CoveringBox)
             })?,
     };
     if !(lo.is_finite() && hi.is_finite()) || (hi - lo).min_element() < 0.0 {

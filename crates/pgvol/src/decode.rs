@@ -43,8 +43,8 @@ pub(crate) fn remove_specks(
     let removed = mesh.remove_small_components(limit as f64);
     if removed > 0 {
         progress.warn(&format!(
-            "removed {removed} piece{} enclosing less than {limit:.3e} (--min-component sets \
-             the volume; 0 keeps every piece)",
+            "removed {removed} piece{} enclosing less than {limit:.3e} (the smallest piece \
+             volume kept; 0 keeps every piece)",
             if removed == 1 { "" } else { "s" }
         ));
     }

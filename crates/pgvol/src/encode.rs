@@ -336,8 +336,9 @@ pub fn check_output(path: &Path, force: bool) -> Result<()> {
     match std::fs::metadata(path) {
         Ok(meta) if meta.is_dir() => Err(fail("is a folder, not a file".into())),
         Ok(meta) if meta.is_file() && meta.permissions().readonly() && !force => Err(fail(
-            "is read-only; make it writable or pass --force to replace it".into(),
-        )),
+            "is read-only; make it writable or allow replacing it".into(),
+        )
+        .with_remedy(crate::error::Remedy::Replace)),
         _ => Ok(()),
     }
 }

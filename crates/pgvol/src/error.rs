@@ -43,6 +43,23 @@ impl ErrorKind {
     }
 }
 
+/// What a caller can change to make a refused call work. The message says it in the library's
+/// terms; front ends with options of their own (the command line's flags) name them from this.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Remedy {
+    /// Allow replacing the existing, read-only output file.
+    Replace,
+    /// Raise the memory limit ([`crate::set_memory_limit`]).
+    MemoryLimit,
+    /// Encode the mesh again with a band of at least this many grid spacings.
+    Band(f32),
+    /// A finer grid.
+    FinerGrid,
+    /// Give the box (two corners) the result should cover.
+    CoveringBox,
+}
+
 /// A failure of a library call: its [`ErrorKind`], the file it concerns (if any), a sentence for
 /// a person and the underlying error (if any). `Display` gives `path: message`.
 #[derive(Debug)]
@@ -51,6 +68,7 @@ pub struct Error {
     path: Option<PathBuf>,
     message: String,
     resolution: Option<usize>,
+    remedy: Option<Remedy>,
     source: Option<Box<dyn std::error::Error + Send + Sync + 'static>>,
 }
 
@@ -65,6 +83,7 @@ impl Error {
             path: None,
             message: message.into(),
             resolution: None,
+            remedy: None,
             source: None,
         }
     }
@@ -90,6 +109,17 @@ impl Error {
     pub fn needing_resolution(mut self, nodes: usize) -> Self {
         self.resolution = Some(nodes);
         self
+    }
+
+    /// The same error with what would make the call work.
+    pub fn with_remedy(mut self, remedy: Remedy) -> Self {
+        self.remedy = Some(remedy);
+        self
+    }
+
+    /// What would make the call work, when the library knows.
+    pub fn remedy(&self) -> Option<Remedy> {
+        self.remedy
     }
 
     /// Nodes per axis of a grid over the same box that would work, for an
@@ -220,8 +250,8 @@ mod tests {
         assert_eq!(e.kind(), ErrorKind::InputFile);
         assert_eq!(e.path(), Some(Path::new("a/b.obj")));
         assert_eq!(
-            Error::parameter("--res must be positive").to_string(),
-            "--res must be positive"
+            Error::parameter("the resolution must be positive").to_string(),
+            "the resolution must be positive"
         );
     }
 

@@ -66,9 +66,10 @@ fn check_resolution(shape: &Shape, lattice: &Lattice) -> Result<()> {
     if lattice.style == LatticeStyle::Sheet && thinnest < 2.0 * spacing {
         return Err(Error::parameter(format!(
             "the sheet thickness {thinnest} is under two grid spacings ({}); use a thicker \
-             sheet or a finer grid (--res)",
+             sheet or a finer grid",
             2.0 * spacing
-        )));
+        ))
+        .with_remedy(crate::error::Remedy::FinerGrid));
     }
     let finest = lattice
         .grade
@@ -76,9 +77,10 @@ fn check_resolution(shape: &Shape, lattice: &Lattice) -> Result<()> {
     if finest < 8.0 * spacing {
         return Err(Error::parameter(format!(
             "the cell size {finest} is under eight grid spacings ({}); use a larger cell or a \
-             finer grid (--res)",
+             finer grid",
             8.0 * spacing
-        )));
+        ))
+        .with_remedy(crate::error::Remedy::FinerGrid));
     }
     Ok(())
 }
@@ -159,8 +161,8 @@ pub fn solid_report(
             let voids = pieces.iter().filter(|&&v| v < 0.0).count();
             if voids > 0 {
                 progress.warn(&format!(
-                    "the solid encloses {voids} void{} with no way out; add a drain into each \
-                     (--drain)",
+                    "the solid encloses {voids} void{} with no way out; add a drain hole into \
+                     each",
                     if voids == 1 { "" } else { "s" }
                 ));
             }

@@ -104,7 +104,7 @@ pub use encode::{
     write_pgv_to, EncodeOptions, Encoded, StorageOptions, StorageReport, BAND_KEY, ENCODE_BAND,
     MIN_BAND, PG_ORDER, PG_RADIUS,
 };
-pub use error::{Error, ErrorKind, Result};
+pub use error::{Error, ErrorKind, Remedy, Result};
 pub use eval::{
     eval, eval_csv, point_json, read_points, read_points_file, sample, Evaluation, ReportPoint,
 };

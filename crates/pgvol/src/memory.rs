@@ -96,7 +96,7 @@ pub(crate) fn check_memory(job: &str, bytes: u64, advice: &str) -> Result<()> {
             ErrorKind::ResourceLimit,
             format!(
                 "{job} needs about {} of memory, more than the {} {}; {advice}, or raise the \
-                 limit (--max-memory)",
+                 limit",
                 human(bytes),
                 human(limit),
                 if LIMIT.load(Ordering::Relaxed) == 0 {
@@ -105,7 +105,8 @@ pub(crate) fn check_memory(job: &str, bytes: u64, advice: &str) -> Result<()> {
                     "allowed"
                 }
             ),
-        )),
+        )
+        .with_remedy(crate::error::Remedy::MemoryLimit)),
         _ => Ok(()),
     }
 }
@@ -255,13 +256,15 @@ mod tests {
     #[test]
     fn a_job_over_the_limit_is_refused_with_its_figure() {
         set_memory_limit(Some(1_000_000));
-        let e = check_memory("encoding at 256³", 2_000_000, "lower --res").unwrap_err();
+        let e = check_memory("encoding at 256³", 2_000_000, "lower the resolution").unwrap_err();
         set_memory_limit(None);
         assert_eq!(e.kind(), ErrorKind::ResourceLimit);
+        assert_eq!(e.remedy(), Some(crate::Remedy::MemoryLimit));
         assert!(
             e.message().contains("2.0 MB") && e.message().contains("1.0 MB"),
             "{e}"
         );
+        assert!(!e.message().contains("--"), "{e}");
         assert!(check_memory("a small job", 10, "").is_ok());
     }
 }

@@ -219,10 +219,11 @@ pub(crate) fn check_reach_within(band: f32, support: f32, spacing: f32, reach: f
             ErrorKind::BadParameter,
             format!(
                 "the field is an exact distance only within {band:.4} of the surface, too \
-                 narrow for {reach}; encode it again with `--band {needed}` (grid \
-                 spacings) or wider, or pass the mesh"
+                 narrow for {reach}; encode it again with a band of {needed} grid spacings \
+                 or wider, or pass the mesh"
             ),
-        ));
+        )
+        .with_remedy(crate::error::Remedy::Band(needed)));
     }
     Ok(())
 }
