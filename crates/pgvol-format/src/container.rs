@@ -30,17 +30,38 @@ const MAX_HEADER: usize = 1 << 20;
 
 /// Frames a header and a payload: magic, version, header with its CRC, payload with its CRC.
 pub(crate) fn container(header: &PgvHeader, payload: &[u8]) -> Vec<u8> {
-    let header = serde_json::to_vec(header).expect("header serialises");
-    let mut out = Vec::with_capacity(32 + header.len() + payload.len());
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
-    out.extend_from_slice(&header);
-    out.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(payload);
-    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    let mut out = Vec::with_capacity(32 + payload.len() + 1024);
+    write_container(&mut out, header, &[payload]).expect("writing to memory does not fail");
     out
+}
+
+/// Bytes of the container around a header of `header_len` bytes, without the payload.
+pub(crate) const fn framing_bytes(header_len: usize) -> usize {
+    MAGIC.len() + 4 + 4 + header_len + 4 + 8 + 4
+}
+
+/// Writes the container of `header` and the payload made of `parts` back to back, so a
+/// payload held in pieces (an index and the bricks' blobs) is written without being copied
+/// into one buffer.
+pub(crate) fn write_container(
+    w: &mut dyn std::io::Write,
+    header: &PgvHeader,
+    parts: &[&[u8]],
+) -> std::io::Result<()> {
+    let header = serde_json::to_vec(header).expect("header serialises");
+    w.write_all(MAGIC)?;
+    w.write_all(&VERSION.to_le_bytes())?;
+    w.write_all(&(header.len() as u32).to_le_bytes())?;
+    w.write_all(&header)?;
+    w.write_all(&crc32fast::hash(&header).to_le_bytes())?;
+    let len: u64 = parts.iter().map(|p| p.len() as u64).sum();
+    w.write_all(&len.to_le_bytes())?;
+    let mut crc = crc32fast::Hasher::new();
+    for part in parts {
+        crc.update(part);
+        w.write_all(part)?;
+    }
+    w.write_all(&crc.finalize().to_le_bytes())
 }
 
 /// Whether a stored CRC-32 matches the computed one. Fuzz builds (`--cfg fuzzing`, set by

@@ -25,6 +25,7 @@ pub use perturbation::{
 };
 pub use pgv::{decode_pgv, encode_pgv, read_pgv, write_pgv};
 pub use sparse::{
-    encode_pgv_with, pgv_info, read_brick, write_pgv_with, Brick, Compression, EncodeOptions,
-    EncodeReport, PgvInfo, Precision, Predictor, SlabBricks, SlabReader, SparseParams,
+    encode_pgv_with, pgv_info, read_brick, sparse_pgv, write_pgv_with, Brick, Compression,
+    EncodeOptions, EncodeReport, PgvInfo, Precision, Predictor, SlabBricks, SlabReader,
+    SparseParams, SparsePgv,
 };

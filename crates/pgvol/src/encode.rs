@@ -267,8 +267,39 @@ pub type StorageReport = Option<pgvol_format::EncodeReport>;
 /// recorded band less one spacing, dilated by the basis support: that covers every cell of a
 /// level set the band supports without storing the clamped nodes at the band's edge.
 pub fn pgv_bytes(file: &PgvFile, storage: &StorageOptions) -> Result<(Vec<u8>, StorageReport)> {
+    let (encoded, report) = encoded_pgv(file, storage)?;
+    Ok((encoded.to_bytes(), report))
+}
+
+/// A file encoded as `storage` asks, held in pieces: a sparse file's blobs are written as they
+/// are rather than copied into one buffer (at 4096³ that buffer and its frame were 0.7 GB).
+enum EncodedPgv<'a> {
+    Dense(&'a PgvFile),
+    Sparse(Box<pgvol_format::SparsePgv>),
+}
+
+impl EncodedPgv<'_> {
+    fn to_bytes(&self) -> Vec<u8> {
+        match self {
+            EncodedPgv::Dense(file) => pgvol_format::encode_pgv(file),
+            EncodedPgv::Sparse(s) => s.to_bytes(),
+        }
+    }
+
+    fn write_to(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        match self {
+            EncodedPgv::Dense(file) => w.write_all(&pgvol_format::encode_pgv(file)),
+            EncodedPgv::Sparse(s) => s.write_to(w),
+        }
+    }
+}
+
+fn encoded_pgv<'a>(
+    file: &'a PgvFile,
+    storage: &StorageOptions,
+) -> Result<(EncodedPgv<'a>, StorageReport)> {
     if storage.dense {
-        return Ok((pgvol_format::encode_pgv(file), None));
+        return Ok((EncodedPgv::Dense(file), None));
     }
     let mut options = pgvol_format::EncodeOptions {
         precision: storage.precision,
@@ -277,14 +308,14 @@ pub fn pgv_bytes(file: &PgvFile, storage: &StorageOptions) -> Result<(Vec<u8>, S
     if let Some(band) = crate::pgv_io::recorded_band(file) {
         options.band = band / file.volume.grid.spacing - 1.0;
     }
-    let (bytes, report) = pgvol_format::encode_pgv_with(file, &options).writing()?;
-    Ok((bytes, Some(report)))
+    let (encoded, report) = pgvol_format::sparse_pgv(file, &options).writing()?;
+    Ok((EncodedPgv::Sparse(Box::new(encoded)), Some(report)))
 }
 
 /// Writes `file` to `path` atomically; see [`pgv_bytes`].
 pub fn write_pgv(path: &Path, file: &PgvFile, storage: &StorageOptions) -> Result<StorageReport> {
-    let (bytes, report) = pgv_bytes(file, storage).map_err(|e| e.at(path))?;
-    pgvol_core::write_atomic(path, |w| w.write_all(&bytes)).writing()?;
+    let (encoded, report) = encoded_pgv(file, storage).map_err(|e| e.at(path))?;
+    pgvol_core::write_atomic(path, |w| encoded.write_to(w)).writing()?;
     Ok(report)
 }
 
@@ -294,8 +325,8 @@ pub fn write_pgv_to(
     file: &PgvFile,
     storage: &StorageOptions,
 ) -> Result<StorageReport> {
-    let (bytes, report) = pgv_bytes(file, storage)?;
-    w.write_all(&bytes).map_err(|e| {
+    let (encoded, report) = encoded_pgv(file, storage)?;
+    encoded.write_to(w).map_err(|e| {
         Error::new(ErrorKind::OutputFile, format!("write failed: {e}")).caused_by(e)
     })?;
     Ok(report)

@@ -13,16 +13,59 @@ use super::options::{EncodeOptions, EncodeReport};
 use super::precision_choice::{basis_weight_bound, encode_smallest, fixed_scale};
 use super::reencode::decoded_layout;
 use super::stored_band::stored_band;
-use crate::container::container;
+use crate::container::{framing_bytes, write_container};
 use crate::error::{err, FormatError};
-use crate::header::PgvFile;
+use crate::header::{PgvFile, PgvHeader};
 use crate::sparse_params::{Precision, SparseParams, BRICK_RANGE, ENCODING_SPARSE};
+
+/// A file in the `sparse-bricks` encoding, held as its header, its index and its bricks'
+/// blobs: written out without being copied into one buffer first.
+pub struct SparsePgv {
+    header: PgvHeader,
+    index: Vec<u8>,
+    blobs: Vec<Vec<u8>>,
+}
+
+impl SparsePgv {
+    /// The payload's pieces in file order.
+    fn parts(&self) -> Vec<&[u8]> {
+        std::iter::once(&self.index[..])
+            .chain(self.blobs.iter().map(|b| &b[..]))
+            .collect()
+    }
+
+    /// Writes the file to `w`.
+    pub fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        write_container(w, &self.header, &self.parts())
+    }
+
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        container_parts(&self.header, &self.parts())
+    }
+}
+
+/// The container of `header` around the payload `parts`, in memory.
+fn container_parts(header: &PgvHeader, parts: &[&[u8]]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(parts.iter().map(|p| p.len()).sum::<usize>() + 1024);
+    write_container(&mut out, header, parts).expect("writing to memory does not fail");
+    out
+}
 
 /// Encodes `file` in the `sparse-bricks` encoding.
 pub fn encode_pgv_with(
     file: &PgvFile,
     opts: &EncodeOptions,
 ) -> Result<(Vec<u8>, EncodeReport), FormatError> {
+    let (encoded, report) = sparse_pgv(file, opts)?;
+    Ok((encoded.to_bytes(), report))
+}
+
+/// [`encode_pgv_with`], keeping the file in pieces for [`SparsePgv::write_to`].
+pub fn sparse_pgv(
+    file: &PgvFile,
+    opts: &EncodeOptions,
+) -> Result<(SparsePgv, EncodeReport), FormatError> {
     let fail = |m: String| err(Path::new("<encode>"), m);
     let volume = &file.volume;
     let g = volume.grid;
@@ -78,29 +121,33 @@ pub fn encode_pgv_with(
     let (blobs, worst) =
         encode_smallest(&stored, &mut sp, scale, opts, weight, prefer).map_err(fail)?;
 
-    let meta = brick_index(&stored_bits, &inside, &blobs);
-    let bytes_index = meta.len();
-    let mut payload = meta;
-    for blob in &blobs {
-        payload.extend_from_slice(blob);
-    }
+    let index = brick_index(&stored_bits, &inside, &blobs);
     let mut header = file.header.clone();
     header.grid = g;
     header.basis = volume.basis;
     header.encoding = ENCODING_SPARSE.to_string();
     header.sparse = Some(sp.clone());
-    let bytes = container(&header, &payload);
+    let header_len = serde_json::to_vec(&header)
+        .expect("header serialises")
+        .len();
     let report = EncodeReport {
         bricks_total: bricks.total(),
         bricks_stored: sp.stored,
-        bytes_header: bytes.len() - payload.len(),
-        bytes_index,
-        bytes_payload: payload.len() - bytes_index,
+        bytes_header: framing_bytes(header_len),
+        bytes_index: index.len(),
+        bytes_payload: blobs.iter().map(Vec::len).sum(),
         precision: sp.precision,
         max_quantisation_error: worst,
         clamp,
     };
-    Ok((bytes, report))
+    Ok((
+        SparsePgv {
+            header,
+            index,
+            blobs,
+        },
+        report,
+    ))
 }
 
 /// Writes `file` to `path` atomically in the `sparse-bricks` encoding.
@@ -109,7 +156,7 @@ pub fn write_pgv_with(
     file: &PgvFile,
     opts: &EncodeOptions,
 ) -> Result<EncodeReport, FormatError> {
-    let (bytes, report) = encode_pgv_with(file, opts).map_err(|e| err(path, e.problem))?;
-    pgvol_core::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| err(path, e.problem))?;
+    let (encoded, report) = sparse_pgv(file, opts).map_err(|e| err(path, e.problem))?;
+    pgvol_core::write_atomic(path, |w| encoded.write_to(w)).map_err(|e| err(path, e.problem))?;
     Ok(report)
 }
