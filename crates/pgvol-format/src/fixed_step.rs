@@ -113,7 +113,9 @@ impl FixedScale {
         if !value.is_finite() {
             return None;
         }
-        if value != v {
+        // Below 2²² steps the rounded estimate of a decoded value is its own word (its relative
+        // error of 2⁻²⁴ is under half a step), so only larger ones need the neighbours.
+        if value != v && a >= NEIGHBOURS_FROM {
             for r in [q.checked_sub(1), q.checked_add(1)].into_iter().flatten() {
                 if r != i32::MIN && self.value(r as u32) == v {
                     return Some(r as u32);
@@ -123,6 +125,9 @@ impl FixedScale {
         Some(q as u32)
     }
 }
+
+/// Steps from zero beyond which [`FixedScale::word`] checks the neighbouring words.
+const NEIGHBOURS_FROM: f64 = (1u64 << 22) as f64;
 
 /// Default bound on how far a coefficient the band does not need may move, in grid spacings.
 pub const FREE_TOLERANCE: f32 = 0.5;

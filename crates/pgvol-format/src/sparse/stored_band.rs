@@ -9,7 +9,7 @@
 //! neighbourhood is not one background value far from zero, then the needed nodes of the file
 //! bricks within reach of those.
 
-use pgvol_core::SparseGrid;
+use pgvol_core::{SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{mirror, Basis, CoefficientVolume};
 use rayon::prelude::*;
 
@@ -73,10 +73,13 @@ pub(crate) fn stored_band(
     reached.dedup();
     reached
         .par_iter()
-        .map_init(Vec::new, |scratch, &b| {
-            needed_nodes(bricks, &near_zero, b, d, scratch)
-                .map(|needed| KeptBrick { index: b, needed })
-        })
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |scratch, &b| {
+                needed_nodes(bricks, &near_zero, b, d, scratch)
+                    .map(|needed| KeptBrick { index: b, needed })
+            },
+        )
         .flatten()
         .collect()
 }
@@ -182,6 +185,11 @@ fn near_zero_nodes(
     let len = n[0] * n[1] * n[2];
     // The B-spline kernels as `pgvol_field::fit::node_values` applies them: the same bits.
     let values = match volume.basis {
+        // File bricks made of whole grid bricks: each grid brick's node values by the field
+        // crate's path (the same operations, with each neighbour brick looked up once).
+        Basis::Bspline2 | Basis::Bspline3 if bricks.edge.is_multiple_of(BRICK_EDGE) => {
+            grid_brick_values(volume, lo, n)
+        }
         Basis::Bspline2 => blurred(&volume.coeffs, lo, n, (1.0 / 8.0, 6.0 / 8.0), scratch),
         Basis::Bspline3 => blurred(&volume.coeffs, lo, n, (1.0 / 6.0, 4.0 / 6.0), scratch),
         Basis::Pg { .. } => {
@@ -206,6 +214,33 @@ fn near_zero_nodes(
     // Most bricks have no node near zero: decide that in one vectorised pass first.
     let closest = values.iter().fold(f32::INFINITY, |m, v| m.min(v.abs()));
     (closest <= limit).then(|| values.iter().map(|v| v.abs() <= limit).collect())
+}
+
+/// The field at the box of `n` nodes from `lo` (x fastest), a whole number of the sparse
+/// grid's bricks from one of them, brick by brick through `brick_node_values_into`.
+fn grid_brick_values(volume: &CoefficientVolume, lo: [usize; 3], n: [usize; 3]) -> Vec<f32> {
+    let mut out = vec![0.0f32; n[0] * n[1] * n[2]];
+    let mut brick = [0.0f32; BRICK_NODES];
+    let first = lo.map(|c| c / BRICK_EDGE);
+    let count = n.map(|c| c.div_ceil(BRICK_EDGE));
+    for bz in 0..count[2] {
+        for by in 0..count[1] {
+            for bx in 0..count[0] {
+                let b = [first[0] + bx, first[1] + by, first[2] + bz];
+                pgvol_field::fit::brick_node_values_into(volume, b, &mut brick);
+                let o = [bx, by, bz].map(|c| c * BRICK_EDGE);
+                let m = [0, 1, 2].map(|a| (n[a] - o[a]).min(BRICK_EDGE));
+                for k in 0..m[2] {
+                    for j in 0..m[1] {
+                        let src = BRICK_EDGE * (j + BRICK_EDGE * k);
+                        let dst = o[0] + n[0] * (o[1] + j + n[1] * (o[2] + k));
+                        out[dst..dst + m[0]].copy_from_slice(&brick[src..src + m[0]]);
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The B-spline field at the box of `n` nodes from `lo` (x fastest): the 3-tap kernel along x,
@@ -261,18 +296,22 @@ fn blurred(
 }
 
 /// Per node of file brick `b` (x fastest): whether a node near zero (`near_zero`, sorted by
-/// file brick) lies within `d` nodes per axis; `None` when none does.
+/// file brick) lies within `d` nodes per axis; `None` when none does. The window around the
+/// brick is held as one bit mask per row along x, so the box dilation is shifts and ORs of
+/// rows (a byte per node and a pass per node and axis took most of a 2048³ file's writing).
 fn needed_nodes(
     bricks: &Bricks,
     near_zero: &[(usize, Box<[bool]>)],
     b: usize,
     d: usize,
-    window: &mut Vec<bool>,
+    (rows, spare): &mut (Vec<u64>, Vec<u64>),
 ) -> Option<Box<[bool]>> {
     let (lo, n) = bricks.extent(b);
     let (wlo, wn) = grow(bricks, lo, n, d);
-    window.clear();
-    window.resize(wn[0] * wn[1] * wn[2], false);
+    debug_assert!(wn[0] <= 64, "a window row fits in 64 bits");
+    let row_at = |j: usize, k: usize| j + wn[1] * k;
+    rows.clear();
+    rows.resize(wn[1] * wn[2], 0);
     for_each_brick_in(bricks, (wlo, wn), |f| {
         let Ok(at) = near_zero.binary_search_by_key(&f, |(b, _)| *b) else {
             return;
@@ -285,29 +324,61 @@ fn needed_nodes(
         for k in from[2]..to[2] {
             for j in from[1]..to[1] {
                 let src = fnn[0] * (j - flo[1] + fnn[1] * (k - flo[2]));
-                let dst = wn[0] * (j - wlo[1] + wn[1] * (k - wlo[2]));
+                let row = &mut rows[row_at(j - wlo[1], k - wlo[2])];
                 for i in from[0]..to[0] {
-                    window[dst + i - wlo[0]] |= near[src + i - flo[0]];
+                    *row |= u64::from(near[src + i - flo[0]]) << (i - wlo[0]);
                 }
             }
         }
     });
-    for axis in 0..3 {
-        dilate_along(window, wn, axis, d);
-    }
+    dilate_rows(rows, spare, wn, d);
     let off = [0, 1, 2].map(|a| lo[a] - wlo[a]);
     let mut needed = Vec::with_capacity(n[0] * n[1] * n[2]);
+    let mut any = 0u64;
     for k in 0..n[2] {
         for j in 0..n[1] {
-            let row = wn[0] * (j + off[1] + wn[1] * (k + off[2])) + off[0];
-            needed.extend_from_slice(&window[row..row + n[0]]);
+            let row = rows[row_at(j + off[1], k + off[2])] >> off[0];
+            any |= row & low_bits(n[0]);
+            needed.extend((0..n[0]).map(|i| row >> i & 1 == 1));
         }
     }
-    needed.iter().any(|&x| x).then(|| needed.into_boxed_slice())
+    (any != 0).then(|| needed.into_boxed_slice())
+}
+
+/// The lowest `n` bits set.
+fn low_bits(n: usize) -> u64 {
+    if n >= 64 {
+        u64::MAX
+    } else {
+        (1 << n) - 1
+    }
+}
+
+/// `rows` (one bit mask per row along x of a box of `dims` nodes, rows y fastest then z) grown
+/// by `d` nodes both ways along each axis, clipped to the box; `spare` is scratch.
+fn dilate_rows(rows: &mut [u64], spare: &mut Vec<u64>, dims: [usize; 3], d: usize) {
+    let width = low_bits(dims[0]);
+    for row in rows.iter_mut() {
+        let r = *row;
+        *row = (1..=d).fold(r, |acc, s| acc | r << s | r >> s) & width;
+    }
+    // Along y within each plane, then along z across planes: each row ORs its neighbours
+    // within `d` rows, read from a copy.
+    for (stride, n) in [(1, dims[1]), (dims[1], dims[2])] {
+        spare.clear();
+        spare.extend_from_slice(rows);
+        for (at, row) in rows.iter_mut().enumerate() {
+            let t = (at / stride) % n;
+            let (a, z) = (t.saturating_sub(d), (t + d).min(n - 1));
+            let base = at - t * stride;
+            *row = (a..=z).fold(0, |acc, u| acc | spare[base + u * stride]);
+        }
+    }
 }
 
 /// `mask` (a box of `dims` nodes, x fastest) grown by `d` nodes both ways along one axis,
-/// clipped to the box (a box dilation is three of these).
+/// clipped to the box (a box dilation is three of these): the tests' reference.
+#[cfg(test)]
 fn dilate_along(mask: &mut [bool], dims: [usize; 3], axis: usize, d: usize) {
     let stride = [1, dims[0], dims[0] * dims[1]][axis];
     let n = dims[axis];
