@@ -71,8 +71,8 @@ pub(crate) fn encode_bricks(
     let encoded: Vec<Option<(Vec<u8>, f32)>> = s
         .kept
         .par_iter()
-        .map_init(Vec::new, |scratch, k| {
-            encode_brick(s, sp, level, k, scratch)
+        .map_init(Packer::default, |packer, k| {
+            encode_brick(s, sp, level, k, packer)
         })
         .collect::<Result<_, String>>()?;
     let mut blobs = Vec::with_capacity(encoded.len());
@@ -87,6 +87,14 @@ pub(crate) fn encode_bricks(
     Ok(Some((blobs, worst)))
 }
 
+/// What each thread keeps between bricks: a compression context (making one per brick took a
+/// few percent of a file's writing) and room for zstd's worst case.
+#[derive(Default)]
+pub(crate) struct Packer {
+    compressor: Option<zstd::bulk::Compressor<'static>>,
+    room: Vec<u8>,
+}
+
 /// One stored brick's compressed bytes and its largest error over needed coefficients; `None`
 /// when `sp.precision` cannot represent its coefficients.
 fn encode_brick(
@@ -94,7 +102,7 @@ fn encode_brick(
     sp: &SparseParams,
     level: i32,
     kept: &KeptBrick,
-    scratch: &mut Vec<u8>,
+    packer: &mut Packer,
 ) -> Result<Option<(Vec<u8>, f32)>, String> {
     let (lo, n) = s.bricks.extent(kept.index);
     let mut values = vec![0.0f32; n[0] * n[1] * n[2]];
@@ -119,8 +127,17 @@ fn encode_brick(
         Compression::Zstd => {
             // Compressed into room for the worst case, then kept at its own length: a blob
             // is a tenth of that room, and every stored brick's blob is held until written.
+            let scratch = &mut packer.room;
             scratch.resize(zstd::zstd_safe::compress_bound(raw.len()), 0);
-            let n = zstd::bulk::compress_to_buffer(&raw, scratch, level)
+            if packer.compressor.is_none() {
+                packer.compressor = Some(
+                    zstd::bulk::Compressor::new(level)
+                        .map_err(|e| format!("zstd compression failed: {e}"))?,
+                );
+            }
+            let compressor = packer.compressor.as_mut().expect("made above");
+            let n = compressor
+                .compress_to_buffer(&raw, &mut scratch[..])
                 .map_err(|e| format!("zstd compression failed: {e}"))?;
             scratch[..n].to_vec()
         }
