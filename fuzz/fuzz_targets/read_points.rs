@@ -30,7 +30,7 @@ fuzz_target!(|data: &[u8]| {
             assert!(!points.is_empty());
             for p in &points {
                 assert!(
-                    p.is_finite() && p.abs().max_element() < MAX_COORDINATE,
+                    p.is_finite() && p.abs().max_element() < f64::from(MAX_COORDINATE),
                     "{p}"
                 );
             }
