@@ -110,11 +110,22 @@ pub fn decode(
     }
     let grid = target_grid(volume, options.res)?;
     crate::memory::check_contour(volume, &grid)?;
-    let mut mesh = progress::stage(progress, "contour", |update| {
+    let mesh = progress::stage(progress, "contour", |update| {
         let (iso, method) = (options.iso, options.method);
         pgvol_contour::contour_volume_reporting(volume, &grid, iso, method, update)
     })?;
-    remove_specks(&mut mesh, options.min_component, grid.spacing, progress);
+    finish_mesh(mesh, options, grid.spacing, progress)
+}
+
+/// A contour as decoding returns it: its specks removed (on a grid of `spacing`), and an empty
+/// level set refused, since it is never a useful mesh.
+pub(crate) fn finish_mesh(
+    mut mesh: Mesh,
+    options: &DecodeOptions,
+    spacing: f32,
+    progress: &dyn Progress,
+) -> Result<Mesh> {
+    remove_specks(&mut mesh, options.min_component, spacing, progress);
     if mesh.triangles.is_empty() {
         return Err(Error::new(
             ErrorKind::BadParameter,

@@ -9,7 +9,7 @@ use pgvol_core::{Grid, Mesh, SparseGrid, BRICK_EDGE};
 use pgvol_field::CoefficientVolume;
 use pgvol_format::SlabReader;
 
-use crate::decode::{remove_specks, target_grid_of, DecodeOptions};
+use crate::decode::{finish_mesh, target_grid_of, DecodeOptions};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::pgv_io::{header_band, read_pgv_bytes};
 use crate::progress::{self, Progress};
@@ -99,14 +99,7 @@ fn decode_slabs(
     progress.finish();
     drop(windows);
     mesh.offset = grid.offset;
-    remove_specks(&mut mesh, options.min_component, grid.spacing, progress);
-    if mesh.triangles.is_empty() {
-        return Err(Error::new(
-            ErrorKind::BadParameter,
-            format!("the level set {} is empty in this field", options.iso),
-        ));
-    }
-    Ok(mesh)
+    finish_mesh(mesh, options, grid.spacing, progress)
 }
 
 /// Adds a run's part to `mesh`. The arrays grow by exactly the part: large blocks are moved by

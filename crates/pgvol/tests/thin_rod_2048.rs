@@ -4,13 +4,9 @@
 
 use pgvol::{DecodeOptions, EncodeOptions, GridSpec, Silent, StorageOptions};
 
-/// Peak resident memory of this process so far, in bytes (`VmHWM`).
-fn peak_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
+mod common;
+
+use common::peak_bytes;
 
 #[test]
 fn a_thin_rod_at_2048_cubed_encodes_and_decodes_within_a_surface_memory_bound() {

@@ -11,8 +11,8 @@ use pgvol_ops::{Layer, SliceOptions};
 
 use super::slab::Slab;
 use super::split;
-use crate::decode::{remove_specks, DecodeOptions};
-use crate::error::{Error, ErrorKind, Result};
+use crate::decode::{finish_mesh, DecodeOptions};
+use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::shape::Shape;
 use crate::slice::SliceSettings;
@@ -109,14 +109,7 @@ pub fn weld_parts(
             .extend(piece.triangles.iter().map(|t| t.map(|i| i + base)));
     }
     mesh.weld(0.0);
-    remove_specks(&mut mesh, options.min_component, spacing, progress);
-    if mesh.triangles.is_empty() {
-        return Err(Error::new(
-            ErrorKind::BadParameter,
-            format!("the level set {} is empty in this field", options.iso),
-        ));
-    }
-    Ok(mesh)
+    finish_mesh(mesh, options, spacing, progress)
 }
 
 /// Layer numbers of the slicing of `shape` by `settings`, cut into at most `parts` ranges.
