@@ -7,11 +7,13 @@ use pgvol_field::{CoefficientVolume, Grid};
 use crate::crossings::with_normal;
 use crate::dual_methods::{dual_contour_with, surface_nets_with};
 use crate::dual_options::DualContourOptions;
-use crate::edge_cubic::{crossing_on_grid_edge, thirds_on_grid_edge};
+use crate::edge_cubic::crossing_on_grid_edge;
 use crate::field::Field;
+use crate::grids::padded;
 use crate::marching::marching_cubes_samples;
-use crate::root::{cubic_edge_root, edge_root, root_from_thirds};
+use crate::root::edge_root;
 use crate::samples::{DenseNodes, Nodes, PaddedNodes, Samples};
+use crate::volume_root::volume_refine;
 use pgvol_core::progress::{Report, Span};
 
 /// How the mesh is extracted.
@@ -24,28 +26,6 @@ pub enum Method {
     SurfaceNets,
     /// Manifold dual contouring with the analytic gradients: keeps sharp features.
     DualContouring,
-}
-
-/// The grid of `volume` resampled with `res` nodes along its longest side, same origin and box.
-/// `None` when the grid would exceed [`pgvol_field::MAX_GRID_NODES`].
-pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
-    resampled_grid_of(&volume.grid, res)
-}
-
-/// [`resampled_grid`] of a volume on `grid`.
-pub fn resampled_grid_of(grid: &Grid, res: usize) -> Option<Grid> {
-    let side = grid.max_corner() - grid.origin;
-    let spacing = side.max_element() / (res.max(2) - 1) as f32;
-    let dims = side
-        .to_array()
-        .map(|s| ((s / spacing).round() as usize + 1).max(2));
-    let total = dims.iter().map(|&d| d as u128).product::<u128>();
-    (total <= pgvol_field::MAX_GRID_NODES).then_some(Grid {
-        origin: grid.origin,
-        spacing,
-        dims,
-        offset: grid.offset,
-    })
 }
 
 /// Contours the `iso` level set of `volume` sampled on `grid`. The samples are padded with one
@@ -112,16 +92,6 @@ pub(crate) fn contour_samples(
 ) -> pgvol_core::Mesh {
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
     contour_nodes(volume, &padded(grid), &nodes, iso, method, None)
-}
-
-/// `grid` with one more node layer on every side: the grid of the padded samples.
-pub(crate) fn padded(grid: &Grid) -> Grid {
-    Grid {
-        origin: grid.origin - Vec3::splat(grid.spacing),
-        spacing: grid.spacing,
-        dims: grid.dims.map(|n| n + 2),
-        offset: grid.offset,
-    }
 }
 
 /// Contours the `iso` level set of any continuous `field` given its samples `inner` on `grid`
@@ -239,45 +209,10 @@ fn contour_nodes(
     }
 }
 
-/// Places the crossing of an edge on the continuous field of `volume` where both ends lie in
-/// its box, and linearly elsewhere (where values are artificial padding).
-pub(crate) fn volume_refine(
-    volume: &CoefficientVolume,
-    iso: f32,
-) -> impl Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + '_ {
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let in_box = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-    move |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-        if in_box(a) && in_box(b) {
-            volume_edge_root(volume, a, va, b, vb, iso)
-        } else {
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            a + (b - a) * t
-        }
-    }
-}
-
-/// The crossing on a grid edge of the continuous field of `volume`: from the coefficients
-/// directly where the edge lies on the volume's own B-spline grid, else by two evaluations.
-fn volume_edge_root(
-    volume: &CoefficientVolume,
-    a: Vec3,
-    va: f32,
-    b: Vec3,
-    vb: f32,
-    iso: f32,
-) -> Vec3 {
-    match thirds_on_grid_edge(volume, a, b) {
-        Some(thirds) if va.is_finite() && vb.is_finite() => {
-            root_from_thirds(a, va, b, vb, thirds, iso)
-        }
-        _ => cubic_edge_root(volume, a, va, b, vb, iso),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grids::resampled_grid;
     use crate::test_volumes::two_balls;
     use pgvol_field::Basis;
 
