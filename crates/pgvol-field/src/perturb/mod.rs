@@ -11,6 +11,7 @@ mod point_grid;
 pub mod quadric;
 mod resample;
 mod strays;
+mod trial;
 
 pub use box_tree::BoxTree;
 pub use build::{
