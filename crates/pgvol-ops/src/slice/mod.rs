@@ -26,13 +26,10 @@ use plane::{LayerField, Plane};
 use window::Window;
 
 pub use bricks::{brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, INSIDE, OUTSIDE};
-pub use plane::LayerCost;
+pub use plane::{LayerCost, MAX_LAYER_NODES};
 
 /// Most layers one call produces: far beyond any printer, small enough to refuse typos.
 pub const MAX_LAYERS: usize = 1_000_000;
-
-/// Most nodes in one layer's 2D grid (a 16384² grid would need 1 GiB per layer in flight).
-pub const MAX_LAYER_NODES: usize = 1 << 26;
 
 /// The build direction. Layer coordinates `(u, v)` are the next two axes in cyclic order
 /// (X: `(y, z)`, Y: `(z, x)`, Z: `(x, y)`), so `u × v` points along the axis and

@@ -6,8 +6,10 @@
 //! costs what its contours' length does, not its area. Nodes, edges and vertices are numbered as
 //! in a dense pass over the whole grid, and the loops come out in the same order.
 
-use crate::slice::MAX_LAYER_NODES;
 use crate::OpsError;
+
+/// Most nodes in one layer's 2D grid (a 16384² grid would need 1 GiB per layer in flight).
+pub const MAX_LAYER_NODES: usize = 1 << 26;
 
 /// Cells per block edge.
 pub(crate) const BLOCK: usize = 8;
