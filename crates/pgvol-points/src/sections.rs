@@ -156,7 +156,7 @@ mod tests {
     use pgvol_field::CoefficientVolume;
 
     use super::*;
-    use crate::tests::sphere_points;
+    use crate::test_points::sphere_points;
     use crate::{reconstruct_with, Method, PointCloud, PointsOptions};
 
     /// What a section of a unit sphere's reconstruction looked like.
