@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{at_input, GridArgs, MethodArg, OutputArgs, PathArg};
-use super::ops::{check_dense_file, check_output_name, file_storage};
+use super::args::{check_dense_file, check_output_name, file_storage};
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::{self, Seconds};
