@@ -68,7 +68,7 @@ fn parse_sections(s: &str) -> Result<SectionsArg, String> {
         .map(|h| {
             let h = h.trim();
             match h.parse::<f32>() {
-                Ok(v) if v.is_finite() && v.abs() < pgvol::ops::MAX_LAYER_COORDINATE => Ok(v),
+                Ok(v) if v.is_finite() && v.abs() < pgvol::slicing::MAX_LAYER_COORDINATE => Ok(v),
                 _ => Err(format!(
                     "the height '{h}' is not a finite number below 1e8 in magnitude"
                 )),
