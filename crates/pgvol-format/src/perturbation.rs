@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use glam::DVec3;
-use pgvol_field::perturb::{Perturbation, PerturbationField, Quadric};
+use pgvol_perturb::{Perturbation, PerturbationField, Quadric};
 
 use crate::container::{container, parse_container};
 use crate::error::{err, FormatError};

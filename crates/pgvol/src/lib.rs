@@ -130,7 +130,7 @@ pub use pgv_io::{
     pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes, read_pgv_from,
     recorded_band, FieldSource,
 };
-pub use pgvol_field::perturb::{
+pub use pgvol_perturb::{
     Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason, Strays, DESCENT_STEPS,
 };
 pub use points::{
@@ -159,6 +159,7 @@ pub use pgvol_format as format;
 pub use pgvol_mesh as mesh;
 pub use pgvol_metrics as metrics;
 pub use pgvol_ops as ops;
+pub use pgvol_perturb as perturbation;
 pub use pgvol_points as point_cloud;
 pub use pgvol_sdf as sdf;
 pub use pgvol_slice as slicing;

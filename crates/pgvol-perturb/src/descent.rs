@@ -5,9 +5,9 @@
 //! gradient descent). Every step must keep the term a local bump within the loop's bounds and
 //! must not put more probes on the wrong side.
 
-use super::field::Perturbation;
-use super::quadric::{monomials, TERMS};
-use super::trial::{evaluate, State, Trial};
+use crate::field::Perturbation;
+use crate::quadric::{monomials, TERMS};
+use crate::trial::{evaluate, State, Trial};
 
 /// First step, as a fraction of the length of the coefficient vector.
 const FIRST_STEP: f64 = 0.05;

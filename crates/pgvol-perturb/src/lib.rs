@@ -2,6 +2,8 @@
 //! `M(x) = F(x) + Σ fᵢ Qᵢ(x)³` over `Qᵢ ≥ 0`, a base quadric plus local bumps added until the
 //! mesh's vertices lie on the zero set. See `docs/perturbation.md`.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+
 mod box_tree;
 mod build;
 mod cleanup;

@@ -3,8 +3,8 @@
 
 use glam::DVec3;
 
-use super::field::Perturbation;
-use super::point_grid::PointGrid;
+use crate::field::Perturbation;
+use crate::point_grid::PointGrid;
 
 /// The loop's state at the vertices and probes.
 pub(crate) struct State {

@@ -24,11 +24,11 @@ use glam::{DVec3, Vec3};
 use pgvol_core::Mesh;
 use serde::Serialize;
 
-use super::descent::refine;
-use super::field::{Perturbation, PerturbationField};
-use super::point_grid::PointGrid;
-use super::quadric::{self, monomials, Quadric, TERMS};
-use super::trial::{evaluate, Refusal, State, Trial};
+use crate::descent::refine;
+use crate::field::{Perturbation, PerturbationField};
+use crate::point_grid::PointGrid;
+use crate::quadric::{self, monomials, Quadric, TERMS};
+use crate::trial::{evaluate, Refusal, State, Trial};
 
 /// Points per perturbation, as in the paper.
 pub const POINTS_PER_TERM: usize = 10;
