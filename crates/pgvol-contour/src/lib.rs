@@ -77,5 +77,5 @@ pub use quality::min_angle_histogram;
 pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
 pub use volume::{
     contour_field, contour_field_reporting, contour_sampled, contour_volume,
-    contour_volume_reporting, Method,
+    contour_volume_reporting, Method, SamplesError,
 };

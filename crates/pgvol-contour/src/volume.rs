@@ -101,7 +101,10 @@ pub(crate) fn contour_samples(
 /// along an edge (an exact signed distance near a sharp edge) gets its true crossing; edges into
 /// the padding are interpolated linearly. `options` applies to dual contouring.
 ///
-/// Returns an empty mesh when `inner` does not match `grid` or the spacing is not positive.
+/// # Errors
+///
+/// [`SamplesError`] when `inner` does not hold one sample per node of `grid`, or the grid
+/// spacing is not positive and finite.
 pub fn contour_field(
     field: &dyn Field,
     grid: &Grid,
@@ -109,8 +112,22 @@ pub fn contour_field(
     iso: f32,
     method: Method,
     options: &DualContourOptions,
-) -> pgvol_core::Mesh {
+) -> Result<pgvol_core::Mesh, SamplesError> {
     contour_field_reporting(field, grid, inner, iso, method, options, &|_| {})
+}
+
+/// Why [`contour_field`] cannot contour the samples it is given.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SamplesError {
+    /// The samples are not one per node of the grid.
+    #[error(
+        "{given} samples given for a grid of {} × {} × {} nodes: one sample per node is needed",
+        dims[0], dims[1], dims[2]
+    )]
+    Count { given: usize, dims: [usize; 3] },
+    /// The grid spacing is zero, negative or not finite.
+    #[error("the grid spacing is {0}: it must be positive and finite")]
+    Spacing(f32),
 }
 
 /// [`contour_field`], reporting the fraction done to `report`.
@@ -122,16 +139,22 @@ pub fn contour_field_reporting(
     method: Method,
     options: &DualContourOptions,
     report: Report,
-) -> pgvol_core::Mesh {
+) -> Result<pgvol_core::Mesh, SamplesError> {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
-    if nodes != Some(inner.len()) || !(grid.spacing.is_finite() && grid.spacing > 0.0) {
-        return pgvol_core::Mesh::default();
+    if nodes != Some(inner.len()) {
+        return Err(SamplesError::Count {
+            given: inner.len(),
+            dims: grid.dims,
+        });
+    }
+    if !(grid.spacing.is_finite() && grid.spacing > 0.0) {
+        return Err(SamplesError::Spacing(grid.spacing));
     }
     // The padding is read through the source, not copied around the caller's samples.
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
     let padded = padded(grid);
     let Some(samples) = Samples::checked(&nodes, padded.origin, padded.spacing, iso) else {
-        return pgvol_core::Mesh::default();
+        return Ok(pgvol_core::Mesh::default());
     };
     let samples = samples.reporting(Some(Span::whole(report)));
     let (lo, hi) = (grid.origin, grid.max_corner());
@@ -154,7 +177,7 @@ pub fn contour_field_reporting(
         }
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
     };
-    in_frame_of(grid, mesh)
+    Ok(in_frame_of(grid, mesh))
 }
 
 /// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
@@ -335,7 +358,7 @@ mod tests {
         };
         let mut gaps = Vec::new();
         for method in [Method::MarchingCubes, Method::DualContouring] {
-            let mesh = contour_field(&field, &grid, &samples, 0.0, method, &options);
+            let mesh = contour_field(&field, &grid, &samples, 0.0, method, &options).unwrap();
             let s = mesh.stats();
             assert!(s.watertight && s.winding_consistent, "{method:?}: {s:?}");
             let exact = 1.1f64.powi(3);
@@ -350,23 +373,30 @@ mod tests {
     }
 
     #[test]
-    fn exact_field_declines_mismatched_samples() {
+    fn exact_field_refuses_mismatched_samples() {
         let (field, _) = rotated_cube();
-        let grid = Grid {
+        let mut grid = Grid {
             origin: Vec3::ZERO,
             spacing: 0.1,
             dims: [4, 4, 4],
             offset: Default::default(),
         };
         let options = DualContourOptions::default();
-        let mesh = contour_field(
-            &field,
-            &grid,
-            &[0.0; 10],
-            0.0,
-            Method::DualContouring,
-            &options,
+        let method = Method::DualContouring;
+        let err = contour_field(&field, &grid, &[0.0; 10], 0.0, method, &options).unwrap_err();
+        assert_eq!(
+            err,
+            SamplesError::Count {
+                given: 10,
+                dims: [4, 4, 4]
+            }
         );
-        assert!(mesh.triangles.is_empty());
+        assert_eq!(
+            err.to_string(),
+            "10 samples given for a grid of 4 × 4 × 4 nodes: one sample per node is needed"
+        );
+        grid.spacing = 0.0;
+        let err = contour_field(&field, &grid, &[0.0; 64], 0.0, method, &options).unwrap_err();
+        assert_eq!(err, SamplesError::Spacing(0.0));
     }
 }
