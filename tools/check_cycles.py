@@ -16,8 +16,9 @@ An edge A -> B means that code in A names an item of B through a path:
 The declaration `mod child;` is not an import: a parent and its child form a cycle only if each
 names the other's items. Paths into other crates are not edges. Test code counts as any other.
 
-The script prints every strongly connected component of more than one file in each crate and
-exits 1 if there is one.
+The script prints every strongly connected component of more than one file in each crate, each
+file with the files of the component it imports from (and the first path that does), and exits 1
+if there is one.
 
 Usage: python3 tools/check_cycles.py [crate directory ...]   (default: crates/*)
        python3 tools/check_cycles.py --self-test
@@ -152,15 +153,15 @@ class Crate:
         return mod, False
 
     def edges(self):
-        """{file: set of files it imports from}."""
-        out = {f: set() for f in set(self.file_of.values())}
+        """{file: {file it imports from: the first path that does}}."""
+        out = {f: {} for f in set(self.file_of.values())}
         for file, mod, path, kind in self.refs:
             target_path = self.absolute(mod, path)
             if target_path is None or (kind == "use" and target_path in self.file_of):
                 continue
             target, _ = self.resolve(target_path)
             if target is not None and self.file_of[target] != file:
-                out[file].add(self.file_of[target])
+                out[file].setdefault(self.file_of[target], "::".join(path))
         return out
 
 
@@ -235,9 +236,10 @@ def strongly_connected(graph):
 
 
 def crate_cycles(files):
-    """The cycles of one crate given as {module path: text}: sorted lists of module paths."""
+    """The cycles of one crate given as {module path: text}: sorted lists of module paths, and
+    the graph's edges."""
     graph = Crate(files).edges()
-    return sorted(sorted(c) for c in strongly_connected(graph) if len(c) > 1)
+    return sorted(sorted(c) for c in strongly_connected(graph) if len(c) > 1), graph
 
 
 def load(crate_dir):
@@ -257,12 +259,16 @@ def main(args):
     found = 0
     for d in dirs:
         paths = load(d)
-        for cycle in crate_cycles({m: p.read_text() for m, p in paths.items()}):
+        cycles, graph = crate_cycles({m: p.read_text() for m, p in paths.items()})
+        for cycle in cycles:
             found += 1
-            print(f"{d.name}: import cycle between")
+            print(f"{d.name}: import cycle between (each file, then what it imports in the cycle)")
             for m in cycle:
                 shown = paths[m].resolve()
-                print(f"    {shown.relative_to(root) if shown.is_relative_to(root) else shown}")
+                shown = shown.relative_to(root) if shown.is_relative_to(root) else shown
+                imports = [f"{paths[t].relative_to(d / 'src')} ({graph[m][t]})"
+                           for t in sorted(graph[m]) if t in cycle]
+                print(f"    {shown}: {', '.join(imports)}")
     if found:
         print(f"{found} import cycle(s)")
         return 1
@@ -273,7 +279,7 @@ def main(args):
 def self_test():
     def cycles(**files):
         mods = {tuple(k.split("__")) if k != "lib" else (): v for k, v in files.items()}
-        return crate_cycles(mods)
+        return crate_cycles(mods)[0]
 
     cases = [
         # A parent re-exporting its child while the child names an item defined in the parent.
