@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use libfuzzer_sys::fuzz_target;
-use pgvol::ops::read_svg;
+use pgvol::slicing::read_svg;
 
 const SEED: &[u8] = include_bytes!("../corpus/read_svg/layers.svg");
 

@@ -151,7 +151,7 @@ fn cow_from_20_and_40_layers() {
 #[test]
 fn a_leaning_part_whose_layers_do_not_overlap_stays_one_piece() {
     let (radius, lean, layers) = (0.5f32, 1.5f32, 8);
-    let disc = |c: f32| pgvol::ops::Loop {
+    let disc = |c: f32| pgvol::slicing::Loop {
         points: (0..64)
             .map(|i| {
                 let t = i as f32 / 64.0 * std::f32::consts::TAU;

@@ -426,7 +426,7 @@ mod tests {
         assert!(!out.exists());
         // Written to the default path, one layer per height, the empty one kept.
         run("z:0.5,-0.5,1.05", &[]).unwrap();
-        let layers = pgvol::ops::read_slice_json(&dir.path().join("s.sections.json")).unwrap();
+        let layers = pgvol::slicing::read_slice_json(&dir.path().join("s.sections.json")).unwrap();
         let heights: Vec<f32> = layers.iter().map(|l| l.height).collect();
         assert_eq!(heights, [-0.5, 0.5, 1.05]);
         let loops: Vec<usize> = layers.iter().map(|l| l.loops.len()).collect();
@@ -441,7 +441,7 @@ mod tests {
         let svg = dir.path().join("cuts.svg");
         run("x:0", &["--sections-out", svg.to_str().unwrap()]).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
-        let layers = pgvol::ops::read_svg(&text, &svg).unwrap();
+        let layers = pgvol::slicing::read_svg(&text, &svg).unwrap();
         assert_eq!(layers.len(), 1);
         assert!((layers[0].area() - std::f64::consts::PI).abs() < 0.02 * std::f64::consts::PI);
     }

@@ -8,8 +8,6 @@
 
 use rayon::prelude::*;
 
-use crate::samples::{box_index, BoxValues, BOX};
-
 /// Nodes per block edge. A power of two, so a node's block and offset are a shift and a mask.
 pub(crate) const BLOCK: usize = 8;
 pub(crate) const BLOCK_SHIFT: u32 = BLOCK.trailing_zeros();
@@ -18,6 +16,20 @@ pub(crate) const BLOCK_NODES: usize = BLOCK * BLOCK * BLOCK;
 
 /// Marks a block that the surface does not pass through.
 pub(crate) const INACTIVE: u32 = u32::MAX;
+
+/// Nodes per box edge: a block's own nodes and the first layer of the next block.
+pub(crate) const BOX: usize = BLOCK + 1;
+/// Nodes in one box.
+pub(crate) const BOX_NODES: usize = BOX * BOX * BOX;
+
+/// The values of one block's box: node `lo + (di, dj, dk)` at `di + BOX * (dj + BOX * dk)`.
+pub(crate) type BoxValues = [f32; BOX_NODES];
+
+/// Position of box node `(di, dj, dk)` in [`BoxValues`].
+#[inline]
+pub(crate) fn box_index(d: [usize; 3]) -> usize {
+    d[0] + BOX * (d[1] + BOX * d[2])
+}
 
 /// Blocks per tile edge of [`SlotMap`].
 const TILE: usize = 8;

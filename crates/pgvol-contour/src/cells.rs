@@ -1,9 +1,9 @@
 //! The crossed cells of a block and their configurations.
 
+use crate::blocks::{box_index, BoxValues};
 use crate::crossings::BlockBox;
 use crate::cube::face_corners;
 use crate::decider::joins_inside;
-use crate::samples::{box_index, BoxValues};
 use crate::table::CaseTable;
 
 /// Calls `visit(cell, case, joined)` for every cell owned by `block` that has a crossed edge,

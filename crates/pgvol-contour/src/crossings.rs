@@ -8,11 +8,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::blocks::{
-    box_nodes, local_node, origin, Blocks, BoxMasks, BLOCK, BLOCK_NODES, BLOCK_SHIFT, INACTIVE,
+    box_index, box_nodes, local_node, origin, Blocks, BoxMasks, BoxValues, BLOCK, BLOCK_NODES,
+    BLOCK_SHIFT, BOX_NODES, INACTIVE,
 };
 use crate::place::onto_edge;
-use crate::samples::CROSSINGS_PART;
-use crate::samples::{box_index, BoxValues, Samples, BOX_NODES};
+use crate::samples::{Samples, CROSSINGS_PART};
 use pgvol_core::progress::tick;
 
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).

@@ -1,8 +1,8 @@
 //! Continuous fields that contouring can evaluate between the grid nodes.
 
 use glam::Vec3;
-use pgvol_field::perturb::PerturbationField;
 use pgvol_field::CoefficientVolume;
+use pgvol_perturb::PerturbationField;
 
 use crate::cubic_eval::bspline3_value_gradient;
 

@@ -1,7 +1,7 @@
 //! Marching cubes of a coefficient volume run by run of node layers along z, so that what is
 //! held at any time is one run's samples, crossings and coefficients, not the whole band.
 //!
-//! The padded sampling grid (see `volume`) is cut into runs of [`RUN_LAYERS`] cell layers. A run
+//! The padded sampling grid (see `grids`) is cut into runs of [`RUN_LAYERS`] cell layers. A run
 //! is contoured as a grid of its own, its nodes placed as the whole grid places them, and reads
 //! only the coefficient layers its nodes' supports reach, which a [`CoefficientWindows`] source
 //! provides (the whole volume in memory, or a window decoded from a file). Two runs share the
@@ -21,10 +21,10 @@ use pgvol_core::progress::{tick, Report, Span};
 use pgvol_field::{CoefficientVolume, Grid};
 use rayon::prelude::*;
 
-use crate::blocks::{coords, BLOCK};
+use crate::blocks::{coords, BoxValues, BLOCK};
 use crate::crossings::{all_crossings, Crossings, Place};
 use crate::extract::{block_triangles, Part, EXTRA_FLAG};
-use crate::samples::{BoxValues, Nodes, Samples, CROSSINGS_PART};
+use crate::samples::{Nodes, Samples, CROSSINGS_PART};
 use crate::sparse_sample::{coefficient_layers, VolumeNodes};
 
 /// Cell layers per run: 8 contour blocks. A run sorts again the brick layer it shares with the
@@ -99,7 +99,7 @@ fn contour_runs_of<W: CoefficientWindows>(
     part: &mut dyn FnMut(RunPart) -> Result<(), W::Error>,
 ) -> Result<(), RunsError<W::Error>> {
     let volume_grid = windows.grid();
-    let padded = crate::volume::padded(grid);
+    let padded = crate::grids::padded(grid);
     let cells = padded.dims[2] - 1;
     let runs = cells.div_ceil(run_layers);
     let span = Span::whole(report);
@@ -128,7 +128,7 @@ fn run_mesh(
 ) -> (Crossings, Vec<Part>) {
     let sampling = Some(span.part(0.0, SAMPLING_PART));
     let nodes = VolumeNodes::layers(volume, grid, iso, layers, sampling);
-    let padded = crate::volume::padded(grid);
+    let padded = crate::grids::padded(grid);
     let run = RunNodes {
         inner: &nodes,
         first: layers[0],
@@ -139,7 +139,7 @@ fn run_mesh(
         .expect("a run holds at least one cell layer")
         .shifted(layers[0])
         .reporting(Some(span.part(SAMPLING_PART, 1.0)));
-    let refine = crate::volume::volume_refine(volume, iso);
+    let refine = crate::volume_root::volume_refine(volume, iso);
     let crossings = all_crossings(&samples, Place::Position(&refine), EXTRA_FLAG);
     let blocks = crossings.blocks.active.len();
     let counter = samples.counter(CROSSINGS_PART, 1.0, blocks);
@@ -332,7 +332,7 @@ mod tests {
     fn runs_weld_into_the_mesh_of_one_run_and_read_only_their_windows() {
         for basis in [Basis::Bspline3, Basis::Trilinear] {
             let v = two_balls(basis);
-            let fine = crate::volume::resampled_grid(&v, 61).unwrap();
+            let fine = crate::grids::resampled_grid(&v, 61).unwrap();
             for grid in [v.grid, fine] {
                 let whole = mesh_of(&mut &v, &grid, usize::MAX / 2);
                 let s = whole.stats();

@@ -7,22 +7,8 @@
 
 use glam::Vec3;
 
-use crate::blocks::{scan_active, Rows, BLOCK};
+use crate::blocks::{box_index, scan_active, BoxValues, Rows};
 use pgvol_core::progress::{Counter, Span};
-
-/// Nodes per box edge: a block's own nodes and the first layer of the next block.
-pub(crate) const BOX: usize = BLOCK + 1;
-/// Nodes in one box.
-pub(crate) const BOX_NODES: usize = BOX * BOX * BOX;
-
-/// The values of one block's box: node `lo + (di, dj, dk)` at `di + BOX * (dj + BOX * dk)`.
-pub(crate) type BoxValues = [f32; BOX_NODES];
-
-/// Position of box node `(di, dj, dk)` in [`BoxValues`].
-#[inline]
-pub(crate) fn box_index(d: [usize; 3]) -> usize {
-    d[0] + BOX * (d[1] + BOX * d[2])
-}
 
 /// Where node values come from.
 pub(crate) trait Nodes: Sync {
@@ -33,7 +19,8 @@ pub(crate) trait Nodes: Sync {
     /// `iso`: every active block, and maybe others, which reading their box rules out.
     fn candidates(&self, iso: f32) -> Vec<u32>;
 
-    /// The `n` nodes from node `lo` (at most [`BOX`] per axis, all in the grid) into `out`.
+    /// The `n` nodes from node `lo` (at most [`BOX`](crate::blocks::BOX) per axis, all in the
+    /// grid) into `out`.
     fn read_box(&self, lo: [usize; 3], n: [usize; 3], out: &mut BoxValues);
 }
 

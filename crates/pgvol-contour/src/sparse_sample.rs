@@ -21,8 +21,8 @@ use pgvol_core::progress::{tick, Span};
 
 use crate::cubic_eval::bspline3_value_gradient;
 
-use crate::blocks::BLOCK;
-use crate::samples::{box_index, BoxValues, Nodes};
+use crate::blocks::{box_index, BoxValues, BLOCK};
+use crate::samples::Nodes;
 use crate::support::{background_bound, coefficient_ranges, gathered_bound, support_kinds, STORED};
 use crate::window_or::or_over_boxes;
 
@@ -478,8 +478,8 @@ fn candidate_blocks(reach: &Reach, sides: &[u8], exact: &SparseGrid) -> (Vec<u32
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::blocks::{box_nodes, origin};
-    use crate::samples::{PaddedNodes, BOX_NODES};
+    use crate::blocks::{box_nodes, origin, BOX_NODES};
+    use crate::samples::PaddedNodes;
     use crate::test_volumes::two_balls;
     use pgvol_field::Basis;
 

@@ -7,11 +7,13 @@ use pgvol_field::{CoefficientVolume, Grid};
 use crate::crossings::with_normal;
 use crate::dual_methods::{dual_contour_with, surface_nets_with};
 use crate::dual_options::DualContourOptions;
-use crate::edge_cubic::{crossing_on_grid_edge, thirds_on_grid_edge};
+use crate::edge_cubic::crossing_on_grid_edge;
 use crate::field::Field;
+use crate::grids::padded;
 use crate::marching::marching_cubes_samples;
-use crate::root::{cubic_edge_root, edge_root, root_from_thirds};
+use crate::root::edge_root;
 use crate::samples::{DenseNodes, Nodes, PaddedNodes, Samples};
+use crate::volume_root::volume_refine;
 use pgvol_core::progress::{Report, Span};
 
 /// How the mesh is extracted.
@@ -24,28 +26,6 @@ pub enum Method {
     SurfaceNets,
     /// Manifold dual contouring with the analytic gradients: keeps sharp features.
     DualContouring,
-}
-
-/// The grid of `volume` resampled with `res` nodes along its longest side, same origin and box.
-/// `None` when the grid would exceed [`pgvol_field::MAX_GRID_NODES`].
-pub fn resampled_grid(volume: &CoefficientVolume, res: usize) -> Option<Grid> {
-    resampled_grid_of(&volume.grid, res)
-}
-
-/// [`resampled_grid`] of a volume on `grid`.
-pub fn resampled_grid_of(grid: &Grid, res: usize) -> Option<Grid> {
-    let side = grid.max_corner() - grid.origin;
-    let spacing = side.max_element() / (res.max(2) - 1) as f32;
-    let dims = side
-        .to_array()
-        .map(|s| ((s / spacing).round() as usize + 1).max(2));
-    let total = dims.iter().map(|&d| d as u128).product::<u128>();
-    (total <= pgvol_field::MAX_GRID_NODES).then_some(Grid {
-        origin: grid.origin,
-        spacing,
-        dims,
-        offset: grid.offset,
-    })
 }
 
 /// Contours the `iso` level set of `volume` sampled on `grid`. The samples are padded with one
@@ -114,16 +94,6 @@ pub(crate) fn contour_samples(
     contour_nodes(volume, &padded(grid), &nodes, iso, method, None)
 }
 
-/// `grid` with one more node layer on every side: the grid of the padded samples.
-pub(crate) fn padded(grid: &Grid) -> Grid {
-    Grid {
-        origin: grid.origin - Vec3::splat(grid.spacing),
-        spacing: grid.spacing,
-        dims: grid.dims.map(|n| n + 2),
-        offset: grid.offset,
-    }
-}
-
 /// Contours the `iso` level set of any continuous `field` given its samples `inner` on `grid`
 /// (x fastest; only their side of iso matters beyond the crossed edges, so clamped band values
 /// do), padded like [`contour_volume`] so the surface closes. Crossings are found by regula
@@ -131,7 +101,10 @@ pub(crate) fn padded(grid: &Grid) -> Grid {
 /// along an edge (an exact signed distance near a sharp edge) gets its true crossing; edges into
 /// the padding are interpolated linearly. `options` applies to dual contouring.
 ///
-/// Returns an empty mesh when `inner` does not match `grid` or the spacing is not positive.
+/// # Errors
+///
+/// [`SamplesError`] when `inner` does not hold one sample per node of `grid`, or the grid
+/// spacing is not positive and finite.
 pub fn contour_field(
     field: &dyn Field,
     grid: &Grid,
@@ -139,8 +112,22 @@ pub fn contour_field(
     iso: f32,
     method: Method,
     options: &DualContourOptions,
-) -> pgvol_core::Mesh {
+) -> Result<pgvol_core::Mesh, SamplesError> {
     contour_field_reporting(field, grid, inner, iso, method, options, &|_| {})
+}
+
+/// Why [`contour_field`] cannot contour the samples it is given.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SamplesError {
+    /// The samples are not one per node of the grid.
+    #[error(
+        "{given} samples given for a grid of {} × {} × {} nodes: one sample per node is needed",
+        dims[0], dims[1], dims[2]
+    )]
+    Count { given: usize, dims: [usize; 3] },
+    /// The grid spacing is zero, negative or not finite.
+    #[error("the grid spacing is {0}: it must be positive and finite")]
+    Spacing(f32),
 }
 
 /// [`contour_field`], reporting the fraction done to `report`.
@@ -152,16 +139,22 @@ pub fn contour_field_reporting(
     method: Method,
     options: &DualContourOptions,
     report: Report,
-) -> pgvol_core::Mesh {
+) -> Result<pgvol_core::Mesh, SamplesError> {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
-    if nodes != Some(inner.len()) || !(grid.spacing.is_finite() && grid.spacing > 0.0) {
-        return pgvol_core::Mesh::default();
+    if nodes != Some(inner.len()) {
+        return Err(SamplesError::Count {
+            given: inner.len(),
+            dims: grid.dims,
+        });
+    }
+    if !(grid.spacing.is_finite() && grid.spacing > 0.0) {
+        return Err(SamplesError::Spacing(grid.spacing));
     }
     // The padding is read through the source, not copied around the caller's samples.
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
     let padded = padded(grid);
     let Some(samples) = Samples::checked(&nodes, padded.origin, padded.spacing, iso) else {
-        return pgvol_core::Mesh::default();
+        return Ok(pgvol_core::Mesh::default());
     };
     let samples = samples.reporting(Some(Span::whole(report)));
     let (lo, hi) = (grid.origin, grid.max_corner());
@@ -184,7 +177,7 @@ pub fn contour_field_reporting(
         }
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
     };
-    in_frame_of(grid, mesh)
+    Ok(in_frame_of(grid, mesh))
 }
 
 /// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
@@ -239,45 +232,10 @@ fn contour_nodes(
     }
 }
 
-/// Places the crossing of an edge on the continuous field of `volume` where both ends lie in
-/// its box, and linearly elsewhere (where values are artificial padding).
-pub(crate) fn volume_refine(
-    volume: &CoefficientVolume,
-    iso: f32,
-) -> impl Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + '_ {
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let in_box = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
-    move |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
-        if in_box(a) && in_box(b) {
-            volume_edge_root(volume, a, va, b, vb, iso)
-        } else {
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            a + (b - a) * t
-        }
-    }
-}
-
-/// The crossing on a grid edge of the continuous field of `volume`: from the coefficients
-/// directly where the edge lies on the volume's own B-spline grid, else by two evaluations.
-fn volume_edge_root(
-    volume: &CoefficientVolume,
-    a: Vec3,
-    va: f32,
-    b: Vec3,
-    vb: f32,
-    iso: f32,
-) -> Vec3 {
-    match thirds_on_grid_edge(volume, a, b) {
-        Some(thirds) if va.is_finite() && vb.is_finite() => {
-            root_from_thirds(a, va, b, vb, thirds, iso)
-        }
-        _ => cubic_edge_root(volume, a, va, b, vb, iso),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grids::resampled_grid;
     use crate::test_volumes::two_balls;
     use pgvol_field::Basis;
 
@@ -400,7 +358,7 @@ mod tests {
         };
         let mut gaps = Vec::new();
         for method in [Method::MarchingCubes, Method::DualContouring] {
-            let mesh = contour_field(&field, &grid, &samples, 0.0, method, &options);
+            let mesh = contour_field(&field, &grid, &samples, 0.0, method, &options).unwrap();
             let s = mesh.stats();
             assert!(s.watertight && s.winding_consistent, "{method:?}: {s:?}");
             let exact = 1.1f64.powi(3);
@@ -415,23 +373,30 @@ mod tests {
     }
 
     #[test]
-    fn exact_field_declines_mismatched_samples() {
+    fn exact_field_refuses_mismatched_samples() {
         let (field, _) = rotated_cube();
-        let grid = Grid {
+        let mut grid = Grid {
             origin: Vec3::ZERO,
             spacing: 0.1,
             dims: [4, 4, 4],
             offset: Default::default(),
         };
         let options = DualContourOptions::default();
-        let mesh = contour_field(
-            &field,
-            &grid,
-            &[0.0; 10],
-            0.0,
-            Method::DualContouring,
-            &options,
+        let method = Method::DualContouring;
+        let err = contour_field(&field, &grid, &[0.0; 10], 0.0, method, &options).unwrap_err();
+        assert_eq!(
+            err,
+            SamplesError::Count {
+                given: 10,
+                dims: [4, 4, 4]
+            }
         );
-        assert!(mesh.triangles.is_empty());
+        assert_eq!(
+            err.to_string(),
+            "10 samples given for a grid of 4 × 4 × 4 nodes: one sample per node is needed"
+        );
+        grid.spacing = 0.0;
+        let err = contour_field(&field, &grid, &[0.0; 64], 0.0, method, &options).unwrap_err();
+        assert_eq!(err, SamplesError::Spacing(0.0));
     }
 }

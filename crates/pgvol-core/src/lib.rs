@@ -18,5 +18,6 @@ pub use atomic::write_atomic;
 pub use file_error::FileError;
 pub use grid::{Grid, GridError, GRID_MARGIN, MAX_GRID_NODES};
 pub use input::read_input;
-pub use mesh::{Mesh, MeshStats};
+pub use mesh::stats::MeshStats;
+pub use mesh::Mesh;
 pub use sparse::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};

@@ -9,7 +9,6 @@ pub mod basis;
 mod distance;
 pub mod fit;
 pub mod kernel;
-pub mod perturb;
 pub mod prefilter;
 mod stencil;
 pub mod volume;

@@ -20,8 +20,7 @@ use std::path::Path;
 const MAX_OFFSET: f64 = 1e8;
 
 use crate::error::{err, FormatError};
-use crate::header::{PgvHeader, ENCODING_DENSE_F32};
-use crate::perturbation::ENCODING_PERTURBATION;
+use crate::header::{PgvHeader, ENCODING_DENSE_F32, ENCODING_PERTURBATION};
 use crate::sparse_params::ENCODING_SPARSE;
 
 pub const MAGIC: &[u8; 8] = b"PGVOL\0\r\n";

@@ -11,6 +11,9 @@ use crate::sparse_params::SparseParams;
 /// The only payload encoding of version 1: every coefficient as f32, x fastest.
 pub const ENCODING_DENSE_F32: &str = "dense-f32";
 
+/// The encoding name of a stored function list (see `perturbation`).
+pub const ENCODING_PERTURBATION: &str = "perturbation-f64";
+
 /// What a `.pgv` header holds.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PgvHeader {

@@ -18,10 +18,9 @@ pub mod threemf;
 
 pub use error::FormatError;
 pub use fixed_step::{FixedScale, FIXED_KNEE, FIXED_RATIO, FIXED_STEP, FREE_TOLERANCE};
-pub use header::{header_for, PgvFile, PgvHeader};
+pub use header::{header_for, PgvFile, PgvHeader, ENCODING_PERTURBATION};
 pub use perturbation::{
     decode_perturbation, encode_perturbation, is_perturbation, write_perturbation,
-    ENCODING_PERTURBATION,
 };
 pub use pgv::{decode_pgv, encode_pgv, read_pgv, write_pgv};
 pub use sparse::{

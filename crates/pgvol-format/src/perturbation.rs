@@ -7,14 +7,12 @@
 use std::path::Path;
 
 use glam::DVec3;
-use pgvol_field::perturb::{Perturbation, PerturbationField, Quadric};
+use pgvol_perturb::{Perturbation, PerturbationField, Quadric};
 
 use crate::container::{container, parse_container};
 use crate::error::{err, FormatError};
 use crate::header::PgvHeader;
-
-/// The encoding name of a stored function list.
-pub const ENCODING_PERTURBATION: &str = "perturbation-f64";
+pub use crate::header::ENCODING_PERTURBATION;
 
 /// Bytes of the base quadric: centre (3), scale, ten coefficients.
 pub const BASE_BYTES: usize = 8 * 14;

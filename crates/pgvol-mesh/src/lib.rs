@@ -6,6 +6,7 @@
 
 mod base64;
 mod clean;
+mod error;
 mod format;
 mod gltf_io;
 mod io;
@@ -17,6 +18,7 @@ mod stl;
 mod validate;
 
 pub use clean::{clean, read_clean, CleanReport};
+pub use error::MeshError;
 pub use format::MeshFormat;
 pub use io::{check_precision, read, read_bytes, read_ply_points, write, write_to};
 pub use normals::{face_normal, vertex_normals};
@@ -25,6 +27,3 @@ pub use validate::{
     coordinate_out_of_range, f32_rounding_loss, mesh_problem, too_small, MAX_COORDINATE,
     MAX_F32_ROUNDING, MIN_EXTENT,
 };
-
-/// The error of every reader and writer here: the file and what is wrong with it.
-pub type MeshError = FileError;

@@ -12,8 +12,7 @@
 //! convex region is convex).
 
 use crate::contours::{inside_loop, ContourPlane};
-use crate::plane_fit::Lattice;
-use crate::stack::plane_distance;
+use crate::plane_distance::{plane_distance, Lattice};
 
 /// Matched regions are bridged when they share less than this fraction of the smaller one's
 /// nodes.

@@ -22,16 +22,20 @@
 
 pub mod band;
 pub mod bridge;
+mod cloud;
 pub mod contours;
 pub mod cubic;
 pub mod index;
 pub mod normals;
 pub mod orientation;
+pub mod plane_distance;
 pub mod plane_fit;
 pub mod sections;
 pub mod spline_fit;
 pub mod stack;
 pub mod tangent;
+#[cfg(test)]
+mod test_points;
 pub mod wendland;
 
 use std::time::Instant;
@@ -40,16 +44,10 @@ use glam::Vec3;
 use pgvol_core::Grid;
 use pgvol_field::{Basis, CoefficientVolume, FieldError};
 
+pub use cloud::PointCloud;
 pub use cubic::MAX_CUBIC_CENTRES;
 pub use index::{mean_spacing, sampling_radius};
 pub use normals::estimate_normals;
-
-/// Points with optional unit normals (outward).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PointCloud {
-    pub points: Vec<Vec3>,
-    pub normals: Option<Vec<Vec3>>,
-}
 
 /// How the field through the points is built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -463,21 +461,9 @@ pub fn reconstruct_stack(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-
-    /// `n` points spread evenly (Fibonacci lattice) on a sphere of radius `r` at the origin.
-    pub fn sphere_points(n: usize, r: f32) -> Vec<Vec3> {
-        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-        (0..n)
-            .map(|i| {
-                let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
-                let rho = (1.0 - y * y).sqrt();
-                let phi = golden * i as f32;
-                Vec3::new(rho * phi.cos(), y, rho * phi.sin()) * r
-            })
-            .collect()
-    }
+    use crate::test_points::sphere_points;
 
     /// Largest |distance from the origin − r| over the zero crossings along node rows.
     fn radius_error(volume: &CoefficientVolume, r: f32) -> f32 {

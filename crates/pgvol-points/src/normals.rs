@@ -159,7 +159,7 @@ mod tests {
 
     #[test]
     fn sphere_normals_come_out_outward() {
-        let points = crate::tests::sphere_points(2000, 1.0);
+        let points = crate::test_points::sphere_points(2000, 1.0);
         let normals = estimate_normals(&points, crate::index::mean_spacing(&points));
         let outward = points
             .iter()

@@ -99,7 +99,7 @@ mod tests {
     use super::*;
 
     fn sphere() -> (Vec<Vec3>, Vec<Vec3>) {
-        let points = crate::tests::sphere_points(3000, 1.0);
+        let points = crate::test_points::sphere_points(3000, 1.0);
         let normals = points.iter().map(|p| p.normalize()).collect();
         (points, normals)
     }

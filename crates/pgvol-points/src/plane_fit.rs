@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 
 use crate::contours::ContourPlane;
+use crate::plane_distance::Lattice;
 
 /// The loops' vertices are held to zero, and points along segments longer than this many node
 /// spacings (in sliced contours, the segments that simplification merged, whose chords stay
@@ -29,14 +30,6 @@ const RIDGE: f64 = 1e-3;
 /// Loops whose box is smaller than this many node spacings may enclose no node: their inside
 /// is held to its depth at the deepest of a few interior candidates.
 const SMALL_LOOP: f32 = 3.0;
-
-/// A plane's node lattice: `dims[0] × dims[1]` nodes at `origin + spacing · (i, j)`, u fastest.
-#[derive(Clone, Copy, Debug)]
-pub struct Lattice {
-    pub origin: [f32; 2],
-    pub spacing: f32,
-    pub dims: [usize; 2],
-}
 
 /// Replaces `values` (the plane's 2D signed distance at the lattice nodes, u fastest) by node
 /// values whose interpolating cubic B-spline passes through the loops of `plane`.
@@ -340,7 +333,7 @@ mod tests {
             height: 0.0,
             loops: vec![square.clone(), diamond.clone()],
         };
-        let mut values = crate::stack::plane_distance(&plane, &lattice, 6.0);
+        let mut values = crate::plane_distance::plane_distance(&plane, &lattice, 6.0);
         let plain = prefilter(&values, lattice.dims);
         pass_through_loops(&mut values, &plane, &lattice);
         let fitted = prefilter(&values, lattice.dims);
@@ -385,7 +378,7 @@ mod tests {
                 })
                 .collect();
             let plane = ContourPlane { height: 0.0, loops: vec![lp.clone()] };
-            let mut values = crate::stack::plane_distance(&plane, &lattice, 6.0);
+            let mut values = crate::plane_distance::plane_distance(&plane, &lattice, 6.0);
             let before = values.clone();
             pass_through_loops(&mut values, &plane, &lattice);
             let fitted = prefilter(&values, lattice.dims);

@@ -3,14 +3,14 @@
 //! from its B-spline resampling on the grid: the output of the RBF method of Turk and O'Brien
 //! and Morse et al., where the surface is wanted as contours in given planes.
 //!
-//! Each plane is contoured by the slicer's marching squares ([`pgvol_ops::slice`]): the field
+//! Each plane is contoured by the slicer's marching squares ([`pgvol_slice::slice`]): the field
 //! at the nodes of a 2D grid over the grid box's cross-section, one vertex per crossed grid
 //! edge at the field's zero along the edge (regula falsi), so every vertex lies on the field's
 //! zero set, then a simplification that keeps a subset of the vertices.
 
 use pgvol_core::Grid;
-use pgvol_ops::{
-    Axis, Layer, OpsError, SliceOptions, MAX_LAYERS, MAX_LAYER_COORDINATE, MAX_LAYER_NODES,
+use pgvol_slice::{
+    Axis, Layer, SliceError, SliceOptions, MAX_LAYERS, MAX_LAYER_COORDINATE, MAX_LAYER_NODES,
 };
 use rayon::prelude::*;
 
@@ -31,7 +31,7 @@ pub struct SectionPlanes {
 
 impl SectionPlanes {
     /// Planes at `heights` along `axis`, sampled at `resolution` and simplified to a tenth of
-    /// it (as `pgvol_ops::SliceOptions::new`).
+    /// it (as `pgvol_slice::SliceOptions::new`).
     pub fn new(axis: Axis, heights: Vec<f32>, resolution: f32) -> Self {
         SectionPlanes {
             axis,
@@ -57,13 +57,13 @@ pub fn axis_name(axis: Axis) -> &'static str {
 /// resolution or tolerance that is not a positive (non-negative) number, or a resolution so
 /// fine that a plane's grid would exceed [`MAX_LAYER_NODES`]. Cheap: callers check before
 /// fitting.
-pub fn check(grid: &Grid, planes: &SectionPlanes) -> Result<(), OpsError> {
+pub fn check(grid: &Grid, planes: &SectionPlanes) -> Result<(), SliceError> {
     let heights = &planes.heights;
     if heights.is_empty() {
-        return Err(OpsError::BadParameter("no section heights given".into()));
+        return Err(SliceError::BadParameter("no section heights given".into()));
     }
     if heights.len() > MAX_LAYERS {
-        return Err(OpsError::BadParameter(format!(
+        return Err(SliceError::BadParameter(format!(
             "{} section heights, more than the limit of {MAX_LAYERS}",
             heights.len()
         )));
@@ -73,13 +73,13 @@ pub fn check(grid: &Grid, planes: &SectionPlanes) -> Result<(), OpsError> {
     let (lo, hi) = (grid.origin, grid.max_corner());
     for &h in heights {
         if !(h.is_finite() && h.abs() < MAX_LAYER_COORDINATE) {
-            return Err(OpsError::BadParameter(format!(
+            return Err(SliceError::BadParameter(format!(
                 "the section height {h} is not a finite number below {MAX_LAYER_COORDINATE:e} \
                  in magnitude"
             )));
         }
         if !(lo[a]..=hi[a]).contains(&h) {
-            return Err(OpsError::BadParameter(format!(
+            return Err(SliceError::BadParameter(format!(
                 "the section height {name} = {h} is outside the grid box around the points, \
                  which spans {name} from {} to {}",
                 lo[a], hi[a]
@@ -88,12 +88,12 @@ pub fn check(grid: &Grid, planes: &SectionPlanes) -> Result<(), OpsError> {
     }
     let res = planes.resolution;
     if !(res.is_finite() && res > 0.0) {
-        return Err(OpsError::BadParameter(format!(
+        return Err(SliceError::BadParameter(format!(
             "the sections' resolution must be a positive length, got {res}"
         )));
     }
     if !(planes.tolerance.is_finite() && planes.tolerance >= 0.0) {
-        return Err(OpsError::BadParameter(format!(
+        return Err(SliceError::BadParameter(format!(
             "the sections' simplification tolerance must be >= 0, got {}",
             planes.tolerance
         )));
@@ -102,7 +102,7 @@ pub fn check(grid: &Grid, planes: &SectionPlanes) -> Result<(), OpsError> {
     let nodes = |k: usize| ((hi[k] - lo[k]) / res).ceil().max(1.0) as f64 + 3.0;
     let (nu, nv) = (nodes(u), nodes(v));
     if nu * nv > MAX_LAYER_NODES as f64 {
-        return Err(OpsError::BadParameter(format!(
+        return Err(SliceError::BadParameter(format!(
             "sections at a resolution of {res} sample {nu} x {nv} nodes per plane, more than \
              the limit of {MAX_LAYER_NODES}; use a coarser resolution"
         )));
@@ -119,13 +119,13 @@ pub fn sections(
     field: &PointField,
     grid: &Grid,
     planes: &SectionPlanes,
-) -> Result<Vec<Layer>, OpsError> {
+) -> Result<Vec<Layer>, SliceError> {
     check(grid, planes)?;
     let mut heights = planes.heights.clone();
     heights.sort_by(f32::total_cmp);
     heights.dedup();
     let a = planes.axis.indices()[0];
-    let layers: Vec<Result<Layer, OpsError>> = heights
+    let layers: Vec<Result<Layer, SliceError>> = heights
         .par_iter()
         .map(|&h| {
             // The grid box's cross-section at h: the slicer cuts exactly one plane there.
@@ -139,7 +139,7 @@ pub fn sections(
                 resolution: planes.resolution,
                 tolerance: planes.tolerance,
             };
-            let mut layers = pgvol_ops::slice(field, (lo, hi), &options)?;
+            let mut layers = pgvol_slice::slice(field, (lo, hi), &options)?;
             debug_assert_eq!(layers.len(), 1);
             Ok(layers.pop().unwrap_or(Layer {
                 height: h,
@@ -156,7 +156,7 @@ mod tests {
     use pgvol_field::CoefficientVolume;
 
     use super::*;
-    use crate::tests::sphere_points;
+    use crate::test_points::sphere_points;
     use crate::{reconstruct_with, Method, PointCloud, PointsOptions};
 
     /// What a section of a unit sphere's reconstruction looked like.
@@ -221,7 +221,7 @@ mod tests {
                 let (mut lo, mut hi) = bounds;
                 lo.z = h;
                 hi.z = h;
-                pgvol_ops::slice_volume(&volume, (lo, hi), &options)
+                pgvol_slice::slice_volume(&volume, (lo, hi), &options)
                     .unwrap()
                     .remove(0)
             })

@@ -365,7 +365,7 @@ pub(crate) fn write_layers(
                 return Err(errors::parameter(py, "a loop must be an (M, 2) array"));
             }
             let points = view.rows().into_iter().map(|r| [r[0], r[1]]).collect();
-            loops.push(pgvol::ops::Loop { points, hole });
+            loops.push(pgvol::slicing::Loop { points, hole });
         }
         out.push(pgvol::Layer {
             height: layer.height,

@@ -526,6 +526,8 @@ fn segment_crossing(a: Vec3A, dir: Vec3A, t: &[Vec3A; 3], end_margin: f32) -> Cr
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
+    use pgvol_mesh::shapes::octasphere;
     use rand::{Rng, SeedableRng};
 
     pub(crate) fn random_soup(n: usize, seed: u64) -> Mesh {
@@ -613,5 +615,73 @@ mod tests {
             .unwrap();
         assert!((c.distance_squared - 4.0).abs() < 1e-6);
         assert!(bvh.closest(Vec3::new(0.2, 0.2, 2.0), 1.0).is_none());
+    }
+
+    /// A fine sphere, and the bunny when `PGVOL_SHARED_MESHES` names the shared meshes' folder.
+    fn meshes() -> Vec<Mesh> {
+        let mut meshes = vec![octasphere(5)];
+        if let Some(dir) = std::env::var_os("PGVOL_SHARED_MESHES") {
+            let path = std::path::Path::new(&dir).join("stanford-bunny.obj");
+            meshes.push(pgvol_mesh::read(&path).expect("the shared bunny"));
+        }
+        meshes
+    }
+
+    /// The exact distance from `p` to the triangle, in f64: the smallest over its plane's
+    /// foot point (when inside) and its three edges.
+    fn exact_distance(p: DVec3, [a, b, c]: [DVec3; 3]) -> f64 {
+        let segment = |a: DVec3, b: DVec3| {
+            let ab = b - a;
+            let t = ((p - a).dot(ab) / ab.length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+            p.distance(a + ab * t)
+        };
+        let mut best = segment(a, b).min(segment(b, c)).min(segment(c, a));
+        let n = (b - a).cross(c - a);
+        if n.length_squared() > 0.0 {
+            let foot = p - n * ((p - a).dot(n) / n.length_squared());
+            let inside = [(a, b), (b, c), (c, a)]
+                .iter()
+                .all(|&(u, v)| (v - u).cross(foot - u).dot(n) >= 0.0);
+            if inside {
+                best = best.min(p.distance(foot));
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn bounds_never_exceed_the_distance_to_a_leaf_triangle() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        for mesh in meshes() {
+            let bvh = Bvh::build(&mesh);
+            let leaves = bvh.nodes.iter().enumerate().filter(|(_, n)| n.is_leaf());
+            for (id, node) in leaves.step_by(7) {
+                let tris = &bvh.tris[node.first as usize..(node.first + node.count) as usize];
+                let oriented = &bvh.oriented[id];
+                let size = (node.max - node.min).length();
+                for _ in 0..40 {
+                    let [a, b, c] = tris[rng.gen_range(0..tris.len())];
+                    let (u, v): (f32, f32) = (rng.gen(), rng.gen());
+                    let (u, v) = if u + v > 1.0 {
+                        (1.0 - u, 1.0 - v)
+                    } else {
+                        (u, v)
+                    };
+                    let on = a + (b - a) * u + (c - a) * v;
+                    let direction = Vec3A::new(rng.gen(), rng.gen(), rng.gen()) - 0.5;
+                    // On a triangle, a hair away, near, and far.
+                    let offset = [0.0, 1e-6, 1e-3, 0.3, 3.0, 100.0][rng.gen_range(0..6)];
+                    let p = on + direction * (offset * size);
+                    let bound = oriented.distance_squared_bound(p, node.min, node.max);
+                    for &[a, b, c] in tris {
+                        let scanned = closest_point_and_distance(p, a, b, c).2;
+                        assert!(bound <= scanned, "{bound} > {scanned} at {p}");
+                        let corners = [a, b, c].map(|x| DVec3::from(Vec3::from(x)));
+                        let exact = exact_distance(DVec3::from(Vec3::from(p)), corners);
+                        assert!(f64::from(bound) <= exact * exact, "{bound} at {p}");
+                    }
+                }
+            }
+        }
     }
 }

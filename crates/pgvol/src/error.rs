@@ -223,6 +223,12 @@ impl From<pgvol_ops::OpsError> for Error {
     }
 }
 
+impl From<pgvol_slice::SliceError> for Error {
+    fn from(e: pgvol_slice::SliceError) -> Self {
+        Error::new(ErrorKind::BadParameter, e.to_string()).caused_by(e)
+    }
+}
+
 impl From<pgvol_sdf::SdfError> for Error {
     fn from(e: pgvol_sdf::SdfError) -> Self {
         Error::new(

@@ -263,7 +263,8 @@ mod tests {
                 0.0,
                 Method::DualContouring,
                 &options,
-            );
+            )
+            .unwrap();
             (
                 out,
                 field.signs.each_ref().map(|s| s.load(Ordering::Relaxed)),

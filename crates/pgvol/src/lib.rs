@@ -130,7 +130,7 @@ pub use pgv_io::{
     pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes, read_pgv_from,
     recorded_band, FieldSource,
 };
-pub use pgvol_field::perturb::{
+pub use pgvol_perturb::{
     Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason, Strays, DESCENT_STEPS,
 };
 pub use points::{
@@ -159,8 +159,10 @@ pub use pgvol_format as format;
 pub use pgvol_mesh as mesh;
 pub use pgvol_metrics as metrics;
 pub use pgvol_ops as ops;
+pub use pgvol_perturb as perturbation;
 pub use pgvol_points as point_cloud;
 pub use pgvol_sdf as sdf;
+pub use pgvol_slice as slicing;
 
 pub use glam;
 pub use pgvol_contour::Method;
@@ -169,12 +171,12 @@ pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
 pub use pgvol_format::{PgvFile, PgvHeader, Precision};
 pub use pgvol_metrics::Comparison;
 pub use pgvol_ops::{
-    Axis, Blend, BoolOp, Continuity, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle,
-    Layer, LayerFrame, Mask, MaskReport, Ramp, Restore, ShellSide, Tpms, MAX_CONTINUITY,
-    TPMS_NAMES,
+    Blend, BoolOp, Continuity, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Mask,
+    MaskReport, Ramp, Restore, ShellSide, Tpms, MAX_CONTINUITY, TPMS_NAMES,
 };
 pub use pgvol_points::{PointCloud, PointsReport};
 pub use pgvol_sdf::SignMode;
+pub use pgvol_slice::{Axis, Layer, LayerFrame};
 
 /// Seconds spent per stage of a call.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

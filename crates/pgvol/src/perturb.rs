@@ -7,11 +7,11 @@ use std::path::Path;
 
 use glam::Vec3;
 use pgvol_core::Mesh;
-use pgvol_field::perturb::{
-    self, Cleanup, PerturbOptions, PerturbReport, PerturbationField, Strays,
-};
 use pgvol_field::Basis;
 use pgvol_format::{PgvFile, PgvHeader};
+use pgvol_perturb::{
+    self as perturb, Cleanup, PerturbOptions, PerturbReport, PerturbationField, Strays,
+};
 use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 

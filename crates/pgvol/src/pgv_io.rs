@@ -3,8 +3,8 @@
 use std::io::Read;
 use std::path::Path;
 
-use pgvol_field::perturb::PerturbationField;
 use pgvol_format::{PgvFile, PgvHeader, PgvInfo};
+use pgvol_perturb::PerturbationField;
 
 use crate::encode::BAND_KEY;
 use crate::error::{Error, ErrorKind, FileResult, Result};

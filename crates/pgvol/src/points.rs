@@ -9,9 +9,9 @@ use glam::Vec3;
 use std::time::Instant;
 
 use pgvol_format::PgvFile;
-use pgvol_ops::{Axis, Layer};
 use pgvol_points::sections::SectionPlanes;
 use pgvol_points::{Method, PointCloud, PointsReport};
+use pgvol_slice::{Axis, Layer, SliceError};
 
 use crate::encode::{BAND_KEY, ENCODE_BAND};
 use crate::error::{Error, ErrorKind, FileResult, Result};
@@ -343,8 +343,7 @@ fn section_planes(settings: &SectionSettings, grid: &pgvol_core::Grid) -> Result
     let resolution = settings.resolution.unwrap_or(grid.spacing);
     let planes = SectionPlanes::new(settings.axis, settings.heights.clone(), resolution);
     pgvol_points::sections::check(grid, &planes).map_err(|e| match e {
-        pgvol_ops::OpsError::BadParameter(message) => Error::parameter(message),
-        e => e.into(),
+        SliceError::BadParameter(message) => Error::parameter(message),
     })?;
     Ok(planes)
 }
@@ -409,7 +408,7 @@ fn fit_on_grid(
         support: options.support,
     };
     // The sections are cut from the method's field while the fit holds it.
-    let mut cut: Option<(std::result::Result<Vec<Layer>, pgvol_ops::OpsError>, f64)> = None;
+    let mut cut: Option<(std::result::Result<Vec<Layer>, SliceError>, f64)> = None;
     let (volume, report) = progress::stage(progress, "fit", |_| {
         pgvol_points::reconstruct_with(cloud, grid, &fit_options, &mut |field| {
             if let Some(planes) = planes {
@@ -493,17 +492,17 @@ pub fn read_layers(path: &Path) -> Result<Vec<Layer>> {
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     let layers = match ext.as_str() {
-        "json" => pgvol_ops::read_slice_json(path).reading()?,
+        "json" => pgvol_slice::read_slice_json(path).reading()?,
         "cli" => {
             let bytes = pgvol_core::read_input(path).reading()?;
-            pgvol_ops::read_cli(&bytes, path).reading()?
+            pgvol_slice::read_cli(&bytes, path).reading()?
         }
         "svg" => {
             let bytes = pgvol_core::read_input(path).reading()?;
             let text = String::from_utf8(bytes).map_err(|_| {
                 Error::file(ErrorKind::InputFile, path, "the SVG file is not UTF-8 text")
             })?;
-            pgvol_ops::read_svg(&text, path).reading()?
+            pgvol_slice::read_svg(&text, path).reading()?
         }
         _ => {
             return Err(Error::file(
@@ -524,7 +523,7 @@ pub fn read_layers(path: &Path) -> Result<Vec<Layer>> {
         ));
     }
     // The CLI and SVG readers check this themselves; the JSON one does not.
-    if let Some(problem) = pgvol_ops::layer_coordinate_problem(&layers) {
+    if let Some(problem) = pgvol_slice::layer_coordinate_problem(&layers) {
         return Err(Error::file(ErrorKind::InputFile, path, problem));
     }
     Ok(layers)
@@ -561,7 +560,7 @@ pub fn contours(
         return Err(Error::new(ErrorKind::InputFile, "no closed contours"));
     }
     // Layers given directly, not read from a file, are checked here.
-    if let Some(problem) = pgvol_ops::layer_coordinate_problem(layers) {
+    if let Some(problem) = pgvol_slice::layer_coordinate_problem(layers) {
         return Err(Error::parameter(problem));
     }
     planes.sort_by(|x, y| x.height.total_cmp(&y.height));
@@ -770,14 +769,14 @@ mod tests {
     fn layer_files_and_layers_beyond_the_mesh_limit_are_refused() {
         let far = Layer {
             height: 0.5,
-            loops: vec![pgvol_ops::Loop {
+            loops: vec![pgvol_slice::Loop {
                 points: vec![[0.0, 0.0], [1e20, 0.0], [0.0, 1.0]],
                 hole: false,
             }],
         };
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("far.json");
-        pgvol_ops::write_slice_json(&path, std::slice::from_ref(&far)).unwrap();
+        pgvol_slice::write_slice_json(&path, std::slice::from_ref(&far)).unwrap();
         let e = read_layers(&path).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::InputFile, "{e}");
         assert_eq!(e.path(), Some(path.as_path()));

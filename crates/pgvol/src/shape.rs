@@ -44,7 +44,7 @@ impl Shape {
         let band = recorded_band(&file);
         let bounds = match file.header.source_bounds {
             Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
-            None => pgvol_ops::volume_bounds(&file.volume),
+            None => pgvol_slice::volume_bounds(&file.volume),
         };
         Shape {
             volume: file.volume,

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use pgvol_format::SlabReader;
-use pgvol_ops::{
+use pgvol_slice::{
     brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
     LayerFrame, SliceOptions,
 };
@@ -51,7 +51,7 @@ pub fn slice(
 ) -> Result<Vec<Layer>> {
     let options = slice_options(shape, settings)?;
     let layers = progress::stage(progress, "slice", |_| {
-        pgvol_ops::slice_volume(&shape.volume, shape.bounds, &options)
+        pgvol_slice::slice_volume(&shape.volume, shape.bounds, &options)
     })?;
     Ok(layers?)
 }
@@ -97,7 +97,7 @@ pub fn slice_file(
         None => (grid.origin, grid.max_corner()),
     };
     let options = options_for(grid.spacing, grid.offset, settings)?;
-    let total = pgvol_ops::layer_heights(bounds, &options)
+    let total = pgvol_slice::layer_heights(bounds, &options)
         .map_err(|e| at(e.into()))?
         .len();
     let source = FileBricks {
@@ -107,7 +107,7 @@ pub fn slice_file(
     let mut layers = Vec::with_capacity(total);
     progress::check(progress)?;
     progress.stage("slice");
-    pgvol_ops::slice_bricks(
+    pgvol_slice::slice_bricks(
         &source,
         &grid,
         header.basis,
@@ -257,11 +257,11 @@ pub fn write_layers(
         )));
     }
     match format {
-        LayerFormat::Svg => pgvol_ops::write_svg_in(path, layers, frame),
+        LayerFormat::Svg => pgvol_slice::write_svg_in(path, layers, frame),
         LayerFormat::Cli(encoding) => {
-            pgvol_ops::write_cli_in(path, layers, units_mm, encoding, frame)
+            pgvol_slice::write_cli_in(path, layers, units_mm, encoding, frame)
         }
-        LayerFormat::Json => pgvol_ops::write_slice_json_in(path, layers, frame),
+        LayerFormat::Json => pgvol_slice::write_slice_json_in(path, layers, frame),
     }
     .writing()
 }

@@ -4,14 +4,14 @@
 use pgvol::{Axis, DecodeOptions, Layer, PointsOptions, Silent};
 
 /// A counter-clockwise unit circle of 256 points.
-fn circle() -> pgvol::ops::Loop {
+fn circle() -> pgvol::slicing::Loop {
     let points = (0..256)
         .map(|k| {
             let a = k as f32 / 256.0 * std::f32::consts::TAU;
             [a.cos(), a.sin()]
         })
         .collect();
-    pgvol::ops::Loop {
+    pgvol::slicing::Loop {
         points,
         hole: false,
     }

@@ -63,9 +63,9 @@ fn volume_section(volume: &pgvol::CoefficientVolume, axis: Axis, h: f32) -> Laye
     let (mut lo, mut hi) = (volume.grid.origin, volume.grid.max_corner());
     lo[a] = h;
     hi[a] = h;
-    let mut options = pgvol::ops::SliceOptions::new(axis, 1.0, volume.grid.spacing);
+    let mut options = pgvol::slicing::SliceOptions::new(axis, 1.0, volume.grid.spacing);
     options.first = Some(h);
-    pgvol::ops::slice_volume(volume, (lo, hi), &options)
+    pgvol::slicing::slice_volume(volume, (lo, hi), &options)
         .unwrap()
         .remove(0)
 }

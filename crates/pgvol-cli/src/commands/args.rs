@@ -6,6 +6,8 @@ use std::path::PathBuf;
 
 use pgvol::Basis;
 
+use crate::progress::Bars;
+
 /// Grid size options shared by the commands that sample a mesh.
 #[derive(Args, Clone, Copy, Debug)]
 pub struct GridArgs {
@@ -216,5 +218,99 @@ pub fn non_negative(text: &str) -> std::result::Result<f32, String> {
     match text.parse::<f32>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!("expected a number of at least 0, got '{text}'")),
+    }
+}
+
+pub(super) fn check_output_name(output: &std::path::Path) -> Result<()> {
+    if !pgvol::is_pgv(output) {
+        pgvol::mesh_format(output)?;
+    }
+    Ok(())
+}
+
+/// Refuses --dense-file for an output that is not a .pgv file.
+pub(super) fn check_dense_file(dense_file: bool, output: &std::path::Path) -> Result<()> {
+    if dense_file && !pgvol::is_pgv(output) {
+        anyhow::bail!("--dense-file applies to .pgv outputs");
+    }
+    Ok(())
+}
+
+/// Dense f32 with --dense-file, else the sparse bricks at the automatic precision.
+pub(super) fn file_storage(dense_file: bool) -> pgvol::StorageOptions {
+    pgvol::StorageOptions {
+        precision: None,
+        dense: dense_file,
+    }
+}
+
+/// Options shared by the commands that turn a shape into a new shape.
+#[derive(Args, Clone, Copy)]
+pub struct ShapeOutputArgs {
+    /// Grid nodes per axis when the input is a mesh.
+    #[arg(long, default_value_t = pgvol::SHAPE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    pub res: u32,
+    /// Contouring method for mesh outputs.
+    #[arg(long, value_enum, default_value_t)]
+    pub method: MethodArg,
+    /// Remove pieces of the output enclosing less than this volume (model units cubed); by
+    /// default specks under 2 grid cells go, with a warning; 0 keeps every piece.
+    #[arg(long, value_name = "VOLUME", value_parser = non_negative)]
+    pub min_component: Option<f32>,
+    /// How inside is told from outside when the input is a mesh.
+    #[arg(long, value_enum, default_value_t)]
+    pub sign: SignArg,
+    /// Write a .pgv output with every coefficient as f32 instead of the sparse, compressed
+    /// bricks around the surface.
+    #[arg(long)]
+    pub dense_file: bool,
+}
+
+impl ShapeOutputArgs {
+    /// Refuses an output that is neither .pgv nor a mesh format, and --dense-file for a mesh.
+    pub fn check_output(&self, output: &std::path::Path) -> Result<()> {
+        check_output_name(output)?;
+        check_dense_file(self.dense_file, output)
+    }
+
+    /// How a .pgv output is stored: sparse bricks at the automatic precision, as `encode`
+    /// writes them, or dense with --dense-file.
+    pub fn storage(&self) -> pgvol::StorageOptions {
+        file_storage(self.dense_file)
+    }
+
+    /// `input` as a shape: a `.pgv` file, or a mesh encoded at `--res` with `--sign` over its
+    /// box grown by `grow`, exact `reach` beyond the band (see [`pgvol::Shape::load`]).
+    pub fn load(
+        &self,
+        input: &std::path::Path,
+        grow: f32,
+        reach: f32,
+        bars: &Bars,
+    ) -> pgvol::Result<pgvol::Shape> {
+        pgvol::Shape::load(
+            input,
+            self.res as usize,
+            grow,
+            reach,
+            self.sign.into(),
+            bars,
+        )
+    }
+
+    /// [`ShapeOutputArgs::load`] for an operation making walls as thin as `wall`: a grid too
+    /// coarse for them is refused before a mesh is encoded, naming the --res that holds them.
+    pub fn load_walled(
+        &self,
+        input: &std::path::Path,
+        grow: f32,
+        reach: f32,
+        wall: f32,
+        bars: &Bars,
+    ) -> Result<pgvol::Shape> {
+        let sign = self.sign.into();
+        let res = self.res as usize;
+        pgvol::Shape::load_walled(input, res, grow, reach, wall, sign, bars)
+            .map_err(|e| grid_error(e, input))
     }
 }

@@ -5,9 +5,10 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 
+use super::args::ShapeOutputArgs;
 use super::args::{OutputArgs, PathArg};
 use super::edit::{parse_box, parse_operand, result_use, write_edited};
-use super::ops::{report, ShapeOutputArgs};
+use super::ops::report;
 use crate::progress::Bars;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]

@@ -6,8 +6,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
+use super::args::ShapeOutputArgs;
 use super::args::{OutputArgs, PathArg};
-use super::ops::{report, ShapeOutputArgs};
+use super::ops::report;
 use crate::progress::Bars;
 use crate::report::Seconds;
 

@@ -7,8 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{at_input, OutputArgs, PathArg};
-use super::ops::ShapeOutputArgs;
+use super::args::{at_input, OutputArgs, PathArg, ShapeOutputArgs};
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::Seconds;

@@ -79,7 +79,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         // Refuse an unwritable output format before doing the work.
         pgvol::mesh_format(&a.output)?;
     }
-    super::ops::check_dense_file(a.dense_file, &a.output)?;
+    super::args::check_dense_file(a.dense_file, &a.output)?;
     let start = Instant::now();
     let quiet = a.out.silent();
     let mesh = load_mesh(&a.input, quiet)?;
@@ -116,7 +116,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
         None => pgvol::write_perturbation(&a.output, &header, &perturbed.field)?,
         Some(file) if to_pgv => {
             let storage = if a.dense_file {
-                super::ops::file_storage(true)
+                super::args::file_storage(true)
             } else {
                 pgvol::resampled_storage()
             };

@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 
 use super::args::{at_input, GridArgs, MethodArg, OutputArgs, PathArg};
-use super::ops::{check_dense_file, check_output_name, file_storage};
+use super::args::{check_dense_file, check_output_name, file_storage};
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::{self, Seconds};
@@ -68,7 +68,7 @@ fn parse_sections(s: &str) -> Result<SectionsArg, String> {
         .map(|h| {
             let h = h.trim();
             match h.parse::<f32>() {
-                Ok(v) if v.is_finite() && v.abs() < pgvol::ops::MAX_LAYER_COORDINATE => Ok(v),
+                Ok(v) if v.is_finite() && v.abs() < pgvol::slicing::MAX_LAYER_COORDINATE => Ok(v),
                 _ => Err(format!(
                     "the height '{h}' is not a finite number below 1e8 in magnitude"
                 )),

@@ -5,13 +5,11 @@ mod clean;
 mod collinear;
 mod components;
 mod orient;
-mod stats;
+pub mod stats;
 
 use glam::{DVec3, Vec3};
 
 use crate::frame;
-
-pub use stats::MeshStats;
 
 /// An indexed triangle mesh in the units of its source file.
 ///

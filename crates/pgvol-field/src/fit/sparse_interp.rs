@@ -332,15 +332,13 @@ const PADDED: usize = (BRICK_EDGE + 2) * (BRICK_EDGE + 2) * (BRICK_EDGE + 2);
 
 #[cfg(test)]
 mod tests {
-    use std::time::Instant;
-
     use glam::Vec3;
     use pgvol_core::{Background, Grid};
 
     use super::*;
     use crate::analytic::Sphere;
     use crate::distance::SignedDistance;
-    use crate::prefilter::{prefilter_volume, CUBIC_POLE, QUADRATIC_POLE};
+    use crate::prefilter::{CUBIC_POLE, QUADRATIC_POLE};
 
     /// A sphere's distance on an `n`³ grid over [−1, 1]³, stored in the bricks holding a node
     /// within `band` spacings and clamped there, the other bricks absent on their side.
@@ -472,85 +470,6 @@ mod tests {
             let diff = max_diff(&base, &other) / clamp;
             eprintln!("group {group}: {diff:e}");
             assert!(diff < 3e-7, "group {group}: {diff:e}");
-        }
-    }
-
-    /// Nodes gathered and x-filtered over all the groups' windows.
-    fn window_nodes(samples: &SparseGrid, h: usize, group: usize) -> usize {
-        let dims = samples.dims();
-        let bricks = output_bricks(samples, group);
-        bricks
-            .chunk_by(|a, b| a.map(|c| c / group) == b.map(|c| c / group))
-            .map(|g| {
-                (0..3)
-                    .map(|a| {
-                        let lo = g.iter().map(|b| b[a]).min().unwrap_or(0) * BRICK_EDGE;
-                        let hi = (g.iter().map(|b| b[a]).max().unwrap_or(0) + 1) * BRICK_EDGE;
-                        (hi + h).min(dims[a]) - lo.saturating_sub(h)
-                    })
-                    .product::<usize>()
-            })
-            .sum()
-    }
-
-    /// `cargo test --release -p pgvol-field sparse_interp::tests::timing -- --ignored
-    /// --nocapture`: on banded spheres, the dense fit (`interp_samples` on the densified
-    /// samples) against `interp_sparse`, then the prefilters alone per group size and halo,
-    /// with their largest coefficient difference from the dense one.
-    #[test]
-    #[ignore]
-    fn timing() {
-        use crate::fit::{interp_samples, interp_sparse, FitOptions};
-        use crate::Basis;
-        // Beyond the dense fit's reach here: the sparse fit alone.
-        for n in [512usize, 1024] {
-            let (grid, samples) = banded_sphere(n, 4.0);
-            let t = Instant::now();
-            let (fit, _) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
-            eprintln!(
-                "{n}³: {} stored bricks, {} coefficient bricks; sparse fit {:.3} s",
-                samples.stored_count(),
-                fit.coeffs.stored_count(),
-                t.elapsed().as_secs_f64()
-            );
-        }
-        for n in [128usize, 192, 256] {
-            let (grid, samples) = banded_sphere(n, 4.0);
-            let clamp = samples.background().outside;
-            let t = Instant::now();
-            let dense = samples.to_dense();
-            let (dense_fit, _) =
-                interp_samples(grid, Basis::Bspline3, &dense, &FitOptions::default()).unwrap();
-            let dense_secs = t.elapsed().as_secs_f64();
-            drop(dense);
-            let t = Instant::now();
-            let (sparse_fit, report) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
-            let sparse_secs = t.elapsed().as_secs_f64();
-            let diff = max_diff(&sparse_fit.coeffs, &dense_fit.coeffs) / clamp;
-            eprintln!(
-                "{n}³: {} of {} bricks stored, {} coefficient bricks; dense fit {dense_secs:.3} s, \
-                 sparse fit {sparse_secs:.3} s (sign check {:.3} s), max |Δc| {diff:.2e} · clamp",
-                samples.stored_count(),
-                samples.brick_counts().iter().product::<usize>(),
-                sparse_fit.coeffs.stored_count(),
-                report.stages.check,
-            );
-            let t = Instant::now();
-            let mut dense = samples.to_dense();
-            prefilter_volume(&mut dense, grid.dims);
-            eprintln!("  dense prefilter {:.3} s", t.elapsed().as_secs_f64());
-            for (group, h) in [(2, 12), (4, 12), (6, 12), (8, 12), (4, 10), (4, 8)] {
-                let t = Instant::now();
-                let local = prefilter_sparse_with(&samples, CUBIC_POLE, h, group, 0.0);
-                let secs = t.elapsed().as_secs_f64();
-                let diff = max_diff(&local, &dense_fit.coeffs) / clamp;
-                let work = window_nodes(&samples, h, group) as f64
-                    / (local.stored_count() * BRICK_NODES) as f64;
-                eprintln!(
-                    "  group {group} halo {h}: {secs:.3} s, {work:.1} window nodes per \
-                     coefficient, max |Δc| {diff:.2e} · clamp"
-                );
-            }
         }
     }
 }

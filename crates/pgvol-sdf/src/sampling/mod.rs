@@ -20,17 +20,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 
-use flags::{Bits, RegionSigns};
 use near::BrickBox;
-pub use near::REGION_TILE;
+pub use near::{BRICK, REGION_TILE};
+use row::{Plan, RowValues};
 
 use crate::consistency::{sign_contradictions, sparse_sign_contradictions};
 use crate::{grid::Grid, sdf::MeshSdf, SignMode};
-
-/// Nodes per brick edge in a narrow band, where exact bricks hug the surface: on the bunny's
-/// ±3 band at 256³, bricks of 8 took 8–25 % longer than bricks of 4 (more nodes per brick are
-/// beyond the band but still scanned).
-pub const BRICK: usize = 4;
 
 /// Nodes per brick edge on a dense grid. Once the node scans became eight lanes wide with
 /// oriented leaf bounds, the per-brick work (the centre query, collecting and sorting the
@@ -165,47 +160,6 @@ fn cut_row(
         }
     }
     out
-}
-
-/// What every row needs to know about the whole grid.
-struct Plan<'a> {
-    grid: &'a Grid,
-    /// Nodes per brick edge.
-    brick: usize,
-    /// Bricks per axis.
-    bricks: [usize; 3],
-    clamp: f32,
-    /// The bricks the flags below cover, indexed by [`BrickBox::index`].
-    flags: BrickBox,
-    /// Per brick, whether it is within the band of some triangle (`None`: dense, all are).
-    near: Option<Bits>,
-    /// Per brick away from the surface, its sign when one winding number decides its region.
-    regions: Option<RegionSigns>,
-}
-
-/// The values of one row of bricks: nodes `(i, j, k)` of the row's `j` and `k` ranges, x
-/// fastest, then j, then k.
-struct RowValues {
-    /// The written values; the nodes of uniform bricks are left as they were.
-    values: Vec<f32>,
-    exact: usize,
-    /// Per brick along x, its value when every node has it (and it was not written).
-    uniform: Vec<Option<f32>>,
-}
-
-impl RowValues {
-    /// Writes the uniform bricks' values into `values`, for a row of `nx` nodes in bricks of
-    /// `brick` nodes, `layers` node rows (`j` then `k`) thick.
-    fn fill_uniform(&mut self, nx: usize, brick: usize) {
-        let layers = self.values.len() / nx;
-        for (bi, value) in self.uniform.iter().enumerate() {
-            let Some(v) = *value else { continue };
-            let (i0, i1) = (bi * brick, (bi * brick + brick).min(nx));
-            for line in self.values.chunks_exact_mut(nx).take(layers) {
-                line[i0..i1].fill(v);
-            }
-        }
-    }
 }
 
 impl MeshSdf {
@@ -791,5 +745,29 @@ mod tests {
             MeshSdf::new(&mesh, SignMode::Auto).unwrap().sign_mode(),
             SignMode::Winding
         );
+    }
+
+    #[test]
+    fn grid_values_do_not_depend_on_thread_count() {
+        // Open, so that winding numbers are carried with drift bounds, dense and in a band.
+        let mut mesh = sphere(3);
+        mesh.triangles
+            .retain(|t| t.iter().map(|&i| mesh.positions[i as usize].z).sum::<f32>() < 1.5);
+        let sdf = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
+        assert!(!sdf.rims().is_empty());
+        let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::ONE, 40).unwrap();
+        for extent in [Extent::Dense, Extent::Band(2.0)] {
+            let run = |threads| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| sdf.sample(&grid, extent, &|_: f64| {}).values)
+            };
+            let one = run(1);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+            assert!(one.iter().any(|&d| d < 0.0) && one.iter().any(|&d| d > 0.0));
+            assert_eq!(bits(&one), bits(&run(2)), "{extent:?}");
+        }
     }
 }

@@ -6,8 +6,12 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::flags::{Bits, RegionSigns};
-use super::BRICK;
 use crate::{grid::Grid, sdf::MeshSdf};
+
+/// Nodes per brick edge in a narrow band, where exact bricks hug the surface: on the bunny's
+/// ±3 band at 256³, bricks of 8 took 8–25 % longer than bricks of 4 (more nodes per brick are
+/// beyond the band but still scanned).
+pub const BRICK: usize = 4;
 
 /// A surface-free region or brick whose winding number is at least this far from 1/2 takes
 /// that sign.

@@ -8,10 +8,51 @@ use super::{
     brick::{Brick, BrickSegment, LocalTriangle},
     candidates::LeafTable,
     carry::WindingCarry,
-    near::REGION_SIGN_MARGIN,
-    Plan, RowValues,
+    flags::{Bits, RegionSigns},
+    near::{BrickBox, REGION_SIGN_MARGIN},
 };
-use crate::{sdf::MeshSdf, SignMode};
+use crate::{grid::Grid, sdf::MeshSdf, SignMode};
+
+/// What every row needs to know about the whole grid.
+pub(super) struct Plan<'a> {
+    pub(super) grid: &'a Grid,
+    /// Nodes per brick edge.
+    pub(super) brick: usize,
+    /// Bricks per axis.
+    pub(super) bricks: [usize; 3],
+    pub(super) clamp: f32,
+    /// The bricks the flags below cover, indexed by [`BrickBox::index`].
+    pub(super) flags: BrickBox,
+    /// Per brick, whether it is within the band of some triangle (`None`: dense, all are).
+    pub(super) near: Option<Bits>,
+    /// Per brick away from the surface, its sign when one winding number decides its region.
+    pub(super) regions: Option<RegionSigns>,
+}
+
+/// The values of one row of bricks: nodes `(i, j, k)` of the row's `j` and `k` ranges, x
+/// fastest, then j, then k.
+pub(super) struct RowValues {
+    /// The written values; the nodes of uniform bricks are left as they were.
+    pub(super) values: Vec<f32>,
+    pub(super) exact: usize,
+    /// Per brick along x, its value when every node has it (and it was not written).
+    pub(super) uniform: Vec<Option<f32>>,
+}
+
+impl RowValues {
+    /// Writes the uniform bricks' values into `values`, for a row of `nx` nodes in bricks of
+    /// `brick` nodes, `layers` node rows (`j` then `k`) thick.
+    pub(super) fn fill_uniform(&mut self, nx: usize, brick: usize) {
+        let layers = self.values.len() / nx;
+        for (bi, value) in self.uniform.iter().enumerate() {
+            let Some(v) = *value else { continue };
+            let (i0, i1) = (bi * brick, (bi * brick + brick).min(nx));
+            for line in self.values.chunks_exact_mut(nx).take(layers) {
+                line[i0..i1].fill(v);
+            }
+        }
+    }
+}
 
 /// Bricks along a row that share one gradient bound where it is small (one rim query per
 /// brick took a tenth of the time of a band on the bunny).

@@ -7,7 +7,7 @@ use glam::Vec3;
 use pgvol_contour::Method;
 use pgvol_core::{Mesh, BRICK_EDGE};
 use pgvol_field::CoefficientVolume;
-use pgvol_ops::{Layer, SliceOptions};
+use pgvol_slice::{Layer, SliceOptions};
 
 use super::slab::Slab;
 use super::split;
@@ -120,7 +120,7 @@ pub fn plan_slice(
 ) -> Result<Vec<Range<usize>>> {
     crate::frame::require_near(shape.volume.grid.offset, "slicing in parts")?;
     let options = crate::slice::slice_options(shape, settings)?;
-    let heights = pgvol_ops::layer_heights(shape.bounds, &options)?;
+    let heights = pgvol_slice::layer_heights(shape.bounds, &options)?;
     split(heights.len(), parts)
 }
 
@@ -132,7 +132,7 @@ pub fn slice_part_bricks(
     layers: Range<usize>,
 ) -> Result<Vec<u8>> {
     let options = crate::slice::slice_options(shape, settings)?;
-    let heights = pgvol_ops::layer_heights(shape.bounds, &options)?;
+    let heights = pgvol_slice::layer_heights(shape.bounds, &options)?;
     let axis = options.axis.indices()[0];
     let g = &shape.volume.grid;
     let node = |h: f32| ((h - g.origin[axis]) / g.spacing).clamp(0.0, g.dims[axis] as f32);
@@ -168,7 +168,7 @@ pub fn slice_part(
         band: None,
     };
     let options: SliceOptions = crate::slice::slice_options(&shape, settings)?;
-    Ok(pgvol_ops::slice_volume_range(
+    Ok(pgvol_slice::slice_volume_range(
         &shape.volume,
         bounds,
         &options,

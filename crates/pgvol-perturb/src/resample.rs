@@ -9,7 +9,7 @@ use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, Grid, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use rayon::prelude::*;
 
-use super::field::PerturbationField;
+use crate::field::PerturbationField;
 
 /// The first-order distance estimate `M / |∇M|` of `field` at the nodes of `grid`, clamped to
 /// `band` spacings. A grid brick is sampled when its corners and centre disagree in sign or

@@ -4,7 +4,7 @@
 use glam::Vec3;
 use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_ops::{slice, slice_bricks, slice_volume, Axis, Layer, LayerCost, SliceOptions};
+use pgvol_slice::{slice, slice_bricks, slice_volume, Axis, Layer, LayerCost, SliceOptions};
 
 /// A sparse volume whose coefficients are `sdf` at the nodes: bricks within `band` of the
 /// surface stored, the others absent on their side. Only the bricks of node layers

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use pgvol_core::Mesh;
-use pgvol_field::perturb::{build, PerturbOptions, StopReason};
+use pgvol_perturb::{build, PerturbOptions, StopReason};
 
 /// Radius of the bumpy sphere along the unit direction `d`: a unit sphere with three smooth
 /// bumps of height 0.25 and one dent of depth 0.15.

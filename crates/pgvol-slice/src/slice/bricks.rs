@@ -5,7 +5,7 @@ use std::ops::Deref;
 use pgvol_core::sparse::BrickValues;
 use pgvol_core::{SparseGrid, BRICK_EDGE};
 
-use crate::OpsError;
+use crate::SliceError;
 
 /// A brick's values, borrowed from a grid held in memory or decoded from a file.
 pub enum BrickRef<'a> {
@@ -110,7 +110,7 @@ impl<'a> BrickLayer<'a> {
 /// window of them, so a source that decodes slabs on demand bounds memory by that window.
 pub trait BrickSource: Sync {
     /// Why a slab could not be had (a damaged file, say).
-    type Error: From<OpsError> + Send;
+    type Error: From<SliceError> + Send;
 
     /// Brick layers per slab.
     fn slab_bricks(&self) -> usize;
@@ -132,13 +132,13 @@ pub fn brick_counts(dims: [usize; 3]) -> [usize; 3] {
 
 /// A sparse grid held in memory, one brick layer per slab, its bricks borrowed.
 impl BrickSource for SparseGrid {
-    type Error = OpsError;
+    type Error = SliceError;
 
     fn slab_bricks(&self) -> usize {
         1
     }
 
-    fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>, OpsError> {
+    fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>, SliceError> {
         let counts = self.brick_counts();
         let [b, c] = plane_axes(axis);
         let mut layer = BrickLayer::outside(counts[b] * counts[c]);

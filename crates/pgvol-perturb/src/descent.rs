@@ -5,9 +5,9 @@
 //! gradient descent). Every step must keep the term a local bump within the loop's bounds and
 //! must not put more probes on the wrong side.
 
-use super::build::{evaluate, State, Trial, MAX_REACH};
-use super::field::Perturbation;
-use super::quadric::{monomials, TERMS};
+use crate::field::Perturbation;
+use crate::quadric::{monomials, TERMS};
+use crate::trial::{evaluate, State, Trial};
 
 /// First step, as a fraction of the length of the coefficient vector.
 const FIRST_STEP: f64 = 0.05;
@@ -36,11 +36,12 @@ fn gradient(state: &State, trial: &Trial) -> [f64; TERMS] {
 }
 
 /// `trial` improved by at most `steps` descent steps on its coefficients, keeping its reach
-/// within [`MAX_REACH`] local units and its peak within `peak_limit`; returns it and the steps
+/// within `reach_limit` local units and its peak within `peak_limit`; returns it and the steps
 /// taken.
 pub(crate) fn refine(
     state: &State,
     mut trial: Trial,
+    reach_limit: f64,
     peak_limit: f64,
     steps: usize,
 ) -> (Trial, usize) {
@@ -66,7 +67,7 @@ pub(crate) fn refine(
             for (qk, gk) in quadric.q.iter_mut().zip(g) {
                 *qk -= step * q_len * gk / g_len;
             }
-            let local = quadric.positive_reach().is_some_and(|r| r <= MAX_REACH)
+            let local = quadric.positive_reach().is_some_and(|r| r <= reach_limit)
                 && quadric.peak().is_some_and(|p| p <= peak_limit);
             let candidate = Perturbation {
                 quadric,

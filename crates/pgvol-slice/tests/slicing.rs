@@ -4,7 +4,7 @@ use std::f64::consts::PI;
 
 use glam::Vec3;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_ops::{layer_heights, slice, slice_volume, Axis, Layer, SliceOptions};
+use pgvol_slice::{layer_heights, slice, slice_volume, Axis, Layer, SliceOptions};
 use proptest::prelude::*;
 
 fn sample(grid: &Grid, f: impl Fn(Vec3) -> f32) -> Vec<f32> {

@@ -2,6 +2,8 @@
 //! `M(x) = F(x) + Σ fᵢ Qᵢ(x)³` over `Qᵢ ≥ 0`, a base quadric plus local bumps added until the
 //! mesh's vertices lie on the zero set. See `docs/perturbation.md`.
 
+#![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
+
 mod box_tree;
 mod build;
 mod cleanup;
@@ -11,6 +13,7 @@ mod point_grid;
 pub mod quadric;
 mod resample;
 mod strays;
+mod trial;
 
 pub use box_tree::BoxTree;
 pub use build::{

@@ -6,8 +6,8 @@
 use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::box_tree::BoxTree;
-use super::quadric::Quadric;
+use crate::box_tree::BoxTree;
+use crate::quadric::Quadric;
 
 /// One local term `f · Q³` on `Q ≥ 0`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

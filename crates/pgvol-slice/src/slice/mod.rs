@@ -18,7 +18,7 @@ use pgvol_field::{Basis, CoefficientVolume, Grid};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::error::OpsError;
+use crate::error::SliceError;
 use crate::polygon::{perimeter, signed_area};
 use crate::simplify::simplify_loops;
 use collapsed::{tap_layers, CollapsedPlane};
@@ -26,13 +26,10 @@ use plane::{LayerField, Plane};
 use window::Window;
 
 pub use bricks::{brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, INSIDE, OUTSIDE};
-pub use plane::LayerCost;
+pub use plane::{LayerCost, MAX_LAYER_NODES};
 
 /// Most layers one call produces: far beyond any printer, small enough to refuse typos.
 pub const MAX_LAYERS: usize = 1_000_000;
-
-/// Most nodes in one layer's 2D grid (a 16384² grid would need 1 GiB per layer in flight).
-pub const MAX_LAYER_NODES: usize = 1 << 26;
 
 /// The build direction. Layer coordinates `(u, v)` are the next two axes in cyclic order
 /// (X: `(y, z)`, Y: `(z, x)`, Z: `(x, y)`), so `u × v` points along the axis and
@@ -135,19 +132,19 @@ pub fn volume_bounds(volume: &CoefficientVolume) -> (Vec3, Vec3) {
 
 /// The plane heights for `bounds` and `options`: `first + i · layer_height` (computed in f64,
 /// rounded once) for `i = 0, 1, …` while not above the top of the bounds.
-pub fn layer_heights(bounds: (Vec3, Vec3), options: &SliceOptions) -> Result<Vec<f32>, OpsError> {
+pub fn layer_heights(bounds: (Vec3, Vec3), options: &SliceOptions) -> Result<Vec<f32>, SliceError> {
     let a = options.axis.indices()[0];
     let (lo, hi) = (bounds.0[a] as f64, bounds.1[a] as f64);
     let step = options.layer_height as f64;
     if !(step.is_finite() && step > 0.0) {
-        return Err(OpsError::BadParameter(format!(
+        return Err(SliceError::BadParameter(format!(
             "layer height must be positive, got {}",
             options.layer_height
         )));
     }
     let first = options.first.map_or(lo + step / 2.0, |f| f as f64);
     if !first.is_finite() {
-        return Err(OpsError::BadParameter(
+        return Err(SliceError::BadParameter(
             "first layer height is not finite".into(),
         ));
     }
@@ -157,7 +154,7 @@ pub fn layer_heights(bounds: (Vec3, Vec3), options: &SliceOptions) -> Result<Vec
         ((hi - first) / step).floor() + 1.0
     };
     if count > MAX_LAYERS as f64 {
-        return Err(OpsError::BadParameter(format!(
+        return Err(SliceError::BadParameter(format!(
             "{count} layers, more than the limit of {MAX_LAYERS}"
         )));
     }
@@ -187,7 +184,7 @@ pub fn slice_volume(
     volume: &CoefficientVolume,
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
-) -> Result<Vec<Layer>, OpsError> {
+) -> Result<Vec<Layer>, SliceError> {
     slice_volume_range(volume, bounds, options, 0..usize::MAX)
 }
 
@@ -200,7 +197,7 @@ pub fn slice_volume_range(
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
     range: std::ops::Range<usize>,
-) -> Result<Vec<Layer>, OpsError> {
+) -> Result<Vec<Layer>, SliceError> {
     if !volume.basis.is_separable() {
         let field = &|p| volume.value(p);
         return slice_points(field, bounds, options, range);
@@ -243,7 +240,7 @@ pub fn slice_bricks<S: BrickSource + ?Sized>(
         Basis::Bspline2 => Profile::Quadratic,
         Basis::Bspline3 => Profile::Cubic,
         Basis::Pg { .. } => {
-            return Err(OpsError::BadParameter(
+            return Err(SliceError::BadParameter(
                 "slicing brick by brick needs a separable basis".into(),
             )
             .into())
@@ -297,7 +294,7 @@ pub fn slice(
     field: &(dyn Fn(Vec3) -> f32 + Sync),
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
-) -> Result<Vec<Layer>, OpsError> {
+) -> Result<Vec<Layer>, SliceError> {
     slice_points(field, bounds, options, 0..usize::MAX)
 }
 
@@ -307,7 +304,7 @@ fn slice_points(
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
     range: std::ops::Range<usize>,
-) -> Result<Vec<Layer>, OpsError> {
+) -> Result<Vec<Layer>, SliceError> {
     let job = Job::new(bounds, options, range)?;
     let axis = options.axis;
     Ok(job
@@ -341,20 +338,20 @@ impl Job {
         bounds: (Vec3, Vec3),
         options: &SliceOptions,
         range: std::ops::Range<usize>,
-    ) -> Result<Job, OpsError> {
+    ) -> Result<Job, SliceError> {
         if !(bounds.0.is_finite() && bounds.1.is_finite() && bounds.0.cmple(bounds.1).all()) {
-            return Err(OpsError::BadParameter(
+            return Err(SliceError::BadParameter(
                 "slice bounds must be finite with min <= max".into(),
             ));
         }
         let res = options.resolution;
         if !(res.is_finite() && res > 0.0) {
-            return Err(OpsError::BadParameter(format!(
+            return Err(SliceError::BadParameter(format!(
                 "slice resolution must be positive, got {res}"
             )));
         }
         if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
-            return Err(OpsError::BadParameter(format!(
+            return Err(SliceError::BadParameter(format!(
                 "simplification tolerance must be >= 0, got {}",
                 options.tolerance
             )));

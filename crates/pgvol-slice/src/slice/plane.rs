@@ -6,8 +6,10 @@
 //! costs what its contours' length does, not its area. Nodes, edges and vertices are numbered as
 //! in a dense pass over the whole grid, and the loops come out in the same order.
 
-use crate::slice::MAX_LAYER_NODES;
-use crate::OpsError;
+use crate::SliceError;
+
+/// Most nodes in one layer's 2D grid (a 16384² grid would need 1 GiB per layer in flight).
+pub const MAX_LAYER_NODES: usize = 1 << 26;
 
 /// Cells per block edge.
 pub(crate) const BLOCK: usize = 8;
@@ -93,7 +95,7 @@ pub struct LayerCost {
 }
 
 impl Plane {
-    pub(crate) fn new(u: (f32, f32), v: (f32, f32), spacing: f32) -> Result<Plane, OpsError> {
+    pub(crate) fn new(u: (f32, f32), v: (f32, f32), spacing: f32) -> Result<Plane, SliceError> {
         let axis = |(lo, hi): (f32, f32)| {
             let cells = ((hi - lo) / spacing).ceil().max(1.0);
             let origin = (lo + hi) * 0.5 - cells * spacing * 0.5;
@@ -102,7 +104,7 @@ impl Plane {
         let (ou, nu) = axis(u);
         let (ov, nv) = axis(v);
         if nu * nv > MAX_LAYER_NODES as f64 {
-            return Err(OpsError::BadParameter(format!(
+            return Err(SliceError::BadParameter(format!(
                 "a layer grid of {nu} x {nv} nodes exceeds the limit of {MAX_LAYER_NODES}; \
                  use a coarser resolution"
             )));

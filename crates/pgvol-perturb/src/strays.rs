@@ -13,8 +13,8 @@ use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 
-use super::field::{Perturbation, PerturbationError, PerturbationField};
-use super::quadric::Quadric;
+use crate::field::{Perturbation, PerturbationError, PerturbationField};
+use crate::quadric::Quadric;
 
 /// What [`clear_strays`] did on one grid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

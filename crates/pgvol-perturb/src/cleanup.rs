@@ -7,8 +7,8 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::field::{Perturbation, PerturbationError, PerturbationField};
-use super::quadric::Quadric;
+use crate::field::{Perturbation, PerturbationError, PerturbationField};
+use crate::quadric::Quadric;
 
 /// What [`clear_points`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

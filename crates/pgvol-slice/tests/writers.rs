@@ -1,7 +1,7 @@
 //! Layer files: structure of the SVG and CLI output, exact JSON round trip.
 
 use glam::Vec3;
-use pgvol_ops::{
+use pgvol_slice::{
     read_slice_json, slice, write_cli, write_slice_json, write_svg, Axis, Layer, SliceOptions,
 };
 

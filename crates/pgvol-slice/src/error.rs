@@ -1,0 +1,8 @@
+//! The error of slicing and of the layer files.
+
+/// Why a slice could not be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SliceError {
+    #[error("invalid parameter: {0}")]
+    BadParameter(String),
+}
