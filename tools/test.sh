@@ -26,6 +26,9 @@ if cargo tree -p pgvol-format -e normal --prefix none | grep -E '^(gltf|tobj|obv
 fi
 echo "pgvol-format is free of gltf, tobj and obvhs"
 
+section "import cycles"
+python3 tools/check_cycles.py
+
 section "cargo build --release"
 cargo build --release
 

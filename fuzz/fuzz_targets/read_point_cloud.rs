@@ -7,7 +7,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use libfuzzer_sys::fuzz_target;
-use pgvol::read_cloud_text;
+use pgvol::io::read_cloud_text;
 use pgvol_mesh::{read_ply_points, MAX_COORDINATE};
 
 const TEXT_SEED: &[u8] = include_bytes!("../corpus/read_point_cloud/cloud.xyz");

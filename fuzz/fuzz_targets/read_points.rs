@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use libfuzzer_sys::fuzz_target;
-use pgvol::read_points;
+use pgvol::io::read_points;
 use pgvol_mesh::MAX_COORDINATE;
 
 /// Valid files of the seed corpus.

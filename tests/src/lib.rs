@@ -60,7 +60,7 @@ pub fn shared_mesh_path(name: &str) -> PathBuf {
 /// triangles dropped).
 pub fn load_shared(name: &str) -> Mesh {
     let path = shared_mesh_path(name);
-    match pgvol::read_mesh(&path) {
+    match pgvol::io::read_mesh(&path) {
         Ok((mesh, _)) => mesh,
         Err(e) => panic!("cannot read shared mesh {}: {e}", path.display()),
     }
@@ -94,7 +94,9 @@ pub fn encode(mesh: &Mesh, res: usize) -> pgvol::Encoded {
 
 /// The zero level set of `volume`, contoured as `pgvol decode` does by default.
 pub fn decode(volume: &CoefficientVolume) -> Mesh {
-    pgvol::decode(volume, &pgvol::DecodeOptions::default(), &pgvol::Silent).expect("decode")
+    pgvol::Field::from_volume((*volume).clone())
+        .to_mesh(&pgvol::DecodeOptions::default(), &pgvol::Silent)
+        .expect("decode")
 }
 
 /// Runs `f` in a fresh rayon pool of `threads` threads.

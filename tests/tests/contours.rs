@@ -1,7 +1,7 @@
 //! Surfaces rebuilt from the contours `pgvol slice` cuts from a shared mesh: watertight, close
 //! to the mesh, and sliced again at the input planes they give back the input contours.
 
-use pgvol::{Layer, PointsOptions, Shape, SliceSettings};
+use pgvol::{Field, Layer, PointsOptions, SliceOptions};
 use pgvol_tests::{decode, encode, load_shared};
 
 /// Largest and mean distance from a point of `a`'s loops to the nearest segment of `b`'s, over
@@ -50,18 +50,21 @@ struct Reproduction {
 /// the diagonal and the contour reproduction.
 fn rebuild(name: &str, count: usize) -> (f64, Reproduction) {
     let mesh = load_shared(name);
-    let shape = Shape::from_file(encode(&mesh, 128).file);
+    let shape = Field::from_file(encode(&mesh, 128).file);
     let (lo, hi) = mesh.bounds().unwrap();
-    let mut settings = SliceSettings::new((hi.z - lo.z) / count as f32);
-    let resolution = shape.volume.grid.spacing;
+    let mut settings = SliceOptions::new((hi.z - lo.z) / count as f32);
+    let resolution = shape.volume().grid.spacing;
     settings.resolution = Some(resolution);
-    let layers = pgvol::slice(&shape, &settings, &pgvol::Silent).expect("slice");
+    let layers = shape
+        .slice(&settings, &pgvol::Silent)
+        .map(|s| s.layers)
+        .expect("slice");
     let options = PointsOptions {
         grid: pgvol::GridSpec::Res(128),
         ..Default::default()
     };
-    let rebuilt =
-        pgvol::contours(&layers, pgvol::Axis::Z, &options, &pgvol::Silent).expect("contours");
+    let rebuilt = pgvol::reconstruct::contours(&layers, pgvol::Axis::Z, &options, &pgvol::Silent)
+        .expect("contours");
     let surface = decode(&rebuilt.file.volume);
     let stats = surface.stats();
     assert!(stats.watertight, "{name} from {count} layers: {stats:?}");
@@ -69,11 +72,13 @@ fn rebuild(name: &str, count: usize) -> (f64, Reproduction) {
     // The reslice samples the same in-plane lattice as the input slices (the lattice is centred
     // on the shape's bounds): on a shifted lattice marching squares alone cuts sharp corners
     // by up to half a resolution, whatever the surface.
-    let mut again = Shape::from_file(rebuilt.file);
-    again.bounds = shape.bounds;
+    let again = Field::from_file(rebuilt.file).with_bounds(shape.bounds());
     let mut at_input = settings;
     at_input.first = Some(f64::from(layers[0].height));
-    let resliced = pgvol::slice(&again, &at_input, &pgvol::Silent).expect("reslice");
+    let resliced = again
+        .slice(&at_input, &pgvol::Silent)
+        .map(|s| s.layers)
+        .expect("reslice");
     let (worst, mean) = contour_distance(&layers, &resliced);
     let (back, back_mean) = contour_distance(&resliced, &layers);
     let reproduction = Reproduction {
@@ -170,8 +175,8 @@ fn a_leaning_part_whose_layers_do_not_overlap_stays_one_piece() {
         grid: pgvol::GridSpec::Res(128),
         ..Default::default()
     };
-    let rebuilt =
-        pgvol::contours(&input, pgvol::Axis::Z, &options, &pgvol::Silent).expect("contours");
+    let rebuilt = pgvol::reconstruct::contours(&input, pgvol::Axis::Z, &options, &pgvol::Silent)
+        .expect("contours");
     let surface = decode(&rebuilt.file.volume);
     let stats = surface.stats();
     assert!(stats.watertight, "{stats:?}");

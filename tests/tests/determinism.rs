@@ -31,7 +31,7 @@ fn pipeline_output_is_identical_with_one_and_two_threads() {
     let run = |threads| {
         with_threads(threads, || {
             let encoded = encode(&mesh, 32);
-            let bytes = pgvol::pgv_bytes(&encoded.file, &pgvol::StorageOptions::default())
+            let bytes = pgvol::io::pgv_bytes(&encoded.file, &pgvol::StorageOptions::default())
                 .expect("file bytes")
                 .0;
             (

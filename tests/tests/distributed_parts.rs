@@ -68,10 +68,10 @@ fn encoding_in_parts_gives_the_same_file_bytes() {
             ..EncodeOptions::default()
         };
         let whole = pgvol::encode(&mesh, &options, &Silent).unwrap();
-        let (want, _) = pgvol::pgv_bytes(&whole.file, &StorageOptions::default()).unwrap();
+        let (want, _) = pgvol::io::pgv_bytes(&whole.file, &StorageOptions::default()).unwrap();
         for parts in [1, 2, 8] {
             let got = encode_in_parts(&mesh, &options, parts);
-            let (bytes, _) = pgvol::pgv_bytes(&got.file, &StorageOptions::default()).unwrap();
+            let (bytes, _) = pgvol::io::pgv_bytes(&got.file, &StorageOptions::default()).unwrap();
             assert!(bytes == want, "{name}: {parts} parts give other bytes");
         }
     }
@@ -102,7 +102,9 @@ fn decoding_and_slicing_in_parts_match_the_whole() {
     };
     let file = pgvol::encode(&mesh, &options, &Silent).unwrap().file;
     let decode_options = DecodeOptions::default();
-    let whole = pgvol::decode(&file.volume, &decode_options, &Silent).unwrap();
+    let whole = pgvol::Field::from_volume(file.volume.clone())
+        .to_mesh(&decode_options, &Silent)
+        .unwrap();
     let want = triangle_set(&whole);
     for parts in [1, 2, 8] {
         let pieces: Vec<Mesh> = plan_decode(&file.volume, parts)
@@ -126,14 +128,14 @@ fn decoding_and_slicing_in_parts_match_the_whole() {
         assert!(triangle_set(&welded) == want, "{parts} parts");
     }
 
-    let shape = pgvol::Shape::from_file(file);
-    let settings = pgvol::SliceSettings::new(shape.volume.grid.spacing * 1.7);
-    let layers = pgvol::slice(&shape, &settings, &Silent).unwrap();
+    let shape = pgvol::Field::from_file(file);
+    let settings = pgvol::SliceOptions::new(shape.volume().grid.spacing * 1.7);
+    let layers = shape.slice(&settings, &Silent).map(|s| s.layers).unwrap();
     for parts in [1, 3, 8] {
         let mut got = Vec::new();
         for range in plan_slice(&shape, &settings, parts).unwrap() {
             let bricks = slice_part_bricks(&shape, &settings, range.clone()).unwrap();
-            got.extend(slice_part(&bricks, shape.bounds, &settings, range).unwrap());
+            got.extend(slice_part(&bricks, shape.bounds(), &settings, range).unwrap());
         }
         assert_eq!(got, layers, "{parts} parts");
     }

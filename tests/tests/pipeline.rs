@@ -1,7 +1,8 @@
 //! The whole shipped encode/decode pipeline on every shared mesh at 48^3: mesh -> banded signed
 //! distance -> cubic B-spline coefficients -> sparse .pgv file -> marching cubes -> mesh.
 
-use pgvol::{read_pgv, write_pgv, StorageOptions};
+use pgvol::io::{read_pgv, write_pgv};
+use pgvol::StorageOptions;
 use pgvol_tests::{decode, encode, load_shared, margin_cube, SHARED_MESHES};
 
 const RES: usize = 48;
@@ -126,10 +127,10 @@ fn every_shared_mesh_survives_the_pipeline() {
             .unwrap()
             .expect("sparse files report their storage");
         let back = read_pgv(&path).unwrap();
-        let band = pgvol::recorded_band(&back).expect("the band is recorded");
+        let band = pgvol::io::recorded_band(&back).expect("the band is recorded");
         let spacing = back.volume.grid.spacing;
         assert!(
-            (band - pgvol::ENCODE_BAND * spacing).abs() < 1e-6 * band,
+            (band - pgvol::limits::ENCODE_BAND * spacing).abs() < 1e-6 * band,
             "{name}: band {band}"
         );
         let near = file

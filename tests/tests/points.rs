@@ -2,7 +2,8 @@
 //! its Chamfer-L1 against the true mesh (exact point-to-triangle distances) stays within a
 //! bound, for each sparse method, with given and with estimated normals.
 
-use pgvol::{Mesh, PointCloud, PointsMethod, PointsOptions};
+use pgvol::reconstruct::{PointCloud, PointsMethod};
+use pgvol::{Mesh, PointsOptions};
 use pgvol_tests::{decode, load_shared};
 
 /// `n` area-uniform samples of `mesh`, with the normals of their triangles if asked.
@@ -35,7 +36,7 @@ fn chamfer_pct_of(
         method,
         ..Default::default()
     };
-    let fitted = pgvol::points(&cloud, &options, &pgvol::Silent).expect("points");
+    let fitted = pgvol::reconstruct::points(&cloud, &options, &pgvol::Silent).expect("points");
     assert_eq!(fitted.report.normals_estimated, !normals);
     let surface = decode(&fitted.file.volume);
     let stats = surface.stats();
@@ -96,7 +97,7 @@ fn cubic_rbf_on_a_small_cloud() {
         method: PointsMethod::RbfCubic,
         ..Default::default()
     };
-    let fitted = pgvol::points(&cloud, &options, &pgvol::Silent).expect("points");
+    let fitted = pgvol::reconstruct::points(&cloud, &options, &pgvol::Silent).expect("points");
     let surface = decode(&fitted.file.volume);
     assert!(surface.stats().watertight);
     let c = pgvol::compare(&surface, &mesh, 20_000, 1).expect("compare");
@@ -106,8 +107,8 @@ fn cubic_rbf_on_a_small_cloud() {
     );
     assert!(c.chamfer_l1_pct < 0.08, "{}", c.chamfer_l1_pct);
 
-    let big = sample_cloud(&mesh, pgvol::MAX_CUBIC_CENTRES, true);
-    let err = pgvol::points(&big, &options, &pgvol::Silent).unwrap_err();
+    let big = sample_cloud(&mesh, pgvol::limits::MAX_CUBIC_CENTRES, true);
+    let err = pgvol::reconstruct::points(&big, &options, &pgvol::Silent).unwrap_err();
     assert_eq!(err.kind(), pgvol::ErrorKind::ResourceLimit);
     assert!(err.to_string().contains("rbf-wendland"), "{err}");
 }

@@ -4,7 +4,9 @@
 #![forbid(unsafe_code)]
 
 mod commands;
+mod field_text;
 mod output;
+mod parse;
 mod progress;
 mod remedy;
 mod report;
@@ -161,7 +163,7 @@ mod tests {
                 .err()
                 .unwrap_or_else(|| panic!("--coarse {coarse} parsed"))
                 .to_string();
-            let range = format!("expected 4 to {}", pgvol::MAX_RES);
+            let range = format!("expected 4 to {}", pgvol::limits::MAX_RES);
             assert!(e.contains("--coarse") && e.contains(&range), "{e}");
         }
     }
@@ -190,7 +192,7 @@ mod tests {
         ])
         .unwrap();
         let e = commands::run(cli.command).unwrap_err().to_string();
-        pgvol::set_memory_limit(None);
+        pgvol::limits::set_memory_limit(None);
         assert!(
             e.contains("600 x 600 x 600 grid needs about") && e.contains("100.0 MB allowed"),
             "{e}"
@@ -267,9 +269,9 @@ mod tests {
             "--through=-0.25,-0.35,0.1",
         ];
         run_blend(&ipatch, &out).unwrap();
-        let shape = pgvol::Shape::from_file(pgvol::read_pgv(&out).unwrap());
+        let shape = pgvol::Field::from_file(pgvol::io::read_pgv(&out).unwrap());
         let at = pgvol::glam::DVec3::new(-0.25, -0.35, 0.1);
-        let v = pgvol::eval(&shape, &[at])[0].value;
+        let v = shape.eval(&[at])[0].value;
         assert!(v.abs() < 0.02, "{v}");
         // Weights with --through are w1..wn only: n + 1 numbers are refused by name.
         let mut wrong = ipatch.to_vec();
@@ -310,18 +312,16 @@ mod tests {
             &out,
         )
         .unwrap();
-        let shape = pgvol::Shape::from_file(pgvol::read_pgv(&out).unwrap());
+        let shape = pgvol::Field::from_file(pgvol::io::read_pgv(&out).unwrap());
         // The vertex is cut off; deep in the octant is inside.
-        let values: Vec<f32> = pgvol::eval(
-            &shape,
-            &[
+        let values: Vec<f32> = shape
+            .eval(&[
                 pgvol::glam::DVec3::splat(-0.02),
                 pgvol::glam::DVec3::splat(-0.5),
-            ],
-        )
-        .iter()
-        .map(|e| e.value)
-        .collect();
+            ])
+            .iter()
+            .map(|e| e.value)
+            .collect();
         assert!(values[0] > 0.0 && values[1] < 0.0, "{values:?}");
         // No bound is refused by name.
         let e = run_blend(&["spline", "plane:1,0,0,0", "plane:0,1,0,0"], &out)

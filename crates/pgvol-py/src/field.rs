@@ -131,28 +131,31 @@ impl Layer {
 /// A smooth implicit field: coefficients of a compactly supported basis on a grid.
 #[pyclass(frozen, module = "pgvol")]
 pub(crate) struct Field {
-    shape: pgvol::Shape,
+    shape: pgvol::Field,
     header: pgvol::PgvHeader,
 }
 
 impl Field {
     pub(crate) fn from_file(file: pgvol::PgvFile) -> Self {
-        let header = file.header.clone();
+        Self::from_shape(pgvol::Field::from_file(file))
+    }
+
+    pub(crate) fn from_shape(shape: pgvol::Field) -> Self {
         Self {
-            shape: pgvol::Shape::from_file(file),
-            header,
+            header: shape.header().clone(),
+            shape,
         }
     }
 
     /// The field and what is known of its shape.
-    pub(crate) fn shape(&self) -> &pgvol::Shape {
+    pub(crate) fn shape(&self) -> &pgvol::Field {
         &self.shape
     }
 
     fn file(&self) -> pgvol::PgvFile {
         pgvol::PgvFile {
             header: self.header.clone(),
-            volume: self.shape.volume.clone(),
+            volume: self.shape.volume().clone(),
         }
     }
 
@@ -174,16 +177,10 @@ impl Field {
         }
         Ok(storage)
     }
-
-    /// The field `operation` made from this one, moving the surface by up to `shift` (see
-    /// `pgvol::Shape::derived_file`).
-    fn derive(&self, volume: pgvol::CoefficientVolume, operation: &str, shift: f32) -> Field {
-        Field::from_file(self.shape.derived_file(volume, operation, shift))
-    }
 }
 
 // Python signatures show literal defaults only; these are the library's.
-const _: () = assert!(pgvol::ENCODE_BAND == 4.0);
+const _: () = assert!(pgvol::limits::ENCODE_BAND == 4.0);
 
 /// The grid choice of `res` and `voxel`.
 pub(crate) fn grid_spec(
@@ -199,8 +196,11 @@ pub(crate) fn grid_spec(
         )),
         (None, Some(h)) => Ok(pgvol::GridSpec::Voxel(h)),
         (res, None) => {
-            let n = res.unwrap_or(pgvol::DEFAULT_RES);
-            let (lo, hi) = (pgvol::MIN_RES as usize, pgvol::MAX_RES as usize);
+            let n = res.unwrap_or(pgvol::limits::DEFAULT_RES);
+            let (lo, hi) = (
+                pgvol::limits::MIN_RES as usize,
+                pgvol::limits::MAX_RES as usize,
+            );
             if !(lo..=hi).contains(&n) {
                 return Err(errors::parameter(
                     py,
@@ -239,14 +239,14 @@ fn make_lattice(
                 "give grade_depth or grade_linear, not both",
             ))
         }
-        (Some(depth), None) => Some(pgvol::Ramp::Depth { depth }),
-        (None, Some((a, b))) => Some(pgvol::Ramp::Linear {
+        (Some(depth), None) => Some(pgvol::lattices::Ramp::Depth { depth }),
+        (None, Some((a, b))) => Some(pgvol::lattices::Ramp::Linear {
             from: glam::Vec3::new(a.0, a.1, a.2),
             to: glam::Vec3::new(b.0, b.1, b.2),
         }),
         (None, None) => None,
     };
-    pgvol::make_lattice(
+    pgvol::lattices::make_lattice(
         names::tpms(py, surface)?,
         names::lattice_style(py, style)?,
         cell,
@@ -258,7 +258,7 @@ fn make_lattice(
     .map_err(|e| errors::to_py(py, e))
 }
 
-fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Drain> {
+fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::edit::Drain> {
     let numbers: Vec<f32> = match obj.extract::<Vec<f32>>() {
         Ok(v) => v,
         Err(_) => {
@@ -273,8 +273,24 @@ fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Drain> {
             vec![p.0, p.1, p.2, d.0, d.1, d.2, diameter]
         }
     };
-    let text: Vec<String> = numbers.iter().map(f32::to_string).collect();
-    pgvol::parse_drain(&text.join(",")).map_err(|e| errors::to_py(py, e))
+    if numbers.len() != 7 || numbers.iter().any(|x| !x.is_finite()) {
+        return Err(errors::parameter(
+            py,
+            "a drain: expected seven finite numbers x,y,z,dx,dy,dz,diameter",
+        ));
+    }
+    let direction = glam::Vec3::new(numbers[3], numbers[4], numbers[5]);
+    if direction.length() == 0.0 || numbers[6] <= 0.0 {
+        return Err(errors::parameter(
+            py,
+            "a drain's direction must be non-zero and its diameter positive",
+        ));
+    }
+    Ok(pgvol::edit::Drain {
+        point: glam::Vec3::new(numbers[0], numbers[1], numbers[2]),
+        direction: direction.normalize(),
+        diameter: numbers[6],
+    })
 }
 
 #[pymethods]
@@ -305,7 +321,7 @@ impl Field {
             sign: names::sign(py, sign)?,
         };
         let encoded = run(py, progress, |p| {
-            let (mesh, _) = pgvol::mesh_from_world(&positions, triangles)?;
+            let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
             pgvol::encode(&mesh, &options, p)
         })?;
         Ok(Field::from_file(encoded.file))
@@ -314,7 +330,7 @@ impl Field {
     /// A smooth closed surface through a point cloud (normals estimated when not given), and
     /// with `sections=(axis, heights)` its cross-sections cut from the method's own field.
     #[staticmethod]
-    #[pyo3(signature = (points, normals=None, *, res=None, voxel=None, method="spline", band=pgvol::ENCODE_BAND, support=None, sections=None, section_resolution=None, progress=None))]
+    #[pyo3(signature = (points, normals=None, *, res=None, voxel=None, method="spline", band=pgvol::limits::ENCODE_BAND, support=None, sections=None, section_resolution=None, progress=None))]
     fn from_points(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
@@ -331,7 +347,7 @@ impl Field {
         let single = |v: Vec<glam::DVec3>| -> Vec<glam::Vec3> {
             v.into_iter().map(|p| p.as_vec3()).collect()
         };
-        let cloud = pgvol::PointCloud {
+        let cloud = pgvol::reconstruct::PointCloud {
             points: single(arrays::world_points(points, "points")?),
             normals: normals
                 .map(|n| arrays::world_points(n, "normals"))
@@ -363,7 +379,9 @@ impl Field {
                     "section_resolution applies only with sections",
                 ));
             }
-            let fitted = run(py, progress, |p| pgvol::points(&cloud, &options, p))?;
+            let fitted = run(py, progress, |p| {
+                pgvol::reconstruct::points(&cloud, &options, p)
+            })?;
             return Ok(Py::new(py, Field::from_file(fitted.file))?.into_any());
         };
         let (axis, heights) = sections.extract::<(String, Vec<f32>)>().map_err(|_| {
@@ -372,13 +390,13 @@ impl Field {
                 "sections must be (axis, heights), e.g. (\"z\", [0.0, 0.5])",
             )
         })?;
-        let settings = pgvol::SectionSettings {
+        let settings = pgvol::reconstruct::SectionSettings {
             axis: names::axis(py, &axis)?,
             heights,
             resolution: section_resolution,
         };
         let (fitted, cut) = run(py, progress, |p| {
-            pgvol::points_with_sections(&cloud, &options, &settings, p)
+            pgvol::reconstruct::points_with_sections(&cloud, &options, &settings, p)
         })?;
         let field = Py::new(py, Field::from_file(fitted.file))?;
         let layers: Vec<Layer> = cut
@@ -406,7 +424,7 @@ impl Field {
     /// Reads a `.pgv` file.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Field> {
-        let file = quiet(py, || pgvol::read_pgv(&path))?;
+        let file = quiet(py, || pgvol::io::read_pgv(&path))?;
         Ok(Field::from_file(file))
     }
 
@@ -415,7 +433,7 @@ impl Field {
     fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Field> {
         // There is no file: bytes that do not decode are a bad value, not a missing file.
         let file = quiet(py, || {
-            pgvol::read_pgv_bytes(data, Path::new("<bytes>")).map_err(|e| match e.kind() {
+            pgvol::io::read_pgv_bytes(data, Path::new("<bytes>")).map_err(|e| match e.kind() {
                 pgvol::ErrorKind::InputFile => pgvol::Error::parameter(format!(
                     "the bytes are not a readable .pgv file: {}",
                     e.message()
@@ -439,8 +457,8 @@ impl Field {
     ) -> PyResult<()> {
         let storage = self.storage(py, dense, precision)?;
         quiet(py, || {
-            pgvol::check_pgv_name(&path)?;
-            pgvol::write_pgv(&path, &self.file(), &storage).map(|_| ())
+            pgvol::io::check_pgv_name(&path)?;
+            pgvol::io::write_pgv(&path, &self.file(), &storage).map(|_| ())
         })
     }
 
@@ -453,7 +471,7 @@ impl Field {
         precision: Option<&str>,
     ) -> PyResult<Bound<'py, PyBytes>> {
         let storage = self.storage(py, dense, precision)?;
-        let (bytes, _) = quiet(py, || pgvol::pgv_bytes(&self.file(), &storage))?;
+        let (bytes, _) = quiet(py, || pgvol::io::pgv_bytes(&self.file(), &storage))?;
         Ok(PyBytes::new(py, &bytes))
     }
 
@@ -474,7 +492,7 @@ impl Field {
         let points = self
             .shape
             .to_local(&arrays::world_points(points, "points")?);
-        let values = py.detach(|| self.shape.volume.values_many(&points));
+        let values = py.detach(|| self.shape.volume().values_many(&points));
         Ok(arrays::vector(py, values))
     }
 
@@ -489,7 +507,7 @@ impl Field {
             .shape
             .to_local(&arrays::world_points(points, "points")?);
         let (values, gradients): (Vec<f32>, Vec<glam::Vec3>) =
-            py.detach(|| self.shape.volume.eval_many(&points).into_iter().unzip());
+            py.detach(|| self.shape.volume().eval_many(&points).into_iter().unzip());
         Ok((arrays::vector(py, values), arrays::vec3s(py, gradients)))
     }
 
@@ -502,7 +520,8 @@ impl Field {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let points = arrays::world_points(points, "points")?;
         let exact: Vec<bool> = py.detach(|| {
-            pgvol::eval(&self.shape, &points)
+            self.shape
+                .eval(&points)
                 .into_iter()
                 .map(|e| e.exact)
                 .collect()
@@ -518,8 +537,8 @@ impl Field {
         py: Python<'py>,
         grid: Option<&Bound<'py, Grid>>,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let grid = grid.map_or(self.shape.volume.grid, |g| g.get().grid);
-        let values = quiet(py, || pgvol::sample(&self.shape.volume, &grid))?;
+        let grid = grid.map_or(self.shape.volume().grid, |g| g.get().grid);
+        let values = quiet(py, || self.shape.sample_grid(&grid))?;
         Ok(arrays::grid_values(py, values, grid.dims))
     }
 
@@ -552,9 +571,7 @@ impl Field {
             res,
             min_component,
         };
-        let mesh = run(py, progress, |p| {
-            pgvol::decode_shape(&self.shape, &options, p)
-        })?;
+        let mesh = run(py, progress, |p| self.shape.to_mesh(&options, p))?;
         let n = mesh.positions.len();
         let triangles = mesh.triangles.clone();
         Ok((
@@ -582,9 +599,8 @@ impl Field {
 
     /// The shape grown (distance > 0) or shrunk (distance < 0) by `distance`.
     fn offset(&self, py: Python<'_>, distance: f32) -> PyResult<Field> {
-        let volume = quiet(py, || pgvol::offset(&self.shape, distance))?;
-        let shift = pgvol::operation_shift(None, distance);
-        Ok(self.derive(volume, &pgvol::operation_name(None, distance), shift))
+        let shape = quiet(py, || self.shape.offset(distance))?;
+        Ok(Field::from_shape(shape))
     }
 
     /// A wall of `thickness` around the surface (`side` "inner", "outer" or "centred"), or with
@@ -610,12 +626,13 @@ impl Field {
             .iter()
             .map(|d| drain(py, d))
             .collect::<PyResult<Vec<_>>>()?;
-        let volume = run(py, progress, |p| {
-            pgvol::shell(&self.shape, thickness, kind, &drains, p)
-        })?;
-        let operation = pgvol::operation_name(Some(kind), thickness);
-        let shift = pgvol::operation_shift(Some(kind), thickness);
-        Ok(self.derive(volume, &operation, shift))
+        let options = pgvol::ShellOptions {
+            thickness,
+            kind,
+            drains,
+        };
+        let shape = run(py, progress, |p| self.shape.shell(&options, p))?;
+        Ok(Field::from_shape(shape))
     }
 
     /// The part cut by a triply periodic lattice: `surface` "gyroid", "schwarz-p", "diamond" or
@@ -640,9 +657,8 @@ impl Field {
     ) -> PyResult<Field> {
         let grading = (grade_depth, grade_linear, cell_far, thickness_far);
         let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
-        let solid = run(py, progress, |p| pgvol::lattice(&self.shape, &lattice, p))?;
-        let operation = format!("lattice {surface} cell {cell} thickness {thickness}");
-        Ok(self.derive(solid.volume, &operation, 0.0))
+        let solid = run(py, progress, |p| self.shape.lattice(&lattice, p))?;
+        Ok(Field::from_shape(solid.field))
     }
 
     /// The shape hollowed to walls of `wall` thickness with the cavity filled by a lattice (the
@@ -672,10 +688,9 @@ impl Field {
             .map(|d| drain(py, d))
             .collect::<PyResult<Vec<_>>>()?;
         let solid = run(py, progress, |p| {
-            pgvol::infill(&self.shape, wall, &lattice, &drains, p)
+            self.shape.infill(wall, &lattice, &drains, p)
         })?;
-        let operation = format!("hollow {wall} infill {surface} cell {cell} thickness {thickness}");
-        Ok(self.derive(solid.volume, &operation, wall))
+        Ok(Field::from_shape(solid.field))
     }
 
     /// Layers of closed contours `layer_height` apart along `axis`.
@@ -691,17 +706,18 @@ impl Field {
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Vec<Layer>> {
         // Layers are returned in the field's local coordinates, exact only near the origin.
-        pgvol::require_near(self.shape.volume.grid.offset, "slicing into arrays")
+        pgvol::checks::require_near(self.shape.volume().grid.offset, "slicing into arrays")
             .map_err(|e| errors::to_py(py, e))?;
-        let settings = pgvol::SliceSettings {
+        let settings = pgvol::SliceOptions {
             axis: names::axis(py, axis)?,
             layer_height,
             first: first.map(f64::from),
             resolution,
             tolerance,
         };
-        let layers = run(py, progress, |p| pgvol::slice(&self.shape, &settings, p))?;
-        Ok(layers
+        let sliced = run(py, progress, |p| self.shape.slice(&settings, p))?;
+        Ok(sliced
+            .layers
             .into_iter()
             .map(|l| Layer::from_layer(py, l))
             .collect())
@@ -711,14 +727,14 @@ impl Field {
     #[getter]
     fn grid(&self) -> Grid {
         Grid {
-            grid: self.shape.volume.grid,
+            grid: self.shape.volume().grid,
         }
     }
 
     /// The basis: "bspline3", "bspline2", "trilinear" or "pg-n<N>-r<R>".
     #[getter]
     fn basis(&self) -> String {
-        self.shape.volume.basis.to_string()
+        self.shape.volume().basis.to_string()
     }
 
     /// How the coefficients were fitted ("interp", "iso", "wls").
@@ -731,7 +747,7 @@ impl Field {
     /// distances, in mesh units; None when the file records none.
     #[getter]
     fn band(&self) -> Option<f32> {
-        self.shape.band
+        self.shape.band()
     }
 
     /// The distance from the surface within which values are exact distances: the band less
@@ -745,7 +761,7 @@ impl Field {
     #[getter]
     #[allow(clippy::type_complexity)]
     fn bounds(&self) -> ((f32, f32, f32), (f32, f32, f32)) {
-        let (lo, hi) = self.shape.bounds;
+        let (lo, hi) = self.shape.bounds();
         (lo.into(), hi.into())
     }
 
@@ -756,15 +772,16 @@ impl Field {
     }
 
     fn __repr__(&self) -> String {
-        let g = self.shape.volume.grid;
+        let g = self.shape.volume().grid;
         let [nx, ny, nz] = g.dims;
-        let band = match self.shape.band {
+        let band = match self.shape.band() {
             Some(b) => format!("{b}"),
             None => "None".into(),
         };
         format!(
             "Field(basis={}, dims=({nx}, {ny}, {nz}), spacing={}, band={band})",
-            self.shape.volume.basis, g.spacing
+            self.shape.volume().basis,
+            g.spacing
         )
     }
 }

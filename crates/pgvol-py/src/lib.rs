@@ -35,7 +35,7 @@ fn read_mesh(
     py: Python<'_>,
     path: PathBuf,
 ) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyArray2<i32>>)> {
-    let (mesh, _) = quiet(py, || pgvol::read_mesh(&path))?;
+    let (mesh, _) = quiet(py, || pgvol::io::read_mesh(&path))?;
     let n = mesh.positions.len();
     let triangles = mesh.triangles.clone();
     Ok((
@@ -56,7 +56,7 @@ fn write_mesh(
         &arrays::world_points(vertices, "vertices")?,
         arrays::faces(faces)?,
     );
-    quiet(py, || pgvol::write_mesh(&path, &mesh))
+    quiet(py, || pgvol::io::write_mesh(&path, &mesh))
 }
 
 /// Surface distances and statistics of mesh `a` against reference mesh `b`, from `samples`
@@ -74,8 +74,8 @@ fn compare<'py>(
     let (va, fa) = arrays::mesh_parts(a, "a")?;
     let (vb, fb) = arrays::mesh_parts(b, "b")?;
     let comparison = quiet(py, || {
-        let (a, _) = pgvol::mesh_from_world(&va, fa)?;
-        let (b, _) = pgvol::mesh_from_world(&vb, fb)?;
+        let (a, _) = pgvol::io::mesh_from_world(&va, fa)?;
+        let (b, _) = pgvol::io::mesh_from_world(&vb, fb)?;
         pgvol::compare(&a, &b, samples, seed)
     })?;
     let value = serde_json::to_value(&comparison)
@@ -84,20 +84,20 @@ fn compare<'py>(
 }
 
 // Python signatures show literal defaults only; this is the library's.
-const _: () = assert!(pgvol::COMPARE_SAMPLES == 200_000);
+const _: () = assert!(pgvol::limits::COMPARE_SAMPLES == 200_000);
 
 /// Sets the largest estimated peak memory, in bytes, a call may start with; None returns to
 /// the default, the memory the machine has available when the call starts.
 #[pyfunction]
 #[pyo3(signature = (limit))]
 fn set_memory_limit(limit: Option<u64>) {
-    pgvol::set_memory_limit(limit);
+    pgvol::limits::set_memory_limit(limit);
 }
 
 /// The memory limit in force, in bytes (None where the platform does not tell).
 #[pyfunction]
 fn memory_limit() -> Option<u64> {
-    pgvol::memory_limit()
+    pgvol::limits::memory_limit()
 }
 
 #[pymodule]
@@ -113,10 +113,10 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(memory_limit, m)?)?;
     parts::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("DEFAULT_RES", pgvol::DEFAULT_RES)?;
-    m.add("MIN_RES", pgvol::MIN_RES)?;
-    m.add("MAX_RES", pgvol::MAX_RES)?;
-    m.add("ENCODE_BAND", pgvol::ENCODE_BAND)?;
-    m.add("COMPARE_SAMPLES", pgvol::COMPARE_SAMPLES)?;
+    m.add("DEFAULT_RES", pgvol::limits::DEFAULT_RES)?;
+    m.add("MIN_RES", pgvol::limits::MIN_RES)?;
+    m.add("MAX_RES", pgvol::limits::MAX_RES)?;
+    m.add("ENCODE_BAND", pgvol::limits::ENCODE_BAND)?;
+    m.add("COMPARE_SAMPLES", pgvol::limits::COMPARE_SAMPLES)?;
     Ok(())
 }

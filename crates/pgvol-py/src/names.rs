@@ -13,8 +13,8 @@ fn unknown(py: Python<'_>, what: &str, got: &str, expected: &str) -> PyErr {
 pub(crate) fn basis(py: Python<'_>, name: &str) -> PyResult<pgvol::Basis> {
     if name == "pg" {
         return Ok(pgvol::Basis::Pg {
-            n: pgvol::PG_ORDER,
-            r: pgvol::PG_RADIUS,
+            n: pgvol::limits::PG_ORDER,
+            r: pgvol::limits::PG_RADIUS,
         });
     }
     pgvol::Basis::from_name(name).ok_or_else(|| {
@@ -80,12 +80,15 @@ pub(crate) fn axis(py: Python<'_>, name: &str) -> PyResult<pgvol::Axis> {
 }
 
 /// "spline", "tangent", "rbf-wendland" or "rbf-cubic".
-pub(crate) fn points_method(py: Python<'_>, name: &str) -> PyResult<pgvol::PointsMethod> {
+pub(crate) fn points_method(
+    py: Python<'_>,
+    name: &str,
+) -> PyResult<pgvol::reconstruct::PointsMethod> {
     Ok(match name {
-        "spline" => pgvol::PointsMethod::Spline,
-        "tangent" => pgvol::PointsMethod::Tangent,
-        "rbf-wendland" => pgvol::PointsMethod::RbfWendland,
-        "rbf-cubic" => pgvol::PointsMethod::RbfCubic,
+        "spline" => pgvol::reconstruct::PointsMethod::Spline,
+        "tangent" => pgvol::reconstruct::PointsMethod::Tangent,
+        "rbf-wendland" => pgvol::reconstruct::PointsMethod::RbfWendland,
+        "rbf-cubic" => pgvol::reconstruct::PointsMethod::RbfCubic,
         _ => {
             return Err(unknown(
                 py,
@@ -98,11 +101,11 @@ pub(crate) fn points_method(py: Python<'_>, name: &str) -> PyResult<pgvol::Point
 }
 
 /// "inner", "outer" or "centred".
-pub(crate) fn side(py: Python<'_>, name: &str) -> PyResult<pgvol::ShellSide> {
+pub(crate) fn side(py: Python<'_>, name: &str) -> PyResult<pgvol::edit::ShellSide> {
     Ok(match name {
-        "inner" => pgvol::ShellSide::Inner,
-        "outer" => pgvol::ShellSide::Outer,
-        "centred" | "centered" => pgvol::ShellSide::Centred,
+        "inner" => pgvol::edit::ShellSide::Inner,
+        "outer" => pgvol::edit::ShellSide::Outer,
+        "centred" | "centered" => pgvol::edit::ShellSide::Centred,
         _ => return Err(unknown(py, "side", name, "inner, outer or centred")),
     })
 }
@@ -116,16 +119,16 @@ pub(crate) fn precision(py: Python<'_>, name: &str) -> PyResult<pgvol::Precision
 }
 
 /// "gyroid", "schwarz-p" (or "primitive"), "diamond" or "neovius".
-pub(crate) fn tpms(py: Python<'_>, name: &str) -> PyResult<pgvol::Tpms> {
+pub(crate) fn tpms(py: Python<'_>, name: &str) -> PyResult<pgvol::lattices::Tpms> {
     name.parse()
         .map_err(|_| unknown(py, "surface", name, "gyroid, schwarz-p, diamond or neovius"))
 }
 
 /// "sheet" or "strut".
-pub(crate) fn lattice_style(py: Python<'_>, name: &str) -> PyResult<pgvol::LatticeStyle> {
+pub(crate) fn lattice_style(py: Python<'_>, name: &str) -> PyResult<pgvol::lattices::LatticeStyle> {
     match name {
-        "sheet" => Ok(pgvol::LatticeStyle::Sheet),
-        "strut" => Ok(pgvol::LatticeStyle::Strut),
+        "sheet" => Ok(pgvol::lattices::LatticeStyle::Sheet),
+        "strut" => Ok(pgvol::lattices::LatticeStyle::Strut),
         _ => Err(unknown(py, "lattice style", name, "sheet or strut")),
     }
 }

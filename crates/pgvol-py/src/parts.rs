@@ -43,7 +43,9 @@ fn mesh(
 ) -> PyResult<pgvol::Mesh> {
     let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
-    quiet(py, || Ok(pgvol::mesh_from_world(&positions, triangles)?.0))
+    quiet(py, || {
+        Ok(pgvol::io::mesh_from_world(&positions, triangles)?.0)
+    })
 }
 
 /// A part of an encode: groups `y0..y1`, `z0..z1` and the estimated peak bytes.
@@ -189,7 +191,7 @@ pub(crate) fn plan_decode(
     field: &Field,
     parts: usize,
 ) -> PyResult<Vec<(usize, usize)>> {
-    parts::plan_decode(&field.shape().volume, parts)
+    parts::plan_decode(field.shape().volume(), parts)
         .map(pairs)
         .map_err(|e| errors::to_py(py, e))
 }
@@ -202,7 +204,7 @@ pub(crate) fn decode_part_bricks<'py>(
     start: usize,
     end: usize,
 ) -> Bound<'py, PyBytes> {
-    let bytes = py.detach(|| parts::decode_part_bricks(&field.shape().volume, start..end));
+    let bytes = py.detach(|| parts::decode_part_bricks(field.shape().volume(), start..end));
     PyBytes::new(py, &bytes)
 }
 
@@ -270,8 +272,8 @@ fn slice_settings(
     first: Option<f32>,
     resolution: Option<f32>,
     tolerance: Option<f32>,
-) -> PyResult<pgvol::SliceSettings> {
-    Ok(pgvol::SliceSettings {
+) -> PyResult<pgvol::SliceOptions> {
+    Ok(pgvol::SliceOptions {
         axis: names::axis(py, axis)?,
         layer_height,
         first: first.map(f64::from),
@@ -373,9 +375,15 @@ pub(crate) fn write_layers(
         });
     }
     quiet(py, || {
-        let format = pgvol::LayerFormat::from_path(&path, binary)?;
+        let format = pgvol::io::LayerFormat::from_path(&path, binary)?;
         // Layers from Python are world coordinates as given.
-        pgvol::write_layers(&path, &out, format, units_mm, &pgvol::LayerFrame::default())
+        pgvol::io::write_layers(
+            &path,
+            &out,
+            format,
+            units_mm,
+            &pgvol::reconstruct::LayerFrame::default(),
+        )
     })
 }
 

@@ -34,20 +34,20 @@ pub(crate) fn perturb<'py>(
 ) -> PyResult<(Field, Bound<'py, PyAny>)> {
     let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
-    let options = pgvol::PerturbOptions {
+    let options = pgvol::perturbation::PerturbOptions {
         max_functions,
         tolerance,
         descent_steps,
     };
     let spec = pgvol::GridSpec::Res(res);
     let (file, report) = run(py, progress, |p| {
-        let (mesh, _) = pgvol::mesh_from_world(&positions, triangles)?;
-        let built = pgvol::perturb_on(&mesh, &options, spec, p)?;
+        let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+        let built = pgvol::perturbation::perturb_on(&mesh, &options, spec, p)?;
         if let Some(path) = &list_path {
-            let header = pgvol::perturbation_header(&built.field, &mesh, spec)?;
-            pgvol::write_perturbation(path, &header, &built.field)?;
+            let header = pgvol::perturbation::perturbation_header(&built.field, &mesh, spec)?;
+            pgvol::perturbation::write_perturbation(path, &header, &built.field)?;
         }
-        let file = pgvol::resample(&built.field, &mesh, spec, p)?;
+        let file = pgvol::perturbation::resample(&built.field, &mesh, spec, p)?;
         let report = serde_json::json!({
             "perturbation": built.report,
             "cleanup": built.cleanup,
@@ -59,5 +59,5 @@ pub(crate) fn perturb<'py>(
 }
 
 // Python signatures show literal defaults only; these are the library's.
-const _: () = assert!(pgvol::DEFAULT_RES == 128);
-const _: () = assert!(pgvol::DESCENT_STEPS == 20);
+const _: () = assert!(pgvol::limits::DEFAULT_RES == 128);
+const _: () = assert!(pgvol::perturbation::DESCENT_STEPS == 20);

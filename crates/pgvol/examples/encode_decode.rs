@@ -12,7 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let [mesh_path, res, stem] = args.as_slice() else {
         return Err("usage: encode_decode MESH RES OUT_STEM".into());
     };
-    let (mesh, _cleaned) = pgvol::read_mesh(mesh_path.as_ref())?;
+    let (mesh, _cleaned) = pgvol::io::read_mesh(mesh_path.as_ref())?;
 
     let options = EncodeOptions {
         grid: GridSpec::Res(res.parse()?),
@@ -20,12 +20,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let encoded = pgvol::encode(&mesh, &options, &Silent)?;
     let pgv_path = PathBuf::from(format!("{stem}.pgv"));
-    pgvol::write_pgv(&pgv_path, &encoded.file, &StorageOptions::default())?;
+    pgvol::io::write_pgv(&pgv_path, &encoded.file, &StorageOptions::default())?;
 
-    let file = pgvol::read_pgv(&pgv_path)?;
-    let surface = pgvol::decode(&file.volume, &DecodeOptions::default(), &Silent)?;
+    let file = pgvol::io::read_pgv(&pgv_path)?;
+    let surface = pgvol::Field::from_volume(file.volume.clone())
+        .to_mesh(&DecodeOptions::default(), &Silent)?;
     let glb_path = PathBuf::from(format!("{stem}.glb"));
-    pgvol::write_mesh(&glb_path, &surface)?;
+    pgvol::io::write_mesh(&glb_path, &surface)?;
 
     for path in [mesh_path.as_ref(), pgv_path.as_path(), glb_path.as_path()] {
         println!(

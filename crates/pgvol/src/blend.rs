@@ -2,12 +2,13 @@
 //! re-fitted into one coefficient volume, renormalised near the surface.
 
 use glam::Vec3;
-use pgvol_field::{Basis, CoefficientVolume};
+use pgvol_field::Basis;
 use pgvol_sdf::SignMode;
 
 use crate::csg::{check_edit_memory, covering_grid, load_operands, operand_fields, ResultUse};
 use crate::encode::ENCODE_BAND;
 use crate::error::{Error, Result};
+use crate::field_value::Field;
 use crate::operand::{Operand, OperandField};
 use crate::progress::Progress;
 
@@ -64,7 +65,7 @@ pub enum IPatchWeights {
 /// Grid and box of a blend's result.
 #[derive(Clone, Copy, Debug)]
 pub struct BlendSettings {
-    /// Grid nodes per axis (default [`crate::CSG_RES`]).
+    /// Grid nodes per axis (default [`crate::csg::CSG_RES`]).
     pub res: usize,
     /// The box the result covers; by default that of the bounded primaries.
     pub bounds: Option<(Vec3, Vec3)>,
@@ -77,7 +78,7 @@ pub struct BlendSettings {
 impl Default for BlendSettings {
     fn default() -> Self {
         BlendSettings {
-            res: crate::CSG_RES,
+            res: crate::csg::CSG_RES,
             bounds: None,
             sign: SignMode::Auto,
             result: ResultUse::Volume,
@@ -89,7 +90,7 @@ impl Default for BlendSettings {
 #[derive(Clone, Debug)]
 pub struct Blended {
     /// The re-fitted field.
-    pub volume: CoefficientVolume,
+    pub field: Field,
     /// The I-patch's weights.
     pub weights: Option<(Vec<f32>, f32)>,
 }
@@ -175,7 +176,16 @@ pub fn blend(
     let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, 3.0, field)
         .map_err(crate::csg::ops_error)?;
     crate::progress::check(progress)?;
-    Ok(Blended { volume, weights })
+    let name = match operator {
+        BlendOperator::Liming { .. } => "blend liming",
+        BlendOperator::Spline { .. } => "blend spline",
+        BlendOperator::IPatch { .. } => "blend ipatch",
+    };
+    let band = ENCODE_BAND * volume.grid.spacing;
+    Ok(Blended {
+        field: Field::edited(volume, name, band),
+        weights,
+    })
 }
 
 /// Refuses operands that do not fit the blend; returns its operands besides the primaries.

@@ -4,13 +4,13 @@
 use glam::Vec3;
 use pgvol_core::Grid;
 use pgvol_field::{Basis, CoefficientVolume};
-use pgvol_format::PgvFile;
 use pgvol_ops::{Blend, BoolOp};
 use pgvol_sdf::SignMode;
 
 use crate::emptiness::{require_surface, IfEmpty, Sides};
-use crate::encode::{BAND_KEY, ENCODE_BAND};
+use crate::encode::ENCODE_BAND;
 use crate::error::{Error, Result};
+use crate::field_value::Field;
 use crate::operand::{LoadedOperand, Operand, OperandField};
 use crate::progress::Progress;
 
@@ -81,7 +81,7 @@ pub(crate) fn check_edit_memory(
 
 /// What to compute.
 #[derive(Clone, Copy, Debug)]
-pub struct CsgSettings {
+pub struct CsgOptions {
     /// Union, intersection or difference (the first operand less the others).
     pub op: BoolOp,
     /// Sharp, or rounded with a radius in model units.
@@ -98,9 +98,9 @@ pub struct CsgSettings {
     pub result: ResultUse,
 }
 
-impl Default for CsgSettings {
+impl Default for CsgOptions {
     fn default() -> Self {
-        CsgSettings {
+        CsgOptions {
             op: BoolOp::Union,
             blend: Blend::Sharp,
             res: CSG_RES,
@@ -112,7 +112,7 @@ impl Default for CsgSettings {
 }
 
 /// The operation's name as recorded in the result's file.
-pub fn csg_name(settings: &CsgSettings) -> String {
+fn csg_name(settings: &CsgOptions) -> String {
     let op = match settings.op {
         BoolOp::Union => "union",
         BoolOp::Intersection => "intersection",
@@ -126,7 +126,7 @@ pub fn csg_name(settings: &CsgSettings) -> String {
 
 /// The grid every operand is placed on: a cube over `bounds`, or else over the bounded
 /// operands, grown by `grow`.
-pub fn covering_grid(
+pub(crate) fn covering_grid(
     operands: &[LoadedOperand],
     bounds: Option<(Vec3, Vec3)>,
     grow: f32,
@@ -155,7 +155,7 @@ pub fn covering_grid(
 }
 
 /// Reads the operands: `.pgv` files and meshes by extension, primaries as given.
-pub fn load_operands(operands: &[Operand]) -> Result<Vec<LoadedOperand>> {
+pub(crate) fn load_operands(operands: &[Operand]) -> Result<Vec<LoadedOperand>> {
     operands
         .iter()
         .map(|o| {
@@ -168,7 +168,7 @@ pub fn load_operands(operands: &[Operand]) -> Result<Vec<LoadedOperand>> {
 }
 
 /// Places the operands on `grid` as fields with exact distances `reach` out.
-pub fn operand_fields(
+pub(crate) fn operand_fields(
     operands: &[Operand],
     loaded: &[LoadedOperand],
     grid: Grid,
@@ -189,13 +189,64 @@ pub fn operand_fields(
         .collect()
 }
 
-/// The Boolean of the operands (the first less the others for a difference), re-fitted in the
-/// cubic B-spline on one grid covering all, brick by brick. The result is a distance within
-/// [`ENCODE_BAND`] spacings of its surface where the operands are, bounded as
-/// [`pgvol_ops::union`] documents in the blends.
-pub fn csg(
+impl Field {
+    /// The Boolean of the operands (the first less the others for a difference), re-fitted in
+    /// the cubic B-spline on one grid covering all, brick by brick. The result is a distance
+    /// within [`ENCODE_BAND`] spacings of its surface where the operands are, bounded as
+    /// [`pgvol_ops::union`] documents in the blends.
+    pub fn csg(
+        operands: &[Operand],
+        options: &CsgOptions,
+        progress: &dyn Progress,
+    ) -> Result<Field> {
+        let volume = csg(operands, options, progress)?;
+        let band = ENCODE_BAND * volume.grid.spacing;
+        Ok(Field::edited(volume, &csg_name(options), band))
+    }
+
+    /// This shape joined with `other`, sharp or rounded by `blend`; see [`Field::boolean`].
+    pub fn union(&self, other: &Field, blend: Blend) -> Result<Field> {
+        self.boolean(BoolOp::Union, other, blend)
+    }
+
+    /// What this shape and `other` share, sharp or rounded by `blend`; see [`Field::boolean`].
+    pub fn intersection(&self, other: &Field, blend: Blend) -> Result<Field> {
+        self.boolean(BoolOp::Intersection, other, blend)
+    }
+
+    /// This shape less `other`, sharp or rounded by `blend`; see [`Field::boolean`].
+    pub fn difference(&self, other: &Field, blend: Blend) -> Result<Field> {
+        self.boolean(BoolOp::Difference, other, blend)
+    }
+
+    /// The Boolean `op` of this field and `other` on a grid covering both (grown by a rounding
+    /// radius) as fine as the finer of their grids; see [`Field::csg`] to choose the grid.
+    pub fn boolean(&self, op: BoolOp, other: &Field, blend: Blend) -> Result<Field> {
+        let radius = match blend {
+            Blend::Sharp => 0.0,
+            Blend::Round(r) => r,
+        };
+        let (a, b) = (self.bounds, other.bounds);
+        let (lo, hi) = (a.0.min(b.0) - radius, a.1.max(b.1) + radius);
+        let spacing = self.grid().spacing.min(other.grid().spacing);
+        // A cube grid of N nodes spans 1.1 × the longest side in N - 1 spacings.
+        let nodes = (1.1 * (hi - lo).max_element() / spacing).ceil() as usize + 1;
+        let options = CsgOptions {
+            op,
+            blend,
+            res: nodes.clamp(crate::grid::MIN_RES as usize, crate::grid::MAX_RES as usize),
+            bounds: Some((a.0.min(b.0), a.1.max(b.1))),
+            ..CsgOptions::default()
+        };
+        let operands = [Operand::from(self.clone()), Operand::from(other.clone())];
+        Field::csg(&operands, &options, &crate::progress::Silent)
+    }
+}
+
+/// See [`Field::csg`].
+fn csg(
     operands: &[Operand],
-    settings: &CsgSettings,
+    settings: &CsgOptions,
     progress: &dyn Progress,
 ) -> Result<CoefficientVolume> {
     if operands.len() < 2 {
@@ -254,15 +305,4 @@ pub fn csg(
     };
     require_surface(Sides::of_volume(&volume), &why)?;
     Ok(volume)
-}
-
-/// The `.pgv` file of an edited field: its operation and the band within which its values
-/// are distances recorded in the header.
-pub fn edited_file(volume: CoefficientVolume, operation: &str, band: f32) -> PgvFile {
-    let mut header = pgvol_format::header_for(&volume, "interp", None);
-    header
-        .metadata
-        .insert("operation".into(), operation.to_string());
-    header.metadata.insert(BAND_KEY.into(), format!("{band}"));
-    PgvFile { header, volume }
 }

@@ -6,7 +6,6 @@ use pgvol_field::CoefficientVolume;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::progress::{self, Progress};
-use crate::shape::Shape;
 
 /// How a field is contoured.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,22 +84,9 @@ pub(crate) fn target_grid_of(grid: &Grid, res: Option<usize>) -> Result<Grid> {
     }
 }
 
-/// Contours the `options.iso` level set of `shape`, refusing a level beyond the band where its
-/// field is an exact distance (there the level set would follow the clamp, not the shape).
-pub fn decode_shape(
-    shape: &Shape,
-    options: &DecodeOptions,
-    progress: &dyn Progress,
-) -> Result<Mesh> {
-    if options.iso != 0.0 && options.iso.is_finite() {
-        shape.check_reach(options.iso)?;
-    }
-    decode(&shape.volume, options, progress)
-}
-
 /// Contours the `options.iso` level set of `volume`. An empty level set is an error: it is
 /// never a useful mesh.
-pub fn decode(
+pub(crate) fn decode(
     volume: &CoefficientVolume,
     options: &DecodeOptions,
     progress: &dyn Progress,

@@ -9,11 +9,12 @@ use pgvol_core::{Grid, Mesh, SparseGrid, BRICK_EDGE};
 use pgvol_field::CoefficientVolume;
 use pgvol_format::SlabReader;
 
+use crate::band::header_band;
 use crate::decode::{finish_mesh, target_grid_of, DecodeOptions};
 use crate::error::{Error, ErrorKind, FileResult, Result};
-use crate::pgv_io::{header_band, read_pgv_bytes};
+use crate::field_value::{check_reach_within, Field};
+use crate::pgv_io::read_pgv_bytes;
 use crate::progress::{self, Progress};
-use crate::shape::{check_reach_within, Shape};
 
 /// Contours the `options.iso` level set of the `.pgv` file at `path`, as [`crate::decode_shape`]
 /// of the file's shape does. Marching cubes of a sparse file reads the file one window of brick
@@ -35,8 +36,8 @@ pub fn decode_file(path: &Path, options: &DecodeOptions, progress: &dyn Progress
         header.basis.is_separable() && (options.iso == 0.0 || header_band(header).is_some())
     });
     let Some(reader) = streamed else {
-        let shape = Shape::from_file(read_pgv_bytes(&bytes, path)?);
-        return crate::decode_shape(&shape, options, progress).map_err(at);
+        let shape = Field::from_file(read_pgv_bytes(&bytes, path)?);
+        return shape.to_mesh(options, progress).map_err(at);
     };
     decode_slabs(&reader, options, progress).map_err(at)
 }

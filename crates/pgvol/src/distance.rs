@@ -178,7 +178,7 @@ impl GridFormat {
             Some(e) if e == "npy" => Ok(GridFormat::Npy),
             Some(e) if e == "nrrd" => Ok(GridFormat::Nrrd),
             _ => Err(Error::new(
-                crate::ErrorKind::OutputFile,
+                crate::error::ErrorKind::OutputFile,
                 "unknown grid file extension (expected .nrrd or .npy)",
             )
             .at(path)),

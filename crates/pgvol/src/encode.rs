@@ -12,13 +12,14 @@ use pgvol_format::{PgvFile, Precision};
 use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 
+use crate::band::BAND_KEY;
 use crate::distance::{mesh_sdf, sample, sample_sparse, MeshDistance};
 use crate::emptiness::{is_flat, require_mesh_surface, Sides, FLAT_MESH};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::memory::{check_grid, BYTES_PER_NODE};
 use crate::progress::{self, Progress};
-use crate::Timings;
+use crate::timings::Timings;
 
 /// Exact distances within this many grid spacings of the surface when encoding: the cubic
 /// B-spline near the surface depends on samples up to 2 nodes away directly and on farther ones
@@ -33,10 +34,6 @@ pub const PG_ORDER: u8 = 3;
 
 /// Pseudo-Gaussian support radius, in grid spacings, when only the basis is chosen.
 pub const PG_RADIUS: f32 = 1.5;
-
-/// Header metadata key holding the distance from the surface, in mesh units, within which the
-/// stored field is an exact distance; beyond it the field is a clamp.
-pub const BAND_KEY: &str = "band";
 
 /// How a mesh becomes a coefficient volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -305,7 +302,7 @@ fn encoded_pgv<'a>(
         precision: storage.precision,
         ..Default::default()
     };
-    if let Some(band) = crate::pgv_io::recorded_band(file) {
+    if let Some(band) = crate::band::recorded_band(file) {
         options.band = band / file.volume.grid.spacing - 1.0;
     }
     let (encoded, report) = pgvol_format::sparse_pgv(file, &options).writing()?;
@@ -347,30 +344,6 @@ impl StorageOptions {
             precision,
             dense: precision.is_none(),
         }
-    }
-}
-
-/// Refuses an output path before any work is done: its folder must exist, it must not be a
-/// folder itself, and a read-only file is replaced only when `force` is set.
-pub fn check_output(path: &Path, force: bool) -> Result<()> {
-    let fail = |problem: String| Error::new(ErrorKind::OutputFile, problem).at(path);
-    let folder = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if !folder.is_dir() {
-        return Err(fail(format!(
-            "the folder '{}' does not exist",
-            folder.display()
-        )));
-    }
-    match std::fs::metadata(path) {
-        Ok(meta) if meta.is_dir() => Err(fail("is a folder, not a file".into())),
-        Ok(meta) if meta.is_file() && meta.permissions().readonly() && !force => Err(fail(
-            "is read-only; make it writable or allow replacing it".into(),
-        )
-        .with_remedy(crate::error::Remedy::Replace)),
-        _ => Ok(()),
     }
 }
 

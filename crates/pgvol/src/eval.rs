@@ -10,7 +10,7 @@ use pgvol_field::CoefficientVolume;
 use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
-use crate::shape::Shape;
+use crate::field_value::Field;
 
 /// Parses points, one `x,y,z` per line (commas, semicolons, spaces or tabs between). Blank lines
 /// and lines starting with `#` are skipped, and so is a first line in which no field is a number
@@ -84,29 +84,36 @@ pub struct Evaluation {
     pub exact: bool,
 }
 
-/// Value and gradient of `shape`'s field at each point (world coordinates, taken into the
-/// field's frame in f64), in parallel, each flagged by whether it is an exact distance.
-pub fn eval(shape: &Shape, points: &[DVec3]) -> Vec<Evaluation> {
-    let volume: &CoefficientVolume = &shape.volume;
-    let band = shape.exact_band();
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let points = shape.to_local(points);
-    volume
-        .eval_many(&points)
-        .into_iter()
-        .zip(&points)
-        .map(|((value, gradient), p)| Evaluation {
-            value,
-            gradient: gradient.to_array(),
-            exact: value.abs() < band && p.cmpge(lo).all() && p.cmple(hi).all(),
-        })
-        .collect()
+impl Field {
+    /// Value and gradient of the field at each point (world coordinates, taken into the
+    /// field's frame in f64), in parallel, each flagged by whether it is an exact distance.
+    pub fn eval(&self, points: &[DVec3]) -> Vec<Evaluation> {
+        let volume: &CoefficientVolume = &self.file.volume;
+        let band = self.exact_band();
+        let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+        let points = self.to_local(points);
+        volume
+            .eval_many(&points)
+            .into_iter()
+            .zip(&points)
+            .map(|((value, gradient), p)| Evaluation {
+                value,
+                gradient: gradient.to_array(),
+                exact: value.abs() < band && p.cmpge(lo).all() && p.cmple(hi).all(),
+            })
+            .collect()
+    }
+
+    /// The field sampled at every node of `grid` (in the field's local frame), x fastest
+    /// (flat index `i + nx · (j + ny · k)`). Refuses a grid that is not finite, positive and
+    /// within the node limit, or that would not fit in memory.
+    pub fn sample_grid(&self, grid: &Grid) -> Result<Vec<f32>> {
+        sample(&self.file.volume, grid)
+    }
 }
 
-/// The field of `volume` sampled at every node of `grid`, x fastest (flat index
-/// `i + nx · (j + ny · k)`). Refuses a grid that is not finite, positive and within the node
-/// limit, or that would not fit in memory.
-pub fn sample(volume: &CoefficientVolume, grid: &Grid) -> Result<Vec<f32>> {
+/// See [`Field::sample_grid`].
+pub(crate) fn sample(volume: &CoefficientVolume, grid: &Grid) -> Result<Vec<f32>> {
     if !(grid.spacing.is_finite() && grid.spacing > 0.0) {
         return Err(Error::parameter(format!(
             "the grid spacing must be a positive number, got {}",
@@ -134,46 +141,4 @@ pub fn sample(volume: &CoefficientVolume, grid: &Grid) -> Result<Vec<f32>> {
     }
     crate::memory::check_grid("sampling", grid, crate::memory::BYTES_PER_SDF_NODE)?;
     Ok(volume.sample(grid))
-}
-
-/// A query point as a report gives it: single precision near the origin, full f64 for a field
-/// with a frame offset (as [`eval_csv`] writes it).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-#[serde(untagged)]
-pub enum ReportPoint {
-    /// A point of a field near the origin.
-    Single([f32; 3]),
-    /// A point of a field far from the origin.
-    Double([f64; 3]),
-}
-
-/// `p` as [`ReportPoint`] for `shape`.
-pub fn point_json(shape: &Shape, p: DVec3) -> ReportPoint {
-    if shape.volume.grid.offset != DVec3::ZERO {
-        ReportPoint::Double(p.to_array())
-    } else {
-        ReportPoint::Single(p.as_vec3().to_array())
-    }
-}
-
-/// The rows `x,y,z,value,gx,gy,gz,exact` of [`eval`]'s results (`exact` 1 or 0), with a header
-/// line. Points are written as single precision for a field near the origin (as read), and in
-/// full f64 for a field with a frame offset, so a far point is written as given.
-pub fn eval_csv(shape: &Shape, points: &[DVec3], results: &[Evaluation]) -> String {
-    let far = shape.volume.grid.offset != DVec3::ZERO;
-    let mut text = String::from("x,y,z,value,gx,gy,gz,exact\n");
-    for (p, e) in points.iter().zip(results) {
-        let [gx, gy, gz] = e.gradient;
-        let [x, y, z] = if far {
-            p.to_array().map(|c| c.to_string())
-        } else {
-            p.as_vec3().to_array().map(|c| c.to_string())
-        };
-        text.push_str(&format!(
-            "{x},{y},{z},{},{gx},{gy},{gz},{}\n",
-            e.value,
-            u8::from(e.exact)
-        ));
-    }
-    text
 }

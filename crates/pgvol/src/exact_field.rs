@@ -2,7 +2,7 @@
 //! on the input surface itself rather than on a smoothed fit of it.
 
 use glam::Vec3;
-use pgvol_contour::Field;
+use pgvol_contour::Field as ContourField;
 use pgvol_core::{Grid, Mesh};
 use pgvol_sdf::{Closest, MeshSdf, SignMode};
 
@@ -122,7 +122,7 @@ impl<'a> MeshField<'a> {
     }
 }
 
-impl Field for MeshField<'_> {
+impl ContourField for MeshField<'_> {
     fn value(&self, p: Vec3) -> f32 {
         self.value_gradient(p).0
     }

@@ -6,6 +6,7 @@ use pgvol_core::Grid;
 use pgvol_format::PgvFile;
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::field_value::Field;
 
 /// Export targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,6 +59,41 @@ pub const THREEMF_UNITS: [&str; 6] = [
 /// The unit named in 3MF packages unless told otherwise: pgvol keeps the mesh's units, which
 /// for printing are most often millimetres.
 pub const THREEMF_UNIT: &str = "millimeter";
+
+/// How [`Field::export`] writes a field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExportOptions<'a> {
+    /// The target; `None` (the default) picks the sampled field in the format of the path's
+    /// extension (.nrrd, .npy or .3mf).
+    pub kind: Option<ExportKind>,
+    /// Sample on this many nodes along the longest side; `None` (the default) samples the
+    /// stored grid. Not for coefficients.
+    pub res: Option<usize>,
+    /// The unit a 3MF package names, one of [`THREEMF_UNITS`] (default [`THREEMF_UNIT`]).
+    pub unit: &'a str,
+}
+
+impl Default for ExportOptions<'_> {
+    fn default() -> Self {
+        ExportOptions {
+            kind: None,
+            res: None,
+            unit: THREEMF_UNIT,
+        }
+    }
+}
+
+impl Field {
+    /// Writes the field to `path` for other tools as `options` say; returns the grid written.
+    pub fn export(&self, path: impl AsRef<Path>, options: &ExportOptions) -> Result<Grid> {
+        let path = path.as_ref();
+        let kind = match options.kind {
+            Some(kind) => kind,
+            None => ExportKind::from_path(path, false)?,
+        };
+        export(path, &self.file, kind, options.res, options.unit)
+    }
+}
 
 /// Writes `file` to `path` as `kind`, sampled on `res` nodes along the longest side (`None`:
 /// the stored grid; not for coefficients); a 3MF package names `unit` (one of

@@ -3,12 +3,12 @@
 //! solid they make (volume fraction and surface area).
 
 use pgvol_core::Mesh;
-use pgvol_ops::{Drain, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms};
+use pgvol_ops::{Drain, FieldMeasure, Grade, Lattice, LatticeSolid, LatticeStyle, Ramp, Tpms};
 
 use crate::error::{Error, Result};
+use crate::field_value::{check_drains, check_thickness, Field};
 use crate::memory::check_memory;
 use crate::progress::{self, Progress};
-use crate::shape::{check_drains, check_thickness, Shape};
 
 /// Bytes per brick of 8³ nodes a lattice stores: the node values and the coefficients (2 KiB
 /// each), and the local fit's working copy with its halo.
@@ -57,9 +57,9 @@ pub fn lattice_reach(lattice: &Lattice, wall: f32) -> f32 {
 
 /// Refuses a lattice whose finest wall is thinner than two grid spacings: the field cannot
 /// hold it and the solid would break into specks.
-fn check_resolution(shape: &Shape, lattice: &Lattice) -> Result<()> {
+fn check_resolution(shape: &Field, lattice: &Lattice) -> Result<()> {
     lattice.check()?;
-    let spacing = shape.volume.grid.spacing;
+    let spacing = shape.file.volume.grid.spacing;
     let thinnest = lattice
         .grade
         .map_or(lattice.thickness, |g| g.thickness.min(lattice.thickness));
@@ -86,9 +86,9 @@ fn check_resolution(shape: &Shape, lattice: &Lattice) -> Result<()> {
 }
 
 /// Refuses a lattice on `shape` that would not fit in memory.
-fn check_lattice_memory(shape: &Shape) -> Result<()> {
-    let bricks = pgvol_ops::lattice_bricks(&shape.volume) as u64;
-    let [nx, ny, nz] = shape.volume.grid.dims;
+fn check_lattice_memory(shape: &Field) -> Result<()> {
+    let bricks = pgvol_ops::lattice_bricks(&shape.file.volume) as u64;
+    let [nx, ny, nz] = shape.file.volume.grid.dims;
     check_memory(
         &format!("a lattice filling {bricks} bricks of a {nx} x {ny} x {nz} grid"),
         bricks.saturating_mul(BYTES_PER_LATTICE_BRICK),
@@ -96,36 +96,75 @@ fn check_lattice_memory(shape: &Shape) -> Result<()> {
     )
 }
 
-/// The part of `shape` intersected with `lattice`.
-pub fn lattice(shape: &Shape, lattice: &Lattice, progress: &dyn Progress) -> Result<LatticeSolid> {
-    crate::frame::require_near(shape.volume.grid.offset, "a lattice")?;
-    check_resolution(shape, lattice)?;
-    shape.check_reach(lattice_reach(lattice, 0.0))?;
-    check_lattice_memory(shape)?;
-    Ok(progress::stage(progress, "lattice", |_| {
-        pgvol_ops::lattice_part(&shape.volume, lattice)
-    })??)
+/// A lattice solid and what the field measures of it and of the part it was cut from.
+#[derive(Clone, Debug)]
+pub struct Latticed {
+    /// The solid.
+    pub field: Field,
+    /// The solid's volume and area, from its node values.
+    pub solid: FieldMeasure,
+    /// The part's, likewise.
+    pub part: FieldMeasure,
 }
 
-/// `shape` hollowed to walls of `wall` thickness, the cavity filled with `lattice` and the
-/// drains cut through wall and lattice.
-pub fn infill(
-    shape: &Shape,
-    wall: f32,
-    lattice: &Lattice,
-    drains: &[Drain],
-    progress: &dyn Progress,
-) -> Result<LatticeSolid> {
-    check_thickness(wall)?;
-    crate::resolution::check_wall("the wall thickness", wall, &shape.volume.grid)?;
-    crate::frame::require_near(shape.volume.grid.offset, "an infill")?;
-    check_resolution(shape, lattice)?;
-    shape.check_reach(lattice_reach(lattice, wall))?;
-    check_drains(shape, wall, drains, progress)?;
-    check_lattice_memory(shape)?;
-    Ok(progress::stage(progress, "infill", |_| {
-        pgvol_ops::infill(&shape.volume, wall, lattice, drains)
-    })??)
+impl Latticed {
+    fn of(part: &Field, solid: LatticeSolid, operation: &str, shift: f32) -> Latticed {
+        Latticed {
+            field: part.derived(solid.volume, operation, shift),
+            solid: solid.solid,
+            part: solid.part,
+        }
+    }
+
+    /// The solid's volume fraction and area: on `mesh`, the contoured solid, when there is one
+    /// (exact sums over its triangles), else from the field's node values (no contouring).
+    pub fn report(&self, mesh: Option<&Mesh>, progress: &dyn Progress) -> SolidReport {
+        solid_report(self, mesh, progress)
+    }
+}
+
+impl Field {
+    /// The part intersected with `lattice`.
+    pub fn lattice(&self, lattice: &Lattice, progress: &dyn Progress) -> Result<Latticed> {
+        crate::frame::require_near(self.file.volume.grid.offset, "a lattice")?;
+        check_resolution(self, lattice)?;
+        self.check_reach(lattice_reach(lattice, 0.0))?;
+        check_lattice_memory(self)?;
+        let solid = progress::stage(progress, "lattice", |_| {
+            pgvol_ops::lattice_part(&self.file.volume, lattice)
+        })??;
+        let operation = format!(
+            "lattice {} cell {} thickness {}",
+            lattice.surface, lattice.cell, lattice.thickness
+        );
+        Ok(Latticed::of(self, solid, &operation, 0.0))
+    }
+
+    /// The part hollowed to walls of `wall` thickness, the cavity filled with `lattice` and
+    /// the drains (world coordinates) cut through wall and lattice.
+    pub fn infill(
+        &self,
+        wall: f32,
+        lattice: &Lattice,
+        drains: &[Drain],
+        progress: &dyn Progress,
+    ) -> Result<Latticed> {
+        check_thickness(wall)?;
+        crate::resolution::check_wall("the wall thickness", wall, &self.file.volume.grid)?;
+        crate::frame::require_near(self.file.volume.grid.offset, "an infill")?;
+        check_resolution(self, lattice)?;
+        self.check_reach(lattice_reach(lattice, wall))?;
+        check_drains(self, wall, drains, progress)?;
+        check_lattice_memory(self)?;
+        let solid = progress::stage(progress, "infill", |_| {
+            pgvol_ops::infill(&self.file.volume, wall, lattice, drains)
+        })??;
+        let operation = format!(
+            "hollow {wall} infill {} cell {} thickness {}",
+            lattice.surface, lattice.cell, lattice.thickness
+        );
+        Ok(Latticed::of(self, solid, &operation, wall))
+    }
 }
 
 /// What a lattice solid measures.
@@ -148,13 +187,8 @@ pub struct SolidReport {
     pub enclosed_voids: Option<usize>,
 }
 
-/// The volume fraction and area of `solid`: on `mesh`, the contoured solid, when there is one
-/// (exact sums over its triangles), else from the field's node values (no contouring).
-pub fn solid_report(
-    solid: &LatticeSolid,
-    mesh: Option<&Mesh>,
-    progress: &dyn Progress,
-) -> SolidReport {
+/// See [`Latticed::report`].
+fn solid_report(solid: &Latticed, mesh: Option<&Mesh>, progress: &dyn Progress) -> SolidReport {
     let (volume, area, enclosed_voids) = match mesh {
         Some(mesh) => {
             let pieces = piece_volumes(mesh);

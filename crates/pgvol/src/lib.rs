@@ -11,45 +11,60 @@
 //!
 //! # A tour
 //!
+//! Every job goes through one value, [`Field`]: made from a mesh or read from a `.pgv` file,
+//! changed by operations that each return a new `Field`, and queried, contoured, sliced or
+//! saved. The modules hold the readers and writers ([`io`]), the limits and defaults
+//! ([`limits`]) and the less common jobs.
+//!
 //! ```
-//! use pgvol::{DecodeOptions, EncodeOptions, GridSpec, Silent, StorageOptions};
+//! use pgvol::{DecodeOptions, EncodeOptions, Field, GridSpec, Silent, SliceOptions, StorageOptions};
 //!
 //! # fn main() -> pgvol::Result<()> {
 //! let dir = tempfile::tempdir().unwrap();
-//! // A mesh file: here a unit sphere written by pgvol itself.
+//! // A mesh file: here a unit sphere written by pgvol itself, read back (bit-identical
+//! // vertices welded, degenerate triangles dropped).
 //! let sphere_path = dir.path().join("sphere.obj");
-//! pgvol::write_mesh(&sphere_path, &pgvol::mesh::shapes::octasphere(4))?;
+//! pgvol::io::write_mesh(&sphere_path, &pgvol::mesh::shapes::octasphere(4))?;
+//! let (mesh, _cleaned) = pgvol::io::read_mesh(&sphere_path)?;
 //!
-//! // Load it (bit-identical vertices welded, degenerate triangles dropped).
-//! let (mesh, _cleaned) = pgvol::read_mesh(&sphere_path)?;
+//! // Encode: signed distance on a 48³ grid, cubic B-spline coefficients, distances kept 8 grid
+//! // spacings out so that the operations below read exact distances.
+//! let options = EncodeOptions { grid: GridSpec::Res(48), band: 8.0, ..EncodeOptions::default() };
+//! let field = Field::from_mesh(&mesh, &options, &Silent)?;
 //!
-//! // Encode: signed distance on a 48³ grid, cubic B-spline coefficients.
-//! let options = EncodeOptions { grid: GridSpec::Res(48), ..EncodeOptions::default() };
-//! let encoded = pgvol::encode(&mesh, &options, &Silent)?;
-//!
-//! // Write it as a sparse, compressed .pgv file and read it back.
+//! // Save it as a sparse, compressed .pgv file and load it again.
 //! let pgv_path = dir.path().join("sphere.pgv");
-//! pgvol::write_pgv(&pgv_path, &encoded.file, &StorageOptions::default())?;
-//! let file = pgvol::read_pgv(&pgv_path)?;
+//! field.save(&pgv_path, &StorageOptions::default())?;
+//! let field = Field::load(&pgv_path)?;
 //!
-//! // Near the surface the field is the signed distance: -0.1 just inside the unit sphere.
-//! // (Beyond the band of 4 grid spacings it holds a clamped value of the right sign.)
-//! let (value, gradient) = file.volume.eval(glam::Vec3::new(0.9, 0.0, 0.0));
-//! assert!((value + 0.1).abs() < 0.01);
-//! assert!(gradient.x > 0.95);
+//! // Near the surface the field is the signed distance: -0.05 just inside the unit sphere,
+//! // with a unit gradient pointing out. Farther than the band of exact distances (the 8 spacings
+//! // less the basis support's 2, here 0.28) it holds a value of the right sign, and `exact`
+//! // says which is which.
+//! let at = field.eval(&[glam::DVec3::new(0.95, 0.0, 0.0), glam::DVec3::new(0.5, 0.0, 0.0)]);
+//! assert!((at[0].value + 0.05).abs() < 0.005 && at[0].gradient[0] > 0.95 && at[0].exact);
+//! assert!(at[1].value < 0.0 && !at[1].exact);
 //!
-//! // Decode: contour the zero level set into a watertight mesh.
-//! let surface = pgvol::decode(&file.volume, &DecodeOptions::default(), &Silent)?;
+//! // Contour the zero level set into a watertight mesh.
+//! let surface = field.to_mesh(&DecodeOptions::default(), &Silent)?;
 //! assert!(surface.stats().watertight);
 //!
-//! // Slice into layers 0.1 apart along z.
-//! let shape = pgvol::Shape::from_file(file);
-//! let layers = pgvol::slice(&shape, &pgvol::SliceSettings::new(0.1), &Silent)?;
-//! assert!(layers.len() >= 19);
+//! // Slice into layers 0.1 apart along z: 20 layers from -0.95 to 0.95, each a disc whose
+//! // area is that of the sphere's section, π(1 - z²).
+//! let sliced = field.slice(&SliceOptions::new(0.1), &Silent)?;
+//! assert_eq!(sliced.layers.len(), 20);
+//! for layer in &sliced.layers {
+//!     let z = f64::from(layer.height);
+//!     let disc = std::f64::consts::PI * (1.0 - z * z);
+//!     assert!((layer.area() - disc).abs() < 0.03 * disc + 0.01, "{z}: {}", layer.area());
+//! }
 //!
-//! // Grow the shape by 0.05: the field shifts, the surface moves out.
-//! let grown = pgvol::offset(&shape, 0.05)?;
-//! assert!((grown.eval(glam::Vec3::new(0.9, 0.0, 0.0)).0 + 0.15).abs() < 0.01);
+//! // Operations chain: grow by 0.05, then hollow to walls of 0.2; the surface moves out,
+//! // and the centre is now outside the solid.
+//! let part = field.offset(0.05)?.hollow(0.2, &[], &Silent)?;
+//! let [outer, centre] = [glam::DVec3::new(1.04, 0.0, 0.0), glam::DVec3::ZERO];
+//! let values = part.eval(&[outer, centre]);
+//! assert!(values[0].value < 0.0 && values[1].value > 0.0);
 //! # Ok(())
 //! # }
 //! ```
@@ -58,6 +73,7 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
+mod band;
 mod blend;
 mod csg;
 mod decode;
@@ -70,8 +86,8 @@ mod error;
 mod eval;
 mod exact_field;
 mod export;
+mod field_value;
 mod frame;
-pub use frame::require_near;
 mod grid;
 mod lattice;
 mod memory;
@@ -86,70 +102,140 @@ mod progress;
 mod remesh;
 mod repair;
 mod resolution;
-mod shape;
 mod slice;
+mod timings;
 
-pub use blend::{blend, BlendOperator, BlendSettings, Blended, IPatchWeights, DEFAULT_LAMBDA};
-pub use csg::{
-    covering_grid, csg, csg_name, edited_file, load_operands, operand_fields, CsgSettings,
-    ResultUse, CSG_RES,
-};
-pub use decode::{decode, decode_shape, DecodeOptions, SPECK_VOXELS};
-pub use decode_file::decode_file;
-pub use distance::{
-    mesh_sdf, signed_distance, write_grid, GridFormat, MeshDistance, SdfGrid, SdfOptions,
-};
-pub use encode::{
-    check_output, check_pgv_name, encode, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv,
-    write_pgv_to, EncodeOptions, Encoded, StorageOptions, StorageReport, BAND_KEY, ENCODE_BAND,
-    MIN_BAND, PG_ORDER, PG_RADIUS,
-};
+pub use csg::{CsgOptions, ResultUse};
+pub use decode::DecodeOptions;
+pub use distance::SdfOptions;
+pub use encode::{encode, EncodeOptions, Encoded, StorageOptions, StorageReport};
 pub use error::{Error, ErrorKind, Remedy, Result};
-pub use eval::{
-    eval, eval_csv, point_json, read_points, read_points_file, sample, Evaluation, ReportPoint,
-};
-pub use exact_field::{MeshField, NODE_BAND};
-pub use export::{export, ExportKind, THREEMF_UNIT, THREEMF_UNITS};
-pub use grid::{GridSpec, DEFAULT_RES, MAX_RES, MIN_RES};
-pub use lattice::{
-    infill, lattice, lattice_reach, make_lattice, solid_report, SolidReport,
-    BYTES_PER_LATTICE_BRICK,
-};
-pub use memory::{human, memory_limit, parse_size, set_memory_limit};
-pub use mesh_io::{
-    check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh, read_mesh_bytes,
-    write_mesh, write_mesh_to,
-};
-pub use operand::{parse_operand, LoadedOperand, Operand, OperandField, Primary, PRIMARY_FORMS};
-pub use perturb::{
-    perturb, perturb_on, perturbation_header, perturbation_mesh, resample, resample_onto,
-    resampled_storage, write_perturbation, Perturbed, CHECK_MARGIN, CHECK_RES, RESAMPLE_BAND,
-    SOURCE_KEY, STRAY_ROUNDS,
-};
-pub use pgv_io::{
-    pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes, read_pgv_from,
-    recorded_band, FieldSource,
-};
-pub use pgvol_perturb::{
-    Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason, Strays, DESCENT_STEPS,
-};
-pub use points::{
-    contours, points, points_bytes, points_with_sections, read_cloud_text, read_layers,
-    read_point_cloud, PointsMethod, PointsOptions, Reconstructed, SectionSettings, Sections,
-    MAX_CUBIC_CENTRES, POINT_TEXT_EXTENSIONS,
-};
+pub use eval::Evaluation;
+pub use export::{ExportKind, ExportOptions};
+pub use field_value::{Field, OpenOptions, ShellKind, ShellOptions};
+pub use grid::GridSpec;
+pub use lattice::{Latticed, SolidReport};
+pub use operand::{Operand, Primary};
+pub use points::{PointsOptions, Reconstructed};
 pub use progress::{Progress, Silent};
 pub use remesh::{remesh, RemeshField, RemeshOptions, Remeshed};
-pub use repair::{parse_face, parse_mask, repair, repair_reach, DEFAULT_ALPHA, DEFAULT_COARSE};
-pub use resolution::{check_pieces, check_wall, EXTRA_PIECES, MIN_WALL_SPACINGS, PIECES_FACTOR};
-pub use shape::{
-    check_offset, check_thickness, exact_reach, growth, offset, operation_name, operation_shift,
-    parse_drain, shell, Shape, ShellKind, SHAPE_RES, SLICE_RES,
-};
-pub use slice::{
-    layer_frame, slice, slice_file, write_layers, LayerFormat, SliceSettings, Sliced,
-    DEFAULT_UNITS_MM,
-};
+pub use repair::Repaired;
+pub use slice::{SliceOptions, Sliced};
+pub use timings::Timings;
+
+pub use glam;
+pub use pgvol_contour::Method;
+pub use pgvol_core::{Grid, Mesh};
+pub use pgvol_field::{Basis, CoefficientVolume, FitMethod};
+pub use pgvol_format::{PgvFile, PgvHeader, Precision};
+pub use pgvol_metrics::Comparison;
+pub use pgvol_ops::{Blend, BoolOp, Lattice};
+pub use pgvol_sdf::SignMode;
+pub use pgvol_slice::{Axis, Layer};
+
+/// Reading and writing files: meshes, `.pgv` files, point clouds and point lists, layer files,
+/// sampled grids and the formats other tools read.
+pub mod io {
+    pub use crate::band::recorded_band;
+    pub use crate::distance::{write_grid, GridFormat};
+    pub use crate::encode::{
+        check_pgv_name, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv, write_pgv_to,
+    };
+    pub use crate::eval::{read_points, read_points_file};
+    pub use crate::export::export;
+    pub use crate::mesh_io::{
+        check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh,
+        read_mesh_bytes, write_mesh, write_mesh_to,
+    };
+    pub use crate::pgv_io::{
+        pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes,
+        read_pgv_from, FieldSource,
+    };
+    pub use crate::points::{
+        read_cloud_text, read_layers, read_point_cloud, POINT_TEXT_EXTENSIONS,
+    };
+    pub use crate::slice::{write_layers, LayerFormat};
+}
+
+/// Work on a `.pgv` file window by window, so memory follows the surface rather than the grid.
+pub mod stream {
+    pub use crate::decode_file::decode_file;
+    pub use crate::slice::slice_file;
+}
+
+/// Defaults, limits and the memory cap every job is estimated against before it starts.
+pub mod limits {
+    pub use crate::band::BAND_KEY;
+    pub use crate::blend::DEFAULT_LAMBDA;
+    pub use crate::csg::CSG_RES;
+    pub use crate::decode::SPECK_VOXELS;
+    pub use crate::encode::{ENCODE_BAND, MIN_BAND, PG_ORDER, PG_RADIUS};
+    pub use crate::exact_field::NODE_BAND;
+    pub use crate::export::{THREEMF_UNIT, THREEMF_UNITS};
+    pub use crate::field_value::{SHAPE_RES, SLICE_RES};
+    pub use crate::grid::{DEFAULT_RES, MAX_RES, MIN_RES};
+    pub use crate::lattice::BYTES_PER_LATTICE_BRICK;
+    pub use crate::memory::{memory_limit, set_memory_limit};
+    pub use crate::points::MAX_CUBIC_CENTRES;
+    pub use crate::repair::{DEFAULT_ALPHA, DEFAULT_COARSE};
+    pub use crate::resolution::{EXTRA_PIECES, MIN_WALL_SPACINGS, PIECES_FACTOR};
+    pub use crate::slice::DEFAULT_UNITS_MM;
+    pub use pgvol_ops::{MAX_CONTINUITY, TPMS_NAMES};
+
+    /// Area-uniform samples drawn on each mesh by [`crate::compare`] unless told otherwise.
+    pub const COMPARE_SAMPLES: usize = 200_000;
+}
+
+/// Checks of parameters that callers can make before any heavy work.
+pub mod checks {
+    pub use crate::field_value::{check_offset, check_thickness, exact_reach};
+    pub use crate::frame::require_near;
+    pub use crate::lattice::lattice_reach;
+    pub use crate::repair::repair_reach;
+    pub use crate::resolution::{check_pieces, check_wall};
+}
+
+/// Signed distances of meshes: sampled on grids, or evaluated exactly anywhere.
+pub mod distances {
+    pub use crate::distance::{mesh_sdf, signed_distance, MeshDistance, SdfGrid};
+    pub use crate::exact_field::MeshField;
+}
+
+/// Editing: Booleans and algebraic blends of operands, repairs inside masks, shells.
+pub mod edit {
+    pub use crate::blend::{blend, BlendOperator, BlendSettings, Blended, IPatchWeights};
+    pub use pgvol_ops::{Continuity, Drain, Face, Mask, MaskReport, Restore, ShellSide};
+}
+
+/// Lattices for additive manufacturing: triply periodic surfaces cut to a part or filling it.
+pub mod lattices {
+    pub use crate::lattice::make_lattice;
+    pub use pgvol_ops::{Grade, LatticeSolid, LatticeStyle, Ramp, Tpms};
+}
+
+/// Surfaces from point clouds and from stacks of planar contours.
+pub mod reconstruct {
+    pub use crate::points::{
+        contours, points, points_bytes, points_with_sections, PointsMethod, SectionSettings,
+        Sections,
+    };
+    pub use pgvol_points::{PointCloud, PointsReport};
+    pub use pgvol_slice::LayerFrame;
+}
+
+/// The perturbation method: a mesh as a list of quadric perturbations, its files, and its
+/// resampling onto a coefficient volume.
+pub mod perturbation {
+    pub use crate::perturb::{
+        perturb, perturb_on, perturbation_header, perturbation_mesh, resample, resample_onto,
+        resampled_storage, write_perturbation, Perturbed, CHECK_MARGIN, CHECK_RES, RESAMPLE_BAND,
+        SOURCE_KEY, STRAY_ROUNDS,
+    };
+    pub use pgvol_perturb::{
+        Cleanup, PerturbOptions, PerturbReport, PerturbationField, StopReason, Strays,
+        DESCENT_STEPS,
+    };
+}
 
 /// The stage crates, for what the facade does not wrap.
 pub use pgvol_contour as contour;
@@ -159,42 +245,9 @@ pub use pgvol_format as format;
 pub use pgvol_mesh as mesh;
 pub use pgvol_metrics as metrics;
 pub use pgvol_ops as ops;
-pub use pgvol_perturb as perturbation;
 pub use pgvol_points as point_cloud;
 pub use pgvol_sdf as sdf;
 pub use pgvol_slice as slicing;
-
-pub use glam;
-pub use pgvol_contour::Method;
-pub use pgvol_core::{Grid, Mesh};
-pub use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport};
-pub use pgvol_format::{PgvFile, PgvHeader, Precision};
-pub use pgvol_metrics::Comparison;
-pub use pgvol_ops::{
-    Blend, BoolOp, Continuity, Drain, Face, Grade, Lattice, LatticeSolid, LatticeStyle, Mask,
-    MaskReport, Ramp, Restore, ShellSide, Tpms, MAX_CONTINUITY, TPMS_NAMES,
-};
-pub use pgvol_points::{PointCloud, PointsReport};
-pub use pgvol_sdf::SignMode;
-pub use pgvol_slice::{Axis, Layer, LayerFrame};
-
-/// Seconds spent per stage of a call.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct Timings {
-    /// Reading the input.
-    pub read: f64,
-    /// Signed distances.
-    pub sdf: f64,
-    /// Fitting the coefficients.
-    pub fit: f64,
-    /// Contouring.
-    pub contour: f64,
-    /// Writing the output.
-    pub write: f64,
-}
-
-/// Area-uniform samples drawn on each mesh by [`compare`] unless told otherwise.
-pub const COMPARE_SAMPLES: usize = 200_000;
 
 /// Surface distances and statistics of mesh `a` against reference mesh `b`, from `samples`
 /// area-uniform samples on each, reproducible from `seed`.

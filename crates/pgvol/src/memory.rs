@@ -201,7 +201,7 @@ pub(crate) fn grid_bytes(nodes: usize, per_node: u64) -> u64 {
 }
 
 /// A size for a person: `1.6 GB`, `340 MB`.
-pub fn human(bytes: u64) -> String {
+pub(crate) fn human(bytes: u64) -> String {
     const UNITS: [&str; 5] = ["B", "kB", "MB", "GB", "TB"];
     let mut value = bytes as f64;
     let mut unit = 0;
@@ -216,41 +216,14 @@ pub fn human(bytes: u64) -> String {
     }
 }
 
-/// Parses a size such as `8G`, `512M`, `2.5GB` or a plain number of bytes.
-pub fn parse_size(text: &str) -> Result<u64> {
-    let t = text.trim();
-    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
-    let (number, unit) = t.split_at(split);
-    let factor: f64 = match unit.trim().to_ascii_uppercase().as_str() {
-        "" | "B" => 1.0,
-        "K" | "KB" => 1e3,
-        "M" | "MB" => 1e6,
-        "G" | "GB" => 1e9,
-        "T" | "TB" => 1e12,
-        "KIB" => 1024.0,
-        "MIB" => 1024.0 * 1024.0,
-        "GIB" => 1024.0 * 1024.0 * 1024.0,
-        _ => f64::NAN,
-    };
-    match number.trim().parse::<f64>() {
-        Ok(n) if n.is_finite() && n > 0.0 && factor.is_finite() => Ok((n * factor) as u64),
-        _ => Err(Error::parameter(format!(
-            "'{text}' is not a size (examples: 8G, 512M, 2.5GB)"
-        ))),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn sizes_parse_and_print() {
-        assert_eq!(parse_size("8G").unwrap(), 8_000_000_000);
-        assert_eq!(parse_size("512 MiB").unwrap(), 512 << 20);
-        assert_eq!(parse_size("1000").unwrap(), 1000);
-        assert!(parse_size("lots").is_err() && parse_size("-1G").is_err());
+    fn sizes_print_for_people() {
         assert_eq!(human(1_600_000_000), "1.6 GB");
+        assert_eq!(human(999), "999 B");
     }
 
     #[test]
@@ -259,7 +232,7 @@ mod tests {
         let e = check_memory("encoding at 256³", 2_000_000, "lower the resolution").unwrap_err();
         set_memory_limit(None);
         assert_eq!(e.kind(), ErrorKind::ResourceLimit);
-        assert_eq!(e.remedy(), Some(crate::Remedy::MemoryLimit));
+        assert_eq!(e.remedy(), Some(crate::error::Remedy::MemoryLimit));
         assert!(
             e.message().contains("2.0 MB") && e.message().contains("1.0 MB"),
             "{e}"

@@ -2,6 +2,7 @@
 //! from `.pgv` files or encoded from meshes onto the operation's grid.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use glam::{Quat, Vec3};
 use pgvol_core::{Grid, Mesh};
@@ -11,15 +12,12 @@ use pgvol_sdf::SignMode;
 
 use crate::encode::{fit_volume, is_pgv, EncodeOptions, ENCODE_BAND};
 use crate::error::{Error, Result};
+use crate::field_value::Field;
 use crate::grid::GridSpec;
+use crate::mesh_io;
 use crate::pgv_io::read_pgv;
 use crate::progress::Progress;
-use crate::shape::Shape;
-use crate::{mesh_io, Timings};
-
-/// The forms of [`parse_operand`]'s analytic primaries, for help texts and errors.
-pub const PRIMARY_FORMS: &str = "sphere:cx,cy,cz,r  box:cx,cy,cz,hx,hy,hz  \
-     plane:nx,ny,nz,d (the half-space n·p ≤ d)  cylinder:px,py,pz,ax,ay,az,r";
+use crate::timings::Timings;
 
 /// An analytic solid with its exact signed distance.
 #[derive(Clone, Copy, Debug)]
@@ -62,6 +60,20 @@ pub enum Operand {
     Primary(Primary),
     /// A `.pgv` file or a mesh file.
     File(PathBuf),
+    /// A field in memory.
+    Field(Arc<Field>),
+}
+
+impl From<Field> for Operand {
+    fn from(field: Field) -> Operand {
+        Operand::Field(Arc::new(field))
+    }
+}
+
+impl From<Primary> for Operand {
+    fn from(primary: Primary) -> Operand {
+        Operand::Primary(primary)
+    }
 }
 
 /// An operand as a field to evaluate anywhere.
@@ -83,94 +95,13 @@ impl OperandField {
     }
 }
 
-fn numbers(kind: &str, text: &str, count: usize, form: &str) -> Result<Vec<f32>> {
-    let values: Vec<f32> = text
-        .split(',')
-        .map(|x| x.trim().parse::<f32>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| Error::parameter(format!("{kind}: '{text}' is not {count} numbers {form}")))?;
-    if values.len() != count || values.iter().any(|x| !x.is_finite()) {
-        return Err(Error::parameter(format!(
-            "{kind}: expected {count} finite numbers {form}, got '{text}'"
-        )));
-    }
-    Ok(values)
-}
-
-fn positive(kind: &str, what: &str, x: f32) -> Result<f32> {
-    if x > 0.0 {
-        Ok(x)
-    } else {
-        Err(Error::parameter(format!(
-            "{kind}: the {what} must be positive, got {x}"
-        )))
-    }
-}
-
-fn unit(kind: &str, v: Vec3) -> Result<Vec3> {
-    v.try_normalize()
-        .ok_or_else(|| Error::parameter(format!("{kind}: the direction must be non-zero")))
-}
-
-/// An analytic primary from `kind:numbers` (see [`PRIMARY_FORMS`]); anything else is a path.
-pub fn parse_operand(text: &str) -> Result<Operand> {
-    let Some((kind, rest)) = text.split_once(':') else {
-        return Ok(Operand::File(PathBuf::from(text)));
-    };
-    let v3 = |v: &[f32]| Vec3::new(v[0], v[1], v[2]);
-    let primary = match kind {
-        "sphere" => {
-            let v = numbers(kind, rest, 4, "cx,cy,cz,r")?;
-            Primary::Sphere(Sphere {
-                centre: v3(&v),
-                radius: positive(kind, "radius", v[3])?,
-            })
-        }
-        "box" => {
-            let v = numbers(kind, rest, 6, "cx,cy,cz,hx,hy,hz")?;
-            let half = v3(&v[3..]);
-            if half.min_element() <= 0.0 {
-                return Err(Error::parameter(format!(
-                    "box: the half-extents must be positive, got {half}"
-                )));
-            }
-            Primary::Box(RotatedBox {
-                centre: v3(&v),
-                half,
-                rotation: Quat::IDENTITY,
-            })
-        }
-        "plane" => {
-            let v = numbers(kind, rest, 4, "nx,ny,nz,d")?;
-            let n = v3(&v);
-            let length = n.length();
-            let normal = unit(kind, n)?;
-            Primary::Plane(Plane {
-                normal,
-                offset: v[3] / length,
-            })
-        }
-        "cylinder" => {
-            let v = numbers(kind, rest, 7, "px,py,pz,ax,ay,az,r")?;
-            Primary::Cylinder(Cylinder {
-                point: v3(&v),
-                axis: unit(kind, v3(&v[3..]))?,
-                radius: positive(kind, "radius", v[6])?,
-            })
-        }
-        // Windows drive letters and other paths with a colon.
-        _ => return Ok(Operand::File(PathBuf::from(text))),
-    };
-    Ok(Operand::Primary(primary))
-}
-
 /// Operands read, ready to be placed on one grid.
 #[derive(Clone, Debug)]
 pub enum LoadedOperand {
     /// An analytic solid.
     Primary(Primary),
-    /// A `.pgv` file's field.
-    Field(Box<Shape>),
+    /// A `.pgv` file's field, or a field in memory.
+    Field(Arc<Field>),
     /// A mesh, encoded later onto the operation's grid.
     Mesh(Box<Mesh>),
 }
@@ -180,11 +111,15 @@ impl LoadedOperand {
     pub fn load(operand: &Operand) -> Result<LoadedOperand> {
         Ok(match operand {
             Operand::Primary(p) => LoadedOperand::Primary(*p),
+            Operand::Field(field) => {
+                crate::frame::require_near(field.file.volume.grid.offset, "combining shapes")?;
+                LoadedOperand::Field(Arc::clone(field))
+            }
             Operand::File(path) if is_pgv(path) => {
-                let shape = Shape::from_file(read_pgv(path)?);
-                crate::frame::require_near(shape.volume.grid.offset, "combining shapes")
+                let shape = Field::from_file(read_pgv(path)?);
+                crate::frame::require_near(shape.file.volume.grid.offset, "combining shapes")
                     .map_err(|e| e.at(path))?;
-                LoadedOperand::Field(Box::new(shape))
+                LoadedOperand::Field(Arc::new(shape))
             }
             Operand::File(path) => {
                 let (mesh, _) = mesh_io::read_mesh(path)?;
@@ -232,8 +167,8 @@ impl LoadedOperand {
             LoadedOperand::Mesh(mesh) => crate::memory::mesh_area(mesh),
             LoadedOperand::Field(shape) => {
                 // A surface crosses about 1.5 bricks per brick face of area.
-                let side = 8.0 * shape.volume.grid.spacing as f64;
-                shape.volume.coeffs.stored_count() as f64 * side * side / 1.5
+                let side = 8.0 * shape.file.volume.grid.spacing as f64;
+                shape.file.volume.coeffs.stored_count() as f64 * side * side / 1.5
             }
         }
     }
@@ -242,7 +177,7 @@ impl LoadedOperand {
     pub fn field_bytes(&self, grid: &Grid, reach: f32) -> u64 {
         match self {
             LoadedOperand::Primary(_) => 0,
-            LoadedOperand::Field(shape) => shape.volume.coeffs.memory_bytes() as u64,
+            LoadedOperand::Field(shape) => shape.file.volume.coeffs.memory_bytes() as u64,
             LoadedOperand::Mesh(mesh) => crate::memory::sparse_encode_bytes(
                 crate::memory::mesh_area(mesh),
                 mesh.triangles.len(),
@@ -266,7 +201,7 @@ impl LoadedOperand {
             LoadedOperand::Primary(p) => Ok(OperandField::Primary(*p)),
             LoadedOperand::Field(shape) => {
                 shape.check_reach(reach)?;
-                Ok(OperandField::Volume(Box::new(shape.volume.clone())))
+                Ok(OperandField::Volume(Box::new(shape.file.volume.clone())))
             }
             LoadedOperand::Mesh(mesh) => {
                 let options = EncodeOptions {
@@ -284,28 +219,112 @@ impl LoadedOperand {
     }
 }
 
+impl Operand {
+    /// An analytic primary from `kind:numbers` (`sphere:cx,cy,cz,r`, `box:cx,cy,cz,hx,hy,hz`,
+    /// `plane:nx,ny,nz,d`, `cylinder:px,py,pz,ax,ay,az,r`); anything else is a path.
+    pub fn parse(text: &str) -> Result<Operand> {
+        let Some((kind, rest)) = text.split_once(':') else {
+            return Ok(Operand::File(PathBuf::from(text)));
+        };
+        let v3 = |v: &[f32]| Vec3::new(v[0], v[1], v[2]);
+        let primary = match kind {
+            "sphere" => {
+                let v = numbers(kind, rest, 4, "cx,cy,cz,r")?;
+                Primary::Sphere(Sphere {
+                    centre: v3(&v),
+                    radius: positive(kind, "radius", v[3])?,
+                })
+            }
+            "box" => {
+                let v = numbers(kind, rest, 6, "cx,cy,cz,hx,hy,hz")?;
+                let half = v3(&v[3..]);
+                if half.min_element() <= 0.0 {
+                    return Err(Error::parameter(format!(
+                        "box: the half-extents must be positive, got {half}"
+                    )));
+                }
+                Primary::Box(RotatedBox {
+                    centre: v3(&v),
+                    half,
+                    rotation: Quat::IDENTITY,
+                })
+            }
+            "plane" => {
+                let v = numbers(kind, rest, 4, "nx,ny,nz,d")?;
+                let n = v3(&v);
+                let length = n.length();
+                let normal = unit(kind, n)?;
+                Primary::Plane(Plane {
+                    normal,
+                    offset: v[3] / length,
+                })
+            }
+            "cylinder" => {
+                let v = numbers(kind, rest, 7, "px,py,pz,ax,ay,az,r")?;
+                Primary::Cylinder(Cylinder {
+                    point: v3(&v),
+                    axis: unit(kind, v3(&v[3..]))?,
+                    radius: positive(kind, "radius", v[6])?,
+                })
+            }
+            // Windows drive letters and other paths with a colon.
+            _ => return Ok(Operand::File(PathBuf::from(text))),
+        };
+        Ok(Operand::Primary(primary))
+    }
+}
+
+fn numbers(kind: &str, text: &str, count: usize, form: &str) -> Result<Vec<f32>> {
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| Error::parameter(format!("{kind}: '{text}' is not {count} numbers {form}")))?;
+    if values.len() != count || values.iter().any(|x| !x.is_finite()) {
+        return Err(Error::parameter(format!(
+            "{kind}: expected {count} finite numbers {form}, got '{text}'"
+        )));
+    }
+    Ok(values)
+}
+
+fn positive(kind: &str, what: &str, x: f32) -> Result<f32> {
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::parameter(format!(
+            "{kind}: the {what} must be positive, got {x}"
+        )))
+    }
+}
+
+fn unit(kind: &str, v: Vec3) -> Result<Vec3> {
+    v.try_normalize()
+        .ok_or_else(|| Error::parameter(format!("{kind}: the direction must be non-zero")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn primaries_parse_and_bad_ones_are_refused() {
-        let Operand::Primary(s) = parse_operand("sphere:0,0,0,2").unwrap() else {
+        let Operand::Primary(s) = Operand::parse("sphere:0,0,0,2").unwrap() else {
             panic!("not a primary")
         };
         assert_eq!(s.distance(Vec3::new(3.0, 0.0, 0.0)), 1.0);
-        let Operand::Primary(h) = parse_operand("plane:0,0,2,1").unwrap() else {
+        let Operand::Primary(h) = Operand::parse("plane:0,0,2,1").unwrap() else {
             panic!("not a primary")
         };
         assert!((h.distance(Vec3::new(0.0, 0.0, 1.0)) - 0.5).abs() < 1e-6);
-        assert!(matches!(parse_operand("part.stl"), Ok(Operand::File(_))));
+        assert!(matches!(Operand::parse("part.stl"), Ok(Operand::File(_))));
         for bad in [
             "sphere:0,0,0",
             "sphere:0,0,0,-1",
             "box:0,0,0,1,0,1",
             "plane:0,0,0,1",
         ] {
-            let e = parse_operand(bad).unwrap_err().to_string();
+            let e = Operand::parse(bad).unwrap_err().to_string();
             assert!(e.contains(bad.split(':').next().unwrap()), "{e}");
         }
     }

@@ -15,10 +15,11 @@ use pgvol_perturb::{
 use pgvol_sdf::sampling::Extent;
 use pgvol_sdf::SignMode;
 
+use crate::band::BAND_KEY;
 use crate::decode::{decode, DecodeOptions};
 use crate::distance::{mesh_sdf, sample};
 use crate::emptiness::{require_mesh_surface, Sides};
-use crate::encode::{BAND_KEY, ENCODE_BAND};
+use crate::encode::ENCODE_BAND;
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::progress::{self, Progress};
@@ -225,8 +226,8 @@ fn sign_points(mesh: &Mesh, progress: &dyn Progress) -> Result<Vec<(Vec3, f32)>>
 /// node of fandisk at 96³ turned over in the file, a one-node piece the field in memory did not
 /// have. The price is bytes: binary32 files came out 3 to 4× larger in the runs measured (the
 /// cow at 96³: 900 KB against 250 KB).
-pub fn resampled_storage() -> crate::StorageOptions {
-    crate::StorageOptions {
+pub fn resampled_storage() -> crate::encode::StorageOptions {
+    crate::encode::StorageOptions {
         precision: Some(pgvol_format::Precision::F32),
         ..Default::default()
     }

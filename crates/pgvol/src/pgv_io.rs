@@ -6,7 +6,6 @@ use std::path::Path;
 use pgvol_format::{PgvFile, PgvHeader, PgvInfo};
 use pgvol_perturb::PerturbationField;
 
-use crate::encode::BAND_KEY;
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::progress::{Progress, Silent};
 
@@ -123,21 +122,4 @@ pub fn read_pgv_from(r: &mut dyn Read, name: &Path) -> Result<PgvFile> {
 /// What a file holds and how its bytes divide, without decoding the coefficients.
 pub fn pgv_info(bytes: &[u8], name: &Path) -> Result<PgvInfo> {
     pgvol_format::pgv_info(bytes, name).reading()
-}
-
-/// The distance from the surface within which `file`'s field is exact, when its header records
-/// one that makes sense (finite, positive, at most the grid's extent).
-pub fn recorded_band(file: &PgvFile) -> Option<f32> {
-    header_band(&file.header)
-}
-
-/// [`recorded_band`] from the header alone.
-pub(crate) fn header_band(header: &PgvHeader) -> Option<f32> {
-    let g = header.grid;
-    let extent = g.spacing * g.dims.iter().copied().max().unwrap_or(0) as f32;
-    header
-        .metadata
-        .get(BAND_KEY)
-        .and_then(|b| b.parse::<f32>().ok())
-        .filter(|b| b.is_finite() && *b > 0.0 && *b <= extent)
 }

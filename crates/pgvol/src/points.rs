@@ -13,7 +13,8 @@ use pgvol_points::sections::SectionPlanes;
 use pgvol_points::{Method, PointCloud, PointsReport};
 use pgvol_slice::{Axis, Layer, SliceError};
 
-use crate::encode::{BAND_KEY, ENCODE_BAND};
+use crate::band::BAND_KEY;
+use crate::encode::ENCODE_BAND;
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::progress::{self, Progress};
@@ -690,7 +691,7 @@ mod tests {
                 points: cloud,
                 normals: None,
             };
-            let e = points(&cloud, &PointsOptions::default(), &crate::Silent).unwrap_err();
+            let e = points(&cloud, &PointsOptions::default(), &progress::Silent).unwrap_err();
             assert_eq!(e.kind(), ErrorKind::InputFile);
             e.to_string()
         };
@@ -782,7 +783,7 @@ mod tests {
         assert_eq!(e.path(), Some(path.as_path()));
         assert!(e.message().contains("coordinate 1e20 in layer 0"), "{e}");
         let options = PointsOptions::default();
-        let e = contours(&[far], Axis::Z, &options, &crate::Silent).unwrap_err();
+        let e = contours(&[far], Axis::Z, &options, &progress::Silent).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
         assert!(e.message().contains("out of range"), "{e}");
     }

@@ -15,7 +15,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::exact_field::{MeshField, NODE_BAND};
 use crate::grid::GridSpec;
 use crate::progress::{self, Progress};
-use crate::Timings;
+use crate::timings::Timings;
 
 /// Which field places the vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]

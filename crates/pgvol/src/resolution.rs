@@ -125,7 +125,7 @@ mod tests {
         assert!(e.message().contains("0.25"), "{e}");
         // A wall no grid holds is named so, without overflowing.
         let e = check_wall("the wall", 1e-30, &grid).unwrap_err();
-        let most = crate::MAX_RES as usize;
+        let most = crate::grid::MAX_RES as usize;
         assert!(
             e.message().contains(&format!("more than the {most} nodes")),
             "{e}"

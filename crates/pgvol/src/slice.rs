@@ -6,17 +6,17 @@ use glam::Vec3;
 use pgvol_format::SlabReader;
 use pgvol_slice::{
     brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
-    LayerFrame, SliceOptions,
+    LayerFrame, SliceOptions as StageOptions,
 };
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::field_value::Field;
 use crate::pgv_io::read_pgv_bytes;
 use crate::progress::{self, Progress};
-use crate::shape::Shape;
 
 /// How to slice a shape.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SliceSettings {
+pub struct SliceOptions {
     /// Axis the layers stack along (default z).
     pub axis: Axis,
     /// Distance between layer planes, in model units (> 0).
@@ -30,7 +30,7 @@ pub struct SliceSettings {
     pub tolerance: Option<f32>,
 }
 
-impl SliceSettings {
+impl SliceOptions {
     /// Layers of `layer_height` along z with every other setting at its default.
     pub fn new(layer_height: f32) -> Self {
         Self {
@@ -43,17 +43,16 @@ impl SliceSettings {
     }
 }
 
-/// The layers of `shape`.
-pub fn slice(
-    shape: &Shape,
-    settings: &SliceSettings,
-    progress: &dyn Progress,
-) -> Result<Vec<Layer>> {
-    let options = slice_options(shape, settings)?;
-    let layers = progress::stage(progress, "slice", |_| {
-        pgvol_slice::slice_volume(&shape.volume, shape.bounds, &options)
-    })?;
-    Ok(layers?)
+impl Field {
+    /// The layers of the shape, and where they sit in the world.
+    pub fn slice(&self, options: &SliceOptions, progress: &dyn Progress) -> Result<Sliced> {
+        let stage = slice_options(self, options)?;
+        let layers = progress::stage(progress, "slice", |_| {
+            pgvol_slice::slice_volume(&self.file.volume, self.bounds, &stage)
+        })??;
+        let frame = layer_frame(self, options.axis);
+        Ok(Sliced { layers, frame })
+    }
 }
 
 /// The layers of a `.pgv` file and where they sit in the world.
@@ -68,28 +67,20 @@ pub struct Sliced {
 /// The layers of the `.pgv` file at `path`, as [`slice`] of the file's shape gives them. A
 /// sparse file is decoded one slab of bricks at a time, only the slabs within reach of the
 /// layers being sliced held, so memory is the file's bytes and a window of the volume.
-pub fn slice_file(
-    path: &Path,
-    settings: &SliceSettings,
-    progress: &dyn Progress,
-) -> Result<Sliced> {
+pub fn slice_file(path: &Path, settings: &SliceOptions, progress: &dyn Progress) -> Result<Sliced> {
     let bytes = pgvol_core::read_input(path).reading()?;
     let at = |e: Error| match e.path() {
         Some(_) => e,
         None => e.at(path),
     };
     let Some(reader) = SlabReader::open(&bytes, path).reading()? else {
-        let shape = Shape::from_file(read_pgv_bytes(&bytes, path)?);
-        let layers = slice(&shape, settings, progress).map_err(at)?;
-        let frame = layer_frame(&shape, settings.axis);
-        return Ok(Sliced { layers, frame });
+        let shape = Field::from_file(read_pgv_bytes(&bytes, path)?);
+        return shape.slice(settings, progress).map_err(at);
     };
     let header = reader.header().clone();
     if !header.basis.is_separable() {
-        let shape = Shape::from_file(read_pgv_bytes(&bytes, path)?);
-        let layers = slice(&shape, settings, progress).map_err(at)?;
-        let frame = layer_frame(&shape, settings.axis);
-        return Ok(Sliced { layers, frame });
+        let shape = Field::from_file(read_pgv_bytes(&bytes, path)?);
+        return shape.slice(settings, progress).map_err(at);
     }
     let grid = header.grid;
     let bounds = match header.source_bounds {
@@ -165,17 +156,13 @@ impl BrickSource for FileBricks<'_, '_> {
 }
 
 /// The stage's options for slicing `shape` by `settings`.
-pub(crate) fn slice_options(shape: &Shape, settings: &SliceSettings) -> Result<SliceOptions> {
-    let grid = &shape.volume.grid;
+pub(crate) fn slice_options(shape: &Field, settings: &SliceOptions) -> Result<StageOptions> {
+    let grid = &shape.file.volume.grid;
     options_for(grid.spacing, grid.offset, settings)
 }
 
 /// The stage's options for slicing a field of grid `spacing` and frame `offset` by `settings`.
-fn options_for(
-    spacing: f32,
-    offset: glam::DVec3,
-    settings: &SliceSettings,
-) -> Result<SliceOptions> {
+fn options_for(spacing: f32, offset: glam::DVec3, settings: &SliceOptions) -> Result<StageOptions> {
     if !(settings.layer_height.is_finite() && settings.layer_height > 0.0) {
         return Err(Error::parameter(format!(
             "the layer height must be a positive number, got {}",
@@ -183,7 +170,7 @@ fn options_for(
         )));
     }
     let resolution = settings.resolution.unwrap_or(spacing);
-    let mut options = SliceOptions::new(settings.axis, settings.layer_height, resolution);
+    let mut options = StageOptions::new(settings.axis, settings.layer_height, resolution);
     // The stage slices in the field's local frame.
     let shift = LayerFrame::new(settings.axis, offset).height;
     options.first = settings.first.map(|f| (f - shift) as f32);
@@ -195,8 +182,8 @@ fn options_for(
 
 /// Where layers of `shape` stacked along `axis` sit in the world: the field's frame offset, which
 /// [`write_layers`] adds (in f64) to the local layer coordinates.
-pub fn layer_frame(shape: &Shape, axis: Axis) -> LayerFrame {
-    LayerFrame::new(axis, shape.volume.grid.offset)
+fn layer_frame(shape: &Field, axis: Axis) -> LayerFrame {
+    LayerFrame::new(axis, shape.file.volume.grid.offset)
 }
 
 /// Layer file formats.
@@ -241,7 +228,7 @@ impl LayerFormat {
 /// Millimetres per model unit written to Common Layer Interface headers unless told otherwise.
 pub const DEFAULT_UNITS_MM: f32 = 1.0;
 
-/// Writes `layers` to `path` atomically in world coordinates (`frame`, from [`layer_frame`],
+/// Writes `layers` to `path` atomically in world coordinates (`frame`, from [`Sliced::frame`],
 /// added in f64); `units_mm` is millimetres per model unit (CLI header). Binary CLI, which
 /// holds f32, is refused for layers so far from the origin that it would round them visibly.
 pub fn write_layers(

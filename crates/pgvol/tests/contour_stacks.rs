@@ -31,7 +31,7 @@ fn layers(heights: &[f32]) -> Vec<Layer> {
 /// cylinder they stack into: the caps lie half the outermost layer distances beyond the
 /// outermost planes.
 fn stack(heights: &[f32]) -> (pgvol::core::MeshStats, f64) {
-    let fit = pgvol::contours(
+    let fit = pgvol::reconstruct::contours(
         &layers(heights),
         Axis::Z,
         &PointsOptions::default(),
@@ -42,7 +42,9 @@ fn stack(heights: &[f32]) -> (pgvol::core::MeshStats, f64) {
         min_component: Some(0.0),
         ..DecodeOptions::default()
     };
-    let mesh = pgvol::decode(&fit.file.volume, &options, &Silent).unwrap();
+    let mesh = pgvol::Field::from_volume(fit.file.volume.clone())
+        .to_mesh(&options, &Silent)
+        .unwrap();
     let n = heights.len();
     let length =
         f64::from(1.5 * (heights[n - 1] - heights[0]) - 0.5 * (heights[n - 2] - heights[1]));
@@ -71,7 +73,7 @@ fn unevenly_spaced_planes_give_one_solid_without_cavities() {
 
 #[test]
 fn two_layers_at_one_height_are_refused_by_name() {
-    let e = pgvol::contours(
+    let e = pgvol::reconstruct::contours(
         &layers(&[0.0, 0.5, 0.5, 1.0]),
         Axis::Z,
         &PointsOptions::default(),

@@ -1,16 +1,14 @@
 //! Booleans of fields against analytic truths: the rounded union's fillet radius, its bound
 //! against the sharp union, and operands read from files.
 
+use pgvol::edit::{Continuity, IPatchWeights};
 use pgvol::glam::{DVec3, Vec3};
 use pgvol::mesh::shapes;
-use pgvol::{Blend, BoolOp, CoefficientVolume, CsgSettings, EncodeOptions, ErrorKind, GridSpec};
-use pgvol::{Continuity, IPatchWeights, Operand, Silent};
+use pgvol::{Blend, BoolOp, CoefficientVolume, CsgOptions, EncodeOptions, ErrorKind, GridSpec};
+use pgvol::{Operand, Silent};
 
 fn operands(texts: &[&str]) -> Vec<Operand> {
-    texts
-        .iter()
-        .map(|t| pgvol::parse_operand(t).unwrap())
-        .collect()
+    texts.iter().map(|t| Operand::parse(t).unwrap()).collect()
 }
 
 /// The zero of the field on the segment from `a` (outside) to `b` (inside), by bisection.
@@ -30,16 +28,18 @@ fn zero_between(volume: &CoefficientVolume, mut a: Vec3, mut b: Vec3) -> Vec3 {
 #[test]
 fn rounded_union_of_orthogonal_planes_is_a_fillet_of_the_radius() {
     let r = 0.3;
-    let settings = CsgSettings {
+    let settings = CsgOptions {
         op: BoolOp::Union,
         blend: Blend::Round(r),
         res: 96,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..CsgSettings::default()
+        ..CsgOptions::default()
     };
     // The half-spaces x ≤ 0 and y ≤ 0: the fillet fills their concave corner along z.
     let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
-    let volume = pgvol::csg(&planes, &settings, &Silent).unwrap();
+    let volume = pgvol::Field::csg(&planes, &settings, &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
     let centre = Vec3::new(r, r, 0.1);
     // Along rays from the fillet's centre toward the corner the surface lies at the radius.
     let mut worst: f32 = 0.0;
@@ -58,20 +58,24 @@ fn rounded_union_of_orthogonal_planes_is_a_fillet_of_the_radius() {
 #[test]
 fn rounded_field_stays_between_the_sharp_one_and_the_radius_below() {
     let spheres = operands(&["sphere:0,0,0,1", "sphere:1.2,0,0,0.8"]);
-    let sharp = CsgSettings {
+    let sharp = CsgOptions {
         res: 64,
         bounds: Some((Vec3::splat(-2.0), Vec3::splat(2.0))),
-        ..CsgSettings::default()
+        ..CsgOptions::default()
     };
     let r = 0.25;
-    let round = CsgSettings {
+    let round = CsgOptions {
         blend: Blend::Round(r),
         ..sharp
     };
-    let a = pgvol::csg(&spheres, &sharp, &Silent).unwrap();
-    let b = pgvol::csg(&spheres, &round, &Silent).unwrap();
+    let a = pgvol::Field::csg(&spheres, &sharp, &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
+    let b = pgvol::Field::csg(&spheres, &round, &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
     let h = a.grid.spacing;
-    let band = pgvol::ENCODE_BAND * h;
+    let band = pgvol::limits::ENCODE_BAND * h;
     let mut deepest: f32 = 0.0;
     for i in 0..400 {
         let p = Vec3::new(
@@ -108,25 +112,29 @@ fn a_pgv_operand_too_narrow_for_the_radius_is_refused_by_name() {
         ..EncodeOptions::default()
     };
     let encoded = pgvol::encode(&shapes::octasphere(2), &options, &Silent).unwrap();
-    pgvol::write_pgv(&path, &encoded.file, &pgvol::StorageOptions::default()).unwrap();
+    pgvol::io::write_pgv(&path, &encoded.file, &pgvol::StorageOptions::default()).unwrap();
     let both = vec![
         Operand::File(path.clone()),
-        pgvol::parse_operand("sphere:0.5,0,0,0.5").unwrap(),
+        Operand::parse("sphere:0.5,0,0,0.5").unwrap(),
     ];
-    let settings = CsgSettings {
+    let settings = CsgOptions {
         blend: Blend::Round(0.8),
         res: 32,
-        ..CsgSettings::default()
+        ..CsgOptions::default()
     };
-    let e = pgvol::csg(&both, &settings, &Silent).unwrap_err();
+    let e = pgvol::Field::csg(&both, &settings, &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
     assert_eq!(e.path(), Some(path.as_path()), "{e}");
     // The same with a sharp union works, and its surface passes through both balls' far poles.
-    let sharp = CsgSettings {
+    let sharp = CsgOptions {
         res: 32,
-        ..CsgSettings::default()
+        ..CsgOptions::default()
     };
-    let v = pgvol::csg(&both, &sharp, &Silent).unwrap();
+    let v = pgvol::Field::csg(&both, &sharp, &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
     assert!(v.value(Vec3::new(1.0, 0.0, 0.0)).abs() < 0.02);
     assert!(v.value(Vec3::ZERO) < -0.2);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -137,17 +145,17 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
     // P₁ = x, P₂ = y, C = (−x − y − 0.6)/√2, λ = ½: on the bisector x = y = −s the blend
     // vanishes where (2s − 0.6)² / 2 = s², s = 0.6 / (2 + √2).
     let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
-    let operator = pgvol::BlendOperator::Liming {
-        cut: pgvol::parse_operand("plane:-1,-1,0,0.6").unwrap(),
+    let operator = pgvol::edit::BlendOperator::Liming {
+        cut: Operand::parse("plane:-1,-1,0,0.6").unwrap(),
         lambda: 0.5,
     };
-    let settings = pgvol::BlendSettings {
+    let settings = pgvol::edit::BlendSettings {
         res: 64,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..pgvol::BlendSettings::default()
+        ..pgvol::edit::BlendSettings::default()
     };
-    let blended = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap();
-    let v = &blended.volume;
+    let blended = pgvol::edit::blend(&planes, &operator, &settings, &Silent).unwrap();
+    let v = blended.field.volume();
     let p = zero_between(v, Vec3::new(0.0, 0.0, 0.1), Vec3::new(-0.5, -0.5, 0.1));
     let s = 0.6 / (2.0 + std::f32::consts::SQRT_2);
     assert!(
@@ -161,47 +169,47 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
     let q = zero_between(v, Vec3::new(0.3, -0.8, 0.0), Vec3::new(-0.3, -0.8, 0.0));
     assert!(q.x.abs() < 1e-3, "{q}");
     // Too few operands are refused.
-    let e = pgvol::blend(&planes[..1], &operator, &settings, &Silent).unwrap_err();
+    let e = pgvol::edit::blend(&planes[..1], &operator, &settings, &Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter);
 }
 
 #[test]
 fn an_ipatch_with_fewer_bounds_than_primaries_is_refused() {
     let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
-    let settings = pgvol::BlendSettings {
+    let settings = pgvol::edit::BlendSettings {
         res: 16,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..pgvol::BlendSettings::default()
+        ..pgvol::edit::BlendSettings::default()
     };
     for weights in [
         IPatchWeights::Given(vec![1.0, 1.0], -0.5),
         IPatchWeights::Fitted(vec![DVec3::new(-0.5, -0.5, 0.0); 4]),
     ] {
-        let operator = pgvol::BlendOperator::IPatch {
+        let operator = pgvol::edit::BlendOperator::IPatch {
             bounds: operands(&["plane:-1,0,0,1"]),
             weights,
             continuity: Continuity::G1,
         };
-        let e = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap_err();
+        let e = pgvol::edit::blend(&planes, &operator, &settings, &Silent).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
         assert!(e.message().contains("one bound per primary"), "{e}");
         assert!(!e.message().contains("--"), "{e}");
     }
     // Weights that do not pair with the primaries are refused the same way.
-    let operator = pgvol::BlendOperator::IPatch {
+    let operator = pgvol::edit::BlendOperator::IPatch {
         bounds: operands(&["plane:-1,0,0,1", "plane:0,-1,0,1"]),
         weights: IPatchWeights::Given(vec![1.0], -0.5),
         continuity: Continuity::G1,
     };
-    let e = pgvol::blend(&planes, &operator, &settings, &Silent).unwrap_err();
+    let e = pgvol::edit::blend(&planes, &operator, &settings, &Silent).unwrap_err();
     assert!(e.message().contains("needs 2 weights"), "{e}");
 }
 
-fn blend_settings(res: usize) -> pgvol::BlendSettings {
-    pgvol::BlendSettings {
+fn blend_settings(res: usize) -> pgvol::edit::BlendSettings {
+    pgvol::edit::BlendSettings {
         res,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..pgvol::BlendSettings::default()
+        ..pgvol::edit::BlendSettings::default()
     }
 }
 
@@ -211,12 +219,12 @@ fn g1_blends_keep_the_values_they_had_before_orders_and_more_operands() {
     // order and functional splines any number of operands: the defaults must not move.
     let primaries = operands(&["plane:1,0,0,0", "sphere:0.2,0.1,0,0.9"]);
     let bounds = operands(&["plane:-1,0,0,0.8", "plane:0,-1,0.2,0.7"]);
-    let ipatch = pgvol::BlendOperator::IPatch {
+    let ipatch = pgvol::edit::BlendOperator::IPatch {
         bounds: bounds.clone(),
         weights: IPatchWeights::Given(vec![1.0, 1.5], -0.7),
         continuity: Continuity::default(),
     };
-    let spline = pgvol::BlendOperator::Spline {
+    let spline = pgvol::edit::BlendOperator::Spline {
         bounds,
         lambda: 0.4,
     };
@@ -230,8 +238,10 @@ fn g1_blends_keep_the_values_they_had_before_orders_and_more_operands() {
         (ipatch, [3194680684u32, 1022291138, 3200330749, 3200472928]),
         (spline, [3196500120, 1033848309, 1047626734, 1038211911]),
     ] {
-        let v = pgvol::blend(&primaries, &operator, &blend_settings(24), &Silent)
+        let v = pgvol::edit::blend(&primaries, &operator, &blend_settings(24), &Silent)
             .unwrap()
+            .field
+            .into_file()
             .volume;
         let now = points.map(|p| v.value(p).to_bits());
         assert_eq!(now, before, "{operator:?}");
@@ -263,13 +273,15 @@ fn higher_order_ipatches_cross_the_diagonal_where_their_formula_does() {
     let bounds = operands(&["plane:-1,0,0,0.8", "plane:0,-1,0,0.8"]);
     let mut crossings = Vec::new();
     for order in 1..=3 {
-        let operator = pgvol::BlendOperator::IPatch {
+        let operator = pgvol::edit::BlendOperator::IPatch {
             bounds: bounds.clone(),
             weights: IPatchWeights::Given(vec![1.0, 1.0], 0.5),
             continuity: Continuity::new(order).unwrap(),
         };
-        let v = pgvol::blend(&planes, &operator, &blend_settings(48), &Silent)
+        let v = pgvol::edit::blend(&planes, &operator, &blend_settings(48), &Silent)
             .unwrap()
+            .field
+            .into_file()
             .volume;
         let p = zero_between(&v, Vec3::new(-0.02, -0.02, 0.0), Vec3::new(-0.7, -0.7, 0.0));
         let s = diagonal_zero(order, 0.5) as f32;
@@ -289,13 +301,13 @@ fn an_ipatch_through_a_point_passes_through_it_at_every_order() {
     let bounds = operands(&["plane:-1,0,0,0.8", "plane:0,-1,0,0.8"]);
     let through = Vec3::new(-0.25, -0.35, 0.1);
     for order in [1, 2, 4] {
-        let operator = pgvol::BlendOperator::IPatch {
+        let operator = pgvol::edit::BlendOperator::IPatch {
             bounds: bounds.clone(),
             weights: IPatchWeights::Through(vec![1.0, 1.0], through.as_dvec3()),
             continuity: Continuity::new(order).unwrap(),
         };
-        let blended = pgvol::blend(&planes, &operator, &blend_settings(48), &Silent).unwrap();
-        let v = blended.volume.value(through);
+        let blended = pgvol::edit::blend(&planes, &operator, &blend_settings(48), &Silent).unwrap();
+        let v = blended.field.volume().value(through);
         assert!(v.abs() < 0.01, "order {order}: {v} at {through}");
         // The weight is the formula's, computed here independently in f64.
         let e = order as i32 + 1;
@@ -310,12 +322,12 @@ fn an_ipatch_through_a_point_passes_through_it_at_every_order() {
     }
     // A point on a bound fixes no weight; one far away is refused before any work.
     for point in [DVec3::new(-0.8, -0.3, 0.0), DVec3::new(1e9, 0.0, 0.0)] {
-        let operator = pgvol::BlendOperator::IPatch {
+        let operator = pgvol::edit::BlendOperator::IPatch {
             bounds: bounds.clone(),
             weights: IPatchWeights::Through(vec![1.0, 1.0], point),
             continuity: Continuity::G1,
         };
-        let e = pgvol::blend(&planes, &operator, &blend_settings(16), &Silent).unwrap_err();
+        let e = pgvol::edit::blend(&planes, &operator, &blend_settings(16), &Silent).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
         assert!(!e.message().contains("--"), "{e}");
     }
@@ -326,12 +338,14 @@ fn a_functional_spline_of_three_planes_rounds_their_vertex() {
     // The octant x, y, z ≤ 0 with the one bound (−x − y − z − 1.2)/√3 (planes are normalised),
     // λ = ½: on the diagonal x = y = z = −s the blend vanishes where (3s − 1.2)²/3 = s³.
     let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0", "plane:0,0,1,0"]);
-    let operator = pgvol::BlendOperator::Spline {
+    let operator = pgvol::edit::BlendOperator::Spline {
         bounds: operands(&["plane:-1,-1,-1,1.2"]),
         lambda: 0.5,
     };
-    let v = pgvol::blend(&planes, &operator, &blend_settings(48), &Silent)
+    let v = pgvol::edit::blend(&planes, &operator, &blend_settings(48), &Silent)
         .unwrap()
+        .field
+        .into_file()
         .volume;
     let p = zero_between(&v, Vec3::splat(-0.01), Vec3::splat(-0.6));
     let cubic = |s: f64| (3.0 * s - 1.2).powi(2) / 3.0 - s.powi(3);
@@ -354,6 +368,6 @@ fn a_functional_spline_of_three_planes_rounds_their_vertex() {
     assert!(q.x.abs() < 1e-3, "{q}");
     assert!(v.value(Vec3::new(0.2, 0.2, -0.3)) > 0.0);
     // One primary has no edge to round.
-    let e = pgvol::blend(&planes[..1], &operator, &blend_settings(16), &Silent).unwrap_err();
+    let e = pgvol::edit::blend(&planes[..1], &operator, &blend_settings(16), &Silent).unwrap_err();
     assert!(e.message().contains("two or more primaries"), "{e}");
 }

@@ -1,17 +1,16 @@
 //! Operations whose result has no inside (or no surface) refuse it with an empty-result error
 //! that says why, instead of returning a field that only a later decode refuses.
 
+use pgvol::edit::Restore;
 use pgvol::glam::{DVec3, Vec3};
 use pgvol::mesh::shapes;
-use pgvol::{
-    BoolOp, CsgSettings, EncodeOptions, ErrorKind, GridSpec, Mesh, PerturbOptions, Restore, Shape,
-    Silent,
-};
+use pgvol::perturbation::PerturbOptions;
+use pgvol::{BoolOp, CsgOptions, EncodeOptions, ErrorKind, Field, GridSpec, Mesh, Silent};
 
 fn operands(texts: &[&str]) -> Vec<pgvol::Operand> {
     texts
         .iter()
-        .map(|t| pgvol::parse_operand(t).unwrap())
+        .map(|t| pgvol::Operand::parse(t).unwrap())
         .collect()
 }
 
@@ -42,7 +41,7 @@ fn sheet(n: u32) -> Mesh {
             triangles.push([a, a + n + 2, a + n + 1]);
         }
     }
-    pgvol::mesh_from_parts(positions, triangles).unwrap().0
+    pgvol::io::mesh_from_parts(positions, triangles).unwrap().0
 }
 
 /// The sheet tilted: open and without thickness, though not flat along an axis.
@@ -54,7 +53,7 @@ fn tilted(n: u32) -> Mesh {
             p + DVec3::Z * (0.3 * p.x + 0.2 * p.y)
         })
         .collect();
-    pgvol::mesh_from_world(&world, mesh.triangles.clone())
+    pgvol::io::mesh_from_world(&world, mesh.triangles.clone())
         .unwrap()
         .0
 }
@@ -71,27 +70,32 @@ impl pgvol::Progress for Stages {
 
 #[test]
 fn booleans_with_nothing_inside_are_refused_with_their_reason() {
-    let settings = |op| CsgSettings {
+    let settings = |op| CsgOptions {
         op,
         res: 32,
-        ..CsgSettings::default()
+        ..CsgOptions::default()
     };
     let disjoint = operands(&["sphere:0,0,0,1", "sphere:3,0,0,1"]);
     assert_empty(
-        pgvol::csg(&disjoint, &settings(BoolOp::Intersection), &Silent),
+        Field::csg(&disjoint, &settings(BoolOp::Intersection), &Silent)
+            .map(|f| f.into_file().volume),
         &["the intersection is empty", "do not overlap"],
     );
     let same = operands(&["sphere:0,0,0,1", "sphere:0,0,0,1"]);
     assert_empty(
-        pgvol::csg(&same, &settings(BoolOp::Difference), &Silent),
+        Field::csg(&same, &settings(BoolOp::Difference), &Silent).map(|f| f.into_file().volume),
         &["the difference is empty", "cover all of the first"],
     );
     // Overlapping operands still give their intersection, and a smaller ball its difference.
     let overlap = operands(&["sphere:0,0,0,1", "sphere:1,0,0,1"]);
-    let v = pgvol::csg(&overlap, &settings(BoolOp::Intersection), &Silent).unwrap();
+    let v = Field::csg(&overlap, &settings(BoolOp::Intersection), &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
     assert!(v.value(Vec3::new(0.5, 0.0, 0.0)) < 0.0);
     let smaller = operands(&["sphere:0,0,0,1", "sphere:0,0,0,0.5"]);
-    pgvol::csg(&smaller, &settings(BoolOp::Difference), &Silent).unwrap();
+    Field::csg(&smaller, &settings(BoolOp::Difference), &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
 }
 
 #[test]
@@ -101,26 +105,37 @@ fn a_repair_that_keeps_nothing_is_refused() {
         ..EncodeOptions::default()
     };
     let encoded = pgvol::encode(&shapes::octasphere(2), &options, &Silent).unwrap();
-    let shape = Shape::from_file(encoded.file);
-    let (lo, hi) = (shape.volume.grid.origin, shape.volume.grid.max_corner());
-    let whole = pgvol::Mask {
+    let shape = Field::from_file(encoded.file);
+    let (lo, hi) = (shape.volume().grid.origin, shape.volume().grid.max_corner());
+    let whole = pgvol::edit::Mask {
         lo: lo - 1.0,
         hi: hi + 1.0,
     };
     let restore = Restore::Protrusion {
-        face: pgvol::parse_face("-z").unwrap(),
+        face: pgvol::edit::Face {
+            axis: 2,
+            upper: false,
+        },
         alpha: 1.0,
     };
     assert_empty(
-        pgvol::repair(&shape, &[whole], restore, &Silent),
+        shape
+            .repair(&[whole], restore, &Silent)
+            .map(|r| (r.field.into_file().volume, r.masks)),
         &[
             "the restored field",
             "masks around only the parts to restore",
         ],
     );
     // A mask over a cap only keeps the rest.
-    let cap = pgvol::parse_mask("-1.2,-1.2,0.6,1.2,1.2,1.2").unwrap();
-    pgvol::repair(&shape, &[cap], restore, &Silent).unwrap();
+    let cap = pgvol::edit::Mask {
+        lo: Vec3::new(-1.2, -1.2, 0.6),
+        hi: Vec3::new(1.2, 1.2, 1.2),
+    };
+    shape
+        .repair(&[cap], restore, &Silent)
+        .map(|r| (r.field.into_file().volume, r.masks))
+        .unwrap();
 }
 
 #[test]
@@ -140,7 +155,7 @@ fn sheets_without_thickness_encode_and_perturb_to_an_error_saying_so() {
     // A flat sheet in any orientation is refused before any work, even on the largest grid.
     let stages = Stages::default();
     let finest = EncodeOptions {
-        grid: GridSpec::Res(pgvol::MAX_RES as usize),
+        grid: GridSpec::Res(pgvol::limits::MAX_RES as usize),
         ..EncodeOptions::default()
     };
     assert_empty(
@@ -158,7 +173,7 @@ fn sheets_without_thickness_encode_and_perturb_to_an_error_saying_so() {
         ..PerturbOptions::default()
     };
     assert_empty(
-        pgvol::perturb_on(&sheet(6), &perturb, GridSpec::Res(24), &Silent),
+        pgvol::perturbation::perturb_on(&sheet(6), &perturb, GridSpec::Res(24), &Silent),
         &["the perturbation field is empty", "flat"],
     );
     // A closed mesh encodes as before.

@@ -5,12 +5,12 @@ use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+use pgvol::edit::ShellSide;
 use pgvol::glam::Vec3;
 use pgvol::mesh::{shapes, MeshFormat};
 use pgvol::{
-    Basis, DecodeOptions, EncodeOptions, ErrorKind, FitMethod, GridSpec, Mesh, Method, Progress,
-    RemeshField, RemeshOptions, SdfOptions, Shape, ShellKind, ShellSide, SignMode, Silent,
-    StorageOptions,
+    Basis, DecodeOptions, EncodeOptions, ErrorKind, Field, FitMethod, GridSpec, Mesh, Method,
+    Progress, RemeshField, RemeshOptions, SdfOptions, ShellKind, SignMode, Silent, StorageOptions,
 };
 
 fn sphere() -> Mesh {
@@ -57,24 +57,24 @@ fn pgv_bytes_writers_and_paths_give_the_same_file() {
             ..StorageOptions::default()
         },
     ] {
-        let (bytes, report) = pgvol::pgv_bytes(&file, &storage).unwrap();
+        let (bytes, report) = pgvol::io::pgv_bytes(&file, &storage).unwrap();
         assert_eq!(report.is_none(), storage.dense);
 
         let path = dir.path().join("s.pgv");
-        let written = pgvol::write_pgv(&path, &file, &storage).unwrap();
+        let written = pgvol::io::write_pgv(&path, &file, &storage).unwrap();
         assert_eq!(written, report);
         assert_eq!(std::fs::read(&path).unwrap(), bytes);
 
         let mut sink = Vec::new();
-        let streamed = pgvol::write_pgv_to(&mut sink, &file, &storage).unwrap();
+        let streamed = pgvol::io::write_pgv_to(&mut sink, &file, &storage).unwrap();
         assert_eq!(streamed, report);
         assert_eq!(sink, bytes);
 
-        let from_path = pgvol::read_pgv(&path).unwrap();
+        let from_path = pgvol::io::read_pgv(&path).unwrap();
         let name = Path::new("memory.pgv");
-        assert_eq!(pgvol::read_pgv_bytes(&bytes, name).unwrap(), from_path);
+        assert_eq!(pgvol::io::read_pgv_bytes(&bytes, name).unwrap(), from_path);
         assert_eq!(
-            pgvol::read_pgv_from(&mut bytes.as_slice(), name).unwrap(),
+            pgvol::io::read_pgv_from(&mut bytes.as_slice(), name).unwrap(),
             from_path
         );
         if storage.dense {
@@ -96,16 +96,16 @@ fn mesh_bytes_writers_and_paths_agree_in_every_format() {
         MeshFormat::Ply,
     ] {
         let path = dir.path().join(format!("m.{}", format.extension()));
-        pgvol::write_mesh(&path, &mesh).unwrap();
-        assert_eq!(pgvol::mesh_format(&path).unwrap(), format);
+        pgvol::io::write_mesh(&path, &mesh).unwrap();
+        assert_eq!(pgvol::io::mesh_format(&path).unwrap(), format);
         let on_disk = std::fs::read(&path).unwrap();
         let mut sink = Vec::new();
-        pgvol::write_mesh_to(&mut sink, &mesh, format, &path).unwrap();
+        pgvol::io::write_mesh_to(&mut sink, &mesh, format, &path).unwrap();
         assert_eq!(sink, on_disk, "{format:?}");
 
-        let (from_path, report) = pgvol::read_mesh(&path).unwrap();
+        let (from_path, report) = pgvol::io::read_mesh(&path).unwrap();
         let (from_bytes, report_bytes) =
-            pgvol::read_mesh_bytes(&on_disk, format, Path::new("memory")).unwrap();
+            pgvol::io::read_mesh_bytes(&on_disk, format, Path::new("memory")).unwrap();
         assert_eq!(from_bytes, from_path, "{format:?}");
         assert_eq!(report_bytes, report, "{format:?}");
         assert_eq!(
@@ -120,7 +120,7 @@ fn mesh_bytes_writers_and_paths_agree_in_every_format() {
 fn in_memory_readers_name_the_given_file_in_errors() {
     let name = Path::new("in/memory.pgv");
     assert_error(
-        pgvol::read_pgv_bytes(b"not a pgv file", name),
+        pgvol::io::read_pgv_bytes(b"not a pgv file", name),
         ErrorKind::InputFile,
         Some(name),
     );
@@ -132,7 +132,7 @@ fn in_memory_readers_name_the_given_file_in_errors() {
         }
     }
     let e = assert_error(
-        pgvol::read_pgv_from(&mut Failing, name),
+        pgvol::io::read_pgv_from(&mut Failing, name),
         ErrorKind::InputFile,
         Some(name),
     );
@@ -140,7 +140,7 @@ fn in_memory_readers_name_the_given_file_in_errors() {
 
     let mesh_name = Path::new("in/memory.stl");
     assert_error(
-        pgvol::read_mesh_bytes(b"solid nothing\n", MeshFormat::Stl, mesh_name),
+        pgvol::io::read_mesh_bytes(b"solid nothing\n", MeshFormat::Stl, mesh_name),
         ErrorKind::InputFile,
         Some(mesh_name),
     );
@@ -156,13 +156,13 @@ fn in_memory_readers_name_the_given_file_in_errors() {
     }
     let file = encoded(16).file;
     assert_error(
-        pgvol::write_pgv_to(&mut Full, &file, &StorageOptions::default()),
+        pgvol::io::write_pgv_to(&mut Full, &file, &StorageOptions::default()),
         ErrorKind::OutputFile,
         None,
     );
     let out = Path::new("out/memory.obj");
     assert_error(
-        pgvol::write_mesh_to(&mut Full, &sphere(), MeshFormat::Obj, out),
+        pgvol::io::write_mesh_to(&mut Full, &sphere(), MeshFormat::Obj, out),
         ErrorKind::OutputFile,
         Some(out),
     );
@@ -174,28 +174,31 @@ fn in_memory_readers_name_the_given_file_in_errors() {
 #[test]
 fn encode_records_its_band_and_the_file_keeps_it() {
     let dir = tempfile::tempdir().unwrap();
-    for band in [pgvol::ENCODE_BAND, 6.5] {
+    for band in [pgvol::limits::ENCODE_BAND, 6.5] {
         let options = EncodeOptions {
             band,
             ..encode_options(24)
         };
         let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
         let h = file.volume.grid.spacing;
-        let recorded = pgvol::recorded_band(&file).expect("a recorded band");
+        let recorded = pgvol::io::recorded_band(&file).expect("a recorded band");
         assert!((recorded - band * h).abs() <= 1e-6 * recorded, "{recorded}");
 
         let path = dir.path().join("b.pgv");
-        pgvol::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
-        let back = pgvol::read_pgv(&path).unwrap();
-        assert_eq!(pgvol::recorded_band(&back), Some(recorded));
-        let stored = Shape::from_file(back);
-        assert_eq!(stored.band, Some(recorded));
+        pgvol::io::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
+        let back = pgvol::io::read_pgv(&path).unwrap();
+        assert_eq!(pgvol::io::recorded_band(&back), Some(recorded));
+        let stored = Field::from_file(back);
+        assert_eq!(stored.band(), Some(recorded));
 
         // The sparse file keeps what an offset to the edge of the band reads: it moves the
         // surface as the in-memory field does, up to the storage's quantisation.
         let amount = 0.9 * (band - 2.0) * h;
-        let from_file = pgvol::offset(&stored, amount).unwrap();
-        let in_memory = pgvol::offset(&Shape::from_file(file), amount).unwrap();
+        let from_file = stored.offset(amount).map(|f| f.into_file().volume).unwrap();
+        let in_memory = Field::from_file(file)
+            .offset(amount)
+            .map(|f| f.into_file().volume)
+            .unwrap();
         for p in [
             Vec3::X,
             -Vec3::Y,
@@ -212,7 +215,7 @@ fn encode_records_its_band_and_the_file_keeps_it() {
 
 #[test]
 fn offsets_and_shells_within_the_band_succeed_and_beyond_it_are_refused() {
-    for band in [pgvol::ENCODE_BAND, 8.0] {
+    for band in [pgvol::limits::ENCODE_BAND, 8.0] {
         let options = EncodeOptions {
             band,
             ..encode_options(24)
@@ -222,36 +225,58 @@ fn offsets_and_shells_within_the_band_succeed_and_beyond_it_are_refused() {
         // The cubic B-spline reaches two spacings past the level set it shapes.
         let reach = (band - 2.0) * h;
         // What `pgvol info` shows as the usable reach is the one the operations enforce.
-        let shown = pgvol::exact_reach(&file);
+        let shown = pgvol::checks::exact_reach(&file);
         assert!(
             (shown - reach).abs() <= 1e-5 * reach,
             "{shown} against {reach}"
         );
-        let shape = Shape::from_file(file);
+        let shape = Field::from_file(file);
         assert_eq!(shape.exact_band(), shown);
         for amount in [0.5 * reach, -0.5 * reach, 0.95 * reach] {
-            let grown = pgvol::offset(&shape, amount).unwrap();
+            let grown = shape.offset(amount).map(|f| f.into_file().volume).unwrap();
             // The surface moved: the old surface point is now `amount` inside.
             let value = grown.eval(Vec3::new(0.0, 0.0, 1.0)).0;
             assert!((value + amount).abs() < 0.25 * h, "{value} after {amount}");
         }
         for amount in [1.05 * reach, -1.05 * reach, 3.0 * reach] {
-            assert_error(pgvol::offset(&shape, amount), ErrorKind::BadParameter, None);
+            assert_error(
+                shape.offset(amount).map(|f| f.into_file().volume),
+                ErrorKind::BadParameter,
+                None,
+            );
         }
         for kind in [
             ShellKind::Hollow,
             ShellKind::Wall(ShellSide::Outer),
             ShellKind::Wall(ShellSide::Centred),
         ] {
-            let built = pgvol::shell(&shape, 0.5 * reach, kind, &[], &Silent);
-            if 0.5 * reach < pgvol::MIN_WALL_SPACINGS * h {
+            let built = shape
+                .shell(
+                    &pgvol::ShellOptions {
+                        thickness: 0.5 * reach,
+                        kind,
+                        drains: [].to_vec(),
+                    },
+                    &Silent,
+                )
+                .map(|f| f.into_file().volume);
+            if 0.5 * reach < pgvol::limits::MIN_WALL_SPACINGS * h {
                 // Within the band, but a wall thinner than the grid holds.
                 assert_error(built, ErrorKind::Unresolved, None);
             } else {
                 built.unwrap();
             }
             assert_error(
-                pgvol::shell(&shape, 1.05 * reach, kind, &[], &Silent),
+                shape
+                    .shell(
+                        &pgvol::ShellOptions {
+                            thickness: 1.05 * reach,
+                            kind,
+                            drains: [].to_vec(),
+                        },
+                        &Silent,
+                    )
+                    .map(|f| f.into_file().volume),
                 ErrorKind::BadParameter,
                 None,
             );
@@ -267,9 +292,9 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
     };
     let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
     let h = file.volume.grid.spacing;
-    let (encoded, _) = pgvol::pgv_bytes(&file, &StorageOptions::default()).unwrap();
-    let shape = Shape::from_file(file);
-    let band = shape.band.unwrap();
+    let (encoded, _) = pgvol::io::pgv_bytes(&file, &StorageOptions::default()).unwrap();
+    let shape = Field::from_file(file);
+    let band = shape.band().unwrap();
     let dense = StorageOptions {
         dense: true,
         ..StorageOptions::default()
@@ -280,19 +305,31 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
         (Some(ShellKind::Hollow), 2.5 * h),
         (Some(ShellKind::Wall(ShellSide::Centred)), 3.0 * h),
     ] {
-        let volume = match kind {
-            None => pgvol::offset(&shape, amount).unwrap(),
-            Some(kind) => pgvol::shell(&shape, amount, kind, &[], &Silent).unwrap(),
+        let result = match kind {
+            None => shape.offset(amount),
+            Some(kind) => {
+                let options = pgvol::ShellOptions {
+                    thickness: amount,
+                    kind,
+                    drains: Vec::new(),
+                };
+                shape.shell(&options, &Silent)
+            }
         };
-        let what = pgvol::operation_name(kind, amount);
-        let shift = pgvol::operation_shift(kind, amount);
-        let derived = shape.derived_file(volume.clone(), &what, shift);
+        let derived = result.unwrap().into_file();
+        let volume = derived.volume.clone();
+        let what = format!("{kind:?} {amount}");
+        // How far the operation reads the shape's field beyond its surface.
+        let shift = match kind {
+            Some(ShellKind::Wall(ShellSide::Centred)) => amount / 2.0,
+            _ => amount.abs(),
+        };
         // The band it is exact in: the shape's less how far the operation reads beyond it.
-        let recorded = pgvol::recorded_band(&derived).unwrap();
+        let recorded = pgvol::io::recorded_band(&derived).unwrap();
         assert!((recorded - (band - shift)).abs() <= 1e-6 * band, "{what}");
 
         // Sparse and quantised as `encode` writes, about as small.
-        let (bytes, report) = pgvol::pgv_bytes(&derived, &StorageOptions::default()).unwrap();
+        let (bytes, report) = pgvol::io::pgv_bytes(&derived, &StorageOptions::default()).unwrap();
         let report = report.expect("a sparse file");
         assert_eq!(report.precision, pgvol::Precision::Fixed, "{what}");
         assert!(
@@ -306,16 +343,16 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
             encoded.len()
         );
         // Dense on request, every coefficient as it is.
-        let (full, none) = pgvol::pgv_bytes(&derived, &dense).unwrap();
+        let (full, none) = pgvol::io::pgv_bytes(&derived, &dense).unwrap();
         assert!(none.is_none() && full.len() > 4 * bytes.len(), "{what}");
         let name = Path::new("d.pgv");
-        let exact = pgvol::read_pgv_bytes(&full, name).unwrap();
+        let exact = pgvol::io::read_pgv_bytes(&full, name).unwrap();
         assert_eq!(exact.header.encoding, "dense-f32");
         assert_eq!(exact.volume.dense_coeffs(), volume.dense_coeffs(), "{what}");
 
         // Within the band the stored bricks keep (the recorded band less a spacing), the sparse
         // file's field is the dense one's up to the quantisation.
-        let back = pgvol::read_pgv_bytes(&bytes, name).unwrap();
+        let back = pgvol::io::read_pgv_bytes(&bytes, name).unwrap();
         let grid = volume.grid;
         let (want, got) = (volume.sample(&grid), back.volume.sample(&grid));
         let mut checked = 0;
@@ -328,10 +365,10 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
         }
         assert!(checked > 1000, "{what}: {checked}");
         // Read back, the file keeps its band; written again, it is the same file.
-        let reread = Shape::from_file(back.clone());
-        assert_eq!(reread.band, Some(recorded));
+        let reread = Field::from_file(back.clone());
+        assert_eq!(reread.band(), Some(recorded));
         assert!((reread.exact_band() - (recorded - 2.0 * h)).abs() <= 1e-5 * band);
-        let (again, _) = pgvol::pgv_bytes(&back, &StorageOptions::default()).unwrap();
+        let (again, _) = pgvol::io::pgv_bytes(&back, &StorageOptions::default()).unwrap();
         assert!(again == bytes, "{what}: writing the read file changed it");
     }
 }
@@ -345,11 +382,30 @@ fn missing_inputs_are_input_errors_naming_the_file() {
     for name in ["missing.obj", "missing.pgv"] {
         let path = dir.path().join(name);
         if name.ends_with(".pgv") {
-            assert_error(pgvol::read_pgv(&path), ErrorKind::InputFile, Some(&path));
+            assert_error(
+                pgvol::io::read_pgv(&path),
+                ErrorKind::InputFile,
+                Some(&path),
+            );
         } else {
-            assert_error(pgvol::read_mesh(&path), ErrorKind::InputFile, Some(&path));
+            assert_error(
+                pgvol::io::read_mesh(&path),
+                ErrorKind::InputFile,
+                Some(&path),
+            );
         }
-        let e = Shape::load(&path, 16, 0.0, 0.0, SignMode::Auto, &Silent).unwrap_err();
+        let e = Field::open(
+            &path,
+            &pgvol::OpenOptions {
+                res: 16,
+                grow: 0.0,
+                reach: 0.0,
+                wall: None,
+                sign: SignMode::Auto,
+            },
+            &Silent,
+        )
+        .unwrap_err();
         assert_eq!((e.kind(), e.path()), (ErrorKind::InputFile, Some(&*path)));
     }
 }
@@ -360,12 +416,12 @@ fn unknown_or_unwritable_outputs_are_output_errors_naming_the_file() {
     let mesh = sphere();
     let unknown = dir.path().join("m.xyz");
     assert_error(
-        pgvol::write_mesh(&unknown, &mesh),
+        pgvol::io::write_mesh(&unknown, &mesh),
         ErrorKind::OutputFile,
         Some(&unknown),
     );
     assert_error(
-        pgvol::mesh_format(&unknown),
+        pgvol::io::mesh_format(&unknown),
         ErrorKind::OutputFile,
         Some(&unknown),
     );
@@ -373,13 +429,13 @@ fn unknown_or_unwritable_outputs_are_output_errors_naming_the_file() {
 
     let not_pgv = dir.path().join("v.obj");
     assert_error(
-        pgvol::check_pgv_name(&not_pgv),
+        pgvol::io::check_pgv_name(&not_pgv),
         ErrorKind::OutputFile,
         Some(&not_pgv),
     );
     let grid_name = dir.path().join("g.txt");
     assert_error(
-        pgvol::GridFormat::from_path(&grid_name),
+        pgvol::io::GridFormat::from_path(&grid_name),
         ErrorKind::OutputFile,
         Some(&grid_name),
     );
@@ -387,7 +443,7 @@ fn unknown_or_unwritable_outputs_are_output_errors_naming_the_file() {
     let no_dir = dir.path().join("no/such/dir/v.pgv");
     let file = encoded(16).file;
     assert_error(
-        pgvol::write_pgv(&no_dir, &file, &StorageOptions::default()),
+        pgvol::io::write_pgv(&no_dir, &file, &StorageOptions::default()),
         ErrorKind::OutputFile,
         Some(&no_dir),
     );
@@ -438,7 +494,7 @@ fn bad_options_are_parameter_errors() {
             ..DecodeOptions::default()
         };
         assert_error(
-            pgvol::decode(&volume, &options, &Silent),
+            Field::from_volume(volume.clone()).to_mesh(&options, &Silent),
             ErrorKind::BadParameter,
             None,
         );
@@ -449,22 +505,31 @@ fn bad_options_are_parameter_errors() {
         ..DecodeOptions::default()
     };
     assert_error(
-        pgvol::decode(&volume, &far, &Silent),
+        Field::from_volume(volume.clone()).to_mesh(&far, &Silent),
         ErrorKind::BadParameter,
         None,
     );
 
-    let shape = Shape::from_file(encoded(16).file);
+    let shape = Field::from_file(encoded(16).file);
     for distance in [0.0, -0.0, f32::NAN, f32::INFINITY] {
         assert_error(
-            pgvol::offset(&shape, distance),
+            shape.offset(distance).map(|f| f.into_file().volume),
             ErrorKind::BadParameter,
             None,
         );
     }
     for thickness in [0.0, -0.01, f32::NAN] {
         assert_error(
-            pgvol::shell(&shape, thickness, ShellKind::Hollow, &[], &Silent),
+            shape
+                .shell(
+                    &pgvol::ShellOptions {
+                        thickness,
+                        kind: ShellKind::Hollow,
+                        drains: [].to_vec(),
+                    },
+                    &Silent,
+                )
+                .map(|f| f.into_file().volume),
             ErrorKind::BadParameter,
             None,
         );
@@ -476,7 +541,7 @@ fn bad_options_are_parameter_errors() {
             ..SdfOptions::default()
         };
         assert_error(
-            pgvol::signed_distance(&mesh, &options, &Silent),
+            pgvol::distances::signed_distance(&mesh, &options, &Silent),
             ErrorKind::BadParameter,
             None,
         );
@@ -519,7 +584,7 @@ fn grids_beyond_the_node_limit_are_resource_errors() {
         ..DecodeOptions::default()
     };
     assert_error(
-        pgvol::decode(&volume, &options, &Silent),
+        Field::from_volume(volume.clone()).to_mesh(&options, &Silent),
         ErrorKind::ResourceLimit,
         None,
     );
@@ -534,7 +599,7 @@ fn a_resampling_too_coarse_to_hold_a_surface_is_refused_as_such() {
             ..DecodeOptions::default()
         };
         let e = assert_error(
-            pgvol::decode(&volume, &options, &Silent),
+            Field::from_volume(volume.clone()).to_mesh(&options, &Silent),
             ErrorKind::BadParameter,
             None,
         );
@@ -673,12 +738,9 @@ fn remesh_and_decode_report_their_stages() {
     assert_eq!(recorder.stages(), ["distance", "fit", "contour"]);
 
     let recorder = Recorder::default();
-    pgvol::decode(
-        &encoded(16).file.volume,
-        &DecodeOptions::default(),
-        &recorder,
-    )
-    .unwrap();
+    Field::from_volume(encoded(16).file.volume.clone())
+        .to_mesh(&DecodeOptions::default(), &recorder)
+        .unwrap();
     assert_eq!(recorder.stages(), ["contour"]);
 }
 
@@ -718,7 +780,9 @@ fn contouring_and_the_solving_fits_report_rising_fractions() {
                 res: Some(48),
                 ..DecodeOptions::default()
             };
-            pgvol::decode(&encoded(32).file.volume, &options, &recorder).unwrap();
+            Field::from_volume(encoded(32).file.volume.clone())
+                .to_mesh(&options, &recorder)
+                .unwrap();
             assert_fractions_rise_to_one(&recorder, "contour", &format!("decode {method:?}"));
         }
     });
@@ -788,19 +852,33 @@ fn load_names_the_mesh_when_encoding_it_fails() {
     // A cancelled on-the-fly encode keeps its kind and gains the mesh's name.
     let dir = tempfile::tempdir().unwrap();
     let path: PathBuf = dir.path().join("s.obj");
-    pgvol::write_mesh(&path, &sphere()).unwrap();
-    let e = Shape::load(
+    pgvol::io::write_mesh(&path, &sphere()).unwrap();
+    let e = Field::open(
         &path,
-        16,
-        0.0,
-        0.0,
-        SignMode::Auto,
+        &pgvol::OpenOptions {
+            res: 16,
+            grow: 0.0,
+            reach: 0.0,
+            wall: None,
+            sign: SignMode::Auto,
+        },
         &Recorder::cancelling_in(""),
     )
     .unwrap_err();
     assert_eq!((e.kind(), e.path()), (ErrorKind::Cancelled, Some(&*path)));
-    let shape = Shape::load(&path, 16, 0.0, 0.1, SignMode::Auto, &Silent).unwrap();
-    assert!(shape.band.is_some() && shape.mesh.is_some());
+    let shape = Field::open(
+        &path,
+        &pgvol::OpenOptions {
+            res: 16,
+            grow: 0.0,
+            reach: 0.1,
+            wall: None,
+            sign: SignMode::Auto,
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(shape.band().is_some() && shape.mesh().is_some());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -817,7 +895,7 @@ fn meshes_from_parts_are_checked_and_cleaned_like_read_meshes() {
     positions.push(Vec3::ZERO);
     let last = positions.len() as u32 - 1;
     triangles.push([last, last, 0]);
-    let (mesh, report) = pgvol::mesh_from_parts(positions, triangles).unwrap();
+    let (mesh, report) = pgvol::io::mesh_from_parts(positions, triangles).unwrap();
     assert_eq!(report.degenerate_dropped, 1);
     assert_eq!(mesh.triangles.len(), s.triangles.len());
     assert!(mesh.stats().watertight);
@@ -848,7 +926,7 @@ fn meshes_from_parts_are_checked_and_cleaned_like_read_meshes() {
     ];
     for (positions, triangles, problem) in bad {
         let e = assert_error(
-            pgvol::mesh_from_parts(positions, triangles),
+            pgvol::io::mesh_from_parts(positions, triangles),
             ErrorKind::BadParameter,
             None,
         );
@@ -865,7 +943,9 @@ fn sampling_a_grid_gives_the_field_at_its_nodes_x_fastest() {
         dims: [3, 4, 5],
         offset: Default::default(),
     };
-    let values = pgvol::sample(&volume, &grid).unwrap();
+    let values = Field::from_volume(volume.clone())
+        .sample_grid(&grid)
+        .unwrap();
     assert_eq!(values.len(), 60);
     for (k, j, i) in [(0, 0, 0), (4, 3, 2), (2, 1, 0), (1, 3, 1)] {
         let p = grid.origin + grid.spacing * Vec3::new(i as f32, j as f32, k as f32);
@@ -884,14 +964,18 @@ fn sampling_a_grid_gives_the_field_at_its_nodes_x_fastest() {
             dims,
             ..grid
         };
-        assert_error(pgvol::sample(&volume, &grid), ErrorKind::BadParameter, None);
+        assert_error(
+            Field::from_volume(volume.clone()).sample_grid(&grid),
+            ErrorKind::BadParameter,
+            None,
+        );
     }
     let huge = pgvol::Grid {
         dims: [1 << 12, 1 << 12, 1 << 12],
         ..grid
     };
     assert_error(
-        pgvol::sample(&volume, &huge),
+        Field::from_volume(volume.clone()).sample_grid(&huge),
         ErrorKind::ResourceLimit,
         None,
     );
@@ -902,19 +986,22 @@ fn a_file_sliced_slab_by_slab_gives_the_layers_of_the_whole_field() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.pgv");
     let file = encoded(72).file;
-    pgvol::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
-    let shape = Shape::from_file(pgvol::read_pgv(&path).unwrap());
+    pgvol::io::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
+    let shape = Field::from_file(pgvol::io::read_pgv(&path).unwrap());
     for axis in [pgvol::Axis::X, pgvol::Axis::Y, pgvol::Axis::Z] {
         for height in [0.013, 0.2] {
-            let settings = pgvol::SliceSettings {
+            let settings = pgvol::SliceOptions {
                 axis,
-                ..pgvol::SliceSettings::new(height)
+                ..pgvol::SliceOptions::new(height)
             };
-            let whole = pgvol::slice(&shape, &settings, &Silent).unwrap();
-            let streamed = pgvol::slice_file(&path, &settings, &Silent).unwrap();
+            let whole = shape.slice(&settings, &Silent).map(|s| s.layers).unwrap();
+            let streamed = pgvol::stream::slice_file(&path, &settings, &Silent).unwrap();
             assert!(whole.iter().filter(|l| !l.loops.is_empty()).count() >= 4);
             assert_eq!(streamed.layers, whole, "{axis:?} every {height}");
-            assert_eq!(streamed.frame, pgvol::layer_frame(&shape, axis));
+            assert_eq!(
+                streamed.frame,
+                shape.slice(&settings, &Silent).unwrap().frame
+            );
         }
     }
     // A damaged file is refused, naming it.
@@ -922,7 +1009,7 @@ fn a_file_sliced_slab_by_slab_gives_the_layers_of_the_whole_field() {
     let n = bytes.len();
     bytes[n / 2] ^= 0x10;
     std::fs::write(&path, &bytes).unwrap();
-    let e = pgvol::slice_file(&path, &pgvol::SliceSettings::new(0.05), &Silent).unwrap_err();
+    let e = pgvol::stream::slice_file(&path, &pgvol::SliceOptions::new(0.05), &Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::InputFile);
     assert!(e.to_string().contains("s.pgv"), "{e}");
 }
@@ -933,17 +1020,17 @@ fn a_file_decoded_window_by_window_gives_the_mesh_of_the_whole_field() {
     let path = dir.path().join("d.pgv");
     // 150 layers along z: three runs of contouring, each from its own window of slabs.
     let file = encoded(150).file;
-    pgvol::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
-    let shape = Shape::from_file(pgvol::read_pgv(&path).unwrap());
-    let h = shape.volume.grid.spacing;
+    pgvol::io::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
+    let shape = Field::from_file(pgvol::io::read_pgv(&path).unwrap());
+    let h = shape.volume().grid.spacing;
     for (iso, res) in [(0.0, None), (h, None), (0.0, Some(97))] {
         let options = DecodeOptions {
             iso,
             res,
             ..Default::default()
         };
-        let whole = pgvol::decode_shape(&shape, &options, &Silent).unwrap();
-        let streamed = pgvol::decode_file(&path, &options, &Silent).unwrap();
+        let whole = shape.to_mesh(&options, &Silent).unwrap();
+        let streamed = pgvol::stream::decode_file(&path, &options, &Silent).unwrap();
         assert_eq!(streamed.positions, whole.positions, "iso {iso} res {res:?}");
         assert_eq!(streamed.triangles, whole.triangles, "iso {iso} res {res:?}");
         let s = streamed.stats();
@@ -962,15 +1049,15 @@ fn a_file_decoded_window_by_window_gives_the_mesh_of_the_whole_field() {
         iso: 0.4,
         ..Default::default()
     };
-    let e = pgvol::decode_file(&path, &far, &Silent).unwrap_err();
+    let e = pgvol::stream::decode_file(&path, &far, &Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
-    assert!(pgvol::decode_shape(&shape, &far, &Silent).is_err());
+    assert!(shape.to_mesh(&far, &Silent).is_err());
     // A damaged file is refused, naming it.
     let mut bytes = std::fs::read(&path).unwrap();
     let n = bytes.len();
     bytes[n / 2] ^= 0x10;
     std::fs::write(&path, &bytes).unwrap();
-    let e = pgvol::decode_file(&path, &Default::default(), &Silent).unwrap_err();
+    let e = pgvol::stream::decode_file(&path, &Default::default(), &Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::InputFile);
     assert!(e.to_string().contains("d.pgv"), "{e}");
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use pgvol::glam::{DVec3, Vec3};
 use pgvol::{
-    DecodeOptions, EncodeOptions, GridSpec, Mesh, RemeshOptions, Shape, Silent, SliceSettings,
+    DecodeOptions, EncodeOptions, Field, GridSpec, Mesh, RemeshOptions, Silent, SliceOptions,
     StorageOptions,
 };
 
@@ -20,7 +20,7 @@ const SAME_PCT: f64 = 1e-2;
 
 fn torus_knot() -> Mesh {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/torus-knot.obj");
-    pgvol::read_mesh(&path).expect("fixture").0
+    pgvol::io::read_mesh(&path).expect("fixture").0
 }
 
 fn unit_cube() -> Mesh {
@@ -39,7 +39,7 @@ fn moved_file(mesh: &Mesh, shift: DVec3, dir: &Path, name: &str) -> (PathBuf, Me
     }
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
-    let (read, _) = pgvol::read_mesh(&path).expect("moved mesh reads");
+    let (read, _) = pgvol::io::read_mesh(&path).expect("moved mesh reads");
     (path, read)
 }
 
@@ -97,8 +97,8 @@ fn remesh_far_matches_remesh_at_the_origin() {
             assert_same_surface(&far, &moved, &format!("remesh {name} by {shift}"));
             // And through a file: OBJ keeps the world positions in f64.
             let out = dir.path().join("out.obj");
-            pgvol::write_mesh(&out, &far).unwrap();
-            let (back, _) = pgvol::read_mesh(&out).unwrap();
+            pgvol::io::write_mesh(&out, &far).unwrap();
+            let (back, _) = pgvol::io::read_mesh(&out).unwrap();
             assert_same_surface(&back, &moved, &format!("remesh {name} by {shift}, OBJ"));
         }
     }
@@ -116,10 +116,12 @@ fn encode_decode_eval_slice_and_offset_far_match_the_origin() {
     // Through a file, as the far field goes: storage quantises the coefficients alike.
     let near_file = pgvol::encode(&knot, &options, &Silent).unwrap().file;
     let near_pgv = dir.path().join("near.pgv");
-    pgvol::write_pgv(&near_pgv, &near_file, &StorageOptions::default()).unwrap();
-    let near_file = pgvol::read_pgv(&near_pgv).unwrap();
-    let near_shape = Shape::from_file(near_file.clone());
-    let near_mesh = pgvol::decode(&near_file.volume, &DecodeOptions::default(), &Silent).unwrap();
+    pgvol::io::write_pgv(&near_pgv, &near_file, &StorageOptions::default()).unwrap();
+    let near_file = pgvol::io::read_pgv(&near_pgv).unwrap();
+    let near_shape = Field::from_file(near_file.clone());
+    let near_mesh = Field::from_volume(near_file.volume.clone())
+        .to_mesh(&DecodeOptions::default(), &Silent)
+        .unwrap();
     let (lo, hi) = knot.bounds().unwrap();
     let size = f64::from((hi - lo).max_element());
     // Query points around the surface: the vertices pushed out and in along the axes.
@@ -129,30 +131,40 @@ fn encode_decode_eval_slice_and_offset_far_match_the_origin() {
         .step_by(97)
         .flat_map(|p| [p.as_dvec3() + 0.01 * size, p.as_dvec3() - 0.01 * size])
         .collect();
-    let near_values = pgvol::eval(&near_shape, &queries);
-    let settings = SliceSettings::new((size / 7.0) as f32);
-    let near_layers = pgvol::slice(&near_shape, &settings, &Silent).unwrap();
-    let near_grown = pgvol::offset(&near_shape, 0.02 * size as f32).unwrap();
-    let near_grown = pgvol::decode(&near_grown, &DecodeOptions::default(), &Silent).unwrap();
+    let near_values = near_shape.eval(&queries);
+    let settings = SliceOptions::new((size / 7.0) as f32);
+    let near_layers = near_shape
+        .slice(&settings, &Silent)
+        .map(|s| s.layers)
+        .unwrap();
+    let near_grown = near_shape
+        .offset(0.02 * size as f32)
+        .map(|f| f.into_file().volume)
+        .unwrap();
+    let near_grown = Field::from_volume(near_grown.clone())
+        .to_mesh(&DecodeOptions::default(), &Silent)
+        .unwrap();
 
     for shift in shifts() {
         let (_, far_input) = moved_file(&knot, shift, dir.path(), "in.obj");
         let encoded = pgvol::encode(&far_input, &options, &Silent).unwrap();
         let pgv = dir.path().join("far.pgv");
-        pgvol::write_pgv(&pgv, &encoded.file, &StorageOptions::default()).unwrap();
-        let file = pgvol::read_pgv(&pgv).unwrap();
+        pgvol::io::write_pgv(&pgv, &encoded.file, &StorageOptions::default()).unwrap();
+        let file = pgvol::io::read_pgv(&pgv).unwrap();
         assert_eq!(
             file.volume.grid.offset, far_input.offset,
             "the header keeps the offset"
         );
 
-        let far_mesh = pgvol::decode(&file.volume, &DecodeOptions::default(), &Silent).unwrap();
+        let far_mesh = Field::from_volume(file.volume.clone())
+            .to_mesh(&DecodeOptions::default(), &Silent)
+            .unwrap();
         let moved = translated(near_mesh.clone(), shift);
         assert_same_surface(&far_mesh, &moved, &format!("decode by {shift}"));
 
-        let shape = Shape::from_file(file);
+        let shape = Field::from_file(file);
         let far_queries: Vec<DVec3> = queries.iter().map(|&q| q + shift).collect();
-        for (far, near) in pgvol::eval(&shape, &far_queries).iter().zip(&near_values) {
+        for (far, near) in shape.eval(&far_queries).iter().zip(&near_values) {
             assert_eq!(far.exact, near.exact);
             assert!(
                 (far.value - near.value).abs() as f64 <= 1e-4 * size,
@@ -163,8 +175,8 @@ fn encode_decode_eval_slice_and_offset_far_match_the_origin() {
         }
 
         // Layers in world coordinates: the far heights are the origin's plus the shift.
-        let far_layers = pgvol::slice(&shape, &settings, &Silent).unwrap();
-        let frame = pgvol::layer_frame(&shape, settings.axis);
+        let sliced = shape.slice(&settings, &Silent).unwrap();
+        let (far_layers, frame) = (sliced.layers, sliced.frame);
         assert_eq!(far_layers.len(), near_layers.len());
         for (far, near) in far_layers.iter().zip(&near_layers) {
             let far_height = frame.height + f64::from(far.height);
@@ -177,8 +189,8 @@ fn encode_decode_eval_slice_and_offset_far_match_the_origin() {
         }
         // And in the files: the JSON heights are world heights.
         let json = dir.path().join("layers.json");
-        let format = pgvol::LayerFormat::from_path(&json, false).unwrap();
-        pgvol::write_layers(&json, &far_layers, format, 1.0, &frame).unwrap();
+        let format = pgvol::io::LayerFormat::from_path(&json, false).unwrap();
+        pgvol::io::write_layers(&json, &far_layers, format, 1.0, &frame).unwrap();
         let text = std::fs::read_to_string(&json).unwrap();
         let first = f64::from(near_layers[0].height) + shift.z;
         let written: f64 = text
@@ -192,8 +204,13 @@ fn encode_decode_eval_slice_and_offset_far_match_the_origin() {
             "{written} against {first}"
         );
 
-        let grown = pgvol::offset(&shape, 0.02 * size as f32).unwrap();
-        let grown = pgvol::decode(&grown, &DecodeOptions::default(), &Silent).unwrap();
+        let grown = shape
+            .offset(0.02 * size as f32)
+            .map(|f| f.into_file().volume)
+            .unwrap();
+        let grown = Field::from_volume(grown.clone())
+            .to_mesh(&DecodeOptions::default(), &Silent)
+            .unwrap();
         let moved = translated(near_grown.clone(), shift);
         assert_same_surface(&grown, &moved, &format!("offset by {shift}"));
     }
@@ -208,8 +225,8 @@ fn glb_and_ply_keep_far_positions_and_stl_is_refused_with_advice() {
     let moved = translated(cube.clone(), shift);
     for ext in ["glb", "gltf", "ply", "obj"] {
         let path = dir.path().join(format!("cube.{ext}"));
-        pgvol::write_mesh(&path, &far).unwrap();
-        let (back, _) = pgvol::read_mesh(&path).unwrap();
+        pgvol::io::write_mesh(&path, &far).unwrap();
+        let (back, _) = pgvol::io::read_mesh(&path).unwrap();
         for i in 0..back.positions.len() {
             let nearest = (0..8)
                 .map(|j| (back.world(i) - moved.world(j)).length())
@@ -221,14 +238,14 @@ fn glb_and_ply_keep_far_positions_and_stl_is_refused_with_advice() {
         }
     }
     let stl = dir.path().join("cube.stl");
-    let err = pgvol::write_mesh(&stl, &far).unwrap_err().to_string();
+    let err = pgvol::io::write_mesh(&stl, &far).unwrap_err().to_string();
     assert!(
         err.contains("STL") && err.contains("%") && err.contains("OBJ"),
         "{err}"
     );
     assert!(!stl.exists());
     // Near the origin STL is written as before.
-    pgvol::write_mesh(&stl, &cube).unwrap();
+    pgvol::io::write_mesh(&stl, &cube).unwrap();
 }
 
 #[test]
@@ -237,16 +254,23 @@ fn commands_working_near_the_origin_only_refuse_far_inputs_with_advice() {
     let (path, far) = moved_file(&unit_cube(), DVec3::splat(1e6), dir.path(), "cube.obj");
     let operands = [
         pgvol::Operand::File(path),
-        pgvol::parse_operand("sphere:0,0,0,1").unwrap(),
+        pgvol::Operand::parse("sphere:0,0,0,1").unwrap(),
     ];
-    let err = pgvol::load_operands(&operands).unwrap_err().to_string();
+    let options = pgvol::CsgOptions::default();
+    let err = Field::csg(&operands, &options, &Silent)
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("near the origin") && err.contains("translate"),
         "{err}"
     );
-    let err = pgvol::perturb(&far, &pgvol::PerturbOptions::default(), &Silent)
-        .unwrap_err()
-        .to_string();
+    let err = pgvol::perturbation::perturb(
+        &far,
+        &pgvol::perturbation::PerturbOptions::default(),
+        &Silent,
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("near the origin"), "{err}");
 }
 
@@ -259,6 +283,6 @@ fn coordinates_beyond_the_accepted_range_are_still_refused() {
         "v 2e8 0 0\nv 200000001 0 0\nv 2e8 1 0\nv 2e8 0 1\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n",
     )
     .unwrap();
-    let err = pgvol::read_mesh(&path).unwrap_err().to_string();
+    let err = pgvol::io::read_mesh(&path).unwrap_err().to_string();
     assert!(err.contains("out of range") && err.contains("1e8"), "{err}");
 }

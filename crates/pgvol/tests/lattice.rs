@@ -2,25 +2,40 @@
 //! infill leaves the two labyrinths of a sheet as enclosed voids until a drain opens each.
 
 use glam::Vec3;
-use pgvol::{ErrorKind, Lattice, Shape, SignMode, Silent, Tpms};
+use pgvol::lattices::Tpms;
+use pgvol::{ErrorKind, Field, Lattice, OpenOptions, SignMode, Silent};
 
 const WALL: f32 = 0.1;
 
-fn sphere() -> Shape {
+fn sphere() -> Field {
     let mesh = pgvol::mesh::shapes::octasphere(5);
-    Shape::from_mesh(mesh, 96, 0.0, WALL, SignMode::Auto, &Silent).unwrap()
+    Field::for_operations(
+        mesh,
+        &OpenOptions {
+            res: 96,
+            grow: 0.0,
+            reach: WALL,
+            wall: None,
+            sign: SignMode::Auto,
+        },
+        &Silent,
+    )
+    .unwrap()
 }
 
-fn solid(solid: &pgvol::LatticeSolid) -> pgvol::SolidReport {
-    let mesh = pgvol::decode(&solid.volume, &pgvol::DecodeOptions::default(), &Silent).unwrap();
+fn solid(solid: &pgvol::Latticed) -> pgvol::SolidReport {
+    let mesh = solid
+        .field
+        .to_mesh(&pgvol::DecodeOptions::default(), &Silent)
+        .unwrap();
     let s = mesh.stats();
     assert!(
         s.watertight && s.winding_consistent && s.non_manifold_edges == 0,
         "{s:?}"
     );
-    let on_mesh = pgvol::solid_report(solid, Some(&mesh), &Silent);
+    let on_mesh = solid.report(Some(&mesh), &Silent);
     // The estimate from node values agrees with the contoured solid.
-    let on_field = pgvol::solid_report(solid, None, &Silent);
+    let on_field = solid.report(None, &Silent);
     assert!(
         (on_field.volume / on_mesh.volume - 1.0).abs() < 0.01,
         "{on_field:?} {on_mesh:?}"
@@ -36,14 +51,14 @@ fn solid(solid: &pgvol::LatticeSolid) -> pgvol::SolidReport {
 fn lattices_the_grid_cannot_hold_are_refused_with_the_figure() {
     let shape = sphere();
     let thin = Lattice::sheet(Tpms::Gyroid, 0.5, 0.01);
-    let e = pgvol::lattice(&shape, &thin, &Silent).unwrap_err();
+    let e = shape.lattice(&thin, &Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter);
     assert!(e.message().contains("under two grid spacings"), "{e}");
     let fine = Lattice::sheet(Tpms::Gyroid, 0.1, 0.049);
-    let e = pgvol::lattice(&shape, &fine, &Silent).unwrap_err();
+    let e = shape.lattice(&fine, &Silent).unwrap_err();
     assert!(e.message().contains("under eight grid spacings"), "{e}");
     let too_thick = Lattice::sheet(Tpms::Gyroid, 0.5, 0.3);
-    let e = pgvol::lattice(&shape, &too_thick, &Silent).unwrap_err();
+    let e = shape.lattice(&too_thick, &Silent).unwrap_err();
     assert!(e.message().contains("under half the cell"), "{e}");
 }
 
@@ -51,7 +66,7 @@ fn lattices_the_grid_cannot_hold_are_refused_with_the_figure() {
 fn drains_open_the_labyrinths_of_an_infill() {
     let shape = sphere();
     let gyroid = Lattice::sheet(Tpms::Gyroid, 0.6, 0.08);
-    let closed = pgvol::infill(&shape, WALL, &gyroid, &[], &Silent).unwrap();
+    let closed = shape.infill(WALL, &gyroid, &[], &Silent).unwrap();
     let sealed = solid(&closed);
     assert!(sealed.enclosed_voids.unwrap() >= 2, "{sealed:?}");
     assert!(sealed.fraction > 0.2 && sealed.fraction < 0.6, "{sealed:?}");
@@ -67,14 +82,14 @@ fn drains_open_the_labyrinths_of_an_infill() {
             })
             .unwrap()
     };
-    let drains: Vec<pgvol::Drain> = [1.0, -1.0]
-        .map(|sign| pgvol::Drain {
+    let drains: Vec<pgvol::edit::Drain> = [1.0, -1.0]
+        .map(|sign| pgvol::edit::Drain {
             point: labyrinth(sign),
             direction: Vec3::Z,
             diameter: 0.08,
         })
         .to_vec();
-    let open = pgvol::infill(&shape, WALL, &gyroid, &drains, &Silent).unwrap();
+    let open = shape.infill(WALL, &gyroid, &drains, &Silent).unwrap();
     let drained = solid(&open);
     assert!(
         drained.enclosed_voids.unwrap() + 2 <= sealed.enclosed_voids.unwrap(),
@@ -82,10 +97,10 @@ fn drains_open_the_labyrinths_of_an_infill() {
     );
     assert!(drained.volume < sealed.volume);
     // A drain point in the wall opens nothing and is refused.
-    let wall = pgvol::Drain {
+    let wall = pgvol::edit::Drain {
         point: Vec3::new(0.0, 0.0, 0.95),
         ..drains[0]
     };
-    let e = pgvol::infill(&shape, WALL, &gyroid, &[wall], &Silent).unwrap_err();
+    let e = shape.infill(WALL, &gyroid, &[wall], &Silent).unwrap_err();
     assert!(e.message().contains("in the wall"), "{e}");
 }

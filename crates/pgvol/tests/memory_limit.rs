@@ -19,17 +19,17 @@ impl Limit {
 
 impl Drop for Limit {
     fn drop(&mut self) {
-        pgvol::set_memory_limit(None);
+        pgvol::limits::set_memory_limit(None);
     }
 }
 
-fn sphere_shape(res: usize) -> pgvol::Shape {
+fn sphere_shape(res: usize) -> pgvol::Field {
     let options = EncodeOptions {
         grid: GridSpec::Res(res),
         ..Default::default()
     };
     let encoded = pgvol::encode(&pgvol::mesh::shapes::octasphere(3), &options, &Silent).unwrap();
-    pgvol::Shape::from_file(encoded.file)
+    pgvol::Field::from_file(encoded.file)
 }
 
 #[test]
@@ -41,12 +41,12 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
         ..Default::default()
     };
     let encoded = pgvol::encode(&mesh, &options, &Silent).unwrap();
-    let (bytes, _) = pgvol::pgv_bytes(&encoded.file, &StorageOptions::default()).unwrap();
+    let (bytes, _) = pgvol::io::pgv_bytes(&encoded.file, &StorageOptions::default()).unwrap();
     let name = std::path::Path::new("sphere.pgv");
 
     // 32³ coefficients are 131 kB: a 100 kB limit refuses reading, encoding and remeshing.
-    pgvol::set_memory_limit(Some(100_000));
-    let read = pgvol::read_pgv_bytes(&bytes, name).unwrap_err();
+    pgvol::limits::set_memory_limit(Some(100_000));
+    let read = pgvol::io::read_pgv_bytes(&bytes, name).unwrap_err();
     let encode = pgvol::encode(&mesh, &options, &Silent).unwrap_err();
     let remesh = pgvol::remesh(
         &mesh,
@@ -59,14 +59,21 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     .unwrap_err();
     let compare = pgvol::compare(&mesh, &mesh, 10_000, 1).unwrap_err();
     // The lattice of a sphere stores every brick inside it: refused with the brick count.
-    let shape = pgvol::Shape::from_file(encoded.file.clone());
-    let gyroid = pgvol::Lattice::sheet(pgvol::Tpms::Gyroid, 0.8, 0.2);
-    pgvol::set_memory_limit(Some(10_000));
-    let lattice = pgvol::lattice(&shape, &gyroid, &Silent).unwrap_err();
-    pgvol::set_memory_limit(Some(100_000));
+    let shape = pgvol::Field::from_file(encoded.file.clone());
+    let gyroid = pgvol::Lattice::sheet(pgvol::lattices::Tpms::Gyroid, 0.8, 0.2);
+    pgvol::limits::set_memory_limit(Some(10_000));
+    let lattice = shape
+        .lattice(&gyroid, &Silent)
+        .map(|l| pgvol::lattices::LatticeSolid {
+            volume: l.field.into_file().volume,
+            solid: l.solid,
+            part: l.part,
+        })
+        .unwrap_err();
+    pgvol::limits::set_memory_limit(Some(100_000));
     assert_eq!(lattice.kind(), ErrorKind::ResourceLimit, "{lattice}");
     assert!(lattice.message().contains("a lattice filling"), "{lattice}");
-    pgvol::set_memory_limit(None);
+    pgvol::limits::set_memory_limit(None);
 
     for e in [&read, &encode, &remesh, &compare] {
         assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
@@ -76,21 +83,21 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     assert!(read.message().contains("32 x 32 x 32"), "{read}");
 
     // Under the default limit (the memory available) the same jobs run.
-    let back = pgvol::read_pgv_bytes(&bytes, name).unwrap();
+    let back = pgvol::io::read_pgv_bytes(&bytes, name).unwrap();
     assert_eq!(back.volume.grid, encoded.file.volume.grid);
 
     // The largest grid is accepted and estimated before any work: a sparse encode at 4096³ is
     // refused under a 1 GB limit with its figure, and a dense remesh (13 bytes a node, 893 GB)
     // under the machine's own.
-    let top = pgvol::MAX_RES as usize;
+    let top = pgvol::limits::MAX_RES as usize;
     assert_eq!(top, 4096);
-    pgvol::set_memory_limit(Some(1_000_000_000));
+    pgvol::limits::set_memory_limit(Some(1_000_000_000));
     let big = EncodeOptions {
         grid: GridSpec::Res(top),
         ..Default::default()
     };
     let encode = pgvol::encode(&mesh, &big, &Silent).unwrap_err();
-    pgvol::set_memory_limit(None);
+    pgvol::limits::set_memory_limit(None);
     assert_eq!(encode.kind(), ErrorKind::ResourceLimit, "{encode}");
     assert!(encode.message().contains("4096 x 4096 x 4096"), "{encode}");
     assert!(encode.message().contains("GB"), "{encode}");
@@ -111,11 +118,17 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
 fn denoising_lattices_are_range_checked_and_estimated_before_work() {
     let _limit = Limit::take();
     let shape = sphere_shape(48);
-    let mask = pgvol::parse_mask("-0.5,-0.5,0.5,0.5,0.5,1.2").unwrap();
+    let mask = pgvol::edit::Mask {
+        lo: Vec3::new(-0.5, -0.5, 0.5),
+        hi: Vec3::new(0.5, 0.5, 1.2),
+    };
     // Lattices finer than the field's grid are refused by their range, however large.
     for coarse in [3000, 100_000_000] {
-        let restore = pgvol::Restore::Denoise { coarse };
-        let e = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap_err();
+        let restore = pgvol::edit::Restore::Denoise { coarse };
+        let e = shape
+            .repair(&[mask], restore, &Silent)
+            .map(|r| (r.field.into_file().volume, r.masks))
+            .unwrap_err();
         assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
         assert!(
             e.message().contains("the coarse resolution must be 4 to"),
@@ -123,17 +136,23 @@ fn denoising_lattices_are_range_checked_and_estimated_before_work() {
         );
     }
     // A lattice in range but over the limit is refused with its figure.
-    let restore = pgvol::Restore::Denoise { coarse: 20 };
-    pgvol::set_memory_limit(Some(10_000));
-    let e = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap_err();
+    let restore = pgvol::edit::Restore::Denoise { coarse: 20 };
+    pgvol::limits::set_memory_limit(Some(10_000));
+    let e = shape
+        .repair(&[mask], restore, &Silent)
+        .map(|r| (r.field.into_file().volume, r.masks))
+        .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
     assert!(
         e.message().contains("restoring 1 mask(s) needs about"),
         "{e}"
     );
     assert!(e.message().contains("10.0 kB allowed"), "{e}");
-    pgvol::set_memory_limit(None);
-    let (repaired, _) = pgvol::repair(&shape, &[mask], restore, &Silent).unwrap();
+    pgvol::limits::set_memory_limit(None);
+    let (repaired, _) = shape
+        .repair(&[mask], restore, &Silent)
+        .map(|r| (r.field.into_file().volume, r.masks))
+        .unwrap();
     assert!(repaired.value(Vec3::ZERO) < 0.0);
 }
 
@@ -168,20 +187,26 @@ fn edits_count_their_output_and_refuse_before_any_work() {
     let _limit = Limit::take();
     let dir = tempfile::tempdir().unwrap();
     let ball = dir.path().join("ball.stl");
-    pgvol::write_mesh(&ball, &pgvol::mesh::shapes::octasphere(3)).unwrap();
-    let operands: Vec<pgvol::Operand> = [ball.to_str().unwrap(), "sphere:0.5,0,0,0.8"]
-        .iter()
-        .map(|t| pgvol::parse_operand(t).unwrap())
-        .collect();
+    pgvol::io::write_mesh(&ball, &pgvol::mesh::shapes::octasphere(3)).unwrap();
+    let operands: Vec<pgvol::Operand> = vec![
+        pgvol::Operand::File(ball.clone()),
+        pgvol::Primary::Sphere(pgvol::field::analytic::Sphere {
+            centre: Vec3::new(0.5, 0.0, 0.0),
+            radius: 0.8,
+        })
+        .into(),
+    ];
     // Written dense, every node of a 600³ grid costs its coefficient three times over.
-    let dense = pgvol::CsgSettings {
+    let dense = pgvol::CsgOptions {
         res: 600,
         result: pgvol::ResultUse::DenseFile,
         ..Default::default()
     };
-    pgvol::set_memory_limit(Some(100_000_000));
+    pgvol::limits::set_memory_limit(Some(100_000_000));
     let stages = Stages::default();
-    let e = pgvol::csg(&operands, &dense, &stages).unwrap_err();
+    let e = pgvol::Field::csg(&operands, &dense, &stages)
+        .map(|f| f.into_file().volume)
+        .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
     assert!(
         e.message().contains("a Boolean on a 600 x 600 x 600 grid"),
@@ -193,15 +218,16 @@ fn edits_count_their_output_and_refuse_before_any_work() {
 
     // Blends of unbounded primaries at 2048³: the dense file alone is 100 GB, and even kept
     // as a volume the sampling's bookkeeping of 256³ bricks exceeds 1 GB.
-    let planes: Vec<pgvol::Operand> = ["plane:1,0,0,0", "plane:0,1,0,0"]
-        .iter()
-        .map(|t| pgvol::parse_operand(t).unwrap())
-        .collect();
-    let operator = pgvol::BlendOperator::Liming {
-        cut: pgvol::parse_operand("plane:-1,-1,0,0.5").unwrap(),
+    let planes: Vec<pgvol::Operand> = vec![plane(1.0, 0.0, 0.0), plane(0.0, 1.0, 0.0)];
+    let operator = pgvol::edit::BlendOperator::Liming {
+        cut: pgvol::Primary::Plane(pgvol::field::analytic::Plane {
+            normal: Vec3::new(-1.0, -1.0, 0.0).normalize(),
+            offset: 0.5 / 2f32.sqrt(),
+        })
+        .into(),
         lambda: 0.5,
     };
-    pgvol::set_memory_limit(Some(1_000_000_000));
+    pgvol::limits::set_memory_limit(Some(1_000_000_000));
     let mut needed = std::collections::HashMap::new();
     for (result, at_least) in [
         (pgvol::ResultUse::DenseFile, 2048f64.powi(3) * 12.0),
@@ -209,14 +235,14 @@ fn edits_count_their_output_and_refuse_before_any_work() {
         (pgvol::ResultUse::Volume, 256f64.powi(3) * 64.0),
         (pgvol::ResultUse::Mesh, 256f64.powi(3) * 64.0),
     ] {
-        let settings = pgvol::BlendSettings {
+        let settings = pgvol::edit::BlendSettings {
             res: 2048,
             bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
             result,
             ..Default::default()
         };
         let stages = Stages::default();
-        let e = pgvol::blend(&planes, &operator, &settings, &stages).unwrap_err();
+        let e = pgvol::edit::blend(&planes, &operator, &settings, &stages).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::ResourceLimit, "{e}");
         assert!(
             e.message().contains("a blend on a 2048 x 2048 x 2048 grid"),
@@ -234,8 +260,10 @@ fn edits_count_their_output_and_refuse_before_any_work() {
     );
 
     // Within the limit the same jobs run.
-    let small = pgvol::CsgSettings { res: 48, ..dense };
-    let v = pgvol::csg(&operands, &small, &Silent).unwrap();
+    let small = pgvol::CsgOptions { res: 48, ..dense };
+    let v = pgvol::Field::csg(&operands, &small, &Silent)
+        .map(|f| f.into_file().volume)
+        .unwrap();
     assert!(v.value(Vec3::new(1.2, 0.0, 0.0)) < 0.0);
 }
 
@@ -255,7 +283,7 @@ fn clouds_of_isolated_points_on_a_fine_grid_are_refused_before_work() {
     let points: Vec<Vec3> = (0..3000)
         .map(|_| Vec3::new(next(), next(), next()))
         .collect();
-    let cloud = pgvol::PointCloud {
+    let cloud = pgvol::reconstruct::PointCloud {
         points,
         normals: None,
     };
@@ -263,12 +291,21 @@ fn clouds_of_isolated_points_on_a_fine_grid_are_refused_before_work() {
         grid: GridSpec::Voxel(0.002),
         ..Default::default()
     };
-    pgvol::set_memory_limit(Some(1000));
+    pgvol::limits::set_memory_limit(Some(1000));
     let stages = Stages::default();
-    let e = pgvol::points(&cloud, &options, &stages).unwrap_err();
+    let e = pgvol::reconstruct::points(&cloud, &options, &stages).unwrap_err();
     assert!(stages.0.lock().unwrap().is_empty(), "{:?}", stages.0);
     // Refused for its spacing, which comes before the memory estimate, with the grid that works.
     assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
     assert!(e.message().contains("too sparse for the grid"), "{e}");
     assert!(e.message().contains("grid spacing of at least"), "{e}");
+}
+
+/// The half-space `n·p ≤ 0` of unit normal along `(x, y, z)`.
+fn plane(x: f32, y: f32, z: f32) -> pgvol::Operand {
+    pgvol::Primary::Plane(pgvol::field::analytic::Plane {
+        normal: Vec3::new(x, y, z).normalize(),
+        offset: 0.0,
+    })
+    .into()
 }

@@ -5,7 +5,8 @@ use std::path::Path;
 
 use pgvol::glam::Vec3;
 use pgvol::mesh::shapes;
-use pgvol::{GridSpec, PerturbOptions, Silent};
+use pgvol::perturbation::PerturbOptions;
+use pgvol::{GridSpec, Silent};
 
 fn bumpy() -> pgvol::Mesh {
     let mut mesh = shapes::octasphere(4);
@@ -25,15 +26,16 @@ fn a_resampled_field_reads_back_and_contours_closed() {
         tolerance: 1e-3,
         ..Default::default()
     };
-    let built = pgvol::perturb(&mesh, &options, &Silent).unwrap();
+    let built = pgvol::perturbation::perturb(&mesh, &options, &Silent).unwrap();
     assert!(built.report.functions > 0);
-    let file = pgvol::resample(&built.field, &mesh, GridSpec::Res(48), &Silent).unwrap();
+    let file =
+        pgvol::perturbation::resample(&built.field, &mesh, GridSpec::Res(48), &Silent).unwrap();
     assert_eq!(file.header.metadata["source"], "perturbation");
-    let bytes = pgvol::pgv_bytes(&file, &pgvol::StorageOptions::default())
+    let bytes = pgvol::io::pgv_bytes(&file, &pgvol::StorageOptions::default())
         .unwrap()
         .0;
-    let back = pgvol::read_pgv_bytes(&bytes, Path::new("bumpy.pgv")).unwrap();
-    let out = pgvol::perturbation_mesh(&back, &Silent).unwrap();
+    let back = pgvol::io::read_pgv_bytes(&bytes, Path::new("bumpy.pgv")).unwrap();
+    let out = pgvol::perturbation::perturbation_mesh(&back, &Silent).unwrap();
     let stats = out.stats();
     assert!(
         stats.watertight && stats.non_manifold_edges == 0,
@@ -54,15 +56,16 @@ fn a_stored_function_list_decodes_as_the_field_in_memory() {
         tolerance: 1e-3,
         ..Default::default()
     };
-    let built = pgvol::perturb(&mesh, &options, &Silent).unwrap();
-    let header = pgvol::perturbation_header(&built.field, &mesh, GridSpec::Res(40)).unwrap();
+    let built = pgvol::perturbation::perturb(&mesh, &options, &Silent).unwrap();
+    let header =
+        pgvol::perturbation::perturbation_header(&built.field, &mesh, GridSpec::Res(40)).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bumpy.pgv");
-    pgvol::write_perturbation(&path, &header, &built.field).unwrap();
+    pgvol::perturbation::write_perturbation(&path, &header, &built.field).unwrap();
     let stored = std::fs::read(&path).unwrap();
     // The list, read back, is the field bit for bit.
-    match pgvol::read_field_source(&path).unwrap() {
-        pgvol::FieldSource::Perturbation { header: h, field } => {
+    match pgvol::io::read_field_source(&path).unwrap() {
+        pgvol::io::FieldSource::Perturbation { header: h, field } => {
             assert_eq!(h, header);
             assert_eq!(field.base(), built.field.base());
             assert_eq!(field.terms(), built.field.terms());
@@ -70,18 +73,19 @@ fn a_stored_function_list_decodes_as_the_field_in_memory() {
         other => panic!("read as a volume: {:?}", other.header()),
     }
     // Decoding the file gives the mesh of the field resampled in memory.
-    let from_file = pgvol::read_pgv(&path).unwrap();
+    let from_file = pgvol::io::read_pgv(&path).unwrap();
     assert_eq!(from_file.header.encoding, "perturbation-f64");
-    let in_memory = pgvol::resample(&built.field, &mesh, GridSpec::Res(40), &Silent).unwrap();
+    let in_memory =
+        pgvol::perturbation::resample(&built.field, &mesh, GridSpec::Res(40), &Silent).unwrap();
     assert_eq!(from_file.volume, in_memory.volume);
-    let a = pgvol::perturbation_mesh(&from_file, &Silent).unwrap();
-    let b = pgvol::perturbation_mesh(&in_memory, &Silent).unwrap();
+    let a = pgvol::perturbation::perturbation_mesh(&from_file, &Silent).unwrap();
+    let b = pgvol::perturbation::perturbation_mesh(&in_memory, &Silent).unwrap();
     assert!(!a.triangles.is_empty());
     assert_eq!(a.positions, b.positions);
     assert_eq!(a.triangles, b.triangles);
     // Truncated or corrupted, the file is refused with its name.
     let name = Path::new("bumpy.pgv");
-    let e = pgvol::read_pgv_bytes(&stored[..stored.len() - 100], name).unwrap_err();
+    let e = pgvol::io::read_pgv_bytes(&stored[..stored.len() - 100], name).unwrap_err();
     assert!(
         e.to_string().contains("bumpy.pgv") && e.to_string().contains("truncated"),
         "{e}"
@@ -89,7 +93,7 @@ fn a_stored_function_list_decodes_as_the_field_in_memory() {
     let mut bad = stored.clone();
     let at = bad.len() - 200;
     bad[at] ^= 4;
-    let e = pgvol::read_pgv_bytes(&bad, name).unwrap_err();
+    let e = pgvol::io::read_pgv_bytes(&bad, name).unwrap_err();
     assert!(
         e.to_string().contains("bumpy.pgv") && e.to_string().contains("checksum"),
         "{e}"
@@ -104,6 +108,6 @@ fn bad_options_are_refused_with_the_figure() {
         tolerance: -1.0,
         ..Default::default()
     };
-    let e = pgvol::perturb(&mesh, &bad, &Silent).unwrap_err();
+    let e = pgvol::perturbation::perturb(&mesh, &bad, &Silent).unwrap_err();
     assert!(e.to_string().contains("-1"), "{e}");
 }

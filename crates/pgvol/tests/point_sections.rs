@@ -6,10 +6,8 @@
 use std::sync::Mutex;
 
 use glam::Vec3;
-use pgvol::{
-    Axis, ErrorKind, GridSpec, Layer, PointCloud, PointsMethod, PointsOptions, Progress,
-    SectionSettings,
-};
+use pgvol::reconstruct::{PointCloud, PointsMethod, SectionSettings};
+use pgvol::{Axis, ErrorKind, GridSpec, Layer, PointsOptions, Progress};
 
 /// Collects warnings.
 #[derive(Default)]
@@ -75,7 +73,7 @@ fn sections_of_a_unit_sphere_cloud_are_its_circles() {
     let cloud = sphere(4000);
     let warnings = Warnings::default();
     let settings = SectionSettings::new(Axis::Z, vec![0.5, 0.0, 1.05]);
-    let (fitted, sections) = pgvol::points_with_sections(
+    let (fitted, sections) = pgvol::reconstruct::points_with_sections(
         &cloud,
         &options(PointsMethod::RbfWendland),
         &settings,
@@ -128,7 +126,7 @@ fn every_axis_cuts_a_counter_clockwise_circle() {
             heights: vec![-0.5],
             resolution: Some(0.02),
         };
-        let (_, sections) = pgvol::points_with_sections(
+        let (_, sections) = pgvol::reconstruct::points_with_sections(
             &cloud,
             &options(PointsMethod::Spline),
             &settings,
@@ -160,7 +158,7 @@ fn heights_outside_the_grid_box_are_refused_before_the_fit() {
         let settings = SectionSettings::new(Axis::Z, heights);
         // A method that would refuse this cloud (too many points for the dense solve) shows
         // the sections were checked first.
-        let e = pgvol::points_with_sections(
+        let e = pgvol::reconstruct::points_with_sections(
             &cloud,
             &options(PointsMethod::RbfCubic),
             &settings,
@@ -172,7 +170,7 @@ fn heights_outside_the_grid_box_are_refused_before_the_fit() {
         assert!(msg.contains(says), "{msg}");
         assert!(!msg.contains("--"), "the library names no flags: {msg}");
     }
-    let e = pgvol::points_with_sections(
+    let e = pgvol::reconstruct::points_with_sections(
         &cloud,
         &options(PointsMethod::Spline),
         &SectionSettings::new(Axis::Y, vec![-1.5]),
@@ -190,7 +188,8 @@ fn heights_outside_the_grid_box_are_refused_before_the_fit() {
 fn clouds_given_directly_are_checked_for_range() {
     let mut cloud = sphere(100);
     cloud.points[7] = Vec3::new(0.0, f32::INFINITY, 0.0);
-    let e = pgvol::points(&cloud, &options(PointsMethod::Spline), &pgvol::Silent).unwrap_err();
+    let e = pgvol::reconstruct::points(&cloud, &options(PointsMethod::Spline), &pgvol::Silent)
+        .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
     assert!(e.to_string().contains("point 7"), "{e}");
 }

@@ -5,7 +5,8 @@
 use std::sync::Mutex;
 
 use glam::Vec3;
-use pgvol::{ErrorKind, GridSpec, PointCloud, PointsOptions, Progress};
+use pgvol::reconstruct::PointCloud;
+use pgvol::{ErrorKind, GridSpec, PointsOptions, Progress};
 
 /// Collects warnings.
 #[derive(Default)]
@@ -51,9 +52,11 @@ fn options(res: usize) -> PointsOptions {
 /// The fit of `cloud` at `res`: its warnings, enclosed volume, pieces, and value at the centre.
 fn fit(cloud: &PointCloud, res: usize) -> (Vec<String>, f64, usize, f32) {
     let warnings = Warnings::default();
-    let fitted = pgvol::points(cloud, &options(res), &warnings).expect("fit");
+    let fitted = pgvol::reconstruct::points(cloud, &options(res), &warnings).expect("fit");
     let volume = &fitted.file.volume;
-    let mesh = pgvol::decode(volume, &pgvol::DecodeOptions::default(), &pgvol::Silent).unwrap();
+    let mesh = pgvol::Field::from_volume((*volume).clone())
+        .to_mesh(&pgvol::DecodeOptions::default(), &pgvol::Silent)
+        .unwrap();
     let stats = mesh.stats();
     let centre = volume.value(Vec3::ZERO);
     (
@@ -70,7 +73,7 @@ const BALL: f64 = 4.0 / 3.0 * std::f64::consts::PI;
 fn a_cloud_too_sparse_for_the_grid_is_refused_with_the_grid_that_works() {
     // 800 random points: 6 neighbours within about 0.17, 10 grid spacings at 128³.
     let cloud = random_sphere(800, 1);
-    let e = pgvol::points(&cloud, &options(128), &pgvol::Silent).unwrap_err();
+    let e = pgvol::reconstruct::points(&cloud, &options(128), &pgvol::Silent).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
     let msg = e.to_string();
     assert!(msg.contains("too sparse for the grid"), "{msg}");
@@ -133,10 +136,10 @@ fn consistent_clouds_fit_without_warnings() {
 fn the_memory_estimate_counts_the_bricks_the_fit_stores() {
     let cloud = random_sphere(3000, 5);
     let options = options(128);
-    let fitted = pgvol::points(&cloud, &options, &pgvol::Silent).unwrap();
+    let fitted = pgvol::reconstruct::points(&cloud, &options, &pgvol::Silent).unwrap();
     let r = &fitted.report;
     let grid = fitted.file.volume.grid;
-    let estimate = pgvol::points_bytes(&cloud.points, r.spacing, &grid, &options);
+    let estimate = pgvol::reconstruct::points_bytes(&cloud.points, r.spacing, &grid, &options);
     let bricks = r.bricks as u64;
     assert!(bricks > 1000, "{r:?}");
     assert!(

@@ -23,14 +23,16 @@ fn a_1024_cubed_encode_and_decode_stays_within_a_sparse_memory_bound() {
     assert_eq!(grid.dims, [1024; 3]);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("sphere.pgv");
-    pgvol::write_pgv(&path, &encoded.file, &StorageOptions::default()).unwrap();
+    pgvol::io::write_pgv(&path, &encoded.file, &StorageOptions::default()).unwrap();
     drop(encoded);
 
-    let file = pgvol::read_pgv(&path).unwrap();
+    let file = pgvol::io::read_pgv(&path).unwrap();
     let stored = file.volume.coeffs.stored_count();
     let all: usize = file.volume.coeffs.brick_counts().iter().product();
     assert!(stored * 10 < all, "{stored} of {all} bricks stored");
-    let mesh_out = pgvol::decode(&file.volume, &DecodeOptions::default(), &Silent).unwrap();
+    let mesh_out = pgvol::Field::from_volume(file.volume.clone())
+        .to_mesh(&DecodeOptions::default(), &Silent)
+        .unwrap();
 
     // The octasphere's vertices lie on the unit sphere and its faces within 0.3 % of it: every
     // output vertex lies within that plus a fraction of a spacing of radius 1.

@@ -26,10 +26,10 @@ fn a_thin_rod_at_2048_cubed_encodes_and_decodes_within_a_surface_memory_bound() 
     assert_eq!(encoded.file.volume.grid.dims, [2048; 3]);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rod.pgv");
-    pgvol::write_pgv(&path, &encoded.file, &StorageOptions::default()).unwrap();
+    pgvol::io::write_pgv(&path, &encoded.file, &StorageOptions::default()).unwrap();
     drop(encoded);
 
-    let mesh = pgvol::decode_file(&path, &DecodeOptions::default(), &Silent).unwrap();
+    let mesh = pgvol::stream::decode_file(&path, &DecodeOptions::default(), &Silent).unwrap();
     let stats = mesh.stats();
     assert!(
         stats.watertight && stats.euler_characteristic == 2,

@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-use pgvol::{ErrorKind, Progress, Shape, ShellKind, ShellSide, SignMode, Silent};
+use pgvol::edit::ShellSide;
+use pgvol::{ErrorKind, Field, OpenOptions, Progress, ShellKind, SignMode, Silent};
 
 /// The shared mesh corpus: `PGVOL_SHARED_MESHES`, or `../shared/meshes` beside the repository.
 fn shared_mesh(name: &str) -> PathBuf {
@@ -19,7 +20,7 @@ fn shared_mesh(name: &str) -> PathBuf {
 
 /// The rocker arm scaled to 100 units along its longest side.
 fn rocker_mesh() -> pgvol::Mesh {
-    let (mut mesh, _) = pgvol::read_mesh(&shared_mesh("rocker-arm")).unwrap();
+    let (mut mesh, _) = pgvol::io::read_mesh(&shared_mesh("rocker-arm")).unwrap();
     let (lo, hi) = mesh.bounds().unwrap();
     let scale = 100.0 / (hi - lo).max_element();
     mesh.positions.iter_mut().for_each(|p| *p *= scale);
@@ -28,8 +29,19 @@ fn rocker_mesh() -> pgvol::Mesh {
 
 /// The 100-unit rocker arm encoded at the default 128 nodes per axis (spacing 0.86) with
 /// distances exact `reach` out.
-fn rocker(reach: f32) -> Shape {
-    Shape::from_mesh(rocker_mesh(), 128, 0.0, reach, SignMode::Auto, &Silent).unwrap()
+fn rocker(reach: f32) -> Field {
+    Field::for_operations(
+        rocker_mesh(),
+        &OpenOptions {
+            res: 128,
+            grow: 0.0,
+            reach,
+            wall: None,
+            sign: SignMode::Auto,
+        },
+        &Silent,
+    )
+    .unwrap()
 }
 
 /// The stages a call began.
@@ -46,30 +58,46 @@ impl Progress for Stages {
 fn a_mesh_is_not_encoded_for_a_wall_its_grid_cannot_hold() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rocker.stl");
-    pgvol::write_mesh(&path, &rocker_mesh()).unwrap();
+    pgvol::io::write_mesh(&path, &rocker_mesh()).unwrap();
     let stages = Stages::default();
-    let e = Shape::load_walled(&path, 128, 0.0, 0.5, 0.5, SignMode::Auto, &stages).unwrap_err();
+    let walled = |res| OpenOptions {
+        res,
+        reach: 0.5,
+        wall: Some(0.5),
+        ..OpenOptions::default()
+    };
+    let e = Field::open(&path, &walled(128), &stages).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Unresolved, "{e}");
     assert_eq!(e.path(), Some(path.as_path()));
     assert!(stages.0.lock().unwrap().is_empty(), "work began");
     // At the grid it names the mesh is encoded.
     let nodes = e.resolution().unwrap();
-    let shape = Shape::load_walled(&path, nodes, 0.0, 0.5, 0.5, SignMode::Auto, &stages).unwrap();
-    assert!(shape.volume.grid.spacing <= 0.25);
+    let shape = Field::open(&path, &walled(nodes), &stages).unwrap();
+    assert!(shape.volume().grid.spacing <= 0.25);
     assert!(!stages.0.lock().unwrap().is_empty());
 }
 
 #[test]
 fn a_wall_thinner_than_two_spacings_is_refused_with_the_grid_that_holds_it() {
     let shape = rocker(2.0);
-    let spacing = shape.volume.grid.spacing;
+    let spacing = shape.volume().grid.spacing;
     assert!((spacing - 0.866).abs() < 0.01, "{spacing}");
     for kind in [
         ShellKind::Wall(ShellSide::Inner),
         ShellKind::Wall(ShellSide::Centred),
         ShellKind::Hollow,
     ] {
-        let e = pgvol::shell(&shape, 0.5, kind, &[], &Silent).unwrap_err();
+        let e = shape
+            .shell(
+                &pgvol::ShellOptions {
+                    thickness: 0.5,
+                    kind,
+                    drains: [].to_vec(),
+                },
+                &Silent,
+            )
+            .map(|f| f.into_file().volume)
+            .unwrap_err();
         assert_eq!(e.kind(), ErrorKind::Unresolved, "{e}");
         assert!(e.message().contains("0.25"), "{e}");
         // The grid named holds the wall: spacing 0.25 over the same box.
@@ -81,16 +109,26 @@ fn a_wall_thinner_than_two_spacings_is_refused_with_the_grid_that_holds_it() {
         );
     }
     // Two spacings and more are built, in one piece.
-    let wall = pgvol::shell(&shape, 2.0, ShellKind::Wall(ShellSide::Inner), &[], &Silent).unwrap();
-    pgvol::check_pieces("the shell", &shape.volume, &wall).unwrap();
+    let wall = shape
+        .shell(
+            &pgvol::ShellOptions {
+                thickness: 2.0,
+                kind: ShellKind::Wall(ShellSide::Inner),
+                drains: [].to_vec(),
+            },
+            &Silent,
+        )
+        .map(|f| f.into_file().volume)
+        .unwrap();
+    pgvol::checks::check_pieces("the shell", shape.volume(), &wall).unwrap();
 }
 
 #[test]
 fn a_result_broken_into_pieces_is_refused() {
     let shape = rocker(0.5);
     // The 0.5 wall built without the check before: it falls apart on the nodes.
-    let shredded = pgvol::ops::shell(&shape.volume, 0.5, ShellSide::Inner).unwrap();
-    let e = pgvol::check_pieces("the shell", &shape.volume, &shredded).unwrap_err();
+    let shredded = pgvol::ops::shell(shape.volume(), 0.5, ShellSide::Inner).unwrap();
+    let e = pgvol::checks::check_pieces("the shell", shape.volume(), &shredded).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Unresolved, "{e}");
     assert!(e.message().contains("where the shape has 1"), "{e}");
     assert_eq!(e.resolution(), Some(255), "{e}");

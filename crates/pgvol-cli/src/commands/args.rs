@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use pgvol::Basis;
 
@@ -12,7 +12,7 @@ use crate::progress::Bars;
 #[derive(Args, Clone, Copy, Debug)]
 pub struct GridArgs {
     /// Nodes per axis of the grid (a cube 1.1 × the mesh's longest extent) [default: 128].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::limits::MIN_RES as i64..=pgvol::limits::MAX_RES as i64))]
     pub res: Option<u32>,
     /// Grid spacing in mesh units, instead of --res.
     #[arg(long, conflicts_with = "res")]
@@ -52,10 +52,10 @@ pub struct BasisArgs {
     #[arg(long, value_enum, default_value_t)]
     pub basis: BasisArg,
     /// Pseudo-Gaussian continuity order n (1 to 4); with --basis pg.
-    #[arg(long, default_value_t = pgvol::PG_ORDER)]
+    #[arg(long, default_value_t = pgvol::limits::PG_ORDER)]
     pub pg_n: u8,
     /// Pseudo-Gaussian support radius r in grid spacings (0 < r ≤ 4); with --basis pg.
-    #[arg(long, default_value_t = pgvol::PG_RADIUS)]
+    #[arg(long, default_value_t = pgvol::limits::PG_RADIUS)]
     pub pg_r: f32,
 }
 
@@ -78,8 +78,8 @@ impl BasisArgs {
     /// Whether any basis option differs from its default.
     pub fn is_default(self) -> bool {
         self.basis == BasisArg::default()
-            && self.pg_n == pgvol::PG_ORDER
-            && self.pg_r == pgvol::PG_RADIUS
+            && self.pg_n == pgvol::limits::PG_ORDER
+            && self.pg_r == pgvol::limits::PG_RADIUS
     }
 }
 
@@ -150,14 +150,38 @@ pub struct OutputArgs {
 }
 
 fn parse_memory(s: &str) -> Result<u64, String> {
-    pgvol::parse_size(s).map_err(|e| e.to_string())
+    crate::parse::parse_size(s).map_err(|e| e.to_string())
+}
+
+/// Refuses an output path before any work is done: its folder must exist, it must not be a
+/// folder itself, and a read-only file is replaced only when `force` is set.
+fn check_output(path: &Path, force: bool) -> pgvol::Result<()> {
+    let fail = |problem: String| pgvol::Error::new(pgvol::ErrorKind::OutputFile, problem).at(path);
+    let folder = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(fail(format!(
+            "the folder '{}' does not exist",
+            folder.display()
+        )));
+    }
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => Err(fail("is a folder, not a file".into())),
+        Ok(meta) if meta.is_file() && meta.permissions().readonly() && !force => Err(fail(
+            "is read-only; make it writable or allow replacing it".into(),
+        )
+        .with_remedy(pgvol::Remedy::Replace)),
+        _ => Ok(()),
+    }
 }
 
 impl OutputArgs {
     /// Refuses `output` before any work: a missing folder, a folder, a read-only file without
     /// --force.
-    pub fn check(self, output: &std::path::Path) -> Result<()> {
-        Ok(pgvol::check_output(output, self.force)?)
+    pub fn check(self, output: &Path) -> Result<()> {
+        Ok(check_output(output, self.force)?)
     }
 
     /// Progress and notes are off in JSON mode too, so standard error stays clean for scripts.
@@ -170,9 +194,12 @@ pub type PathArg = PathBuf;
 
 /// Reads a mesh through the library, warning of what cleaning removed (on standard error unless
 /// `quiet`, and in the report). Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
-pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
-    let (mesh, report) = pgvol::read_mesh(path)?;
-    let is_stl = matches!(pgvol::mesh_format(path), Ok(pgvol::mesh::MeshFormat::Stl));
+pub fn load_mesh(path: &Path, quiet: bool) -> Result<pgvol::Mesh> {
+    let (mesh, report) = pgvol::io::read_mesh(path)?;
+    let is_stl = matches!(
+        pgvol::io::mesh_format(path),
+        Ok(pgvol::mesh::MeshFormat::Stl)
+    );
     let merged = if is_stl { 0 } else { report.vertices_merged };
     if merged > 0 || report.degenerate_dropped > 0 || report.duplicates_dropped > 0 {
         crate::report::warn(
@@ -190,7 +217,7 @@ pub fn load_mesh(path: &std::path::Path, quiet: bool) -> Result<pgvol::Mesh> {
 }
 
 /// A library error without a file, reported against the input that caused it.
-pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
+pub fn at_input(e: pgvol::Error, input: &Path) -> pgvol::Error {
     match e.path() {
         Some(_) => e,
         None => e.at(input),
@@ -199,13 +226,16 @@ pub fn at_input(e: pgvol::Error, input: &std::path::Path) -> pgvol::Error {
 
 /// A library error reported against `input` (see [`at_input`]), saying which `--res` gives the
 /// grid the library names when the grid was too coarse.
-pub fn grid_error(e: pgvol::Error, input: &std::path::Path) -> anyhow::Error {
+pub fn grid_error(e: pgvol::Error, input: &Path) -> anyhow::Error {
     let e = at_input(e, input);
     // Past the largest grid the library's message already says so.
-    let Some(nodes) = e.resolution().filter(|&n| n <= pgvol::MAX_RES as usize) else {
+    let Some(nodes) = e
+        .resolution()
+        .filter(|&n| n <= pgvol::limits::MAX_RES as usize)
+    else {
         return e.into();
     };
-    let hint = if pgvol::is_pgv(input) {
+    let hint = if pgvol::io::is_pgv(input) {
         format!("encode the mesh again with --res {nodes} and the band it needs, or pass the mesh with --res {nodes}")
     } else {
         format!("run again with --res {nodes}")
@@ -221,16 +251,16 @@ pub fn non_negative(text: &str) -> std::result::Result<f32, String> {
     }
 }
 
-pub(super) fn check_output_name(output: &std::path::Path) -> Result<()> {
-    if !pgvol::is_pgv(output) {
-        pgvol::mesh_format(output)?;
+pub(super) fn check_output_name(output: &Path) -> Result<()> {
+    if !pgvol::io::is_pgv(output) {
+        pgvol::io::mesh_format(output)?;
     }
     Ok(())
 }
 
 /// Refuses --dense-file for an output that is not a .pgv file.
-pub(super) fn check_dense_file(dense_file: bool, output: &std::path::Path) -> Result<()> {
-    if dense_file && !pgvol::is_pgv(output) {
+pub(super) fn check_dense_file(dense_file: bool, output: &Path) -> Result<()> {
+    if dense_file && !pgvol::io::is_pgv(output) {
         anyhow::bail!("--dense-file applies to .pgv outputs");
     }
     Ok(())
@@ -248,7 +278,7 @@ pub(super) fn file_storage(dense_file: bool) -> pgvol::StorageOptions {
 #[derive(Args, Clone, Copy)]
 pub struct ShapeOutputArgs {
     /// Grid nodes per axis when the input is a mesh.
-    #[arg(long, default_value_t = pgvol::SHAPE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    #[arg(long, default_value_t = pgvol::limits::SHAPE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::limits::MIN_RES as i64..=pgvol::limits::MAX_RES as i64))]
     pub res: u32,
     /// Contouring method for mesh outputs.
     #[arg(long, value_enum, default_value_t)]
@@ -268,7 +298,7 @@ pub struct ShapeOutputArgs {
 
 impl ShapeOutputArgs {
     /// Refuses an output that is neither .pgv nor a mesh format, and --dense-file for a mesh.
-    pub fn check_output(&self, output: &std::path::Path) -> Result<()> {
+    pub fn check_output(&self, output: &Path) -> Result<()> {
         check_output_name(output)?;
         check_dense_file(self.dense_file, output)
     }
@@ -279,38 +309,51 @@ impl ShapeOutputArgs {
         file_storage(self.dense_file)
     }
 
-    /// `input` as a shape: a `.pgv` file, or a mesh encoded at `--res` with `--sign` over its
-    /// box grown by `grow`, exact `reach` beyond the band (see [`pgvol::Shape::load`]).
+    /// How a mesh result is contoured: --method and --min-component.
+    pub fn decode_options(&self) -> pgvol::DecodeOptions {
+        pgvol::DecodeOptions {
+            method: self.method.into(),
+            min_component: self.min_component,
+            ..Default::default()
+        }
+    }
+
+    /// `input` as a field: a `.pgv` file, or a mesh encoded at `--res` with `--sign` over its
+    /// box grown by `grow`, exact `reach` beyond the band (see [`pgvol::Field::open`]).
     pub fn load(
         &self,
-        input: &std::path::Path,
+        input: &Path,
         grow: f32,
         reach: f32,
         bars: &Bars,
-    ) -> pgvol::Result<pgvol::Shape> {
-        pgvol::Shape::load(
-            input,
-            self.res as usize,
+    ) -> pgvol::Result<pgvol::Field> {
+        let options = pgvol::OpenOptions {
+            res: self.res as usize,
             grow,
             reach,
-            self.sign.into(),
-            bars,
-        )
+            wall: None,
+            sign: self.sign.into(),
+        };
+        pgvol::Field::open(input, &options, bars)
     }
 
     /// [`ShapeOutputArgs::load`] for an operation making walls as thin as `wall`: a grid too
     /// coarse for them is refused before a mesh is encoded, naming the --res that holds them.
     pub fn load_walled(
         &self,
-        input: &std::path::Path,
+        input: &Path,
         grow: f32,
         reach: f32,
         wall: f32,
         bars: &Bars,
-    ) -> Result<pgvol::Shape> {
-        let sign = self.sign.into();
-        let res = self.res as usize;
-        pgvol::Shape::load_walled(input, res, grow, reach, wall, sign, bars)
-            .map_err(|e| grid_error(e, input))
+    ) -> Result<pgvol::Field> {
+        let options = pgvol::OpenOptions {
+            res: self.res as usize,
+            grow,
+            reach,
+            wall: Some(wall),
+            sign: self.sign.into(),
+        };
+        pgvol::Field::open(input, &options, bars).map_err(|e| grid_error(e, input))
     }
 }

@@ -66,10 +66,10 @@ pub struct BlendArgs {
     #[arg(long, value_parser = parse_operand)]
     pub bound: Vec<pgvol::Operand>,
     /// λ in (0, 1) for liming and spline: larger moves the blend away from the edge.
-    #[arg(long, default_value_t = pgvol::DEFAULT_LAMBDA)]
+    #[arg(long, default_value_t = pgvol::limits::DEFAULT_LAMBDA)]
     pub lambda: f32,
     /// I-patch: continuity order n, 1 to 4 (Gⁿ: the bounds raised to n + 1; default 1).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=pgvol::MAX_CONTINUITY as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=pgvol::limits::MAX_CONTINUITY as i64))]
     pub continuity: Option<u32>,
     /// I-patch weights w1,..,wn,w; with --through only w1,..,wn (default all 1).
     #[arg(long, allow_hyphen_values = true, conflicts_with = "points")]
@@ -90,7 +90,7 @@ pub struct BlendArgs {
 }
 
 /// The I-patch's weights from --weights, --points and --through.
-fn ipatch_weights(a: &BlendArgs) -> Result<pgvol::IPatchWeights> {
+fn ipatch_weights(a: &BlendArgs) -> Result<pgvol::edit::IPatchWeights> {
     let n = a.primaries.len();
     let given = match &a.weights {
         Some(text) => Some(parse_numbers(text).map_err(|e| anyhow::anyhow!("--weights: {e}"))?),
@@ -106,13 +106,17 @@ fn ipatch_weights(a: &BlendArgs) -> Result<pgvol::IPatchWeights> {
                     w.len()
                 );
             }
-            pgvol::IPatchWeights::Through(w, point)
+            pgvol::edit::IPatchWeights::Through(w, point)
         }
         (Some(w), _, None) => match w.split_last() {
-            Some((&w0, rest)) if !rest.is_empty() => pgvol::IPatchWeights::Given(rest.to_vec(), w0),
+            Some((&w0, rest)) if !rest.is_empty() => {
+                pgvol::edit::IPatchWeights::Given(rest.to_vec(), w0)
+            }
             _ => bail!("--weights: expected w1,..,wn,w, got {} numbers", w.len()),
         },
-        (None, Some(p), None) => pgvol::IPatchWeights::Fitted(pgvol::read_points_file(p)?),
+        (None, Some(p), None) => {
+            pgvol::edit::IPatchWeights::Fitted(pgvol::io::read_points_file(p)?)
+        }
         (None, None, None) => {
             bail!("ipatch needs --weights, --points to fit them to, or --through")
         }
@@ -121,7 +125,7 @@ fn ipatch_weights(a: &BlendArgs) -> Result<pgvol::IPatchWeights> {
 
 /// The operator the arguments ask for, with the counts each blend needs checked in the
 /// options' names.
-fn operator(a: &BlendArgs) -> Result<pgvol::BlendOperator> {
+fn operator(a: &BlendArgs) -> Result<pgvol::edit::BlendOperator> {
     let ipatch_only = a.continuity.is_some() || a.through.is_some() || a.weights.is_some();
     if !matches!(a.kind, BlendKind::Ipatch) && (ipatch_only || a.points.is_some()) {
         bail!("--continuity, --weights, --points and --through apply to ipatch only");
@@ -131,7 +135,7 @@ fn operator(a: &BlendArgs) -> Result<pgvol::BlendOperator> {
             if a.primaries.len() != 2 {
                 bail!("liming needs two primaries, got {}", a.primaries.len());
             }
-            pgvol::BlendOperator::Liming {
+            pgvol::edit::BlendOperator::Liming {
                 cut: a
                     .cut
                     .clone()
@@ -143,7 +147,7 @@ fn operator(a: &BlendArgs) -> Result<pgvol::BlendOperator> {
             if a.bound.is_empty() {
                 bail!("spline needs --bound, once or more");
             }
-            pgvol::BlendOperator::Spline {
+            pgvol::edit::BlendOperator::Spline {
                 bounds: a.bound.clone(),
                 lambda: a.lambda,
             }
@@ -157,11 +161,11 @@ fn operator(a: &BlendArgs) -> Result<pgvol::BlendOperator> {
                     a.primaries.len()
                 );
             }
-            pgvol::BlendOperator::IPatch {
+            pgvol::edit::BlendOperator::IPatch {
                 bounds: a.bound.clone(),
                 weights: ipatch_weights(a)?,
                 // The parser holds the order to its range.
-                continuity: pgvol::Continuity::new(a.continuity.unwrap_or(1))?,
+                continuity: pgvol::edit::Continuity::new(a.continuity.unwrap_or(1))?,
             }
         }
     })
@@ -172,16 +176,14 @@ pub fn blend(a: BlendArgs) -> Result<()> {
     a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     let operator = operator(&a)?;
-    let settings = pgvol::BlendSettings {
+    let settings = pgvol::edit::BlendSettings {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),
         result: result_use(&a.output, &a.shape),
     };
-    let blended = pgvol::blend(&a.primaries, &operator, &settings, &bars)?;
-    let band = pgvol::ENCODE_BAND * blended.volume.grid.spacing;
-    let operation = format!("blend {:?}", a.kind).to_lowercase();
-    let triangles = write_edited(&a.output, blended.volume, &operation, band, &a.shape, &bars)?;
+    let blended = pgvol::edit::blend(&a.primaries, &operator, &settings, &bars)?;
+    let triangles = write_edited(&a.output, &blended.field, "the blend", &a.shape, &bars)?;
     if a.out.json {
         return crate::report::print(
             &serde_json::json!({

@@ -21,7 +21,7 @@ pub struct CompareArgs {
     /// The reference mesh (its bounding-box diagonal is the unit of the % figures).
     pub b: PathArg,
     /// Area-uniform samples drawn on each mesh.
-    #[arg(long, default_value_t = pgvol::COMPARE_SAMPLES as u64, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    #[arg(long, default_value_t = pgvol::limits::COMPARE_SAMPLES as u64, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
     pub samples: u64,
     /// Seed of the sampler (the same seed gives the same figures).
     #[arg(long, default_value_t = 1)]

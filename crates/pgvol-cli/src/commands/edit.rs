@@ -16,32 +16,26 @@ use crate::report::Seconds;
 /// extension; returns the triangles written (0 for a .pgv).
 pub(super) fn write_edited(
     output: &Path,
-    volume: pgvol::CoefficientVolume,
+    result: &pgvol::Field,
     operation: &str,
-    band: f32,
     args: &ShapeOutputArgs,
     progress: &Bars,
 ) -> Result<usize> {
-    if pgvol::is_pgv(output) {
-        let file = pgvol::edited_file(volume, operation, band);
-        pgvol::write_pgv(output, &file, &args.storage())?;
+    if pgvol::io::is_pgv(output) {
+        result.save(output, &args.storage())?;
         return Ok(0);
     }
-    let options = pgvol::DecodeOptions {
-        method: args.method.into(),
-        min_component: args.min_component,
-        ..Default::default()
-    };
-    let mesh = pgvol::decode(&volume, &options, progress)
+    let mesh = result
+        .to_mesh(&args.decode_options(), progress)
         .map_err(|e| anyhow::anyhow!("{operation}: the result is empty: {e}"))?;
-    pgvol::write_mesh(output, &mesh)?;
+    pgvol::io::write_mesh(output, &mesh)?;
     Ok(mesh.triangles.len())
 }
 
 /// What the output's extension and --dense-file make of an edit's result, for the library's
 /// memory estimate.
 pub(super) fn result_use(output: &Path, args: &ShapeOutputArgs) -> pgvol::ResultUse {
-    match (pgvol::is_pgv(output), args.dense_file) {
+    match (pgvol::io::is_pgv(output), args.dense_file) {
         (true, false) => pgvol::ResultUse::File,
         (true, true) => pgvol::ResultUse::DenseFile,
         (false, _) => pgvol::ResultUse::Mesh,
@@ -70,7 +64,7 @@ pub(super) fn parse_box(text: &str) -> Result<(pgvol::glam::Vec3, pgvol::glam::V
 }
 
 pub(super) fn parse_operand(text: &str) -> Result<pgvol::Operand, String> {
-    pgvol::parse_operand(text).map_err(|e| e.to_string())
+    pgvol::Operand::parse(text).map_err(|e| e.to_string())
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -119,7 +113,7 @@ pub fn csg(a: CsgArgs) -> Result<()> {
     let start = Instant::now();
     a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
-    let settings = pgvol::CsgSettings {
+    let settings = pgvol::CsgOptions {
         op: match a.op {
             OpArg::Union => pgvol::BoolOp::Union,
             OpArg::Intersection => pgvol::BoolOp::Intersection,
@@ -134,25 +128,23 @@ pub fn csg(a: CsgArgs) -> Result<()> {
         sign: a.shape.sign.into(),
         result: result_use(&a.output, &a.shape),
     };
-    let volume = pgvol::csg(&a.operands, &settings, &bars)?;
-    let band = pgvol::ENCODE_BAND * volume.grid.spacing;
-    let operation = pgvol::csg_name(&settings);
-    let triangles = write_edited(&a.output, volume, &operation, band, &a.shape, &bars)?;
+    let result = pgvol::Field::csg(&a.operands, &settings, &bars)?;
+    let triangles = write_edited(&a.output, &result, "the Boolean", &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
 }
 
-fn parse_mask(s: &str) -> Result<pgvol::Mask, String> {
-    pgvol::parse_mask(s).map_err(|e| e.to_string())
+fn parse_mask(s: &str) -> Result<pgvol::edit::Mask, String> {
+    crate::parse::parse_mask(s).map_err(|e| e.to_string())
 }
 
-fn parse_face(s: &str) -> Result<pgvol::Face, String> {
-    pgvol::parse_face(s).map_err(|e| e.to_string())
+fn parse_face(s: &str) -> Result<pgvol::edit::Face, String> {
+    crate::parse::parse_face(s).map_err(|e| e.to_string())
 }
 
 /// Coarse samples: at least 4, and never more than a grid may have nodes along an axis (the
 /// library refuses lattices finer than the field's own grid once it is read).
 fn parse_coarse(s: &str) -> Result<usize, String> {
-    let max = pgvol::MAX_RES as usize;
+    let max = pgvol::limits::MAX_RES as usize;
     match s.trim().parse::<usize>() {
         Ok(n) if (4..=max).contains(&n) => Ok(n),
         _ => Err(format!(
@@ -176,21 +168,21 @@ pub struct RepairArgs {
     /// An axis-aligned box x0,y0,z0,x1,y1,z1 in model units to restore; repeat for more.
     /// Coefficients whose support misses every mask stay bit-identical.
     #[arg(long, required = true, value_parser = parse_mask, allow_hyphen_values = true)]
-    pub mask: Vec<pgvol::Mask>,
+    pub mask: Vec<pgvol::edit::Mask>,
     /// Protrusion removal: the mask's face the protrusion's base crosses (+x, -x, +y, -y, +z,
     /// -z), where the new field joins the body.
     #[arg(long, value_parser = parse_face, allow_hyphen_values = true, required_unless_present = "denoise", conflicts_with = "denoise")]
-    pub face: Option<pgvol::Face>,
+    pub face: Option<pgvol::edit::Face>,
     /// Normal derivative of the field across --face: 1 (a distance's) continues the body;
     /// larger values lower and flatten the cap, smaller ones raise it.
-    #[arg(long, default_value_t = pgvol::DEFAULT_ALPHA, allow_negative_numbers = true, conflicts_with = "denoise")]
+    #[arg(long, default_value_t = pgvol::limits::DEFAULT_ALPHA, allow_negative_numbers = true, conflicts_with = "denoise")]
     pub alpha: f32,
     /// Denoise instead: resample the field coarsely inside the masks and interpolate it with
     /// the quadratic B-spline.
     #[arg(long)]
     pub denoise: bool,
     /// Coarse samples along a mask's longest side when denoising (fewer smooth more).
-    #[arg(long, default_value_t = pgvol::DEFAULT_COARSE, value_parser = parse_coarse, requires = "denoise")]
+    #[arg(long, default_value_t = pgvol::limits::DEFAULT_COARSE, value_parser = parse_coarse, requires = "denoise")]
     pub coarse: usize,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
@@ -203,25 +195,19 @@ pub fn repair(a: RepairArgs) -> Result<()> {
     a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     let restore = match a.face {
-        Some(face) if !a.denoise => pgvol::Restore::Protrusion {
+        Some(face) if !a.denoise => pgvol::edit::Restore::Protrusion {
             face,
             alpha: a.alpha,
         },
-        _ => pgvol::Restore::Denoise { coarse: a.coarse },
+        _ => pgvol::edit::Restore::Denoise { coarse: a.coarse },
     };
-    let reach = pgvol::repair_reach(&a.mask);
+    let reach = pgvol::checks::repair_reach(&a.mask);
     let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
-    let (volume, reports) = pgvol::repair(&shape, &a.mask, restore, &bars)
+    let repaired = shape
+        .repair(&a.mask, restore, &bars)
         .map_err(|e| super::args::at_input(e, &a.input))?;
-    let band = shape
-        .band
-        .unwrap_or_else(|| pgvol::ops::stored_band(&volume));
-    let operation = if a.denoise {
-        format!("denoise coarse {}", a.coarse)
-    } else {
-        format!("repair alpha {}", a.alpha)
-    };
-    let triangles = write_edited(&a.output, volume, &operation, band, &a.shape, &bars)?;
+    let reports = &repaired.masks;
+    let triangles = write_edited(&a.output, &repaired.field, "the repair", &a.shape, &bars)?;
     if a.out.json {
         let masks: Vec<_> = reports
             .iter()

@@ -28,21 +28,21 @@ pub struct EvalArgs {
 
 pub fn run(a: EvalArgs) -> Result<()> {
     let start = std::time::Instant::now();
-    let shape = pgvol::Shape::from_file(pgvol::read_pgv(&a.input)?);
-    let points = pgvol::read_points_file(&a.points)?;
-    let results = pgvol::eval(&shape, &points);
+    let shape = pgvol::Field::from_file(pgvol::io::read_pgv(&a.input)?);
+    let points = pgvol::io::read_points_file(&a.points)?;
+    let results = shape.eval(&points);
     if a.out.json {
         let rows: Vec<_> = points
             .iter()
             .zip(&results)
-            .map(|(p, e)| serde_json::json!({ "point": pgvol::point_json(&shape, *p), "value": e.value, "gradient": e.gradient, "exact": e.exact }))
+            .map(|(p, e)| serde_json::json!({ "point": crate::field_text::point_json(&shape, *p), "value": e.value, "gradient": e.gradient, "exact": e.exact }))
             .collect();
         return report::print(
             &serde_json::json!({ "points": rows }),
             &Seconds::since(start),
         );
     }
-    let text = pgvol::eval_csv(&shape, &points, &results);
+    let text = crate::field_text::eval_csv(&shape, &points, &results);
     match &a.output {
         Some(path) => pgvol::core::write_atomic(path, |w| w.write_all(text.as_bytes()))?,
         None => std::io::stdout().write_all(text.as_bytes())?,

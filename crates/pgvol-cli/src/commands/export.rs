@@ -20,11 +20,11 @@ pub struct ExportArgs {
     #[arg(long, value_enum, default_value_t)]
     pub what: WhatArg,
     /// Sample on N nodes along the longest side over the same box (default: the stored grid).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::limits::MIN_RES as i64..=pgvol::limits::MAX_RES as i64))]
     pub res: Option<u32>,
     /// The unit a .3mf names for the model's coordinates: micron, millimeter, centimeter,
     /// inch, foot or meter.
-    #[arg(long, default_value = pgvol::THREEMF_UNIT)]
+    #[arg(long, default_value = pgvol::limits::THREEMF_UNIT)]
     pub unit: String,
     #[command(flatten)]
     pub out: OutputArgs,
@@ -43,8 +43,8 @@ pub enum WhatArg {
 pub fn run(a: ExportArgs) -> Result<()> {
     let start = std::time::Instant::now();
     let kind = pgvol::ExportKind::from_path(&a.output, a.what == WhatArg::Coefficients)?;
-    let file = pgvol::read_pgv(&a.input)?;
-    let grid = pgvol::export(&a.output, &file, kind, a.res.map(|r| r as usize), &a.unit)?;
+    let file = pgvol::io::read_pgv(&a.input)?;
+    let grid = pgvol::io::export(&a.output, &file, kind, a.res.map(|r| r as usize), &a.unit)?;
     let what = match kind {
         pgvol::ExportKind::CoefficientsNrrd => "coefficients",
         _ => "sdf",

@@ -37,7 +37,7 @@ pub struct EncodeArgs {
     /// Node values are exact distances within W grid spacings of the surface (--fit interp),
     /// clamped beyond. Offsets, shells and levels read from the file are exact within W − 2
     /// spacings (the cubic B-spline's support blends in the clamp), as `pgvol info` shows.
-    #[arg(long, value_name = "W", default_value_t = pgvol::ENCODE_BAND, value_parser = parse_band)]
+    #[arg(long, value_name = "W", default_value_t = pgvol::limits::ENCODE_BAND, value_parser = parse_band)]
     pub band: f32,
     /// How inside is told from outside.
     #[arg(long, value_enum, default_value_t)]
@@ -103,7 +103,7 @@ pub struct DecodeArgs {
     pub method: MethodArg,
     /// Resample the field on a grid of N nodes per axis over the same box (default: the
     /// stored grid).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(pgvol::limits::MIN_RES as i64..=pgvol::limits::MAX_RES as i64))]
     pub res: Option<u32>,
     /// Remove pieces of the output enclosing less than this volume (model units cubed); by
     /// default specks under 2 grid cells go, with a warning; 0 keeps every piece.
@@ -124,10 +124,10 @@ pub struct InfoArgs {
 
 fn parse_band(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
-        Ok(w) if w.is_finite() && w >= pgvol::MIN_BAND => Ok(w),
+        Ok(w) if w.is_finite() && w >= pgvol::limits::MIN_BAND => Ok(w),
         _ => Err(format!(
             "'{s}' is not a number of grid spacings of at least {}",
-            pgvol::MIN_BAND
+            pgvol::limits::MIN_BAND
         )),
     }
 }
@@ -147,7 +147,7 @@ impl PrecisionArg {
 /// `encode --from`: a coefficient NRRD to .pgv, copied bit for bit unless a precision is given.
 fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
     let start = Instant::now();
-    let file = pgvol::read_coefficients_nrrd(from)?;
+    let file = pgvol::io::read_coefficients_nrrd(from)?;
     let precision = a.precision.and_then(PrecisionArg::precision);
     let storage = match (a.dense_file, a.precision) {
         (true, _) => pgvol::StorageOptions {
@@ -160,7 +160,7 @@ fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
             dense: false,
         },
     };
-    let stored = pgvol::write_pgv(&a.output, &file, &storage)?;
+    let stored = pgvol::io::write_pgv(&a.output, &file, &storage)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     let grid = file.volume.grid;
     if a.out.json {
@@ -188,7 +188,7 @@ fn encode_from(a: &EncodeArgs, from: &std::path::Path) -> Result<()> {
 }
 
 pub fn encode(a: EncodeArgs) -> Result<()> {
-    pgvol::check_pgv_name(&a.output)?;
+    pgvol::io::check_pgv_name(&a.output)?;
     if let Some(from) = &a.from {
         return encode_from(&a, from);
     }
@@ -243,7 +243,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         dense: a.dense_file,
     };
     let file = &encoded.file;
-    let stored = pgvol::write_pgv(&a.output, file, &storage)?;
+    let stored = pgvol::io::write_pgv(&a.output, file, &storage)?;
     let bytes = std::fs::metadata(&a.output)?.len();
     let grid = file.volume.grid;
     if a.out.json {
@@ -285,7 +285,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
 
 pub fn decode(a: DecodeArgs) -> Result<()> {
     let start = Instant::now();
-    pgvol::mesh_format(&a.output)?;
+    pgvol::io::mesh_format(&a.output)?;
     let t = Instant::now();
     let options = pgvol::DecodeOptions {
         iso: a.iso,
@@ -293,10 +293,10 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
         res: a.res.map(|r| r as usize),
         min_component: a.min_component,
     };
-    let mesh = pgvol::decode_file(&a.input, &options, &Bars::new(a.out.silent()))
+    let mesh = pgvol::stream::decode_file(&a.input, &options, &Bars::new(a.out.silent()))
         .map_err(|e| at_input(e, &a.input))?;
     let seconds = t.elapsed().as_secs_f64();
-    pgvol::write_mesh(&a.output, &mesh)?;
+    pgvol::io::write_mesh(&a.output, &mesh)?;
     if a.out.json {
         return report::print(
             &serde_json::json!({
@@ -338,8 +338,8 @@ struct Info<'a> {
 pub fn info(a: InfoArgs) -> Result<()> {
     let start = Instant::now();
     let raw = pgvol::core::read_input(&a.input)?;
-    let parts = pgvol::pgv_info(&raw, &a.input)?;
-    let file = pgvol::read_pgv_bytes(&raw, &a.input)?;
+    let parts = pgvol::io::pgv_info(&raw, &a.input)?;
+    let file = pgvol::io::read_pgv_bytes(&raw, &a.input)?;
     let bytes = raw.len() as u64;
     let range = file.volume.coeffs.value_range();
     let count = file.volume.grid.len();
@@ -355,7 +355,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
         bytes_header: parts.bytes_header,
         bytes_index: parts.bytes_index,
         bytes_payload: parts.bytes_payload,
-        exact_reach: pgvol::exact_reach(&file),
+        exact_reach: pgvol::checks::exact_reach(&file),
     };
     if a.out.json {
         return report::print(&info, &Seconds::since(start));

@@ -49,31 +49,31 @@ fn parse_segment(text: &str) -> Result<[f32; 6], String> {
     <[f32; 6]>::try_from(numbers).map_err(|_| format!("'{text}': expected six numbers"))
 }
 
-fn parse_surface(text: &str) -> Result<pgvol::Tpms, String> {
+fn parse_surface(text: &str) -> Result<pgvol::lattices::Tpms, String> {
     text.parse()
 }
 
 /// The lattice of the command line.
 pub fn build_lattice(
-    surface: pgvol::Tpms,
+    surface: pgvol::lattices::Tpms,
     style: StyleArg,
     cell: f32,
     thickness: f32,
     grade: &GradeArgs,
 ) -> Result<pgvol::Lattice> {
     let ramp = match (grade.grade_depth, grade.grade_linear) {
-        (Some(depth), _) => Some(pgvol::Ramp::Depth { depth }),
-        (None, Some(s)) => Some(pgvol::Ramp::Linear {
+        (Some(depth), _) => Some(pgvol::lattices::Ramp::Depth { depth }),
+        (None, Some(s)) => Some(pgvol::lattices::Ramp::Linear {
             from: pgvol::glam::Vec3::new(s[0], s[1], s[2]),
             to: pgvol::glam::Vec3::new(s[3], s[4], s[5]),
         }),
         (None, None) => None,
     };
     let style = match style {
-        StyleArg::Sheet => pgvol::LatticeStyle::Sheet,
-        StyleArg::Strut => pgvol::LatticeStyle::Strut,
+        StyleArg::Sheet => pgvol::lattices::LatticeStyle::Sheet,
+        StyleArg::Strut => pgvol::lattices::LatticeStyle::Strut,
     };
-    Ok(pgvol::make_lattice(
+    Ok(pgvol::lattices::make_lattice(
         surface,
         style,
         cell,
@@ -98,7 +98,7 @@ pub struct LatticeArgs {
     pub output: PathArg,
     /// The periodic surface: gyroid, schwarz-p, diamond or neovius.
     #[arg(long, value_parser = parse_surface)]
-    pub surface: pgvol::Tpms,
+    pub surface: pgvol::lattices::Tpms,
     /// Sheet (a wall on the surface) or strut (a labyrinth).
     #[arg(long, value_enum, default_value_t)]
     pub style: StyleArg,
@@ -122,23 +122,20 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
     a.shape.check_output(&a.output)?;
     let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
     let bars = Bars::new(a.out.silent());
-    let reach = pgvol::lattice_reach(&lattice, 0.0);
+    let reach = pgvol::checks::lattice_reach(&lattice, 0.0);
     let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
-    let volume = pgvol::lattice(&shape, &lattice, &bars).map_err(|e| at_input(e, &a.input))?;
+    let solid = shape
+        .lattice(&lattice, &bars)
+        .map_err(|e| at_input(e, &a.input))?;
     let stages = [
         ("load", loaded),
         ("lattice", start.elapsed().as_secs_f64() - loaded),
     ];
-    let operation = format!(
-        "lattice {} cell {} thickness {}",
-        lattice.surface, lattice.cell, lattice.thickness
-    );
     write_solid(
         &a.output,
-        volume,
-        &shape,
-        (&operation, 0.0),
+        solid,
+        "the lattice",
         &a.shape,
         &a.out,
         &bars,
@@ -147,15 +144,11 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
 }
 
 /// Writes a lattice solid as .pgv or as a mesh by the output's extension, and reports its
-/// volume fraction and area. `shift` is how far inside the part's surface the solid's own
-/// surfaces reach from the part's field read as a distance: the wall of an infill, 0 for a
-/// lattice cut to the part (see [`pgvol::Shape::derived_file`]).
-#[allow(clippy::too_many_arguments)]
+/// volume fraction and area.
 pub fn write_solid(
     output: &Path,
-    solid: pgvol::LatticeSolid,
-    shape: &pgvol::Shape,
-    (operation, shift): (&str, f32),
+    solid: pgvol::Latticed,
+    operation: &str,
     args: &ShapeOutputArgs,
     out: &OutputArgs,
     progress: &Bars,
@@ -163,35 +156,32 @@ pub fn write_solid(
 ) -> Result<()> {
     // A mesh output is contoured anyway and measured exactly; a .pgv is measured on the field.
     let t = Instant::now();
-    let mesh = if pgvol::is_pgv(output) {
+    let mesh = if pgvol::io::is_pgv(output) {
         None
     } else {
-        let options = pgvol::DecodeOptions {
-            method: args.method.into(),
-            min_component: args.min_component,
-            ..Default::default()
-        };
         Some(
-            pgvol::decode(&solid.volume, &options, progress).map_err(|e| {
-                anyhow::anyhow!(
-                    "{operation}: the result is empty (no lattice inside the part): {e}"
-                )
-            })?,
+            solid
+                .field
+                .to_mesh(&args.decode_options(), progress)
+                .map_err(|e| {
+                    anyhow::anyhow!(
+                        "{operation}: the result is empty (no lattice inside the part): {e}"
+                    )
+                })?,
         )
     };
     let contour = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let report = pgvol::solid_report(&solid, mesh.as_ref(), progress);
+    let report = solid.report(mesh.as_ref(), progress);
     let measure = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let triangles = match mesh {
         Some(mesh) => {
-            pgvol::write_mesh(output, &mesh)?;
+            pgvol::io::write_mesh(output, &mesh)?;
             mesh.triangles.len()
         }
         None => {
-            let file = shape.derived_file(solid.volume, operation, shift);
-            pgvol::write_pgv(output, &file, &args.storage())?;
+            solid.field.save(output, &args.storage())?;
             0
         }
     };

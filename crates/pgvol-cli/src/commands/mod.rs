@@ -114,7 +114,7 @@ pub enum Command {
 }
 
 pub fn run(command: Command) -> Result<()> {
-    pgvol::set_memory_limit(command.out().max_memory);
+    pgvol::limits::set_memory_limit(command.out().max_memory);
     if let Some((output, out)) = command.output() {
         out.check(output)?;
     }

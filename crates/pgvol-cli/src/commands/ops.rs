@@ -13,33 +13,27 @@ use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::{self, Seconds};
 
-/// Writes a derived volume as .pgv, or contours it into a mesh file, by the output's extension;
-/// returns the triangles written (0 for a .pgv). `shift` is how far the operation moved the
-/// surface (see [`pgvol::Shape::derived_file`]).
+/// Writes an operation's result as .pgv, or contours it into a mesh file, by the output's
+/// extension; returns the triangles written (0 for a .pgv).
 fn write_result(
     output: &Path,
-    volume: pgvol::CoefficientVolume,
-    shape: &pgvol::Shape,
-    (operation, shift): (&str, f32),
+    result: &pgvol::Field,
+    operation: &str,
     args: &ShapeOutputArgs,
     progress: &Bars,
 ) -> Result<usize> {
-    if pgvol::is_pgv(output) {
-        let file = shape.derived_file(volume, operation, shift);
-        pgvol::write_pgv(output, &file, &args.storage())?;
+    if pgvol::io::is_pgv(output) {
+        result.save(output, &args.storage())?;
         return Ok(0);
     }
-    let options = pgvol::DecodeOptions {
-        method: args.method.into(),
-        min_component: args.min_component,
-        ..Default::default()
-    };
-    let mesh = pgvol::decode(&volume, &options, progress).map_err(|e| {
-        anyhow::anyhow!(
-            "{operation}: the result is empty (the operation removed the whole shape): {e}"
-        )
-    })?;
-    pgvol::write_mesh(output, &mesh)?;
+    let mesh = result
+        .to_mesh(&args.decode_options(), progress)
+        .map_err(|e| {
+            anyhow::anyhow!(
+                "{operation}: the result is empty (the operation removed the whole shape): {e}"
+            )
+        })?;
+    pgvol::io::write_mesh(output, &mesh)?;
     Ok(mesh.triangles.len())
 }
 
@@ -77,7 +71,7 @@ pub struct SliceArgs {
     #[arg(long)]
     pub tolerance: Option<f32>,
     /// Millimetres per model unit, written to the CLI header.
-    #[arg(long, default_value_t = pgvol::DEFAULT_UNITS_MM)]
+    #[arg(long, default_value_t = pgvol::limits::DEFAULT_UNITS_MM)]
     pub units_mm: f32,
     /// Write the .cli file's geometry in the binary form (little-endian long commands).
     #[arg(long)]
@@ -85,7 +79,7 @@ pub struct SliceArgs {
     /// Grid nodes per axis when the input is a mesh: finer than the 128 of the other commands,
     /// since layers are traced at the field's spacing and walls thinner than about one spacing
     /// drop out of them.
-    #[arg(long, default_value_t = pgvol::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+    #[arg(long, default_value_t = pgvol::limits::SLICE_RES as u32, value_parser = clap::value_parser!(u32).range(pgvol::limits::MIN_RES as i64..=pgvol::limits::MAX_RES as i64))]
     pub res: u32,
     /// How inside is told from outside when the input is a mesh.
     #[arg(long, value_enum, default_value_t)]
@@ -96,14 +90,14 @@ pub struct SliceArgs {
 
 pub fn slice(a: SliceArgs) -> Result<()> {
     let format =
-        pgvol::LayerFormat::from_path(&a.output, a.binary).map_err(|e| match e.kind() {
+        pgvol::io::LayerFormat::from_path(&a.output, a.binary).map_err(|e| match e.kind() {
             pgvol::ErrorKind::BadParameter => anyhow::anyhow!("--binary: {e}"),
             _ => e.into(),
         })?;
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
     let start = Instant::now();
-    let settings = pgvol::SliceSettings {
+    let settings = pgvol::SliceOptions {
         axis: match a.axis {
             AxisArg::X => pgvol::Axis::X,
             AxisArg::Y => pgvol::Axis::Y,
@@ -117,13 +111,18 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let sign: pgvol::SignMode = a.sign.into();
     let t = Instant::now();
     // A .pgv file is sliced as it is read, a window of its bricks at a time.
-    let sliced = if pgvol::is_pgv(&a.input) && sign == pgvol::SignMode::Auto {
-        pgvol::slice_file(&a.input, &settings, &bars).map_err(|e| at_input(e, &a.input))?
+    let sliced = if pgvol::io::is_pgv(&a.input) && sign == pgvol::SignMode::Auto {
+        pgvol::stream::slice_file(&a.input, &settings, &bars).map_err(|e| at_input(e, &a.input))?
     } else {
-        let shape = pgvol::Shape::load(&a.input, a.res as usize, 0.0, 0.0, sign, &bars)?;
-        let layers = pgvol::slice(&shape, &settings, &bars).map_err(|e| at_input(e, &a.input))?;
-        let frame = pgvol::layer_frame(&shape, settings.axis);
-        pgvol::Sliced { layers, frame }
+        let open = pgvol::OpenOptions {
+            res: a.res as usize,
+            sign,
+            ..Default::default()
+        };
+        let shape = pgvol::Field::open(&a.input, &open, &bars)?;
+        shape
+            .slice(&settings, &bars)
+            .map_err(|e| at_input(e, &a.input))?
     };
     let slice_seconds = t.elapsed().as_secs_f64();
     let layers = sliced.layers;
@@ -137,7 +136,7 @@ pub fn slice(a: SliceArgs) -> Result<()> {
             a.input.display()
         );
     }
-    pgvol::write_layers(&a.output, &layers, format, a.units_mm, &sliced.frame)?;
+    pgvol::io::write_layers(&a.output, &layers, format, a.units_mm, &sliced.frame)?;
     let points: usize = layers
         .iter()
         .flat_map(|l| &l.loops)
@@ -185,21 +184,14 @@ pub fn offset(a: OffsetArgs) -> Result<()> {
     let start = Instant::now();
     a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
-    pgvol::check_offset(a.distance).map_err(|e| anyhow::anyhow!("--distance: {e}"))?;
+    pgvol::checks::check_offset(a.distance).map_err(|e| anyhow::anyhow!("--distance: {e}"))?;
     let shape = a
         .shape
         .load(&a.input, a.distance.max(0.0), a.distance.abs(), &bars)?;
-    let volume = pgvol::offset(&shape, a.distance).map_err(|e| grid_error(e, &a.input))?;
-    let operation = pgvol::operation_name(None, a.distance);
-    let shift = pgvol::operation_shift(None, a.distance);
-    let triangles = write_result(
-        &a.output,
-        volume,
-        &shape,
-        (&operation, shift),
-        &a.shape,
-        &bars,
-    )?;
+    let grown = shape
+        .offset(a.distance)
+        .map_err(|e| grid_error(e, &a.input))?;
+    let triangles = write_result(&a.output, &grown, "the offset", &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
 }
 
@@ -241,11 +233,11 @@ pub struct ShellArgs {
     /// `x,y,z,dx,dy,dz,diameter` (a point inside the cavity, the direction out through the wall,
     /// the hole's diameter). Repeat for more holes.
     #[arg(long, value_parser = parse_drain, allow_hyphen_values = true)]
-    pub drain: Vec<pgvol::Drain>,
+    pub drain: Vec<pgvol::edit::Drain>,
     /// Hollow and fill the cavity with this lattice: gyroid, schwarz-p, diamond or neovius
     /// (see `pgvol lattice`).
     #[arg(long, value_name = "SURFACE", value_parser = parse_surface, requires = "cell")]
-    pub infill: Option<pgvol::Tpms>,
+    pub infill: Option<pgvol::lattices::Tpms>,
     /// With --infill: the lattice's cell size, model units.
     #[arg(long, requires = "infill")]
     pub cell: Option<f32>,
@@ -263,41 +255,37 @@ pub struct ShellArgs {
     pub out: OutputArgs,
 }
 
-fn parse_drain(s: &str) -> Result<pgvol::Drain, String> {
-    pgvol::parse_drain(s).map_err(|e| e.to_string())
+fn parse_drain(s: &str) -> Result<pgvol::edit::Drain, String> {
+    crate::parse::parse_drain(s).map_err(|e| e.to_string())
 }
 
-fn parse_surface(s: &str) -> Result<pgvol::Tpms, String> {
+fn parse_surface(s: &str) -> Result<pgvol::lattices::Tpms, String> {
     s.parse()
 }
 
 /// `shell --infill`: the hollowed part with its cavity filled by a lattice.
-fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()> {
+fn shell_infill(a: ShellArgs, surface: pgvol::lattices::Tpms, start: Instant) -> Result<()> {
     let cell = a.cell.unwrap_or_default();
     let thickness = a.infill_thickness.unwrap_or(a.thickness);
     let lattice = build_lattice(surface, a.infill_style, cell, thickness, &a.grade)
         .map_err(|e| anyhow::anyhow!("--infill: {e}"))?;
     let bars = Bars::new(a.out.silent());
-    let reach = pgvol::lattice_reach(&lattice, a.thickness);
+    let reach = pgvol::checks::lattice_reach(&lattice, a.thickness);
     let shape = a
         .shape
         .load_walled(&a.input, 0.0, reach, a.thickness, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
-    let volume = pgvol::infill(&shape, a.thickness, &lattice, &a.drain, &bars)
+    let solid = shape
+        .infill(a.thickness, &lattice, &a.drain, &bars)
         .map_err(|e| grid_error(e, &a.input))?;
     let stages = [
         ("load", loaded),
         ("infill", start.elapsed().as_secs_f64() - loaded),
     ];
-    let operation = format!(
-        "hollow {} infill {surface} cell {cell} thickness {thickness}",
-        a.thickness
-    );
     write_solid(
         &a.output,
-        volume,
-        &shape,
-        (&operation, a.thickness),
+        solid,
+        "the infill",
         &a.shape,
         &a.out,
         &bars,
@@ -308,7 +296,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::Tpms, start: Instant) -> Result<()
 pub fn shell(a: ShellArgs) -> Result<()> {
     let start = Instant::now();
     a.shape.check_output(&a.output)?;
-    pgvol::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
+    pgvol::checks::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
     if let Some(surface) = a.infill {
         return shell_infill(a, surface, start);
     }
@@ -323,27 +311,28 @@ pub fn shell(a: ShellArgs) -> Result<()> {
         pgvol::ShellKind::Hollow
     } else {
         pgvol::ShellKind::Wall(match a.side {
-            SideArg::Inner => pgvol::ShellSide::Inner,
-            SideArg::Outer => pgvol::ShellSide::Outer,
-            SideArg::Centred => pgvol::ShellSide::Centred,
+            SideArg::Inner => pgvol::edit::ShellSide::Inner,
+            SideArg::Outer => pgvol::edit::ShellSide::Outer,
+            SideArg::Centred => pgvol::edit::ShellSide::Centred,
         })
     };
-    let grow = pgvol::growth(kind, a.thickness);
+    let options = pgvol::ShellOptions {
+        thickness: a.thickness,
+        kind,
+        drains: a.drain.clone(),
+    };
     let shape = a
         .shape
-        .load_walled(&a.input, grow, a.thickness, a.thickness, &bars)?;
-    let volume = pgvol::shell(&shape, a.thickness, kind, &a.drain, &bars)
+        .load_walled(&a.input, options.growth(), a.thickness, a.thickness, &bars)?;
+    let walled = shape
+        .shell(&options, &bars)
         .map_err(|e| grid_error(e, &a.input))?;
-    let operation = pgvol::operation_name(Some(kind), a.thickness);
-    let shift = pgvol::operation_shift(Some(kind), a.thickness);
-    let triangles = write_result(
-        &a.output,
-        volume,
-        &shape,
-        (&operation, shift),
-        &a.shape,
-        &bars,
-    )?;
+    let operation = if a.hollow {
+        "the hollowing"
+    } else {
+        "the shell"
+    };
+    let triangles = write_result(&a.output, &walled, operation, &a.shape, &bars)?;
     report(&a.out, &a.output, triangles, start)
 }
 

@@ -27,22 +27,22 @@ pub struct PerturbArgs {
     #[arg(short, long)]
     pub output: PathArg,
     /// Most perturbation functions added.
-    #[arg(long, default_value_t = pgvol::PerturbOptions::default().max_functions as u64,
+    #[arg(long, default_value_t = pgvol::perturbation::PerturbOptions::default().max_functions as u64,
           value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     pub max_functions: u64,
     /// Stop once every vertex is within this fraction of the bounding-box diagonal of the zero
     /// set (first-order estimate |M| / |∇M|).
-    #[arg(long, default_value_t = pgvol::PerturbOptions::default().tolerance as f32, value_parser = non_negative)]
+    #[arg(long, default_value_t = pgvol::perturbation::PerturbOptions::default().tolerance as f32, value_parser = non_negative)]
     pub tolerance: f32,
     /// Most descent steps on each perturbation's coefficients after its ten-point solve (the
     /// paper's optimisation step); 0 keeps the solved quadric.
-    #[arg(long, default_value_t = pgvol::PerturbOptions::default().descent_steps as u32)]
+    #[arg(long, default_value_t = pgvol::perturbation::PerturbOptions::default().descent_steps as u32)]
     pub descent_steps: u32,
     /// Write a coefficient volume resampled on RES nodes per axis (a cube 1.1 × the mesh's
     /// longest extent) instead of the function list; for a mesh output, the grid it is
     /// contoured on. Without it the list records, and a mesh output uses, 128.
     #[arg(long, value_name = "RES",
-          value_parser = clap::value_parser!(u32).range(pgvol::MIN_RES as i64..=pgvol::MAX_RES as i64))]
+          value_parser = clap::value_parser!(u32).range(pgvol::limits::MIN_RES as i64..=pgvol::limits::MAX_RES as i64))]
     pub resample: Option<u32>,
     /// With --resample and a .pgv output: write every coefficient as f32 instead of the sparse,
     /// compressed bricks around the surface.
@@ -58,11 +58,11 @@ struct Report<'a> {
     output: &'a std::path::Path,
     input_triangles: usize,
     input_components: usize,
-    perturbation: &'a pgvol::PerturbReport,
+    perturbation: &'a pgvol::perturbation::PerturbReport,
     /// The pass clearing wrong nodes of the check grid away from the surface.
-    cleanup: pgvol::Cleanup,
+    cleanup: pgvol::perturbation::Cleanup,
     /// The passes removing the stray pieces left on the check grid.
-    strays: pgvol::Strays,
+    strays: pgvol::perturbation::Strays,
     grid: pgvol::Grid,
     /// Bytes of the .pgv file, or triangles, vertices and components of the mesh written.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -74,37 +74,37 @@ struct Report<'a> {
 }
 
 pub fn run(a: PerturbArgs) -> Result<()> {
-    let to_pgv = pgvol::is_pgv(&a.output);
+    let to_pgv = pgvol::io::is_pgv(&a.output);
     if !to_pgv {
         // Refuse an unwritable output format before doing the work.
-        pgvol::mesh_format(&a.output)?;
+        pgvol::io::mesh_format(&a.output)?;
     }
     super::args::check_dense_file(a.dense_file, &a.output)?;
     let start = Instant::now();
     let quiet = a.out.silent();
     let mesh = load_mesh(&a.input, quiet)?;
     let read = start.elapsed().as_secs_f64();
-    let options = pgvol::PerturbOptions {
+    let options = pgvol::perturbation::PerturbOptions {
         max_functions: a.max_functions as usize,
         tolerance: a.tolerance as f64,
         descent_steps: a.descent_steps as usize,
     };
     let bars = Bars::new(quiet);
-    let res = a.resample.unwrap_or(pgvol::DEFAULT_RES as u32);
+    let res = a.resample.unwrap_or(pgvol::limits::DEFAULT_RES as u32);
     let spec = pgvol::GridSpec::Res(res as usize);
     // Checked on the grid the output is contoured or resampled on (the list records it).
-    let perturbed =
-        pgvol::perturb_on(&mesh, &options, spec, &bars).map_err(|e| at_input(e, &a.input))?;
+    let perturbed = pgvol::perturbation::perturb_on(&mesh, &options, spec, &bars)
+        .map_err(|e| at_input(e, &a.input))?;
     let built = start.elapsed().as_secs_f64() - read;
     let t = Instant::now();
-    let header = pgvol::perturbation_header(&perturbed.field, &mesh, spec)
+    let header = pgvol::perturbation::perturbation_header(&perturbed.field, &mesh, spec)
         .map_err(|e| at_input(e, &a.input))?;
     let list = to_pgv && a.resample.is_none();
     let file = if list {
         None
     } else {
         Some(
-            pgvol::resample(&perturbed.field, &mesh, spec, &bars)
+            pgvol::perturbation::resample(&perturbed.field, &mesh, spec, &bars)
                 .map_err(|e| at_input(e, &a.input))?,
         )
     };
@@ -113,19 +113,19 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     let (mut bytes, mut triangles, mut components) = (None, None, None);
     let mut contour = 0.0;
     match &file {
-        None => pgvol::write_perturbation(&a.output, &header, &perturbed.field)?,
+        None => pgvol::perturbation::write_perturbation(&a.output, &header, &perturbed.field)?,
         Some(file) if to_pgv => {
             let storage = if a.dense_file {
                 super::args::file_storage(true)
             } else {
-                pgvol::resampled_storage()
+                pgvol::perturbation::resampled_storage()
             };
-            pgvol::write_pgv(&a.output, file, &storage)?;
+            pgvol::io::write_pgv(&a.output, file, &storage)?;
         }
         Some(file) => {
-            let out = pgvol::perturbation_mesh(file, &bars)?;
+            let out = pgvol::perturbation::perturbation_mesh(file, &bars)?;
             contour = t.elapsed().as_secs_f64();
-            pgvol::write_mesh(&a.output, &out)?;
+            pgvol::io::write_mesh(&a.output, &out)?;
             triangles = Some(out.triangles.len());
             components = Some(out.stats().components);
         }

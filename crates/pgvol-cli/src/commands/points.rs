@@ -30,13 +30,13 @@ pub enum PointsMethodArg {
     RbfCubic,
 }
 
-impl From<PointsMethodArg> for pgvol::PointsMethod {
+impl From<PointsMethodArg> for pgvol::reconstruct::PointsMethod {
     fn from(m: PointsMethodArg) -> Self {
         match m {
-            PointsMethodArg::Spline => pgvol::PointsMethod::Spline,
-            PointsMethodArg::Tangent => pgvol::PointsMethod::Tangent,
-            PointsMethodArg::RbfWendland => pgvol::PointsMethod::RbfWendland,
-            PointsMethodArg::RbfCubic => pgvol::PointsMethod::RbfCubic,
+            PointsMethodArg::Spline => pgvol::reconstruct::PointsMethod::Spline,
+            PointsMethodArg::Tangent => pgvol::reconstruct::PointsMethod::Tangent,
+            PointsMethodArg::RbfWendland => pgvol::reconstruct::PointsMethod::RbfWendland,
+            PointsMethodArg::RbfCubic => pgvol::reconstruct::PointsMethod::RbfCubic,
         }
     }
 }
@@ -111,7 +111,7 @@ pub struct PointsArgs {
     /// Node values kept within W grid spacings of the points, clamped beyond. Offsets, shells
     /// and levels read from the file are exact within W − 2 spacings (the cubic B-spline's
     /// support blends in the clamp), as `pgvol info` shows.
-    #[arg(long, value_name = "W", default_value_t = pgvol::ENCODE_BAND)]
+    #[arg(long, value_name = "W", default_value_t = pgvol::limits::ENCODE_BAND)]
     pub band: f32,
     /// Contouring method for mesh outputs.
     #[arg(long = "contour", value_enum, default_value_t)]
@@ -150,7 +150,7 @@ pub fn run(a: PointsArgs) -> Result<()> {
     });
     let sections_format = match &sections_out {
         Some(path) => {
-            let format = pgvol::LayerFormat::from_path(path, false)
+            let format = pgvol::io::LayerFormat::from_path(path, false)
                 .map_err(|e| anyhow::anyhow!("--sections-out: {e}"))?;
             a.out.check(path)?;
             Some(format)
@@ -159,7 +159,7 @@ pub fn run(a: PointsArgs) -> Result<()> {
     };
     let quiet = a.out.silent();
     let bars = Bars::new(quiet);
-    let cloud = pgvol::read_point_cloud(&a.input)?;
+    let cloud = pgvol::io::read_point_cloud(&a.input)?;
     let read_seconds = start.elapsed().as_secs_f64();
     let options = pgvol::PointsOptions {
         grid: a.grid.spec(),
@@ -170,18 +170,19 @@ pub fn run(a: PointsArgs) -> Result<()> {
     let t = Instant::now();
     let (fitted, sections) = match &a.sections {
         Some(s) => {
-            let settings = pgvol::SectionSettings {
+            let settings = pgvol::reconstruct::SectionSettings {
                 axis: s.axis,
                 heights: s.heights.clone(),
                 resolution: a.sections_resolution,
             };
             let (fitted, sections) =
-                pgvol::points_with_sections(&cloud, &options, &settings, &bars)
+                pgvol::reconstruct::points_with_sections(&cloud, &options, &settings, &bars)
                     .map_err(|e| sections_error(e, &a.input))?;
             (fitted, Some(sections))
         }
         None => (
-            pgvol::points(&cloud, &options, &bars).map_err(|e| at_input(e, &a.input))?,
+            pgvol::reconstruct::points(&cloud, &options, &bars)
+                .map_err(|e| at_input(e, &a.input))?,
             None,
         ),
     };
@@ -200,8 +201,14 @@ pub fn run(a: PointsArgs) -> Result<()> {
     if let (Some(s), Some(path), Some(format), Some(arg)) =
         (&sections, &sections_out, sections_format, &a.sections)
     {
-        let frame = pgvol::LayerFrame::new(arg.axis, grid.offset);
-        pgvol::write_layers(path, &s.layers, format, pgvol::DEFAULT_UNITS_MM, &frame)?;
+        let frame = pgvol::reconstruct::LayerFrame::new(arg.axis, grid.offset);
+        pgvol::io::write_layers(
+            path,
+            &s.layers,
+            format,
+            pgvol::limits::DEFAULT_UNITS_MM,
+            &frame,
+        )?;
     }
     let write_seconds = t.elapsed().as_secs_f64();
     let sections_json = match (&sections, &sections_out, &a.sections) {
@@ -330,7 +337,7 @@ pub fn contours(a: ContoursArgs) -> Result<()> {
     check_output_name(&a.output)?;
     check_dense_file(a.dense_file, &a.output)?;
     let bars = Bars::new(a.out.silent());
-    let layers = pgvol::read_layers(&a.input)?;
+    let layers = pgvol::io::read_layers(&a.input)?;
     let options = pgvol::PointsOptions {
         grid: a.grid.spec(),
         method: a.method.into(),
@@ -342,8 +349,8 @@ pub fn contours(a: ContoursArgs) -> Result<()> {
         super::ops::AxisArg::Z => pgvol::Axis::Z,
     };
     let t = Instant::now();
-    let fitted =
-        pgvol::contours(&layers, axis, &options, &bars).map_err(|e| at_input(e, &a.input))?;
+    let fitted = pgvol::reconstruct::contours(&layers, axis, &options, &bars)
+        .map_err(|e| at_input(e, &a.input))?;
     let fit_seconds = t.elapsed().as_secs_f64();
     let triangles = write_output(&a.output, &fitted, a.contour, a.dense_file, &bars)?;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
@@ -379,15 +386,15 @@ fn write_output(
     dense_file: bool,
     bars: &Bars,
 ) -> Result<usize> {
-    if pgvol::is_pgv(output) {
-        pgvol::write_pgv(output, &fitted.file, &file_storage(dense_file))?;
+    if pgvol::io::is_pgv(output) {
+        pgvol::io::write_pgv(output, &fitted.file, &file_storage(dense_file))?;
         return Ok(0);
     }
     let decode = pgvol::DecodeOptions {
         method: contour.into(),
         ..Default::default()
     };
-    let mesh = pgvol::decode(&fitted.file.volume, &decode, bars)?;
-    pgvol::write_mesh(output, &mesh)?;
+    let mesh = pgvol::Field::from_file(fitted.file.clone()).to_mesh(&decode, bars)?;
+    pgvol::io::write_mesh(output, &mesh)?;
     Ok(mesh.triangles.len())
 }

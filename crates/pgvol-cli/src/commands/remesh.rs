@@ -66,14 +66,14 @@ struct Report<'a> {
 
 pub fn run(a: RemeshArgs) -> Result<()> {
     // Refuse an unwritable output format before doing the work.
-    pgvol::mesh_format(&a.output)?;
+    pgvol::io::mesh_format(&a.output)?;
     if a.field == FieldArg::Exact && !a.basis.is_default() {
         anyhow::bail!("--basis applies to --field decoded; the exact field has no basis");
     }
     let start = Instant::now();
     let quiet = a.out.silent();
     let mesh = load_mesh(&a.input, quiet)?;
-    pgvol::check_mesh_output(&a.output, &mesh)?;
+    pgvol::io::check_mesh_output(&a.output, &mesh)?;
     let read = start.elapsed().as_secs_f64();
     let options = pgvol::RemeshOptions {
         grid: a.grid.spec(),
@@ -88,7 +88,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
     let remeshed =
         pgvol::remesh(&mesh, &options, &Bars::new(quiet)).map_err(|e| at_input(e, &a.input))?;
     let w = Instant::now();
-    pgvol::write_mesh(&a.output, &remeshed.mesh)?;
+    pgvol::io::write_mesh(&a.output, &remeshed.mesh)?;
     let mut seconds = remeshed.timings;
     seconds.read = read;
     seconds.write = w.elapsed().as_secs_f64();

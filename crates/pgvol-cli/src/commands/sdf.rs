@@ -47,9 +47,9 @@ pub struct SdfArgs {
 pub fn run(a: SdfArgs) -> Result<()> {
     let start = std::time::Instant::now();
     let format = match a.format {
-        Some(GridFormat::Nrrd) => pgvol::GridFormat::Nrrd,
-        Some(GridFormat::Npy) => pgvol::GridFormat::Npy,
-        None => pgvol::GridFormat::from_path(&a.output)
+        Some(GridFormat::Nrrd) => pgvol::io::GridFormat::Nrrd,
+        Some(GridFormat::Npy) => pgvol::io::GridFormat::Npy,
+        None => pgvol::io::GridFormat::from_path(&a.output)
             .map_err(|e| anyhow::anyhow!("{e}, or give --format"))?,
     };
     let quiet = a.out.silent();
@@ -59,9 +59,9 @@ pub fn run(a: SdfArgs) -> Result<()> {
         band: a.band,
         sign: a.sign.into(),
     };
-    let sampled = pgvol::signed_distance(&mesh, &options, &Bars::new(quiet))
+    let sampled = pgvol::distances::signed_distance(&mesh, &options, &Bars::new(quiet))
         .map_err(|e| at_input(e, &a.mesh))?;
-    pgvol::write_grid(&a.output, &sampled.grid, &sampled.values, format)?;
+    pgvol::io::write_grid(&a.output, &sampled.grid, &sampled.values, format)?;
     let values = &sampled.values;
     let report = Report {
         grid: sampled.grid,

@@ -10,12 +10,13 @@ use pgvol_field::CoefficientVolume;
 use pgvol_slice::{Layer, SliceOptions};
 
 use super::slab::Slab;
-use super::split;
+use super::split::split;
 use crate::decode::{finish_mesh, DecodeOptions};
 use crate::error::{Error, Result};
+use crate::field_value::Field;
 use crate::progress::Progress;
-use crate::shape::Shape;
-use crate::slice::SliceSettings;
+use crate::slice::SliceOptions as SliceSettings;
+use pgvol_format::PgvFile;
 
 /// Grid bricks of coefficients sent around a part's slab. A cell's contour reads coefficients
 /// up to 2 nodes from its corners (the cubic B-spline's support), and the cut edge of the sent
@@ -114,11 +115,11 @@ pub fn weld_parts(
 
 /// Layer numbers of the slicing of `shape` by `settings`, cut into at most `parts` ranges.
 pub fn plan_slice(
-    shape: &Shape,
+    shape: &Field,
     settings: &SliceSettings,
     parts: usize,
 ) -> Result<Vec<Range<usize>>> {
-    crate::frame::require_near(shape.volume.grid.offset, "slicing in parts")?;
+    crate::frame::require_near(shape.file.volume.grid.offset, "slicing in parts")?;
     let options = crate::slice::slice_options(shape, settings)?;
     let heights = pgvol_slice::layer_heights(shape.bounds, &options)?;
     split(heights.len(), parts)
@@ -127,14 +128,14 @@ pub fn plan_slice(
 /// The coefficient bricks the layers `layers` of the slicing read: those within the basis
 /// support of their planes, plus one brick.
 pub fn slice_part_bricks(
-    shape: &Shape,
+    shape: &Field,
     settings: &SliceSettings,
     layers: Range<usize>,
 ) -> Result<Vec<u8>> {
     let options = crate::slice::slice_options(shape, settings)?;
     let heights = pgvol_slice::layer_heights(shape.bounds, &options)?;
     let axis = options.axis.indices()[0];
-    let g = &shape.volume.grid;
+    let g = &shape.file.volume.grid;
     let node = |h: f32| ((h - g.origin[axis]) / g.spacing).clamp(0.0, g.dims[axis] as f32);
     let (Some(first), Some(last)) = (
         heights.get(layers.start),
@@ -149,7 +150,7 @@ pub fn slice_part_bricks(
     };
     let lo = (node(*first) as usize).saturating_sub(3) / BRICK_EDGE;
     let hi = (node(*last) as usize + 3) / BRICK_EDGE + 2;
-    Ok(slab_of(&shape.volume, axis, lo.saturating_sub(1)..hi).to_bytes())
+    Ok(slab_of(&shape.file.volume, axis, lo.saturating_sub(1)..hi).to_bytes())
 }
 
 /// The layers `layers` of the slicing, from the bricks of [`slice_part_bricks`]: each the
@@ -161,15 +162,14 @@ pub fn slice_part(
     layers: Range<usize>,
 ) -> Result<Vec<Layer>> {
     let volume = Slab::from_bytes(bricks)?.volume()?;
-    let shape = Shape {
+    let mut shape = Field::from_file(PgvFile {
+        header: pgvol_format::header_for(&volume, "interp", None),
         volume,
-        bounds,
-        mesh: None,
-        band: None,
-    };
+    });
+    shape.bounds = bounds;
     let options: SliceOptions = crate::slice::slice_options(&shape, settings)?;
     Ok(pgvol_slice::slice_volume_range(
-        &shape.volume,
+        &shape.file.volume,
         bounds,
         &options,
         layers,

@@ -9,10 +9,10 @@ use pgvol_field::{Basis, CoefficientVolume, FitMethod, SPARSE_GROUP};
 use pgvol_sdf::{MeshSdf, SignMode};
 
 use super::slab::Slab;
-use super::split;
+use super::split::split;
 use crate::encode::{encoded_file, EncodeOptions, Encoded};
 use crate::error::{Error, ErrorKind, Result};
-use crate::Timings;
+use crate::timings::Timings;
 
 /// One part of an encode: the fitting groups (each [`SPARSE_GROUP`]³ grid bricks) whose y and
 /// z group indices lie in `gy` and `gz`, with every group along x.

@@ -46,7 +46,7 @@ fn closure_over_the_mesh_hierarchy() {
 
 #[test]
 fn surface_of_the_mesh_distance() {
-    let distance = pgvol::MeshDistance(&box_mesh().1);
+    let distance = pgvol::distances::MeshDistance(&box_mesh().1);
     closest_points_are_on_the_surface_and_nearest(
         &SurfaceOf(&distance),
         &subjects::box_mesh_spec(),

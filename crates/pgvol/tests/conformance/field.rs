@@ -9,9 +9,11 @@
 //! to the bumpy sphere's distance near its surface and to its own measured gradient bound.
 
 use pgvol::contour::Field;
+use pgvol::distances::MeshField;
 use pgvol::field::fit::SignedDistance;
 use pgvol::glam::Vec3;
-use pgvol::{Basis, CoefficientVolume, MeshField, PerturbationField};
+use pgvol::perturbation::PerturbationField;
+use pgvol::{Basis, CoefficientVolume};
 
 use crate::properties::{property_tests, Case, Evaluate};
 use crate::subjects::{self, box_mesh, encoded, encoded_spec, Fitted};

@@ -3,11 +3,12 @@
 //! closed form up to rounding, 1-Lipschitz, with unit gradients pointing away from the closest
 //! surface point.
 
+use pgvol::distances::MeshDistance;
 use pgvol::field::analytic::{RotatedBox, Sphere, Torus};
 use pgvol::field::fit::{SdfFn, SignedDistance};
 use pgvol::glam::Vec3;
 use pgvol::sdf::sampling::Extent;
-use pgvol::{GridSpec, MeshDistance, SdfOptions, Silent};
+use pgvol::{GridSpec, SdfOptions, Silent};
 use proptest::prelude::*;
 
 use crate::properties::{property_tests, Case, Evaluate};
@@ -133,7 +134,7 @@ fn mesh_distance_grid_matches_pointwise_queries_at_every_thread_count() {
                 grid: GridSpec::Res(24),
                 ..SdfOptions::default()
             };
-            pgvol::signed_distance(mesh, &options, &Silent).unwrap()
+            pgvol::distances::signed_distance(mesh, &options, &Silent).unwrap()
         });
         assert_eq!(facade.grid, grid);
         assert_eq!(

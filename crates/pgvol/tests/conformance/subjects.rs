@@ -5,11 +5,9 @@ use std::sync::OnceLock;
 
 use pgvol::glam::{EulerRot, Quat, Vec3};
 use pgvol::mesh::shapes;
+use pgvol::perturbation::{PerturbOptions, PerturbationField};
 use pgvol::sdf::MeshSdf;
-use pgvol::{
-    Basis, CoefficientVolume, EncodeOptions, GridSpec, Mesh, PerturbOptions, PerturbationField,
-    SignMode, Silent,
-};
+use pgvol::{Basis, CoefficientVolume, EncodeOptions, GridSpec, Mesh, SignMode, Silent};
 
 /// What a field is held to, in the units of its shape.
 pub struct Spec {
@@ -305,7 +303,7 @@ pub fn perturbation() -> (PerturbationField, Spec) {
         tolerance: 1e-3,
         ..Default::default()
     };
-    let built = pgvol::perturb(&bumpy_mesh().0, &options, &Silent).unwrap();
+    let built = pgvol::perturbation::perturb(&bumpy_mesh().0, &options, &Silent).unwrap();
     assert!(built.field.terms().len() > 50, "{:?}", built.report.stop);
     let spec = Spec {
         region: (Vec3::splat(-1.3), Vec3::splat(1.3)),

@@ -85,5 +85,6 @@ fn main() {
         ),
         other => fail(format!("unknown --method {other}")),
     };
-    pgvol::write_mesh(std::path::Path::new(output), &mesh).unwrap_or_else(|e| fail(e.to_string()));
+    pgvol::io::write_mesh(std::path::Path::new(output), &mesh)
+        .unwrap_or_else(|e| fail(e.to_string()));
 }

@@ -15,7 +15,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mesh_path = PathBuf::from(args.get(1).expect("usage: format_sizes MESH N"));
     let n: usize = args.get(2).map_or(64, |s| s.parse().expect("N"));
-    let (mesh, _) = pgvol::read_mesh(&mesh_path).expect("mesh");
+    let (mesh, _) = pgvol::io::read_mesh(&mesh_path).expect("mesh");
     let options = EncodeOptions {
         grid: GridSpec::Res(n),
         ..EncodeOptions::default()
@@ -27,7 +27,7 @@ fn main() {
     let h = grid.spacing;
 
     let file_size = |storage: StorageOptions| {
-        pgvol::pgv_bytes(&file, &storage)
+        pgvol::io::pgv_bytes(&file, &storage)
             .expect("pgv bytes")
             .0
             .len()
@@ -69,7 +69,7 @@ fn main() {
                 ..pgvol_format::EncodeOptions::default()
             };
             let (bytes, r) = encode_pgv_with(&file, &storage).expect("encode");
-            let back = pgvol::read_pgv_bytes(&bytes, Path::new("mem")).unwrap();
+            let back = pgvol::io::read_pgv_bytes(&bytes, Path::new("mem")).unwrap();
             assert_eq!(back.volume.coeffs.dims(), file.volume.coeffs.dims());
             // Stored coefficients: nodes of stored bricks (edge bricks are partial).
             let stored_coeffs = stored_coefficients(&grid, &bytes, edge);

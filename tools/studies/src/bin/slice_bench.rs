@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use pgvol::{EncodeOptions, GridSpec, Shape, Silent, SliceSettings};
+use pgvol::{EncodeOptions, Field, GridSpec, Silent, SliceOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let layers: usize = args.next().map_or(Ok(500), |s| s.parse())?;
 
     let t = Instant::now();
-    let (mesh, _) = pgvol::read_mesh(&path)?;
+    let (mesh, _) = pgvol::io::read_mesh(&path)?;
     let options = EncodeOptions {
         grid: GridSpec::Res(res),
         ..EncodeOptions::default()
@@ -27,14 +27,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let encoded = pgvol::encode(&mesh, &options, &Silent)?;
     let encode = t.elapsed();
 
-    let shape = Shape::from_file(encoded.file);
-    let (lo, hi) = shape.bounds;
-    let spacing = shape.volume.grid.spacing;
-    let mut settings = SliceSettings::new((hi.z - lo.z) / layers as f32);
+    let shape = Field::from_file(encoded.file);
+    let (lo, hi) = shape.bounds();
+    let spacing = shape.volume().grid.spacing;
+    let mut settings = SliceOptions::new((hi.z - lo.z) / layers as f32);
     let tolerance = spacing / 10.0;
     settings.tolerance = Some(tolerance);
     let t = Instant::now();
-    let out = pgvol::slice(&shape, &settings, &Silent)?;
+    let out = shape.slice(&settings, &Silent).map(|s| s.layers)?;
     let slicing = t.elapsed();
 
     let loops: usize = out.iter().map(|l| l.loops.len()).sum();
