@@ -13,7 +13,7 @@ use crate::blocks::{
 };
 use crate::place::onto_edge;
 use crate::samples::{Samples, CROSSINGS_PART};
-use pgvol_core::progress::tick;
+use pgvol_core::progress::{stopped, tick};
 
 /// Callback placing the crossing on the edge from `a` (value `va`) to `b` (value `vb`).
 pub(crate) type Refine<'r> = dyn Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + 'r;
@@ -185,6 +185,9 @@ pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Cros
     let vertices: Vec<BlockVertices> = candidates
         .par_iter()
         .filter_map(|&id| {
+            if stopped(counter.as_ref()) {
+                return None;
+            }
             tick(counter.as_ref());
             let o = origin(counts, id);
             let nodes = box_nodes(samples.dims, o);
@@ -195,7 +198,14 @@ pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Cros
                 .is_mixed()
                 .then(|| block_crossings(samples, id, o, values, masks, place))
         })
-        .collect();
+        .collect::<Vec<_>>();
+    // Stopped part way, the crossings found are a partial set whose triangles would look up
+    // edges never visited: none are kept, and the caller drops the empty result.
+    let vertices = if stopped(counter.as_ref()) {
+        Vec::new()
+    } else {
+        vertices
+    };
     let blocks = Blocks::new(samples.dims, vertices.iter().map(|v| v.id).collect());
     let mut base = Vec::with_capacity(vertices.len());
     let mut n = 0usize;

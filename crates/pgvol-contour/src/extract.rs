@@ -11,6 +11,7 @@ use crate::table::{case_table, CaseTable, CENTER};
 /// the flag is resolved once all parts are done and the extra vertices get their final place.
 pub(crate) const EXTRA_FLAG: u32 = 1 << 31;
 
+#[derive(Default)]
 pub(crate) struct Part {
     pub triangles: Vec<[u32; 3]>,
     /// Loop centre vertices (only for the rare loops that cannot be triangulated from their

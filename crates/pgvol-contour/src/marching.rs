@@ -12,7 +12,7 @@ use crate::place;
 use crate::root::cubic_edge_root;
 use crate::samples::CROSSINGS_PART;
 use crate::samples::{DenseNodes, Samples};
-use pgvol_core::progress::tick;
+use pgvol_core::progress::{stopped, tick};
 
 /// Extracts the surface `value == iso` of a grid of samples, placing each vertex on its grid edge
 /// by linear interpolation of the two node values.
@@ -70,6 +70,11 @@ pub(crate) fn marching_cubes_samples(samples: &Samples, refine: &Refine) -> Mesh
     let parts: Vec<Part> = (0..blocks)
         .into_par_iter()
         .map(|slot| {
+            // A stopped stage's result is dropped by its caller: blocks after the stop are left
+            // empty.
+            if stopped(counter.as_ref()) {
+                return Part::default();
+            }
             tick(counter.as_ref());
             block_triangles(&crossings, samples.iso, slot)
         })

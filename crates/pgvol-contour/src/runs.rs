@@ -17,7 +17,7 @@ use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::Vec3;
-use pgvol_core::progress::{tick, Report, Span};
+use pgvol_core::progress::{stopped, tick, Report, Span};
 use pgvol_field::{CoefficientVolume, Grid};
 use rayon::prelude::*;
 
@@ -105,6 +105,10 @@ fn contour_runs_of<W: CoefficientWindows>(
     let span = Span::whole(report);
     let mut stitch = Stitch::default();
     for run in 0..runs {
+        // A stop asked for: the runs not yet begun are not read; the caller drops the mesh.
+        if span.cancelled() {
+            return Ok(());
+        }
         let layers = [run * run_layers, ((run + 1) * run_layers).min(cells)];
         let needed = coefficient_layers(&volume_grid, grid, layers);
         let window = windows.window(needed).map_err(RunsError::Source)?;
@@ -146,6 +150,9 @@ fn run_mesh(
     let parts = (0..blocks)
         .into_par_iter()
         .map(|slot| {
+            if stopped(counter.as_ref()) {
+                return Part::default();
+            }
             tick(counter.as_ref());
             block_triangles(&crossings, iso, slot)
         })

@@ -17,7 +17,7 @@ use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{CoefficientVolume, Grid};
 use rayon::prelude::*;
 
-use pgvol_core::progress::{tick, Span};
+use pgvol_core::progress::{stopped, tick, Span};
 
 use crate::cubic_eval::bspline3_value_gradient;
 
@@ -87,6 +87,14 @@ impl VolumeNodes {
         let rows: Vec<Row> = (0..by * zb.len())
             .into_par_iter()
             .map(|r| {
+                // Stopped: the rows not yet begun read as outside (no crossing), and the
+                // caller drops the result.
+                if stopped(counter.as_ref()) {
+                    return Row {
+                        sides: vec![OUTSIDE; bx],
+                        exact: Vec::new(),
+                    };
+                }
                 tick(counter.as_ref());
                 sampler.row(r)
             })

@@ -1,10 +1,32 @@
-//! Fractions done of a long stage (contouring, a fit), reported from inside its loops to a
-//! caller's progress display.
+//! Fractions done of a long stage (sampling, a fit, contouring), reported from inside its loops
+//! to a caller's progress display, and the caller's request to stop, polled by those loops.
 
-use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
 
-/// Receives the fraction of a stage done, from 0 to 1, from any thread.
-pub type Report<'a> = &'a (dyn Fn(f64) + Sync);
+/// What a long stage's loops talk to, from any thread: they report the fraction done and poll
+/// whether the caller wants them to stop. A stopped stage skips its remaining work and returns
+/// an incomplete result, which the caller (who asked for the stop) discards.
+pub trait Interrupt: Sync {
+    /// `done` of the stage is finished, from 0 to 1.
+    fn update(&self, _done: f64) {}
+    /// Whether the caller wants the stage to stop.
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// A fraction callback is an interrupt that never stops.
+impl<F: Fn(f64) + Sync> Interrupt for F {
+    fn update(&self, done: f64) {
+        self(done)
+    }
+}
+
+/// Reports nothing and never stops.
+pub const QUIET: &dyn Interrupt = &|_: f64| {};
+
+/// The stage's interrupt.
+pub type Report<'a> = &'a dyn Interrupt;
 
 /// A part `[from, to]` of the whole call's fraction, given to one stage of it.
 #[derive(Clone, Copy)]
@@ -35,7 +57,13 @@ impl<'a> Span<'a> {
 
     /// Reports `fraction` of this span done.
     pub fn report(&self, fraction: f64) {
-        (self.report)(self.from + fraction.clamp(0.0, 1.0) * (self.to - self.from));
+        self.report
+            .update(self.from + fraction.clamp(0.0, 1.0) * (self.to - self.from));
+    }
+
+    /// Whether the caller wants the stage to stop.
+    pub fn cancelled(&self) -> bool {
+        self.report.cancelled()
     }
 
     /// Counts `total` items of work through this span.
@@ -46,16 +74,19 @@ impl<'a> Span<'a> {
             // About 200 reports per stage: smooth, and no contention on the callback.
             every: (total / 200).max(1),
             done: AtomicUsize::new(0),
+            stop: AtomicBool::new(false),
         }
     }
 }
 
-/// Items of one stage done so far; reports every `every` items.
+/// Items of one stage done so far; reports every `every` items, and polls the caller's stop
+/// request as often.
 pub struct Counter<'a> {
     span: Span<'a>,
     total: usize,
     every: usize,
     done: AtomicUsize,
+    stop: AtomicBool,
 }
 
 impl Counter<'_> {
@@ -64,7 +95,15 @@ impl Counter<'_> {
         if done.is_multiple_of(self.every) || done == self.total {
             self.span
                 .report(done.min(self.total) as f64 / self.total as f64);
+            if self.span.cancelled() {
+                self.stop.store(true, Relaxed);
+            }
         }
+    }
+
+    /// Whether the caller asked to stop, as of the last poll: items not yet begun are skipped.
+    pub fn stopped(&self) -> bool {
+        self.stop.load(Relaxed)
     }
 }
 
@@ -73,6 +112,11 @@ pub fn tick(counter: Option<&Counter>) {
     if let Some(c) = counter {
         c.tick();
     }
+}
+
+/// Whether `counter`'s caller asked to stop (never without a counter).
+pub fn stopped(counter: Option<&Counter>) -> bool {
+    counter.is_some_and(Counter::stopped)
 }
 
 #[cfg(test)]
@@ -97,5 +141,34 @@ mod tests {
         );
         assert!(seen.windows(2).all(|w| w[0] < w[1]));
         assert!(seen[0] > 0.5 && *seen.last().unwrap() == 0.75);
+    }
+
+    /// Stops after its first report.
+    struct StopAtOnce(AtomicUsize);
+
+    impl Interrupt for StopAtOnce {
+        fn update(&self, _done: f64) {
+            self.0.fetch_add(1, Relaxed);
+        }
+        fn cancelled(&self) -> bool {
+            self.0.load(Relaxed) > 0
+        }
+    }
+
+    #[test]
+    fn a_counter_stops_the_items_after_the_poll_that_sees_the_request() {
+        let interrupt = StopAtOnce(AtomicUsize::new(0));
+        let counter = Span::whole(&interrupt).counter(10_000);
+        let mut worked = 0;
+        for _ in 0..10_000 {
+            if counter.stopped() {
+                continue;
+            }
+            worked += 1;
+            counter.tick();
+        }
+        // The first poll, after `every` = 50 items, sees the request; nothing runs after it.
+        assert_eq!(worked, 50);
+        assert!(!Span::whole(QUIET).counter(10).stopped());
     }
 }

@@ -19,7 +19,7 @@ pub fn sample_band(
     field: &PerturbationField,
     grid: &Grid,
     band: f32,
-    update: &(dyn Fn(f64) + Sync),
+    update: &dyn pgvol_core::progress::Interrupt,
 ) -> SparseGrid {
     let h = grid.spacing;
     let clamp = band * h;
@@ -45,7 +45,7 @@ pub fn sample_band(
             let near = estimates.iter().any(|d| d.abs() <= reach);
             let n = done.fetch_add(1, Ordering::Relaxed);
             if n.is_multiple_of(256) {
-                update(n as f64 / total as f64);
+                update.update(n as f64 / total as f64);
             }
             if !(mixed || near) {
                 return (b, None, centre < 0.0);

@@ -1,13 +1,16 @@
 //! Progress reports and cancellation for long calls, through one callback interface.
 
+use pgvol_core::progress::Interrupt;
+
 use crate::error::{Error, ErrorKind, Result};
 
 /// Receives progress from a long library call and may ask it to stop.
 ///
 /// A call announces each stage by name ("distance", "fit", "contour", …) and then reports the
 /// fraction of that stage done, from any thread. When [`Progress::cancelled`] returns `true` the
-/// call stops at its next check and returns an error of kind [`ErrorKind::Cancelled`]; checks
-/// happen between stages.
+/// call stops and returns an error of kind [`ErrorKind::Cancelled`]: it is asked between stages
+/// and, in the long stages (distance sampling, contouring), each time a stage reports its
+/// fraction, after which the stage's loops begin no further work.
 pub trait Progress: Sync {
     /// A new stage begins.
     fn stage(&self, _name: &str) {}
@@ -38,16 +41,29 @@ pub(crate) fn check(progress: &dyn Progress) -> Result<()> {
     }
 }
 
-/// Runs `work` as the stage `name` of `progress`, passing it the fraction callback, and checks
-/// for cancellation before and after.
+/// A caller's progress as the stage crates' loops see it.
+struct Forward<'a>(&'a dyn Progress);
+
+impl Interrupt for Forward<'_> {
+    fn update(&self, done: f64) {
+        self.0.update(done);
+    }
+    fn cancelled(&self) -> bool {
+        self.0.cancelled()
+    }
+}
+
+/// Runs `work` as the stage `name` of `progress`, passing it the stage's interrupt, and checks
+/// for cancellation before and after: a stage stopped inside its loops returns an incomplete
+/// result, dropped here for the cancellation error.
 pub(crate) fn stage<T>(
     progress: &dyn Progress,
     name: &str,
-    work: impl FnOnce(&(dyn Fn(f64) + Sync)) -> T,
+    work: impl FnOnce(&dyn Interrupt) -> T,
 ) -> Result<T> {
     check(progress)?;
     progress.stage(name);
-    let out = work(&|done| progress.update(done));
+    let out = work(&Forward(progress));
     progress.finish();
     check(progress)?;
     Ok(out)

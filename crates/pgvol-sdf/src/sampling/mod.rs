@@ -15,8 +15,9 @@ mod near;
 mod row;
 
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
+use pgvol_core::progress::Interrupt;
 use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 
@@ -83,6 +84,7 @@ pub struct SparseSampled {
 }
 
 /// One row of grid bricks: the stored ones and the unstored ones inside.
+#[derive(Default)]
 struct GridRow {
     stored: Vec<([usize; 3], Box<BrickValues>)>,
     inside: Vec<[usize; 3]>,
@@ -165,7 +167,7 @@ fn cut_row(
 impl MeshSdf {
     /// Exact signed distance at every node of `grid` (x fastest). The values do not depend on the
     /// number of threads.
-    pub fn sample_grid(&self, grid: &Grid, progress: &(dyn Fn(f64) + Sync)) -> Vec<f32> {
+    pub fn sample_grid(&self, grid: &Grid, progress: &dyn Interrupt) -> Vec<f32> {
         self.sample(grid, Extent::Dense, progress).values
     }
 
@@ -173,7 +175,7 @@ impl MeshSdf {
     /// When `Auto` chose the pseudonormal and the grid contradicts itself (see
     /// `sign_contradictions`), the mesh does not bound a solid: the sign falls back to the
     /// winding number for good and the grid is sampled again.
-    pub fn sample(&self, grid: &Grid, extent: Extent, progress: &(dyn Fn(f64) + Sync)) -> Sampled {
+    pub fn sample(&self, grid: &Grid, extent: Extent, progress: &dyn Interrupt) -> Sampled {
         self.with_sign_fallback(
             || self.sample_once(grid, extent, progress),
             |s| sign_contradictions(grid, &s.values),
@@ -205,7 +207,7 @@ impl MeshSdf {
         &self,
         grid: &Grid,
         width: f32,
-        progress: &(dyn Fn(f64) + Sync),
+        progress: &dyn Interrupt,
     ) -> SparseSampled {
         self.with_sign_fallback(
             || self.sample_sparse_once(grid, width, progress),
@@ -235,7 +237,7 @@ impl MeshSdf {
         &self,
         grid: &Grid,
         width: f32,
-        progress: &(dyn Fn(f64) + Sync),
+        progress: &dyn Interrupt,
     ) -> SparseSampled {
         let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
         self.sample_sparse_rows(grid, width, 0..by, 0..bz, progress)
@@ -255,7 +257,7 @@ impl MeshSdf {
         width: f32,
         ys: std::ops::Range<usize>,
         zs: std::ops::Range<usize>,
-        progress: &(dyn Fn(f64) + Sync),
+        progress: &dyn Interrupt,
     ) -> SparseSampled {
         let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
         let ys = ys.start.min(by)..ys.end.min(by);
@@ -264,12 +266,17 @@ impl MeshSdf {
         let plan = self.band_plan(grid, width, plan_box(grid, ys.clone(), zs.clone()));
         let clamp = plan.clamp;
         let done = AtomicUsize::new(0);
+        // Set at a report that finds the caller wants to stop: rows not yet begun are skipped.
+        let stop = AtomicBool::new(false);
         let total = ys.len() * zs.len();
         // One task per row of grid bricks: the sampler's rows of small bricks it covers, one
         // after another so each carries its winding number along x, then cut into grid bricks.
         let rows: Vec<GridRow> = (0..total)
             .into_par_iter()
             .map_init(row::Scratch::default, |scratch, r| {
+                if stop.load(Ordering::Relaxed) {
+                    return GridRow::default();
+                }
                 let (gj, gk) = (ys.start + r % ys.len(), zs.start + r / ys.len());
                 let mut pieces = Vec::new();
                 for dk in 0..per {
@@ -284,7 +291,10 @@ impl MeshSdf {
                 let out = cut_row(grid, [gj, gk], &pieces, clamp);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(16) || n == total {
-                    progress(n as f64 / total as f64);
+                    progress.update(n as f64 / total as f64);
+                    if progress.cancelled() {
+                        stop.store(true, Ordering::Relaxed);
+                    }
                 }
                 out
             })
@@ -308,7 +318,7 @@ impl MeshSdf {
         }
     }
 
-    fn sample_once(&self, grid: &Grid, extent: Extent, progress: &(dyn Fn(f64) + Sync)) -> Sampled {
+    fn sample_once(&self, grid: &Grid, extent: Extent, progress: &dyn Interrupt) -> Sampled {
         let [nx, ny, _] = grid.dims;
         let plan = match extent {
             Extent::Band(w) => {
@@ -335,7 +345,7 @@ impl MeshSdf {
                 out.fill_uniform(nx, brick);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(64) || n == rows {
-                    progress(n as f64 / rows as f64);
+                    progress.update(n as f64 / rows as f64);
                 }
                 out
             })
