@@ -159,6 +159,19 @@ impl Field {
         }
     }
 
+    /// The Boolean `op` of this field and `other`, sharp or rounded with `radius`.
+    fn boolean(
+        &self,
+        py: Python<'_>,
+        op: pgvol::BoolOp,
+        other: &Field,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        let blend = radius.map_or(pgvol::Blend::Sharp, pgvol::Blend::Round);
+        let shape = quiet(py, || self.shape.boolean(op, &other.shape, blend))?;
+        Ok(Field::from_shape(shape))
+    }
+
     fn storage(
         &self,
         py: Python<'_>,
@@ -181,6 +194,25 @@ impl Field {
 
 // Python signatures show literal defaults only; these are the library's.
 const _: () = assert!(pgvol::limits::ENCODE_BAND == 4.0);
+const _: () = assert!(pgvol::limits::DEFAULT_ALPHA == 1.0);
+const _: () = assert!(pgvol::limits::DEFAULT_COARSE == 30);
+const _: () = assert!(same_str(pgvol::limits::THREEMF_UNIT, "millimeter"));
+
+/// Whether two strings are equal, in a constant.
+const fn same_str(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
 
 /// The grid choice of `res` and `voxel`.
 pub(crate) fn grid_spec(
@@ -691,6 +723,139 @@ impl Field {
             self.shape.infill(wall, &lattice, &drains, p)
         })?;
         Ok(Field::from_shape(solid.field))
+    }
+
+    /// This shape joined with `other`: sharp, or rounded with `radius` (model units). The
+    /// result is re-fitted on a grid covering both shapes (grown by the radius) as fine as the
+    /// finer of their grids, a distance within 4 spacings of its surface.
+    #[pyo3(signature = (other, *, radius=None))]
+    fn union(
+        &self,
+        py: Python<'_>,
+        other: &Bound<'_, Field>,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Union, other.get(), radius)
+    }
+
+    /// What this shape and `other` share, sharp or rounded with `radius`; see `union`.
+    #[pyo3(signature = (other, *, radius=None))]
+    fn intersection(
+        &self,
+        py: Python<'_>,
+        other: &Bound<'_, Field>,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Intersection, other.get(), radius)
+    }
+
+    /// This shape less `other`, sharp or rounded with `radius`; see `union`.
+    #[pyo3(signature = (other, *, radius=None))]
+    fn difference(
+        &self,
+        py: Python<'_>,
+        other: &Bound<'_, Field>,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Difference, other.get(), radius)
+    }
+
+    /// `a | b`: the sharp union.
+    fn __or__(&self, py: Python<'_>, other: &Bound<'_, Field>) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Union, other.get(), None)
+    }
+
+    /// `a & b`: the sharp intersection.
+    fn __and__(&self, py: Python<'_>, other: &Bound<'_, Field>) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Intersection, other.get(), None)
+    }
+
+    /// `a - b`: the sharp difference.
+    fn __sub__(&self, py: Python<'_>, other: &Bound<'_, Field>) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Difference, other.get(), None)
+    }
+
+    /// The field restored inside `masks` (each six numbers x0, y0, z0, x1, y1, z1, or two
+    /// corners): with `face` ("+x", "-x", "+y", "-y", "+z", "-z") a protrusion whose base
+    /// crosses that face of the mask is replaced by a smooth cap continuing the body (`alpha`:
+    /// the field's normal derivative across the face); with `denoise=True` the field is
+    /// resampled with `coarse` samples along the mask's longest side. Coefficients whose support
+    /// misses every mask stay bit-identical. With `reports=True`, returns (field, reports), one
+    /// MaskReport per mask.
+    #[pyo3(signature = (masks, *, face=None, alpha=1.0, denoise=false, coarse=30, reports=false, progress=None))]
+    fn repair(
+        &self,
+        py: Python<'_>,
+        masks: Vec<Bound<'_, PyAny>>,
+        face: Option<&str>,
+        alpha: f32,
+        denoise: bool,
+        coarse: usize,
+        reports: bool,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        let masks = masks
+            .iter()
+            .map(|m| crate::edit::mask(py, m))
+            .collect::<PyResult<Vec<_>>>()?;
+        if masks.is_empty() {
+            return Err(errors::parameter(py, "give at least one mask"));
+        }
+        let restore = match (face, denoise) {
+            (Some(_), true) => {
+                return Err(errors::parameter(
+                    py,
+                    "give face (protrusion removal) or denoise=True, not both",
+                ))
+            }
+            (Some(face), false) => pgvol::edit::Restore::Protrusion {
+                face: names::face(py, face)?,
+                alpha,
+            },
+            (None, true) => pgvol::edit::Restore::Denoise { coarse },
+            (None, false) => {
+                return Err(errors::parameter(
+                    py,
+                    "give the face the protrusion's base crosses (e.g. face=\"-z\"), or \
+                     denoise=True",
+                ))
+            }
+        };
+        let repaired = run(py, progress, |p| self.shape.repair(&masks, restore, p))?;
+        let field = Py::new(py, Field::from_shape(repaired.field))?;
+        if !reports {
+            return Ok(field.into_any());
+        }
+        let reports = repaired
+            .masks
+            .into_iter()
+            .map(|r| Py::new(py, crate::edit::MaskReport::from(r)))
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok((field, reports).into_pyobject(py)?.into_any().unbind())
+    }
+
+    /// Writes the field for other tools, by the extension of `path`: ".nrrd" or ".npy" the
+    /// field sampled on a grid (the stored grid, or `res` nodes along the box's longest side),
+    /// ".3mf" a 3MF volumetric level set naming `unit`; with `coefficients=True`, ".nrrd" holds
+    /// the coefficients with the basis in its key/value fields. Returns the grid written.
+    #[pyo3(signature = (path, *, res=None, coefficients=false, unit="millimeter"))]
+    fn export(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        res: Option<usize>,
+        coefficients: bool,
+        unit: &str,
+    ) -> PyResult<Grid> {
+        let grid = quiet(py, || {
+            let options = pgvol::ExportOptions {
+                kind: Some(pgvol::ExportKind::from_path(&path, coefficients)?),
+                res,
+                unit,
+            };
+            self.shape.export(&path, &options)
+        })?;
+        Ok(Grid { grid })
     }
 
     /// Layers of closed contours `layer_height` apart along `axis`.
