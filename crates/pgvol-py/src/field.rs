@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use numpy::{PyArray1, PyArray2, PyArray3};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 
@@ -94,6 +94,26 @@ impl Layer {
             loops,
             holes,
         }
+    }
+}
+
+impl Layer {
+    /// The library's layer from this one's loops, each an (M, 2) array.
+    pub(crate) fn to_layer(&self, py: Python<'_>) -> PyResult<pgvol::Layer> {
+        let mut loops = Vec::with_capacity(self.loops.len());
+        for (points, &hole) in self.loops.iter().zip(&self.holes) {
+            let array = points.bind(py).readonly();
+            let view = array.as_array();
+            if view.ncols() != 2 {
+                return Err(errors::parameter(py, "a loop must be an (M, 2) array"));
+            }
+            let points = view.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+            loops.push(pgvol::slicing::Loop { points, hole });
+        }
+        Ok(pgvol::Layer {
+            height: self.height,
+            loops,
+        })
     }
 }
 
@@ -196,6 +216,7 @@ impl Field {
 const _: () = assert!(pgvol::limits::ENCODE_BAND == 4.0);
 const _: () = assert!(pgvol::limits::DEFAULT_ALPHA == 1.0);
 const _: () = assert!(pgvol::limits::DEFAULT_COARSE == 30);
+const _: () = assert!(pgvol::limits::CSG_RES == 128);
 const _: () = assert!(same_str(pgvol::limits::THREEMF_UNIT, "millimeter"));
 
 /// Whether two strings are equal, in a constant.
@@ -288,6 +309,23 @@ fn make_lattice(
         thickness_far,
     )
     .map_err(|e| errors::to_py(py, e))
+}
+
+/// An operand of `Field.csg`: a Field, a primary's text or a file's path.
+fn operand(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Operand> {
+    if let Ok(field) = obj.cast::<Field>() {
+        return Ok(pgvol::Operand::from(field.get().shape.clone()));
+    }
+    if let Ok(text) = obj.extract::<String>() {
+        return pgvol::Operand::parse(&text).map_err(|e| errors::to_py(py, e));
+    }
+    match obj.extract::<PathBuf>() {
+        Ok(path) => Ok(pgvol::Operand::File(path)),
+        Err(_) => Err(errors::parameter(
+            py,
+            "an operand is a Field, a primary such as \"sphere:0,0,0,1\", or a file's path",
+        )),
+    }
 }
 
 fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::edit::Drain> {
@@ -437,6 +475,47 @@ impl Field {
             .map(|l| Layer::from_layer(py, l))
             .collect();
         Ok((field, layers).into_pyobject(py)?.into_any().unbind())
+    }
+
+    /// A closed solid through a stack of planar contours along `axis`: a list of Layers (as
+    /// `slice` returns them) or a layer file (.json, .cli or .svg, as `write_layers` and
+    /// `pgvol slice` write them). `method` "spline" interpolates each plane's 2D signed
+    /// distance across the planes; the RBF methods fit points along the loops. The solid is
+    /// closed half a layer beyond the outermost planes.
+    #[staticmethod]
+    #[pyo3(signature = (layers, *, axis="z", res=None, voxel=None, method="spline", progress=None))]
+    fn from_contours(
+        py: Python<'_>,
+        layers: &Bound<'_, PyAny>,
+        axis: &str,
+        res: Option<usize>,
+        voxel: Option<f32>,
+        method: &str,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let source = match layers.extract::<Vec<PyRef<'_, Layer>>>() {
+            Ok(list) => Ok(list
+                .iter()
+                .map(|l| l.to_layer(py))
+                .collect::<PyResult<Vec<_>>>()?),
+            Err(_) => Err(layers.extract::<PathBuf>().map_err(|_| {
+                errors::parameter(py, "layers must be a list of Layer or a layer file's path")
+            })?),
+        };
+        let options = pgvol::PointsOptions {
+            grid: grid_spec(py, res, voxel)?,
+            method: names::points_method(py, method)?,
+            ..Default::default()
+        };
+        let axis = names::axis(py, axis)?;
+        let fitted = run(py, progress, |p| {
+            let layers = match source {
+                Ok(layers) => layers,
+                Err(path) => pgvol::io::read_layers(&path)?,
+            };
+            pgvol::reconstruct::contours(&layers, axis, &options, p)
+        })?;
+        Ok(Field::from_file(fitted.file))
     }
 
     /// Encodes a `trimesh.Trimesh` (or anything with `vertices` and `faces`); the keywords are
@@ -758,6 +837,49 @@ impl Field {
         radius: Option<f32>,
     ) -> PyResult<Field> {
         self.boolean(py, pgvol::BoolOp::Difference, other.get(), radius)
+    }
+
+    /// The Boolean `op` ("union", "intersection", or "difference": the first less the others)
+    /// of two or more `operands`, each a Field, an analytic solid ("sphere:cx,cy,cz,r",
+    /// "box:cx,cy,cz,hx,hy,hz", "plane:nx,ny,nz,d", "cylinder:px,py,pz,ax,ay,az,r") or the path
+    /// of a `.pgv` or mesh file; sharp, or rounded with `radius`. The result is re-fitted on a
+    /// cube grid of `res` nodes per axis over `bounds` ((x0, y0, z0), (x1, y1, z1)), by default
+    /// the box of every bounded operand grown by the radius; `sign` tells inside from outside
+    /// in mesh files.
+    #[staticmethod]
+    #[pyo3(signature = (operands, op="union", *, radius=None, res=128, bounds=None, sign="auto", progress=None))]
+    fn csg(
+        py: Python<'_>,
+        operands: Vec<Bound<'_, PyAny>>,
+        op: &str,
+        radius: Option<f32>,
+        res: usize,
+        bounds: Option<Segment>,
+        sign: &str,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let operands = operands
+            .iter()
+            .map(|o| operand(py, o))
+            .collect::<PyResult<Vec<_>>>()?;
+        let pgvol::GridSpec::Res(res) = grid_spec(py, Some(res), None)? else {
+            unreachable!("a resolution gives a resolution");
+        };
+        let options = pgvol::CsgOptions {
+            op: names::bool_op(py, op)?,
+            blend: radius.map_or(pgvol::Blend::Sharp, pgvol::Blend::Round),
+            res,
+            bounds: bounds.map(|(a, b)| {
+                (
+                    glam::Vec3::new(a.0, a.1, a.2),
+                    glam::Vec3::new(b.0, b.1, b.2),
+                )
+            }),
+            sign: names::sign(py, sign)?,
+            ..Default::default()
+        };
+        let shape = run(py, progress, |p| pgvol::Field::csg(&operands, &options, p))?;
+        Ok(Field::from_shape(shape))
     }
 
     /// `a | b`: the sharp union.

@@ -147,3 +147,20 @@ pub(crate) fn face(py: Python<'_>, name: &str) -> PyResult<pgvol::edit::Face> {
     }
     Ok(pgvol::edit::Face { axis, upper })
 }
+
+/// "union", "intersection" or "difference".
+pub(crate) fn bool_op(py: Python<'_>, name: &str) -> PyResult<pgvol::BoolOp> {
+    Ok(match name {
+        "union" => pgvol::BoolOp::Union,
+        "intersection" => pgvol::BoolOp::Intersection,
+        "difference" => pgvol::BoolOp::Difference,
+        _ => {
+            return Err(unknown(
+                py,
+                "operation",
+                name,
+                "union, intersection or difference",
+            ))
+        }
+    })
+}

@@ -200,3 +200,35 @@ def test_points_on_a_sphere_give_a_sphere():
     v, _ = field.to_mesh()
     radius = np.linalg.norm(v.astype(np.float64), axis=1)
     assert radius.mean() == pytest.approx(1.0, rel=0.005)
+
+
+def test_csg_of_primaries_and_fields(balls):
+    a, _ = balls
+    lens = pgvol.Field.csg(["sphere:0,0,0,1", "sphere:1,0,0,1"], "intersection", res=96)
+    assert volume(lens) == pytest.approx(LENS, rel=0.01)
+    # A Field and a primary mix; the default is the union.
+    joined = pgvol.Field.csg([a, "sphere:1,0,0,1"], res=96)
+    assert volume(joined) == pytest.approx(EXACT["union"], rel=0.01)
+    cut = pgvol.Field.csg([a, "box:0,0,1,2,2,1"], "difference", res=96)
+    assert volume(cut) == pytest.approx(SPHERE / 2, rel=0.01)
+    with pytest.raises(pgvol.ParameterError):
+        pgvol.Field.csg([a], "union")
+    with pytest.raises(pgvol.ParameterError, match="operation"):
+        pgvol.Field.csg([a, a], "xor")
+    with pytest.raises(pgvol.ParameterError, match="sphere"):
+        pgvol.Field.csg([a, "sphere:0,0,1"])
+
+
+def test_contours_of_a_sliced_ball_give_the_ball(balls, tmp_path):
+    a, _ = balls
+    layers = a.slice(0.05)
+    field = pgvol.Field.from_contours(layers, res=64)
+    v, _ = field.to_mesh()
+    radius = np.linalg.norm(v.astype(np.float64), axis=1)
+    assert radius.mean() == pytest.approx(R, rel=0.01)
+    # The same stack read from a layer file gives the same field.
+    pgvol._pgvol.write_layers(tmp_path / "ball.json", layers)
+    again = pgvol.Field.from_contours(tmp_path / "ball.json", res=64)
+    assert again.to_bytes() == field.to_bytes()
+    with pytest.raises(pgvol.ParameterError):
+        pgvol.Field.from_contours(42)  # type: ignore[arg-type]

@@ -214,6 +214,25 @@ class Field:
         the surface gives a Layer without loops and a PgvolWarning.
         """
     @staticmethod
+    def from_contours(
+        layers: Union[Sequence[Layer], _PathLike],
+        *,
+        axis: Literal["x", "y", "z"] = "z",
+        res: Optional[int] = None,
+        voxel: Optional[float] = None,
+        method: _PointsMethod = "spline",
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """A closed solid through a stack of planar contours along ``axis``: Layers (as
+        ``slice`` returns them) or a layer file (.json, .cli or .svg, as ``write_layers`` and
+        ``pgvol slice`` write them), one layer per height, holes as clockwise loops.
+
+        The grid is a cube of side 1.1 x the stack's longest extent with ``res`` nodes per axis
+        (default 128) or spacing ``voxel``. ``method`` "spline" interpolates each plane's 2D
+        signed distance across the planes by a cubic spline along the axis; the RBF methods
+        fit points along the loops. The solid is closed half a layer (at least 2 grid
+        spacings) beyond the outermost planes."""
+    @staticmethod
     def from_trimesh(mesh: Any, **kwargs: Any) -> "Field":
         """Encodes a trimesh.Trimesh; the keywords are those of from_mesh."""
     @staticmethod
@@ -332,6 +351,26 @@ class Field:
         ``union``."""
     def difference(self, other: "Field", *, radius: Optional[float] = None) -> "Field":
         """This shape less ``other``, sharp or rounded with ``radius``; see ``union``."""
+    @staticmethod
+    def csg(
+        operands: Sequence[Union["Field", str, "os.PathLike[str]"]],
+        op: Literal["union", "intersection", "difference"] = "union",
+        *,
+        radius: Optional[float] = None,
+        res: int = 128,
+        bounds: Optional[_Segment] = None,
+        sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """The Boolean ``op`` of two or more ``operands`` (for "difference", the first less the
+        others), sharp or rounded with ``radius``.
+
+        An operand is a Field, an analytic solid ("sphere:cx,cy,cz,r", "box:cx,cy,cz,hx,hy,hz",
+        "plane:nx,ny,nz,d", "cylinder:px,py,pz,ax,ay,az,r") or the path of a .pgv or mesh
+        file. The result is re-fitted in the cubic B-spline on a cube grid of ``res`` nodes per
+        axis over ``bounds`` (default: the box of every bounded operand, grown by the radius;
+        needed when every operand is a plane or cylinder). ``sign`` tells inside from outside
+        in mesh files."""
     def __or__(self, other: "Field", /) -> "Field":
         """``a | b``: ``a.union(b)``."""
     def __and__(self, other: "Field", /) -> "Field":
