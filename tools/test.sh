@@ -84,6 +84,13 @@ if [[ $py_installed == 1 ]]; then
         || failed+=("pytest crates/pgvol-py/tests")
 fi
 
+section "python type stubs (mypy.stubtest pgvol)"
+# The stubs (_pgvol.pyi) and the package's Python modules against the installed extension:
+# every name, signature and default the module has at runtime, and no more. Needs no allowlist.
+if [[ $py_installed == 1 ]]; then
+    .venv/bin/python -m mypy.stubtest pgvol || failed+=("mypy.stubtest pgvol")
+fi
+
 section "end-to-end checks (pytest tools/checks)"
 .venv/bin/python -m pytest -q -p no:cacheprovider tools/checks || failed+=("pytest tools/checks")
 

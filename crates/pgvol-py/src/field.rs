@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use numpy::{PyArray1, PyArray2, PyArray3};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 
@@ -97,6 +97,26 @@ impl Layer {
     }
 }
 
+impl Layer {
+    /// The library's layer from this one's loops, each an (M, 2) array.
+    pub(crate) fn to_layer(&self, py: Python<'_>) -> PyResult<pgvol::Layer> {
+        let mut loops = Vec::with_capacity(self.loops.len());
+        for (points, &hole) in self.loops.iter().zip(&self.holes) {
+            let array = points.bind(py).readonly();
+            let view = array.as_array();
+            if view.ncols() != 2 {
+                return Err(errors::parameter(py, "a loop must be an (M, 2) array"));
+            }
+            let points = view.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+            loops.push(pgvol::slicing::Loop { points, hole });
+        }
+        Ok(pgvol::Layer {
+            height: self.height,
+            loops,
+        })
+    }
+}
+
 #[pymethods]
 impl Layer {
     /// A layer from its height, its loops ((M, 2) float32 arrays) and which loops are holes.
@@ -159,6 +179,19 @@ impl Field {
         }
     }
 
+    /// The Boolean `op` of this field and `other`, sharp or rounded with `radius`.
+    fn boolean(
+        &self,
+        py: Python<'_>,
+        op: pgvol::BoolOp,
+        other: &Field,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        let blend = radius.map_or(pgvol::Blend::Sharp, pgvol::Blend::Round);
+        let shape = quiet(py, || self.shape.boolean(op, &other.shape, blend))?;
+        Ok(Field::from_shape(shape))
+    }
+
     fn storage(
         &self,
         py: Python<'_>,
@@ -181,6 +214,26 @@ impl Field {
 
 // Python signatures show literal defaults only; these are the library's.
 const _: () = assert!(pgvol::limits::ENCODE_BAND == 4.0);
+const _: () = assert!(pgvol::limits::DEFAULT_ALPHA == 1.0);
+const _: () = assert!(pgvol::limits::DEFAULT_COARSE == 30);
+const _: () = assert!(pgvol::limits::CSG_RES == 128);
+const _: () = assert!(same_str(pgvol::limits::THREEMF_UNIT, "millimeter"));
+
+/// Whether two strings are equal, in a constant.
+const fn same_str(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
 
 /// The grid choice of `res` and `voxel`.
 pub(crate) fn grid_spec(
@@ -256,6 +309,23 @@ fn make_lattice(
         thickness_far,
     )
     .map_err(|e| errors::to_py(py, e))
+}
+
+/// An operand of `Field.csg`: a Field, a primary's text or a file's path.
+fn operand(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Operand> {
+    if let Ok(field) = obj.cast::<Field>() {
+        return Ok(pgvol::Operand::from(field.get().shape.clone()));
+    }
+    if let Ok(text) = obj.extract::<String>() {
+        return pgvol::Operand::parse(&text).map_err(|e| errors::to_py(py, e));
+    }
+    match obj.extract::<PathBuf>() {
+        Ok(path) => Ok(pgvol::Operand::File(path)),
+        Err(_) => Err(errors::parameter(
+            py,
+            "an operand is a Field, a primary such as \"sphere:0,0,0,1\", or a file's path",
+        )),
+    }
 }
 
 fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::edit::Drain> {
@@ -405,6 +475,47 @@ impl Field {
             .map(|l| Layer::from_layer(py, l))
             .collect();
         Ok((field, layers).into_pyobject(py)?.into_any().unbind())
+    }
+
+    /// A closed solid through a stack of planar contours along `axis`: a list of Layers (as
+    /// `slice` returns them) or a layer file (.json, .cli or .svg, as `write_layers` and
+    /// `pgvol slice` write them). `method` "spline" interpolates each plane's 2D signed
+    /// distance across the planes; the RBF methods fit points along the loops. The solid is
+    /// closed half a layer beyond the outermost planes.
+    #[staticmethod]
+    #[pyo3(signature = (layers, *, axis="z", res=None, voxel=None, method="spline", progress=None))]
+    fn from_contours(
+        py: Python<'_>,
+        layers: &Bound<'_, PyAny>,
+        axis: &str,
+        res: Option<usize>,
+        voxel: Option<f32>,
+        method: &str,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let source = match layers.extract::<Vec<PyRef<'_, Layer>>>() {
+            Ok(list) => Ok(list
+                .iter()
+                .map(|l| l.to_layer(py))
+                .collect::<PyResult<Vec<_>>>()?),
+            Err(_) => Err(layers.extract::<PathBuf>().map_err(|_| {
+                errors::parameter(py, "layers must be a list of Layer or a layer file's path")
+            })?),
+        };
+        let options = pgvol::PointsOptions {
+            grid: grid_spec(py, res, voxel)?,
+            method: names::points_method(py, method)?,
+            ..Default::default()
+        };
+        let axis = names::axis(py, axis)?;
+        let fitted = run(py, progress, |p| {
+            let layers = match source {
+                Ok(layers) => layers,
+                Err(path) => pgvol::io::read_layers(&path)?,
+            };
+            pgvol::reconstruct::contours(&layers, axis, &options, p)
+        })?;
+        Ok(Field::from_file(fitted.file))
     }
 
     /// Encodes a `trimesh.Trimesh` (or anything with `vertices` and `faces`); the keywords are
@@ -691,6 +802,182 @@ impl Field {
             self.shape.infill(wall, &lattice, &drains, p)
         })?;
         Ok(Field::from_shape(solid.field))
+    }
+
+    /// This shape joined with `other`: sharp, or rounded with `radius` (model units). The
+    /// result is re-fitted on a grid covering both shapes (grown by the radius) as fine as the
+    /// finer of their grids, a distance within 4 spacings of its surface.
+    #[pyo3(signature = (other, *, radius=None))]
+    fn union(
+        &self,
+        py: Python<'_>,
+        other: &Bound<'_, Field>,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Union, other.get(), radius)
+    }
+
+    /// What this shape and `other` share, sharp or rounded with `radius`; see `union`.
+    #[pyo3(signature = (other, *, radius=None))]
+    fn intersection(
+        &self,
+        py: Python<'_>,
+        other: &Bound<'_, Field>,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Intersection, other.get(), radius)
+    }
+
+    /// This shape less `other`, sharp or rounded with `radius`; see `union`.
+    #[pyo3(signature = (other, *, radius=None))]
+    fn difference(
+        &self,
+        py: Python<'_>,
+        other: &Bound<'_, Field>,
+        radius: Option<f32>,
+    ) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Difference, other.get(), radius)
+    }
+
+    /// The Boolean `op` ("union", "intersection", or "difference": the first less the others)
+    /// of two or more `operands`, each a Field, an analytic solid ("sphere:cx,cy,cz,r",
+    /// "box:cx,cy,cz,hx,hy,hz", "plane:nx,ny,nz,d", "cylinder:px,py,pz,ax,ay,az,r") or the path
+    /// of a `.pgv` or mesh file; sharp, or rounded with `radius`. The result is re-fitted on a
+    /// cube grid of `res` nodes per axis over `bounds` ((x0, y0, z0), (x1, y1, z1)), by default
+    /// the box of every bounded operand grown by the radius; `sign` tells inside from outside
+    /// in mesh files.
+    #[staticmethod]
+    #[pyo3(signature = (operands, op="union", *, radius=None, res=128, bounds=None, sign="auto", progress=None))]
+    fn csg(
+        py: Python<'_>,
+        operands: Vec<Bound<'_, PyAny>>,
+        op: &str,
+        radius: Option<f32>,
+        res: usize,
+        bounds: Option<Segment>,
+        sign: &str,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let operands = operands
+            .iter()
+            .map(|o| operand(py, o))
+            .collect::<PyResult<Vec<_>>>()?;
+        let pgvol::GridSpec::Res(res) = grid_spec(py, Some(res), None)? else {
+            unreachable!("a resolution gives a resolution");
+        };
+        let options = pgvol::CsgOptions {
+            op: names::bool_op(py, op)?,
+            blend: radius.map_or(pgvol::Blend::Sharp, pgvol::Blend::Round),
+            res,
+            bounds: bounds.map(|(a, b)| {
+                (
+                    glam::Vec3::new(a.0, a.1, a.2),
+                    glam::Vec3::new(b.0, b.1, b.2),
+                )
+            }),
+            sign: names::sign(py, sign)?,
+            ..Default::default()
+        };
+        let shape = run(py, progress, |p| pgvol::Field::csg(&operands, &options, p))?;
+        Ok(Field::from_shape(shape))
+    }
+
+    /// `a | b`: the sharp union.
+    fn __or__(&self, py: Python<'_>, other: &Bound<'_, Field>) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Union, other.get(), None)
+    }
+
+    /// `a & b`: the sharp intersection.
+    fn __and__(&self, py: Python<'_>, other: &Bound<'_, Field>) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Intersection, other.get(), None)
+    }
+
+    /// `a - b`: the sharp difference.
+    fn __sub__(&self, py: Python<'_>, other: &Bound<'_, Field>) -> PyResult<Field> {
+        self.boolean(py, pgvol::BoolOp::Difference, other.get(), None)
+    }
+
+    /// The field restored inside `masks` (each six numbers x0, y0, z0, x1, y1, z1, or two
+    /// corners): with `face` ("+x", "-x", "+y", "-y", "+z", "-z") a protrusion whose base
+    /// crosses that face of the mask is replaced by a smooth cap continuing the body (`alpha`:
+    /// the field's normal derivative across the face); with `denoise=True` the field is
+    /// resampled with `coarse` samples along the mask's longest side. Coefficients whose support
+    /// misses every mask stay bit-identical. With `reports=True`, returns (field, reports), one
+    /// MaskReport per mask.
+    #[pyo3(signature = (masks, *, face=None, alpha=1.0, denoise=false, coarse=30, reports=false, progress=None))]
+    fn repair(
+        &self,
+        py: Python<'_>,
+        masks: Vec<Bound<'_, PyAny>>,
+        face: Option<&str>,
+        alpha: f32,
+        denoise: bool,
+        coarse: usize,
+        reports: bool,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        let masks = masks
+            .iter()
+            .map(|m| crate::edit::mask(py, m))
+            .collect::<PyResult<Vec<_>>>()?;
+        if masks.is_empty() {
+            return Err(errors::parameter(py, "give at least one mask"));
+        }
+        let restore = match (face, denoise) {
+            (Some(_), true) => {
+                return Err(errors::parameter(
+                    py,
+                    "give face (protrusion removal) or denoise=True, not both",
+                ))
+            }
+            (Some(face), false) => pgvol::edit::Restore::Protrusion {
+                face: names::face(py, face)?,
+                alpha,
+            },
+            (None, true) => pgvol::edit::Restore::Denoise { coarse },
+            (None, false) => {
+                return Err(errors::parameter(
+                    py,
+                    "give the face the protrusion's base crosses (e.g. face=\"-z\"), or \
+                     denoise=True",
+                ))
+            }
+        };
+        let repaired = run(py, progress, |p| self.shape.repair(&masks, restore, p))?;
+        let field = Py::new(py, Field::from_shape(repaired.field))?;
+        if !reports {
+            return Ok(field.into_any());
+        }
+        let reports = repaired
+            .masks
+            .into_iter()
+            .map(|r| Py::new(py, crate::edit::MaskReport::from(r)))
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok((field, reports).into_pyobject(py)?.into_any().unbind())
+    }
+
+    /// Writes the field for other tools, by the extension of `path`: ".nrrd" or ".npy" the
+    /// field sampled on a grid (the stored grid, or `res` nodes along the box's longest side),
+    /// ".3mf" a 3MF volumetric level set naming `unit`; with `coefficients=True`, ".nrrd" holds
+    /// the coefficients with the basis in its key/value fields. Returns the grid written.
+    #[pyo3(signature = (path, *, res=None, coefficients=false, unit="millimeter"))]
+    fn export(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        res: Option<usize>,
+        coefficients: bool,
+        unit: &str,
+    ) -> PyResult<Grid> {
+        let grid = quiet(py, || {
+            let options = pgvol::ExportOptions {
+                kind: Some(pgvol::ExportKind::from_path(&path, coefficients)?),
+                res,
+                unit,
+            };
+            self.shape.export(&path, &options)
+        })?;
+        Ok(Grid { grid })
     }
 
     /// Layers of closed contours `layer_height` apart along `axis`.

@@ -9,6 +9,7 @@
 #![allow(clippy::too_many_arguments)]
 
 mod arrays;
+mod edit;
 mod errors;
 mod field;
 mod json;
@@ -19,11 +20,11 @@ mod progress;
 
 use std::path::PathBuf;
 
-use numpy::PyArray2;
+use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 
 use crate::json::json_to_py;
-use crate::progress::quiet;
+use crate::progress::{quiet, run};
 
 /// Reads a mesh file (OBJ, glTF/GLB, STL or PLY by extension), with bit-identical vertices
 /// welded and degenerate or repeated triangles dropped: (vertices (N, 3), faces (M, 3) int32).
@@ -86,6 +87,43 @@ fn compare<'py>(
 // Python signatures show literal defaults only; this is the library's.
 const _: () = assert!(pgvol::limits::COMPARE_SAMPLES == 200_000);
 
+/// The signed distance of a mesh sampled on a grid: a cube of side 1.1 x the mesh's longest
+/// extent with `res` nodes per axis (default 128) or spacing `voxel`. Exact distances
+/// everywhere, or with `band` only within that many grid spacings of the surface (the sign and
+/// a clamped magnitude elsewhere). Returns (values, grid): a float32 array of shape
+/// (nx, ny, nz) indexed `[i, j, k]`, negative inside, and the Grid of the nodes.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=None, sign="auto", progress=None))]
+fn signed_distance<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    res: Option<usize>,
+    voxel: Option<f32>,
+    band: Option<f32>,
+    sign: &str,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(Bound<'py, PyArray3<f32>>, field::Grid)> {
+    let positions = arrays::world_points(vertices, "vertices")?;
+    let triangles = arrays::faces(faces)?;
+    let options = pgvol::SdfOptions {
+        grid: field::grid_spec(py, res, voxel)?,
+        band,
+        sign: names::sign(py, sign)?,
+    };
+    let sampled = run(py, progress, |p| {
+        let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+        // The grid is returned in the mesh's local coordinates, exact only near the origin.
+        pgvol::checks::require_near(mesh.offset, "signed_distance")?;
+        pgvol::distances::signed_distance(&mesh, &options, p)
+    })?;
+    let grid = sampled.grid;
+    Ok((
+        arrays::grid_values(py, sampled.values, grid.dims),
+        field::Grid { grid },
+    ))
+}
+
 /// Sets the largest estimated peak memory, in bytes, a call may start with; None returns to
 /// the default, the memory the machine has available when the call starts.
 #[pyfunction]
@@ -105,9 +143,11 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<field::Field>()?;
     m.add_class::<field::Grid>()?;
     m.add_class::<field::Layer>()?;
+    m.add_class::<edit::MaskReport>()?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(perturb::perturb, m)?)?;
     m.add_function(wrap_pyfunction!(set_memory_limit, m)?)?;
     m.add_function(wrap_pyfunction!(memory_limit, m)?)?;

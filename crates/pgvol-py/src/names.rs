@@ -132,3 +132,35 @@ pub(crate) fn lattice_style(py: Python<'_>, name: &str) -> PyResult<pgvol::latti
         _ => Err(unknown(py, "lattice style", name, "sheet or strut")),
     }
 }
+
+/// "+x", "-x", "+y", "-y", "+z" or "-z": a face of a repair mask.
+pub(crate) fn face(py: Python<'_>, name: &str) -> PyResult<pgvol::edit::Face> {
+    let axis = match name.get(1..) {
+        Some("x") => 0,
+        Some("y") => 1,
+        Some("z") => 2,
+        _ => usize::MAX,
+    };
+    let upper = name.starts_with('+');
+    if axis == usize::MAX || !(upper || name.starts_with('-')) {
+        return Err(unknown(py, "face", name, "+x, -x, +y, -y, +z or -z"));
+    }
+    Ok(pgvol::edit::Face { axis, upper })
+}
+
+/// "union", "intersection" or "difference".
+pub(crate) fn bool_op(py: Python<'_>, name: &str) -> PyResult<pgvol::BoolOp> {
+    Ok(match name {
+        "union" => pgvol::BoolOp::Union,
+        "intersection" => pgvol::BoolOp::Intersection,
+        "difference" => pgvol::BoolOp::Difference,
+        _ => {
+            return Err(unknown(
+                py,
+                "operation",
+                name,
+                "union, intersection or difference",
+            ))
+        }
+    })
+}

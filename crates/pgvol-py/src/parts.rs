@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use numpy::{PyArray2, PyArrayMethods};
+use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
@@ -357,23 +357,10 @@ pub(crate) fn write_layers(
     binary: bool,
     units_mm: f32,
 ) -> PyResult<()> {
-    let mut out = Vec::with_capacity(layers.len());
-    for layer in &layers {
-        let mut loops = Vec::with_capacity(layer.loops.len());
-        for (points, &hole) in layer.loops.iter().zip(&layer.holes) {
-            let array = points.bind(py).readonly();
-            let view = array.as_array();
-            if view.ncols() != 2 {
-                return Err(errors::parameter(py, "a loop must be an (M, 2) array"));
-            }
-            let points = view.rows().into_iter().map(|r| [r[0], r[1]]).collect();
-            loops.push(pgvol::slicing::Loop { points, hole });
-        }
-        out.push(pgvol::Layer {
-            height: layer.height,
-            loops,
-        });
-    }
+    let out = layers
+        .iter()
+        .map(|l| l.to_layer(py))
+        .collect::<PyResult<Vec<_>>>()?;
     quiet(py, || {
         let format = pgvol::io::LayerFormat::from_path(&path, binary)?;
         // Layers from Python are world coordinates as given.

@@ -36,12 +36,14 @@ from ._pgvol import (
     Field,
     Grid,
     Layer,
+    MaskReport,
     __version__,
     compare,
     memory_limit,
     perturb,
     read_mesh,
     set_memory_limit,
+    signed_distance,
     write_mesh,
 )
 
@@ -73,6 +75,7 @@ __all__ = [
     "InputFileError",
     "InternalError",
     "Layer",
+    "MaskReport",
     "MissingFileError",
     "OutputFileError",
     "ParameterError",
@@ -85,5 +88,6 @@ __all__ = [
     "perturb",
     "read_mesh",
     "set_memory_limit",
+    "signed_distance",
     "write_mesh",
 ]

@@ -22,9 +22,11 @@ __all__ = [
     "Field",
     "Grid",
     "Layer",
+    "MaskReport",
     "read_mesh",
     "write_mesh",
     "compare",
+    "signed_distance",
     "perturb",
     "set_memory_limit",
     "memory_limit",
@@ -34,6 +36,18 @@ __all__ = [
     "MAX_RES",
     "ENCODE_BAND",
     "COMPARE_SAMPLES",
+    "EncodeJob",
+    "plan_encode",
+    "needs_winding",
+    "assemble_encode",
+    "plan_decode",
+    "decode_part_bricks",
+    "decode_part",
+    "weld_parts",
+    "plan_slice",
+    "slice_part_bricks",
+    "slice_part",
+    "write_layers",
 ]
 
 __version__: str
@@ -58,6 +72,12 @@ _PointsMethod = Literal["spline", "tangent", "rbf-wendland", "rbf-cubic"]
 _Drain = Union[Sequence[float], Tuple[Sequence[float], Sequence[float], float]]
 """(x, y, z, dx, dy, dz, diameter) or ((x, y, z), (dx, dy, dz), diameter): a point inside the
 cavity, the direction out through the wall, and the hole's diameter."""
+_Mask = Union[Sequence[float], Tuple[Sequence[float], Sequence[float]]]
+"""(x0, y0, z0, x1, y1, z1) or ((x0, y0, z0), (x1, y1, z1)): an axis-aligned box in model
+units."""
+_Face = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
+_Surface = Literal["gyroid", "schwarz-p", "primitive", "diamond", "neovius"]
+_Segment = Tuple[_Vec3, _Vec3]
 
 @final
 class Grid:
@@ -96,6 +116,24 @@ class Layer:
     @property
     def holes(self) -> List[bool]:
         """Per loop: a hole (clockwise) rather than an outer boundary (counter-clockwise)."""
+
+@final
+class MaskReport:
+    """What a repair did inside one mask."""
+
+    @property
+    def nodes(self) -> int:
+        """Grid nodes whose values were restored."""
+    @property
+    def iterations(self) -> int:
+        """Iterations of the Laplace fill (0 when denoising)."""
+    @property
+    def coefficients(self) -> int:
+        """Coefficients the local re-fit may have changed."""
+    @property
+    def fit_error(self) -> float:
+        """The largest difference between the re-fitted field and the restored values at the
+        mask's nodes."""
 
 @final
 class Field:
@@ -176,6 +214,25 @@ class Field:
         the surface gives a Layer without loops and a PgvolWarning.
         """
     @staticmethod
+    def from_contours(
+        layers: Union[Sequence[Layer], _PathLike],
+        *,
+        axis: Literal["x", "y", "z"] = "z",
+        res: Optional[int] = None,
+        voxel: Optional[float] = None,
+        method: _PointsMethod = "spline",
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """A closed solid through a stack of planar contours along ``axis``: Layers (as
+        ``slice`` returns them) or a layer file (.json, .cli or .svg, as ``write_layers`` and
+        ``pgvol slice`` write them), one layer per height, holes as clockwise loops.
+
+        The grid is a cube of side 1.1 x the stack's longest extent with ``res`` nodes per axis
+        (default 128) or spacing ``voxel``. ``method`` "spline" interpolates each plane's 2D
+        signed distance across the planes by a cubic spline along the axis; the RBF methods
+        fit points along the loops. The solid is closed half a layer (at least 2 grid
+        spacings) beyond the outermost planes."""
+    @staticmethod
     def from_trimesh(mesh: Any, **kwargs: Any) -> "Field":
         """Encodes a trimesh.Trimesh; the keywords are those of from_mesh."""
     @staticmethod
@@ -247,6 +304,136 @@ class Field:
     ) -> "Field":
         """A wall of ``thickness`` on ``side`` of the surface, or with ``hollow=True`` the
         shape with a cavity ``thickness`` inside its surface and optional drain holes."""
+    def lattice(
+        self,
+        surface: _Surface,
+        cell: float,
+        thickness: float,
+        *,
+        style: Literal["sheet", "strut"] = "sheet",
+        grade_depth: Optional[float] = None,
+        grade_linear: Optional[_Segment] = None,
+        cell_far: Optional[float] = None,
+        thickness_far: Optional[float] = None,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """The part cut by a triply periodic lattice of period ``cell``: ``style`` "sheet" (a
+        wall of ``thickness``) or "strut" (a labyrinth bounded at the level ``thickness``).
+        Grading: ``grade_depth`` (from the skin to that depth) or ``grade_linear`` (from one
+        point to another), towards ``cell_far`` and ``thickness_far``."""
+    def infill(
+        self,
+        wall: float,
+        surface: _Surface,
+        cell: float,
+        thickness: float,
+        *,
+        style: Literal["sheet", "strut"] = "sheet",
+        drains: Optional[Sequence[_Drain]] = None,
+        grade_depth: Optional[float] = None,
+        grade_linear: Optional[_Segment] = None,
+        cell_far: Optional[float] = None,
+        thickness_far: Optional[float] = None,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """The shape hollowed to walls of ``wall`` thickness with the cavity filled by a
+        lattice (the parameters of ``lattice``), and ``drains`` cut through wall and
+        lattice."""
+    def union(self, other: "Field", *, radius: Optional[float] = None) -> "Field":
+        """This shape joined with ``other``: sharp, or rounded with ``radius`` (model units).
+
+        The result is re-fitted in the cubic B-spline on a grid covering both shapes (grown by
+        the radius) as fine as the finer of their grids, and is a distance within 4 spacings of
+        its surface. Rounding reads exact distances up to the radius from each surface: each
+        field's ``exact_band`` must reach it."""
+    def intersection(self, other: "Field", *, radius: Optional[float] = None) -> "Field":
+        """What this shape and ``other`` share, sharp or rounded with ``radius``; see
+        ``union``."""
+    def difference(self, other: "Field", *, radius: Optional[float] = None) -> "Field":
+        """This shape less ``other``, sharp or rounded with ``radius``; see ``union``."""
+    @staticmethod
+    def csg(
+        operands: Sequence[Union["Field", str, "os.PathLike[str]"]],
+        op: Literal["union", "intersection", "difference"] = "union",
+        *,
+        radius: Optional[float] = None,
+        res: int = 128,
+        bounds: Optional[_Segment] = None,
+        sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """The Boolean ``op`` of two or more ``operands`` (for "difference", the first less the
+        others), sharp or rounded with ``radius``.
+
+        An operand is a Field, an analytic solid ("sphere:cx,cy,cz,r", "box:cx,cy,cz,hx,hy,hz",
+        "plane:nx,ny,nz,d", "cylinder:px,py,pz,ax,ay,az,r") or the path of a .pgv or mesh
+        file. The result is re-fitted in the cubic B-spline on a cube grid of ``res`` nodes per
+        axis over ``bounds`` (default: the box of every bounded operand, grown by the radius;
+        needed when every operand is a plane or cylinder). ``sign`` tells inside from outside
+        in mesh files."""
+    def __or__(self, other: "Field", /) -> "Field":
+        """``a | b``: ``a.union(b)``."""
+    def __and__(self, other: "Field", /) -> "Field":
+        """``a & b``: ``a.intersection(b)``."""
+    def __sub__(self, other: "Field", /) -> "Field":
+        """``a - b``: ``a.difference(b)``."""
+    # The reflected forms CPython derives from the same number slots: b.__ror__(a) is a | b.
+    def __ror__(self, other: "Field", /) -> "Field": ...
+    def __rand__(self, other: "Field", /) -> "Field": ...
+    def __rsub__(self, other: "Field", /) -> "Field": ...
+    @overload
+    def repair(
+        self,
+        masks: Sequence[_Mask],
+        *,
+        face: Optional[_Face] = None,
+        alpha: float = 1.0,
+        denoise: bool = False,
+        coarse: int = 30,
+        reports: Literal[False] = False,
+        progress: Optional[_Progress] = None,
+    ) -> "Field": ...
+    @overload
+    def repair(
+        self,
+        masks: Sequence[_Mask],
+        *,
+        face: Optional[_Face] = None,
+        alpha: float = 1.0,
+        denoise: bool = False,
+        coarse: int = 30,
+        reports: Literal[True],
+        progress: Optional[_Progress] = None,
+    ) -> Tuple["Field", List[MaskReport]]:
+        """The field restored inside axis-aligned ``masks``; coefficients whose support misses
+        every mask stay bit-identical.
+
+        With ``face`` ("+x", "-x", "+y", "-y", "+z" or "-z") a protrusion whose base crosses
+        that face of each mask is removed and the surface continued across it; ``alpha`` is the
+        field's normal derivative across the face (1, a distance's, continues the body; larger
+        values lower and flatten the cap). With ``denoise=True`` the field inside each mask is
+        resampled with ``coarse`` samples along its longest side (fewer smooth more). Give one
+        of the two. The field must be an exact distance over the masks (encode with a band
+        reaching the masks' largest side). With ``reports=True``, returns ``(field,
+        reports)``, one MaskReport per mask."""
+    def export(
+        self,
+        path: _PathLike,
+        *,
+        res: Optional[int] = None,
+        coefficients: bool = False,
+        unit: Literal[
+            "micron", "millimeter", "centimeter", "inch", "foot", "meter"
+        ] = "millimeter",
+    ) -> Grid:
+        """Writes the field for other tools, the format by the extension of ``path``.
+
+        ".nrrd" and ".npy": the field sampled on the stored grid, or with ``res`` nodes along
+        the box's longest side; NRRD indexed (x, y, z) with the grid's origin and spacing,
+        ``.npy`` float32 of shape (nz, ny, nx). ".3mf": a 3MF volumetric level set (a 16-bit
+        PNG image stack) naming ``unit``. With ``coefficients=True``, ".nrrd" holds the
+        coefficients on the stored grid with the basis in its key/value fields, read back
+        bit-exactly. Returns the grid written."""
     def slice(
         self,
         layer_height: float,
@@ -298,6 +485,23 @@ def compare(
     mean depth-buffer difference over 14 views ("depth_buffer", "depth_buffer_pct"), and the
     topology statistics of both ("a", "b")."""
 
+def signed_distance(
+    vertices: _Points,
+    faces: _Faces,
+    *,
+    res: Optional[int] = None,
+    voxel: Optional[float] = None,
+    band: Optional[float] = None,
+    sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
+    progress: Optional[_Progress] = None,
+) -> Tuple[npt.NDArray[np.float32], Grid]:
+    """The signed distance of a mesh sampled on a grid: a cube of side 1.1 x the mesh's longest
+    extent, centred on it, with ``res`` nodes per axis (default 128) or spacing ``voxel``.
+    Distances are exact everywhere, or with ``band`` only within that many grid spacings of the
+    surface (elsewhere the sign and a clamped magnitude). Returns ``(values, grid)``: float32
+    values of shape (nx, ny, nz), ``values[i, j, k]`` at ``origin + spacing * (i, j, k)``,
+    negative inside, and the grid."""
+
 def perturb(
     vertices: _Points,
     faces: _Faces,
@@ -327,6 +531,7 @@ def memory_limit() -> Optional[int]:
 
 # Jobs in parts, for pgvol.distributed (see docs/distributed.md).
 
+@final
 class EncodeJob:
     """The distance queries of a mesh for encoding any of its parts."""
 

@@ -144,7 +144,9 @@ def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, ban
     bit for bit, as ``Field.from_mesh`` with the interp fit. ``parts`` defaults to four per
     worker thread (one without a client); ``output`` saves the field as a ``.pgv``."""
     vertices, faces = _mesh_arrays(mesh)
-    options = {"res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign}
+    options: dict[str, Any] = {
+        "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
+    }
     plan = _pgvol.plan_encode(vertices, faces, _parts(parts, client), **options)
     key = _job_key(vertices, faces, options)
     shipped: Any = (vertices, faces)
@@ -211,7 +213,9 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
     """Slices a field (a ``Field`` or a ``.pgv`` path) in parts: the layers of
     ``Field.slice`` with the same arguments."""
     field = _field(source)
-    settings = {"axis": axis, "first": first, "resolution": resolution, "tolerance": tolerance}
+    settings: dict[str, Any] = {
+        "axis": axis, "first": first, "resolution": resolution, "tolerance": tolerance
+    }
     plan = _pgvol.plan_slice(field, _parts(parts, client), layer_height, **settings)
     key = uuid.uuid4().hex
     bricks = _scatter(client, [
