@@ -20,7 +20,12 @@ use crate::progress::{self, Progress};
 /// of the file's shape does. Marching cubes of a sparse file reads the file one window of brick
 /// slabs at a time and contours it run by run along z, so memory is the file's bytes, the mesh
 /// and one window; other methods and encodings read the whole volume first.
-pub fn decode_file(path: &Path, options: &DecodeOptions, progress: &dyn Progress) -> Result<Mesh> {
+pub fn decode_file(
+    path: impl AsRef<Path>,
+    options: &DecodeOptions,
+    progress: &dyn Progress,
+) -> Result<Mesh> {
+    let path = path.as_ref();
     let bytes = pgvol_core::read_input(path).reading()?;
     let at = |e: Error| match e.path() {
         Some(_) => e,

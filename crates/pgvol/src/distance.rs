@@ -187,7 +187,13 @@ impl GridFormat {
 }
 
 /// Writes a sampled grid to `path` atomically.
-pub fn write_grid(path: &Path, grid: &Grid, values: &[f32], format: GridFormat) -> Result<()> {
+pub fn write_grid(
+    path: impl AsRef<Path>,
+    grid: &Grid,
+    values: &[f32],
+    format: GridFormat,
+) -> Result<()> {
+    let path = path.as_ref();
     match format {
         GridFormat::Nrrd => pgvol_format::grid_files::write_nrrd(path, grid, values, &[]),
         GridFormat::Npy => pgvol_format::grid_files::write_npy(path, grid, values),

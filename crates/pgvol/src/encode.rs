@@ -310,7 +310,12 @@ fn encoded_pgv<'a>(
 }
 
 /// Writes `file` to `path` atomically; see [`pgv_bytes`].
-pub fn write_pgv(path: &Path, file: &PgvFile, storage: &StorageOptions) -> Result<StorageReport> {
+pub fn write_pgv(
+    path: impl AsRef<Path>,
+    file: &PgvFile,
+    storage: &StorageOptions,
+) -> Result<StorageReport> {
+    let path = path.as_ref();
     let (encoded, report) = encoded_pgv(file, storage).map_err(|e| e.at(path))?;
     pgvol_core::write_atomic(path, |w| encoded.write_to(w)).writing()?;
     Ok(report)
@@ -332,7 +337,8 @@ pub fn write_pgv_to(
 /// A coefficient NRRD written by [`export`](crate::export()) back as a file. Its storage
 /// should stay dense unless a precision is asked for, so the coefficients copy bit for bit:
 /// see [`StorageOptions::for_copy`].
-pub fn read_coefficients_nrrd(path: &Path) -> Result<PgvFile> {
+pub fn read_coefficients_nrrd(path: impl AsRef<Path>) -> Result<PgvFile> {
+    let path = path.as_ref();
     pgvol_format::nrrd::read_coefficients_nrrd(path).reading()
 }
 
@@ -348,14 +354,16 @@ impl StorageOptions {
 }
 
 /// Whether `path` names a `.pgv` file.
-pub fn is_pgv(path: &Path) -> bool {
+pub fn is_pgv(path: impl AsRef<Path>) -> bool {
+    let path = path.as_ref();
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("pgv"))
 }
 
 /// Refuses an output name that is not `.pgv`.
-pub fn check_pgv_name(path: &Path) -> Result<()> {
+pub fn check_pgv_name(path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
     if is_pgv(path) {
         Ok(())
     } else {

@@ -66,7 +66,8 @@ pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<DVec3>> {
 }
 
 /// Reads the points of a file; see [`read_points`].
-pub fn read_points_file(path: &Path) -> Result<Vec<DVec3>> {
+pub fn read_points_file(path: impl AsRef<Path>) -> Result<Vec<DVec3>> {
+    let path = path.as_ref();
     let bytes = pgvol_core::read_input(path).reading()?;
     read_points(bytes.as_slice(), path)
 }

@@ -10,7 +10,8 @@ use crate::error::{Error, FileResult, Result};
 
 /// Reads a mesh file (OBJ, glTF/GLB, STL, PLY by extension), welds bit-identical vertices and
 /// drops degenerate triangles; the report says how many of each.
-pub fn read_mesh(path: &Path) -> Result<(Mesh, CleanReport)> {
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<(Mesh, CleanReport)> {
+    let path = path.as_ref();
     pgvol_mesh::read_clean(path).reading()
 }
 
@@ -53,19 +54,22 @@ pub fn mesh_from_world(
 }
 
 /// The mesh format a file name asks for, refused (as an output error) when there is none.
-pub fn mesh_format(path: &Path) -> Result<MeshFormat> {
+pub fn mesh_format(path: impl AsRef<Path>) -> Result<MeshFormat> {
+    let path = path.as_ref();
     MeshFormat::from_path(path).writing()
 }
 
 /// Refuses, before the work, an output `path` whose format cannot hold a mesh in `like`'s frame
 /// and of its size (STL far from the origin), as writing the result would.
-pub fn check_mesh_output(path: &Path, like: &Mesh) -> Result<()> {
+pub fn check_mesh_output(path: impl AsRef<Path>, like: &Mesh) -> Result<()> {
+    let path = path.as_ref();
     let format = mesh_format(path)?;
     pgvol_mesh::check_precision(like, format, path).writing()
 }
 
 /// Writes `mesh` to `path` atomically in the format of its extension.
-pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<()> {
+pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<()> {
+    let path = path.as_ref();
     pgvol_mesh::write(path, mesh).writing()
 }
 

@@ -268,10 +268,11 @@ pub fn perturbation_header(
 /// Writes `field`'s function list with `header` (from [`perturbation_header`]) to `path`
 /// atomically.
 pub fn write_perturbation(
-    path: &Path,
+    path: impl AsRef<Path>,
     header: &PgvHeader,
     field: &PerturbationField,
 ) -> Result<()> {
+    let path = path.as_ref();
     crate::encode::check_pgv_name(path)?;
     pgvol_format::write_perturbation(path, header, field).writing()
 }

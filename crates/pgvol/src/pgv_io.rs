@@ -50,7 +50,8 @@ impl FieldSource {
 }
 
 /// Reads and checks a `.pgv` file of either kind.
-pub fn read_field_source(path: &Path) -> Result<FieldSource> {
+pub fn read_field_source(path: impl AsRef<Path>) -> Result<FieldSource> {
+    let path = path.as_ref();
     let bytes = pgvol_core::read_input(path).reading()?;
     read_field_source_bytes(&bytes, path)
 }
@@ -80,7 +81,8 @@ pub fn read_field_source_bytes(bytes: &[u8], name: &Path) -> Result<FieldSource>
 
 /// Reads and checks a `.pgv` file as a coefficient volume (a perturbation field resampled, see
 /// [`FieldSource::into_file`]).
-pub fn read_pgv(path: &Path) -> Result<PgvFile> {
+pub fn read_pgv(path: impl AsRef<Path>) -> Result<PgvFile> {
+    let path = path.as_ref();
     let bytes = pgvol_core::read_input(path).reading()?;
     read_pgv_bytes(&bytes, path)
 }

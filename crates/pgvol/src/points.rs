@@ -62,7 +62,8 @@ pub const POINT_TEXT_EXTENSIONS: [&str; 4] = ["xyz", "csv", "txt", "pts"];
 
 /// Reads a point cloud: PLY (the vertices, with nx, ny, nz when present; faces ignored) or
 /// text (`.xyz`, `.csv`, `.txt`, `.pts`: see [`read_cloud_text`]).
-pub fn read_point_cloud(path: &Path) -> Result<PointCloud> {
+pub fn read_point_cloud(path: impl AsRef<Path>) -> Result<PointCloud> {
+    let path = path.as_ref();
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -486,7 +487,8 @@ fn fit_on_grid(
 
 /// Reads a stack of planar contours: the JSON, Common Layer Interface (ASCII or binary) or SVG
 /// layer files `pgvol slice` writes, by extension.
-pub fn read_layers(path: &Path) -> Result<Vec<Layer>> {
+pub fn read_layers(path: impl AsRef<Path>) -> Result<Vec<Layer>> {
+    let path = path.as_ref();
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

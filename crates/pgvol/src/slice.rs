@@ -67,7 +67,12 @@ pub struct Sliced {
 /// The layers of the `.pgv` file at `path`, as [`slice`] of the file's shape gives them. A
 /// sparse file is decoded one slab of bricks at a time, only the slabs within reach of the
 /// layers being sliced held, so memory is the file's bytes and a window of the volume.
-pub fn slice_file(path: &Path, settings: &SliceOptions, progress: &dyn Progress) -> Result<Sliced> {
+pub fn slice_file(
+    path: impl AsRef<Path>,
+    settings: &SliceOptions,
+    progress: &dyn Progress,
+) -> Result<Sliced> {
+    let path = path.as_ref();
     let bytes = pgvol_core::read_input(path).reading()?;
     let at = |e: Error| match e.path() {
         Some(_) => e,
@@ -232,12 +237,13 @@ pub const DEFAULT_UNITS_MM: f32 = 1.0;
 /// added in f64); `units_mm` is millimetres per model unit (CLI header). Binary CLI, which
 /// holds f32, is refused for layers so far from the origin that it would round them visibly.
 pub fn write_layers(
-    path: &Path,
+    path: impl AsRef<Path>,
     layers: &[Layer],
     format: LayerFormat,
     units_mm: f32,
     frame: &LayerFrame,
 ) -> Result<()> {
+    let path = path.as_ref();
     if !(units_mm.is_finite() && units_mm > 0.0) {
         return Err(Error::parameter(format!(
             "millimetres per unit must be a positive number, got {units_mm}"
