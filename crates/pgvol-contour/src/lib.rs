@@ -75,7 +75,4 @@ pub use marching::{marching_cubes, marching_cubes_on_field, marching_cubes_with}
 pub use pgvol_core::progress::Report;
 pub use quality::min_angle_histogram;
 pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
-pub use volume::{
-    contour_field, contour_field_reporting, contour_sampled, contour_volume,
-    contour_volume_reporting, Method, SamplesError,
-};
+pub use volume::{contour_field, contour_sampled, contour_volume, Method, SamplesError};

@@ -28,6 +28,12 @@ pub enum Method {
     DualContouring,
 }
 
+/// `mesh`, contoured in `grid`'s local coordinates, placed in the grid's world frame.
+fn in_frame_of(grid: &Grid, mut mesh: pgvol_core::Mesh) -> pgvol_core::Mesh {
+    mesh.offset = grid.offset;
+    mesh
+}
+
 /// Contours the `iso` level set of `volume` sampled on `grid`. The samples are padded with one
 /// layer of outside values (`iso + spacing`) so the surface is closed even where it reaches the
 /// grid's border; edges into the padding place their vertex by linear interpolation, since the
@@ -35,23 +41,8 @@ pub enum Method {
 ///
 /// The field is evaluated only in the bricks of nodes the level set may cross (see
 /// `sparse_sample`), so time and memory follow the surface rather than the grid.
+/// The fraction done goes to `report` (`pgvol_core::progress::QUIET` for none).
 pub fn contour_volume(
-    volume: &CoefficientVolume,
-    grid: &Grid,
-    iso: f32,
-    method: Method,
-) -> pgvol_core::Mesh {
-    contour_volume_reporting(volume, grid, iso, method, &|_| {})
-}
-
-/// `mesh`, contoured in `grid`'s local coordinates, placed in the grid's world frame.
-fn in_frame_of(grid: &Grid, mut mesh: pgvol_core::Mesh) -> pgvol_core::Mesh {
-    mesh.offset = grid.offset;
-    mesh
-}
-
-/// [`contour_volume`], reporting the fraction done to `report`.
-pub fn contour_volume_reporting(
     volume: &CoefficientVolume,
     grid: &Grid,
     iso: f32,
@@ -78,7 +69,7 @@ pub fn contour_volume_reporting(
     in_frame_of(grid, mesh)
 }
 
-/// The part of [`contour_volume_reporting`]'s progress spent evaluating the field at nodes.
+/// The part of [`contour_volume`]'s progress spent evaluating the field at nodes.
 const SAMPLING_PART: f64 = 0.4;
 
 /// [`contour_volume`] from given samples of `volume` on `grid`.
@@ -92,28 +83,6 @@ pub(crate) fn contour_samples(
 ) -> pgvol_core::Mesh {
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
     contour_nodes(volume, &padded(grid), &nodes, iso, method, None)
-}
-
-/// Contours the `iso` level set of any continuous `field` given its samples `inner` on `grid`
-/// (x fastest; only their side of iso matters beyond the crossed edges, so clamped band values
-/// do), padded like [`contour_volume`] so the surface closes. Crossings are found by regula
-/// falsi on the field itself, not a cubic through the edge, so a field that is not smooth
-/// along an edge (an exact signed distance near a sharp edge) gets its true crossing; edges into
-/// the padding are interpolated linearly. `options` applies to dual contouring.
-///
-/// # Errors
-///
-/// [`SamplesError`] when `inner` does not hold one sample per node of `grid`, or the grid
-/// spacing is not positive and finite.
-pub fn contour_field(
-    field: &dyn Field,
-    grid: &Grid,
-    inner: &[f32],
-    iso: f32,
-    method: Method,
-    options: &DualContourOptions,
-) -> Result<pgvol_core::Mesh, SamplesError> {
-    contour_field_reporting(field, grid, inner, iso, method, options, &|_| {})
 }
 
 /// Why [`contour_field`] cannot contour the samples it is given.
@@ -130,8 +99,19 @@ pub enum SamplesError {
     Spacing(f32),
 }
 
-/// [`contour_field`], reporting the fraction done to `report`.
-pub fn contour_field_reporting(
+/// Contours the `iso` level set of any continuous `field` given its samples `inner` on `grid`
+/// (x fastest; only their side of iso matters beyond the crossed edges, so clamped band values
+/// do), padded like [`contour_volume`] so the surface closes. Crossings are found by regula
+/// falsi on the field itself, not a cubic through the edge, so a field that is not smooth
+/// along an edge (an exact signed distance near a sharp edge) gets its true crossing; edges into
+/// the padding are interpolated linearly. `options` applies to dual contouring.
+///
+/// # Errors
+///
+/// [`SamplesError`] when `inner` does not hold one sample per node of `grid`, or the grid
+/// spacing is not positive and finite.
+/// The fraction done goes to `report` (`pgvol_core::progress::QUIET` for none).
+pub fn contour_field(
     field: &dyn Field,
     grid: &Grid,
     inner: &[f32],
@@ -263,7 +243,7 @@ mod tests {
         let v = two_balls(Basis::Bspline3);
         let method = Method::MarchingCubes;
         let full = contour_samples(&v, &v.grid, &v.sample(&v.grid), 0.0, method);
-        let sparse = contour_volume(&v, &v.grid, 0.0, method);
+        let sparse = contour_volume(&v, &v.grid, 0.0, method, pgvol_core::progress::QUIET);
         assert_eq!(full.triangles, sparse.triangles);
         let worst = full
             .positions
@@ -279,7 +259,13 @@ mod tests {
         // A sphere of radius 1.2 pokes out of the [-1, 1]^3 grid on every face.
         let volume = sphere_volume(1.2);
         for method in [Method::MarchingCubes, Method::DualContouring] {
-            let mesh = contour_volume(&volume, &volume.grid, 0.0, method);
+            let mesh = contour_volume(
+                &volume,
+                &volume.grid,
+                0.0,
+                method,
+                pgvol_core::progress::QUIET,
+            );
             let s = mesh.stats();
             assert!(s.watertight && s.winding_consistent, "{method:?}: {s:?}");
             assert!(s.volume > 0.0 && s.volume < 8.0 + 1e-3, "{method:?}: {s:?}");
@@ -292,8 +278,20 @@ mod tests {
         let fine = resampled_grid(&volume, 39).unwrap();
         assert_eq!(fine.dims, [39, 39, 39]);
         assert!((fine.max_corner() - volume.grid.max_corner()).length() < 1e-5);
-        let coarse = contour_volume(&volume, &volume.grid, 0.0, Method::MarchingCubes);
-        let dense = contour_volume(&volume, &fine, 0.0, Method::MarchingCubes);
+        let coarse = contour_volume(
+            &volume,
+            &volume.grid,
+            0.0,
+            Method::MarchingCubes,
+            pgvol_core::progress::QUIET,
+        );
+        let dense = contour_volume(
+            &volume,
+            &fine,
+            0.0,
+            Method::MarchingCubes,
+            pgvol_core::progress::QUIET,
+        );
         assert!(dense.triangles.len() > 3 * coarse.triangles.len());
         let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.7f64.powi(3);
         assert!((dense.stats().volume - exact).abs() / exact < 0.01);
@@ -358,7 +356,16 @@ mod tests {
         };
         let mut gaps = Vec::new();
         for method in [Method::MarchingCubes, Method::DualContouring] {
-            let mesh = contour_field(&field, &grid, &samples, 0.0, method, &options).unwrap();
+            let mesh = contour_field(
+                &field,
+                &grid,
+                &samples,
+                0.0,
+                method,
+                &options,
+                pgvol_core::progress::QUIET,
+            )
+            .unwrap();
             let s = mesh.stats();
             assert!(s.watertight && s.winding_consistent, "{method:?}: {s:?}");
             let exact = 1.1f64.powi(3);
@@ -383,7 +390,16 @@ mod tests {
         };
         let options = DualContourOptions::default();
         let method = Method::DualContouring;
-        let err = contour_field(&field, &grid, &[0.0; 10], 0.0, method, &options).unwrap_err();
+        let err = contour_field(
+            &field,
+            &grid,
+            &[0.0; 10],
+            0.0,
+            method,
+            &options,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap_err();
         assert_eq!(
             err,
             SamplesError::Count {
@@ -396,7 +412,16 @@ mod tests {
             "10 samples given for a grid of 4 × 4 × 4 nodes: one sample per node is needed"
         );
         grid.spacing = 0.0;
-        let err = contour_field(&field, &grid, &[0.0; 64], 0.0, method, &options).unwrap_err();
+        let err = contour_field(
+            &field,
+            &grid,
+            &[0.0; 64],
+            0.0,
+            method,
+            &options,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap_err();
         assert_eq!(err, SamplesError::Spacing(0.0));
     }
 }

@@ -15,9 +15,8 @@ pub mod volume;
 
 pub use basis::Basis;
 pub use fit::{
-    fit, fit_reporting, interp_sparse_groups, sparse_reach, wls_band, wls_band_reporting,
-    ClosestFn, ClosestPoint, FitMethod, FitOptions, FitReport, LayerBricks, SignedDistance,
-    MAX_Z_STEP, SPARSE_GROUP,
+    fit, interp_sparse_groups, sparse_reach, wls_band, ClosestFn, ClosestPoint, FitMethod,
+    FitOptions, FitReport, LayerBricks, SignedDistance, MAX_Z_STEP, SPARSE_GROUP,
 };
 pub use kernel::{Jet, Kernel};
 pub use pgvol_core::grid::{Grid, MAX_GRID_NODES};

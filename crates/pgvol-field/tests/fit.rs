@@ -98,8 +98,24 @@ fn iso_points_put_the_zero_surface_where_it_belongs() {
     let s = sphere();
     let opts = FitOptions::default();
     for basis in [Basis::Bspline3, Basis::Pg { n: 3, r: 1.5 }] {
-        let (vi, _) = fit(g, basis, FitMethod::Interp, &s, &opts).unwrap();
-        let (vo, rep) = fit(g, basis, FitMethod::Iso { z_step: Some(0.5) }, &s, &opts).unwrap();
+        let (vi, _) = fit(
+            g,
+            basis,
+            FitMethod::Interp,
+            &s,
+            &opts,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap();
+        let (vo, rep) = fit(
+            g,
+            basis,
+            FitMethod::Iso { z_step: Some(0.5) },
+            &s,
+            &opts,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap();
         assert!(rep.converged, "{basis}: {rep:?}");
         assert_eq!(rep.z_step, Some(0.5));
         assert_eq!(rep.spurious_sign_changes, 0);
@@ -126,6 +142,7 @@ fn iso_step_search_picks_a_step_in_range() {
         FitMethod::Iso { z_step: None },
         &sphere(),
         &opts,
+        pgvol_core::progress::QUIET,
     )
     .unwrap();
     let z = rep.z_step.unwrap();
@@ -135,7 +152,8 @@ fn iso_step_search_picks_a_step_in_range() {
         Basis::Bspline3,
         FitMethod::Iso { z_step: Some(-1.0) },
         &sphere(),
-        &opts
+        &opts,
+        pgvol_core::progress::QUIET
     )
     .is_err());
 }
@@ -151,6 +169,7 @@ fn iso_step_longer_than_the_spacing_is_refused() {
             FitMethod::Iso { z_step: Some(z) },
             &sphere(),
             &opts,
+            pgvol_core::progress::QUIET,
         )
     };
     assert_eq!(run(1.0).unwrap().1.z_step, Some(1.0));
@@ -177,8 +196,24 @@ fn weighted_fit_beats_node_interpolation_on_the_surface() {
         Basis::Trilinear,
         Basis::Pg { n: 3, r: 2.0 },
     ] {
-        let (vi, _) = fit(g, basis, FitMethod::Interp, &torus, &opts).unwrap();
-        let (vw, rep) = fit(g, basis, FitMethod::Wls, &torus, &opts).unwrap();
+        let (vi, _) = fit(
+            g,
+            basis,
+            FitMethod::Interp,
+            &torus,
+            &opts,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap();
+        let (vw, rep) = fit(
+            g,
+            basis,
+            FitMethod::Wls,
+            &torus,
+            &opts,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap();
         let (ei, ew) = (surface_rms(&vi, &torus, 600), surface_rms(&vw, &torus, 600));
         assert!(ew < ei, "{basis}: wls {ew} vs interp {ei}");
         assert_eq!(rep.spurious_sign_changes, 0, "{basis}");
@@ -200,6 +235,7 @@ fn spurious_sign_changes_are_counted_far_from_the_surface() {
         FitMethod::Interp,
         &b,
         &FitOptions::default(),
+        pgvol_core::progress::QUIET,
     )
     .unwrap();
     assert_eq!(rep.spurious_sign_changes, 0);

@@ -65,7 +65,13 @@ fn sampled_volume(n: usize, solid: impl Fn(Vec3) -> f32 + Sync) -> f64 {
 }
 
 fn contoured(volume: &CoefficientVolume) -> (f64, f64) {
-    let mesh = contour_volume(volume, &volume.grid, 0.0, Method::MarchingCubes);
+    let mesh = contour_volume(
+        volume,
+        &volume.grid,
+        0.0,
+        Method::MarchingCubes,
+        pgvol_core::progress::QUIET,
+    );
     let s = mesh.stats();
     assert!(
         s.watertight && s.winding_consistent && s.non_manifold_edges == 0,

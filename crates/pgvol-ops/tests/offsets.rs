@@ -43,7 +43,13 @@ fn ball(r: f32) -> impl Fn(Vec3) -> f32 + Sync {
 }
 
 fn contoured_volume(v: &CoefficientVolume) -> f64 {
-    let mesh = contour_volume(v, &v.grid, 0.0, Method::MarchingCubes);
+    let mesh = contour_volume(
+        v,
+        &v.grid,
+        0.0,
+        Method::MarchingCubes,
+        pgvol_core::progress::QUIET,
+    );
     let s = mesh.stats();
     assert!(s.watertight && s.winding_consistent, "{s:?}");
     s.volume
@@ -139,7 +145,13 @@ fn pseudo_gaussian_offsets_are_refitted() {
 fn hollowed_ball_is_the_difference_of_two_balls() {
     let v = field(0.6, RES, Basis::Bspline3, ball(0.5));
     let h = hollow(&v, 0.1, &[]).unwrap();
-    let mesh = contour_volume(&h, &h.grid, 0.0, Method::MarchingCubes);
+    let mesh = contour_volume(
+        &h,
+        &h.grid,
+        0.0,
+        Method::MarchingCubes,
+        pgvol_core::progress::QUIET,
+    );
     let s = mesh.stats();
     // Two spheres: the outside and the cavity's wall.
     assert_eq!((s.components, s.euler_characteristic), (2, 4), "{s:?}");
@@ -156,7 +168,13 @@ fn a_drain_joins_the_cavity_to_the_outside() {
         diameter: 0.12,
     };
     let h = hollow(&v, 0.1, &[drain]).unwrap();
-    let mesh = contour_volume(&h, &h.grid, 0.0, Method::MarchingCubes);
+    let mesh = contour_volume(
+        &h,
+        &h.grid,
+        0.0,
+        Method::MarchingCubes,
+        pgvol_core::progress::QUIET,
+    );
     let s = mesh.stats();
     // One surface of genus 0: the cavity's wall continues through the tube to the outside.
     assert_eq!((s.components, s.euler_characteristic), (1, 2), "{s:?}");

@@ -98,7 +98,7 @@ pub(crate) fn decode(
     crate::memory::check_contour(volume, &grid)?;
     let mesh = progress::stage(progress, "contour", |update| {
         let (iso, method) = (options.iso, options.method);
-        pgvol_contour::contour_volume_reporting(volume, &grid, iso, method, update)
+        pgvol_contour::contour_volume(volume, &grid, iso, method, update)
     })?;
     finish_mesh(mesh, options, grid.spacing, progress)
 }

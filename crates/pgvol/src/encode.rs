@@ -215,13 +215,13 @@ pub(crate) fn fit_volume(
             progress::stage(progress, "fit", |update| {
                 let values = &sampled.values;
                 let basis = options.basis;
-                pgvol_field::wls_band_reporting(grid, basis, values, &surface, &fit_options, update)
+                pgvol_field::wls_band(grid, basis, values, &surface, &fit_options, update)
             })?
         }
         FitMethod::Iso { .. } => {
             timings.sdf = start.elapsed().as_secs_f64();
             progress::stage(progress, "fit", |update| {
-                pgvol_field::fit_reporting(
+                pgvol_field::fit(
                     grid,
                     options.basis,
                     options.fit,

@@ -263,6 +263,7 @@ mod tests {
                 0.0,
                 Method::DualContouring,
                 &options,
+                pgvol_core::progress::QUIET,
             )
             .unwrap();
             (

@@ -145,7 +145,7 @@ fn contour_exact(
     };
     let out = progress::stage(progress, "contour", |update| {
         let values = &sampled.values;
-        pgvol_contour::contour_field_reporting(&field, grid, values, 0.0, method, &options, update)
+        pgvol_contour::contour_field(&field, grid, values, 0.0, method, &options, update)
     })?
     .map_err(|e| Error::new(ErrorKind::Internal, e.to_string()).caused_by(e))?;
     timings.contour = start.elapsed().as_secs_f64();

@@ -76,7 +76,7 @@ fn a_small_sphere_in_a_1024_grid_costs_what_its_surface_costs() {
     let exact = 4.0 * std::f64::consts::PI * f64::from(r).powi(2);
     for method in METHODS {
         let start = Instant::now();
-        let mesh = contour_volume(&v, &v.grid, 0.0, method);
+        let mesh = contour_volume(&v, &v.grid, 0.0, method, pgvol_core::progress::QUIET);
         let seconds = start.elapsed().as_secs_f64();
         let closed = check_closed_manifold(&mesh);
         let stats = mesh.stats();
@@ -106,7 +106,7 @@ fn sparse_volumes_contour_identically_on_any_thread_count() {
     };
     for grid in [v.grid, resampled_grid(&v, 37).unwrap()] {
         for method in METHODS {
-            let run = || contour_volume(&v, &grid, 0.5, method);
+            let run = || contour_volume(&v, &grid, 0.5, method, pgvol_core::progress::QUIET);
             let one = in_pool(1, &run);
             assert!(!one.triangles.is_empty());
             for threads in [2, 3] {
@@ -133,7 +133,7 @@ fn absent_bricks_of_both_sides_bound_a_closed_region() {
     };
     let v = CoefficientVolume::from_sparse(grid, Basis::Bspline3, coeffs).unwrap();
     for method in METHODS {
-        let mesh = contour_volume(&v, &v.grid, 0.0, method);
+        let mesh = contour_volume(&v, &v.grid, 0.0, method, pgvol_core::progress::QUIET);
         let closed = check_closed_manifold(&mesh);
         assert_eq!(closed.euler, 2, "{method:?}");
         // Inside nodes span x 8..=39, y 0..=29, z 0..=23. The field crosses halfway to the

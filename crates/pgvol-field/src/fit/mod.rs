@@ -33,7 +33,7 @@ pub use report::{FitReport, FitStages};
 pub use sign_check::spurious_sign_changes;
 pub use sparse_interp::SPARSE_GROUP;
 pub use sparse_node_values::{brick_node_values, brick_node_values_into, node_values_sparse};
-pub use wls::{wls_band, wls_band_reporting};
+pub use wls::wls_band;
 
 use std::time::Instant;
 
@@ -46,19 +46,9 @@ use crate::volume::{check_inputs, CoefficientVolume, FieldError};
 use node_sdf::NodeSdf;
 
 /// Fits a coefficient volume on `grid` to the signed distance `sdf`.
-pub fn fit(
-    grid: Grid,
-    basis: Basis,
-    method: FitMethod,
-    sdf: &dyn SignedDistance,
-    options: &FitOptions,
-) -> Result<(CoefficientVolume, FitReport), FieldError> {
-    fit_reporting(grid, basis, method, sdf, options, &|_| {})
-}
-
-/// [`fit`], reporting the fraction done to `report` (sampling the distance at the nodes takes
+/// The fraction done goes to `report` (sampling the distance at the nodes takes
 /// the first tenth).
-pub fn fit_reporting(
+pub fn fit(
     grid: Grid,
     basis: Basis,
     method: FitMethod,

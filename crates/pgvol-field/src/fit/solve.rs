@@ -94,7 +94,7 @@ pub fn cgls_with_stall(
         stall,
         max_iterations,
     };
-    cgls_reporting(forward, adjoint, b, cols, damping, limits, None)
+    cgls_within(forward, adjoint, b, cols, damping, limits, None)
 }
 
 /// When an iterative solve stops: see [`cgls_with_stall`].
@@ -113,8 +113,9 @@ fn fraction_done(it: usize, max_iterations: usize, gained: f64, tol: f64) -> f64
     by_iterations.max(by_residual).min(1.0)
 }
 
-/// [`cgls_with_stall`] reporting the fraction done through `span` after each iteration.
-pub fn cgls_reporting(
+/// [`cgls_with_stall`] within `limits`, reporting the fraction done through `span` after each
+/// iteration.
+pub fn cgls_within(
     mut forward: impl FnMut(&[f64]) -> Vec<f64>,
     mut adjoint: impl FnMut(&[f64]) -> Vec<f64>,
     b: &[f64],

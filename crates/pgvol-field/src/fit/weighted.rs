@@ -65,7 +65,7 @@ pub(crate) fn weighted_solve(
         stall: 0.0,
         max_iterations: options.max_iterations,
     };
-    let (y, outcome) = solve::cgls_reporting(fwd, adj, &b, op.cols(), damping, limits, span);
+    let (y, outcome) = solve::cgls_within(fwd, adj, &b, op.cols(), damping, limits, span);
     let c = warm
         .iter()
         .zip(y.iter().zip(&scale))

@@ -26,18 +26,8 @@ use crate::volume::{check_inputs, CoefficientVolume, FieldError};
 /// The `Wls` fit from node samples that are exact within `options.band` spacings of the surface
 /// (farther ones may be clamped, as a narrow-band sampler gives them) and the surface's closest
 /// points.
+/// The fraction done goes to `report` (`pgvol_core::progress::QUIET` for none).
 pub fn wls_band(
-    grid: Grid,
-    basis: Basis,
-    samples: &[f32],
-    surface: &dyn ClosestPoint,
-    options: &FitOptions,
-) -> Result<(CoefficientVolume, FitReport), FieldError> {
-    wls_band_reporting(grid, basis, samples, surface, options, &|_| {})
-}
-
-/// [`wls_band`], reporting the fraction done to `report`.
-pub fn wls_band_reporting(
     grid: Grid,
     basis: Basis,
     samples: &[f32],
@@ -124,7 +114,7 @@ pub(crate) fn fit(
             stall: options.stall,
             max_iterations: options.max_iterations,
         };
-        let (y, outcome) = solve::cgls_reporting(
+        let (y, outcome) = solve::cgls_within(
             |y| op.borrow_mut().forward(y),
             |r| op.borrow_mut().adjoint(r),
             &b,
@@ -227,8 +217,15 @@ mod tests {
             for n in [16, 24] {
                 let g = grid(n);
                 let samples = band_samples(&g, sdf, 4.0);
-                let (wls, rep) =
-                    wls_band(g, Basis::Bspline3, &samples, &SurfaceOf(sdf), &opts).unwrap();
+                let (wls, rep) = wls_band(
+                    g,
+                    Basis::Bspline3,
+                    &samples,
+                    &SurfaceOf(sdf),
+                    &opts,
+                    pgvol_core::progress::QUIET,
+                )
+                .unwrap();
                 let interp = CoefficientVolume::interpolate(g, Basis::Bspline3, samples).unwrap();
                 assert!(rep.converged && rep.iterations > 0, "{name} {n}: {rep:?}");
                 assert!(
@@ -261,7 +258,15 @@ mod tests {
             tolerance: 1e-12,
             ..FitOptions::default()
         };
-        let (_, rep) = wls_band(g, Basis::Bspline3, &samples, &SurfaceOf(&sphere), &opts).unwrap();
+        let (_, rep) = wls_band(
+            g,
+            Basis::Bspline3,
+            &samples,
+            &SurfaceOf(&sphere),
+            &opts,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap();
         assert_eq!(rep.iterations, 1);
         assert!(!rep.converged, "{rep:?}");
     }
@@ -277,7 +282,23 @@ mod tests {
         samples[3] = f32::NAN;
         let surface = SurfaceOf(&sphere);
         let opts = FitOptions::default();
-        assert!(wls_band(g, Basis::Bspline3, &samples, &surface, &opts).is_err());
-        assert!(wls_band(g, Basis::Bspline3, &samples[1..], &surface, &opts).is_err());
+        assert!(wls_band(
+            g,
+            Basis::Bspline3,
+            &samples,
+            &surface,
+            &opts,
+            pgvol_core::progress::QUIET
+        )
+        .is_err());
+        assert!(wls_band(
+            g,
+            Basis::Bspline3,
+            &samples[1..],
+            &surface,
+            &opts,
+            pgvol_core::progress::QUIET
+        )
+        .is_err());
     }
 }

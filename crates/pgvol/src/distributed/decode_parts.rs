@@ -59,8 +59,13 @@ pub fn decode_part(bricks: &[u8], cells: Range<usize>, options: &DecodeOptions) 
     check_part_options(options)?;
     let volume = Slab::from_bytes(bricks)?.volume()?;
     let grid = volume.grid;
-    let mut mesh =
-        pgvol_contour::contour_volume(&volume, &grid, options.iso, Method::MarchingCubes);
+    let mut mesh = pgvol_contour::contour_volume(
+        &volume,
+        &grid,
+        options.iso,
+        Method::MarchingCubes,
+        pgvol_core::progress::QUIET,
+    );
     let last = z_cells(&volume) - 1;
     let (z0, h) = (grid.origin.z, grid.spacing);
     let owner = |t: &[u32; 3]| {

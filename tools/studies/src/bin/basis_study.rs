@@ -175,7 +175,14 @@ fn main() {
                     methods.push(FitMethod::Iso { z_step: None });
                 }
                 for method in methods {
-                    let (vol, report) = match fit(grid, basis, method, sdf.as_ref(), &opts) {
+                    let (vol, report) = match fit(
+                        grid,
+                        basis,
+                        method,
+                        sdf.as_ref(),
+                        &opts,
+                        pgvol_core::progress::QUIET,
+                    ) {
                         Ok(v) => v,
                         Err(e) => {
                             eprintln!("{shape} {res} {basis} {}: {e}", method.name());
