@@ -460,7 +460,7 @@ impl Field {
                 "sections must be (axis, heights), e.g. (\"z\", [0.0, 0.5])",
             )
         })?;
-        let settings = pgvol::reconstruct::SectionSettings {
+        let settings = pgvol::reconstruct::SectionOptions {
             axis: names::axis(py, &axis)?,
             heights,
             resolution: section_resolution,
@@ -880,6 +880,111 @@ impl Field {
         };
         let shape = run(py, progress, |p| pgvol::Field::csg(&operands, &options, p))?;
         Ok(Field::from_shape(shape))
+    }
+
+    /// An algebraic blend of `primaries` (each as for `csg`: a Field, an analytic solid by
+    /// text, or a file): `kind` "liming" (two primaries rounded where they meet, by the cutting
+    /// surface `cut`: `(1 − lam)·P₁·P₂ + lam·C²`), "spline" (a functional spline of the
+    /// primaries with one or more `bound` surfaces) or "ipatch" (one `bound` per primary; the
+    /// weights `weights` (w₁..wₙ then w), or w₁..wₙ with w set so the patch passes `through` a
+    /// point, or fitted to points `fit_points`; `continuity` the order of contact, 1 or more).
+    /// Bounds are negative on the side of the edge to round. Re-fitted on a cube grid of `res`
+    /// nodes per axis over `bounds` ((x0, y0, z0), (x1, y1, z1)), by default the box of the
+    /// bounded primaries (needed when none is bounded). See docs/editing.md.
+    #[staticmethod]
+    #[pyo3(signature = (kind, primaries, *, cut=None, bound=None, lam=0.5, weights=None, through=None, fit_points=None, continuity=1, res=128, bounds=None, sign="auto", progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn blend(
+        py: Python<'_>,
+        kind: &str,
+        primaries: Vec<Bound<'_, PyAny>>,
+        cut: Option<Bound<'_, PyAny>>,
+        bound: Option<Vec<Bound<'_, PyAny>>>,
+        lam: f32,
+        weights: Option<Vec<f32>>,
+        through: Option<(f64, f64, f64)>,
+        fit_points: Option<Vec<(f64, f64, f64)>>,
+        continuity: u32,
+        res: usize,
+        bounds: Option<Segment>,
+        sign: &str,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let operands = |list: &[Bound<'_, PyAny>]| {
+            list.iter()
+                .map(|o| operand(py, o))
+                .collect::<PyResult<Vec<_>>>()
+        };
+        let primaries = operands(&primaries)?;
+        let bound = operands(&bound.unwrap_or_default())?;
+        let operator = match kind {
+            "liming" => pgvol::edit::BlendOperator::Liming {
+                cut: match cut {
+                    Some(c) => operand(py, &c)?,
+                    None => {
+                        return Err(errors::parameter(
+                            py,
+                            "liming needs cut, the cutting surface",
+                        ))
+                    }
+                },
+                lambda: lam,
+            },
+            "spline" => pgvol::edit::BlendOperator::Spline {
+                bounds: bound,
+                lambda: lam,
+            },
+            "ipatch" => {
+                let point = |p: (f64, f64, f64)| glam::DVec3::new(p.0, p.1, p.2);
+                let weights = match (weights, through, fit_points) {
+                    (Some(mut w), None, None) if w.len() >= 2 => {
+                        let last = w.pop().unwrap_or_default();
+                        pgvol::edit::IPatchWeights::Given(w, last)
+                    }
+                    (Some(w), Some(p), None) => pgvol::edit::IPatchWeights::Through(w, point(p)),
+                    (None, None, Some(points)) => {
+                        pgvol::edit::IPatchWeights::Fitted(points.into_iter().map(point).collect())
+                    }
+                    _ => {
+                        return Err(errors::parameter(
+                            py,
+                            "ipatch needs weights (w1..wn, w), weights (w1..wn) with through, \
+                             or fit_points",
+                        ))
+                    }
+                };
+                pgvol::edit::BlendOperator::IPatch {
+                    bounds: bound,
+                    weights,
+                    continuity: pgvol::edit::Continuity::new(continuity)
+                        .map_err(|e| errors::parameter(py, e.to_string()))?,
+                }
+            }
+            other => {
+                return Err(errors::parameter(
+                    py,
+                    format!("unknown blend '{other}' (liming, spline or ipatch)"),
+                ))
+            }
+        };
+        let pgvol::GridSpec::Res(res) = grid_spec(py, Some(res), None)? else {
+            unreachable!("a resolution gives a resolution");
+        };
+        let options = pgvol::edit::BlendOptions {
+            res,
+            bounds: bounds.map(|(a, b)| {
+                (
+                    glam::Vec3::new(a.0, a.1, a.2),
+                    glam::Vec3::new(b.0, b.1, b.2),
+                )
+            }),
+            sign: names::sign(py, sign)?,
+            ..Default::default()
+        };
+        let blended = run(py, progress, |p| {
+            pgvol::edit::blend(&primaries, &operator, &options, p)
+        })?;
+        Ok(Field::from_shape(blended.field))
     }
 
     /// `a | b`: the sharp union.

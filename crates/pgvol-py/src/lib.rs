@@ -124,6 +124,52 @@ fn signed_distance<'py>(
     ))
 }
 
+/// A clean, watertight remesh (`pgvol remesh`): the mesh's field contoured on a cube grid of
+/// `res` nodes per axis (or spacing `voxel`) by `method` ("mc", "sn" or "dc"). `field` "exact"
+/// places the vertices on the mesh's exact signed distance (sharp edges stay sharp with "dc");
+/// a basis name ("bspline3", ...) on the coefficient volume an encode would give. Pieces
+/// enclosing less than `min_component` go (default: specks under 2 grid cells). Returns
+/// (vertices, faces).
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, *, res=None, voxel=None, method="mc", field="exact", min_component=None, sign="auto", progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn remesh<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    res: Option<usize>,
+    voxel: Option<f32>,
+    method: &str,
+    field: &str,
+    min_component: Option<f32>,
+    sign: &str,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyArray2<i32>>)> {
+    let positions = arrays::world_points(vertices, "vertices")?;
+    let triangles = arrays::faces(faces)?;
+    let options = pgvol::RemeshOptions {
+        grid: field::grid_spec(py, res, voxel)?,
+        method: names::method(py, method)?,
+        field: match field {
+            "exact" => pgvol::RemeshField::Exact,
+            basis => pgvol::RemeshField::Decoded(names::basis(py, basis)?),
+        },
+        min_component,
+        sign: names::sign(py, sign)?,
+    };
+    let remeshed = run(py, progress, |p| {
+        let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+        pgvol::remesh(&mesh, &options, p)
+    })?;
+    let mesh = remeshed.mesh;
+    let n = mesh.positions.len();
+    let triangles = mesh.triangles.clone();
+    Ok((
+        arrays::mesh_vertices(py, mesh),
+        arrays::triangles(py, triangles, n)?,
+    ))
+}
+
 /// Sets the largest estimated peak memory, in bytes, a call may start with; None returns to
 /// the default, the memory the machine has available when the call starts.
 #[pyfunction]
@@ -148,6 +194,7 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(signed_distance, m)?)?;
+    m.add_function(wrap_pyfunction!(remesh, m)?)?;
     m.add_function(wrap_pyfunction!(perturb::perturb, m)?)?;
     m.add_function(wrap_pyfunction!(set_memory_limit, m)?)?;
     m.add_function(wrap_pyfunction!(memory_limit, m)?)?;

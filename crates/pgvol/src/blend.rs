@@ -64,7 +64,7 @@ pub enum IPatchWeights {
 
 /// Grid and box of a blend's result.
 #[derive(Clone, Copy, Debug)]
-pub struct BlendSettings {
+pub struct BlendOptions {
     /// Grid nodes per axis (default [`crate::csg::CSG_RES`]).
     pub res: usize,
     /// The box the result covers; by default that of the bounded primaries.
@@ -75,9 +75,9 @@ pub struct BlendSettings {
     pub result: ResultUse,
 }
 
-impl Default for BlendSettings {
+impl Default for BlendOptions {
     fn default() -> Self {
-        BlendSettings {
+        BlendOptions {
             res: crate::csg::CSG_RES,
             bounds: None,
             sign: SignMode::Auto,
@@ -110,7 +110,7 @@ fn check_lambda(lambda: f32) -> Result<()> {
 pub fn blend(
     primaries: &[Operand],
     operator: &BlendOperator,
-    settings: &BlendSettings,
+    settings: &BlendOptions,
     progress: &dyn Progress,
 ) -> Result<Blended> {
     let extra = check_operands(primaries, operator)?;

@@ -203,7 +203,7 @@ pub mod distances {
 
 /// Editing: Booleans and algebraic blends of operands, repairs inside masks, shells.
 pub mod edit {
-    pub use crate::blend::{blend, BlendOperator, BlendSettings, Blended, IPatchWeights};
+    pub use crate::blend::{blend, BlendOperator, BlendOptions, Blended, IPatchWeights};
     pub use pgvol_ops::{Continuity, Drain, Face, Mask, MaskReport, Restore, ShellSide};
 }
 
@@ -216,7 +216,7 @@ pub mod lattices {
 /// Surfaces from point clouds and from stacks of planar contours.
 pub mod reconstruct {
     pub use crate::points::{
-        contours, points, points_bytes, points_with_sections, PointsMethod, SectionSettings,
+        contours, points, points_bytes, points_with_sections, PointsMethod, SectionOptions,
         Sections,
     };
     pub use pgvol_points::{PointCloud, PointsReport};

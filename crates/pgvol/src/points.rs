@@ -235,7 +235,7 @@ pub fn points_bytes(
 /// Cross-sections of the field through a point cloud in planes normal to an axis, cut from the
 /// field itself (see [`points_with_sections`]).
 #[derive(Clone, Debug, PartialEq)]
-pub struct SectionSettings {
+pub struct SectionOptions {
     /// The axis the planes are normal to.
     pub axis: Axis,
     /// Plane positions along the axis, in the cloud's units, within the grid's box.
@@ -244,7 +244,7 @@ pub struct SectionSettings {
     pub resolution: Option<f32>,
 }
 
-impl SectionSettings {
+impl SectionOptions {
     /// Planes at `heights` along `axis`, sampled at the grid spacing.
     pub fn new(axis: Axis, heights: Vec<f32>) -> Self {
         Self {
@@ -290,7 +290,7 @@ pub fn points(
 pub fn points_with_sections(
     cloud: &PointCloud,
     options: &PointsOptions,
-    sections: &SectionSettings,
+    sections: &SectionOptions,
     progress: &dyn Progress,
 ) -> Result<(Reconstructed, Sections)> {
     let (fitted, sections) = reconstruct_points(cloud, options, Some(sections), progress)?;
@@ -302,7 +302,7 @@ pub fn points_with_sections(
 fn reconstruct_points(
     cloud: &PointCloud,
     options: &PointsOptions,
-    sections: Option<&SectionSettings>,
+    sections: Option<&SectionOptions>,
     progress: &dyn Progress,
 ) -> Result<(Reconstructed, Option<Sections>)> {
     if !(options.band.is_finite() && options.band >= crate::encode::MIN_BAND) {
@@ -341,7 +341,7 @@ fn reconstruct_points(
 }
 
 /// The planes of `settings` on `grid`, checked before any work.
-fn section_planes(settings: &SectionSettings, grid: &pgvol_core::Grid) -> Result<SectionPlanes> {
+fn section_planes(settings: &SectionOptions, grid: &pgvol_core::Grid) -> Result<SectionPlanes> {
     let resolution = settings.resolution.unwrap_or(grid.spacing);
     let planes = SectionPlanes::new(settings.axis, settings.heights.clone(), resolution);
     pgvol_points::sections::check(grid, &planes).map_err(|e| match e {

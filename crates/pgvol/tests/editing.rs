@@ -149,10 +149,10 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
         cut: Operand::parse("plane:-1,-1,0,0.6").unwrap(),
         lambda: 0.5,
     };
-    let settings = pgvol::edit::BlendSettings {
+    let settings = pgvol::edit::BlendOptions {
         res: 64,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..pgvol::edit::BlendSettings::default()
+        ..pgvol::edit::BlendOptions::default()
     };
     let blended = pgvol::edit::blend(&planes, &operator, &settings, &Silent).unwrap();
     let v = blended.field.volume();
@@ -176,10 +176,10 @@ fn liming_rounding_of_orthogonal_planes_crosses_the_bisector_where_predicted() {
 #[test]
 fn an_ipatch_with_fewer_bounds_than_primaries_is_refused() {
     let planes = operands(&["plane:1,0,0,0", "plane:0,1,0,0"]);
-    let settings = pgvol::edit::BlendSettings {
+    let settings = pgvol::edit::BlendOptions {
         res: 16,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..pgvol::edit::BlendSettings::default()
+        ..pgvol::edit::BlendOptions::default()
     };
     for weights in [
         IPatchWeights::Given(vec![1.0, 1.0], -0.5),
@@ -205,11 +205,11 @@ fn an_ipatch_with_fewer_bounds_than_primaries_is_refused() {
     assert!(e.message().contains("needs 2 weights"), "{e}");
 }
 
-fn blend_settings(res: usize) -> pgvol::edit::BlendSettings {
-    pgvol::edit::BlendSettings {
+fn blend_settings(res: usize) -> pgvol::edit::BlendOptions {
+    pgvol::edit::BlendOptions {
         res,
         bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
-        ..pgvol::edit::BlendSettings::default()
+        ..pgvol::edit::BlendOptions::default()
     }
 }
 

@@ -235,7 +235,7 @@ fn edits_count_their_output_and_refuse_before_any_work() {
         (pgvol::ResultUse::Volume, 256f64.powi(3) * 64.0),
         (pgvol::ResultUse::Mesh, 256f64.powi(3) * 64.0),
     ] {
-        let settings = pgvol::edit::BlendSettings {
+        let settings = pgvol::edit::BlendOptions {
             res: 2048,
             bounds: Some((Vec3::splat(-1.0), Vec3::splat(1.0))),
             result,

@@ -6,7 +6,7 @@
 use std::sync::Mutex;
 
 use glam::Vec3;
-use pgvol::reconstruct::{PointCloud, PointsMethod, SectionSettings};
+use pgvol::reconstruct::{PointCloud, PointsMethod, SectionOptions};
 use pgvol::{Axis, ErrorKind, GridSpec, Layer, PointsOptions, Progress};
 
 /// Collects warnings.
@@ -72,7 +72,7 @@ fn volume_section(volume: &pgvol::CoefficientVolume, axis: Axis, h: f32) -> Laye
 fn sections_of_a_unit_sphere_cloud_are_its_circles() {
     let cloud = sphere(4000);
     let warnings = Warnings::default();
-    let settings = SectionSettings::new(Axis::Z, vec![0.5, 0.0, 1.05]);
+    let settings = SectionOptions::new(Axis::Z, vec![0.5, 0.0, 1.05]);
     let (fitted, sections) = pgvol::reconstruct::points_with_sections(
         &cloud,
         &options(PointsMethod::RbfWendland),
@@ -121,7 +121,7 @@ fn sections_of_a_unit_sphere_cloud_are_its_circles() {
 fn every_axis_cuts_a_counter_clockwise_circle() {
     let cloud = sphere(3000);
     for axis in [Axis::X, Axis::Y, Axis::Z] {
-        let settings = SectionSettings {
+        let settings = SectionOptions {
             axis,
             heights: vec![-0.5],
             resolution: Some(0.02),
@@ -155,7 +155,7 @@ fn heights_outside_the_grid_box_are_refused_before_the_fit() {
         (vec![-1e9], "not a finite number below 1e8"),
         (vec![], "no section heights"),
     ] {
-        let settings = SectionSettings::new(Axis::Z, heights);
+        let settings = SectionOptions::new(Axis::Z, heights);
         // A method that would refuse this cloud (too many points for the dense solve) shows
         // the sections were checked first.
         let e = pgvol::reconstruct::points_with_sections(
@@ -173,7 +173,7 @@ fn heights_outside_the_grid_box_are_refused_before_the_fit() {
     let e = pgvol::reconstruct::points_with_sections(
         &cloud,
         &options(PointsMethod::Spline),
-        &SectionSettings::new(Axis::Y, vec![-1.5]),
+        &SectionOptions::new(Axis::Y, vec![-1.5]),
         &pgvol::Silent,
     )
     .unwrap_err()

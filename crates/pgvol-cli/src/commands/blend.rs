@@ -176,7 +176,7 @@ pub fn blend(a: BlendArgs) -> Result<()> {
     a.shape.check_output(&a.output)?;
     let bars = Bars::new(a.out.silent());
     let operator = operator(&a)?;
-    let settings = pgvol::edit::BlendSettings {
+    let settings = pgvol::edit::BlendOptions {
         res: a.shape.res as usize,
         bounds: a.bounds,
         sign: a.shape.sign.into(),

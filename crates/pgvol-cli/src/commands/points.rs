@@ -170,7 +170,7 @@ pub fn run(a: PointsArgs) -> Result<()> {
     let t = Instant::now();
     let (fitted, sections) = match &a.sections {
         Some(s) => {
-            let settings = pgvol::reconstruct::SectionSettings {
+            let settings = pgvol::reconstruct::SectionOptions {
                 axis: s.axis,
                 heights: s.heights.clone(),
                 resolution: a.sections_resolution,

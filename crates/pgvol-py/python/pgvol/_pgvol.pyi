@@ -26,6 +26,7 @@ __all__ = [
     "read_mesh",
     "write_mesh",
     "compare",
+    "remesh",
     "signed_distance",
     "perturb",
     "set_memory_limit",
@@ -371,6 +372,30 @@ class Field:
         axis over ``bounds`` (default: the box of every bounded operand, grown by the radius;
         needed when every operand is a plane or cylinder). ``sign`` tells inside from outside
         in mesh files."""
+    @staticmethod
+    def blend(
+        kind: Literal["liming", "spline", "ipatch"],
+        primaries: Sequence[Union["Field", str, "os.PathLike[str]"]],
+        *,
+        cut: Optional[Union["Field", str, "os.PathLike[str]"]] = None,
+        bound: Optional[Sequence[Union["Field", str, "os.PathLike[str]"]]] = None,
+        lam: float = 0.5,
+        weights: Optional[Sequence[float]] = None,
+        through: Optional[Tuple[float, float, float]] = None,
+        fit_points: Optional[Sequence[Tuple[float, float, float]]] = None,
+        continuity: int = 1,
+        res: int = 128,
+        bounds: Optional[_Segment] = None,
+        sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """An algebraic blend of ``primaries`` (as ``csg``'s operands): "liming" (two primaries
+        rounded where they meet by the cutting surface ``cut``), "spline" (a functional spline
+        with one or more ``bound`` surfaces) or "ipatch" (one ``bound`` per primary, with
+        ``weights`` w1..wn then w, or w1..wn and a point ``through``, or ``fit_points``;
+        ``continuity`` the order of contact). ``lam`` is the Liming and spline parameter in
+        (0, 1). Re-fitted on a cube grid of ``res`` nodes per axis over ``bounds`` (default:
+        the bounded primaries' box)."""
     def __or__(self, other: "Field", /) -> "Field":
         """``a | b``: ``a.union(b)``."""
     def __and__(self, other: "Field", /) -> "Field":
@@ -484,6 +509,23 @@ def compare(
     degrees, the deviation of a's vertices and vertex normals from b ("vertex_deviation"), the
     mean depth-buffer difference over 14 views ("depth_buffer", "depth_buffer_pct"), and the
     topology statistics of both ("a", "b")."""
+
+def remesh(
+    vertices: _Points,
+    faces: _Faces,
+    *,
+    res: Optional[int] = None,
+    voxel: Optional[float] = None,
+    method: Literal["mc", "sn", "dc"] = "mc",
+    field: str = "exact",
+    min_component: Optional[float] = None,
+    sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
+    progress: Optional[_Progress] = None,
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
+    """A clean, watertight remesh: the mesh's field contoured on a cube grid of ``res`` nodes
+    per axis (or spacing ``voxel``) by ``method``. ``field`` "exact" places vertices on the
+    mesh's exact signed distance; a basis name ("bspline3", ...) on the coefficient volume an
+    encode would give. Returns ``(vertices, faces)``."""
 
 def signed_distance(
     vertices: _Points,
