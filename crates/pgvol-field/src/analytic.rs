@@ -132,6 +132,53 @@ impl SignedDistance for Cylinder {
     }
 }
 
+/// `sdf` sampled on `grid` as the encoder samples a mesh: the bricks holding a node within
+/// `band` spacings of the surface stored, their values clamped to ±`band` spacings, every other
+/// brick absent on its side. For tests and studies of the sparse fits.
+pub fn banded_samples(
+    sdf: &dyn SignedDistance,
+    grid: &pgvol_core::Grid,
+    band: f32,
+) -> pgvol_core::SparseGrid {
+    use pgvol_core::sparse::brick_offset;
+    use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
+
+    let clamp = band * grid.spacing;
+    let mut out = SparseGrid::new(grid.dims, Background::clamp(clamp));
+    let bricks: Vec<[usize; 3]> = out.all_bricks().collect();
+    // Half the diagonal of a brick: a brick whose centre is farther than this past the band
+    // holds no node within it, and all its nodes are on the centre's side.
+    let reach = clamp + 0.5 * 3f32.sqrt() * (BRICK_EDGE - 1) as f32 * grid.spacing;
+    for b in bricks {
+        let (lo, m) = out.brick_extent(b);
+        let centre = grid.point(lo[0], lo[1], lo[2])
+            + 0.5 * (BRICK_EDGE - 1) as f32 * Vec3::splat(grid.spacing);
+        let d = sdf.distance(centre);
+        if d.abs() > reach {
+            out.set_inside(b, d < 0.0);
+            continue;
+        }
+        let mut values = Box::new([clamp; BRICK_NODES]);
+        let (mut near, mut inside) = (false, false);
+        for k in 0..m[2] {
+            for j in 0..m[1] {
+                for i in 0..m[0] {
+                    let d = sdf.distance(grid.point(lo[0] + i, lo[1] + j, lo[2] + k));
+                    near |= d.abs() < clamp;
+                    inside = d < 0.0;
+                    values[brick_offset([i, j, k])] = d.clamp(-clamp, clamp);
+                }
+            }
+        }
+        if near {
+            out.insert(b, values);
+        } else if inside {
+            out.set_inside(b, true);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

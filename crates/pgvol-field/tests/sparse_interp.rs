@@ -40,34 +40,9 @@ fn torus() -> Torus {
     }
 }
 
-/// `sdf` sampled as the encoder does: bricks holding a node within the band stored, their
-/// values clamped to ±clamp, the other bricks absent on their side.
+/// `sdf` sampled as the encoder does, with the encoder's default band.
 fn banded(grid: &Grid, sdf: &dyn SignedDistance) -> SparseGrid {
-    let clamp = BAND * grid.spacing;
-    let mut out = SparseGrid::new(grid.dims, Background::clamp(clamp));
-    let bricks: Vec<[usize; 3]> = out.all_bricks().collect();
-    for b in bricks {
-        let (lo, n) = out.brick_extent(b);
-        let mut values = Box::new([clamp; 512]);
-        let mut near = false;
-        let mut inside = false;
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let d = sdf.distance(grid.point(lo[0] + i, lo[1] + j, lo[2] + k));
-                    near |= d.abs() < clamp;
-                    inside = d < 0.0;
-                    values[brick_offset([i, j, k])] = d.clamp(-clamp, clamp);
-                }
-            }
-        }
-        if near {
-            out.insert(b, values);
-        } else if inside {
-            out.set_inside(b, true);
-        }
-    }
-    out
+    pgvol_field::analytic::banded_samples(sdf, grid, BAND)
 }
 
 /// Bricks within one brick (26-neighbourhood) of a stored brick of `g`.

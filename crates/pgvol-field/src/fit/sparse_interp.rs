@@ -333,55 +333,22 @@ const PADDED: usize = (BRICK_EDGE + 2) * (BRICK_EDGE + 2) * (BRICK_EDGE + 2);
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
-    use pgvol_core::{Background, Grid};
+    use pgvol_core::Grid;
 
     use super::*;
     use crate::analytic::Sphere;
-    use crate::distance::SignedDistance;
+
     use crate::prefilter::{CUBIC_POLE, QUADRATIC_POLE};
 
-    /// A sphere's distance on an `n`³ grid over [−1, 1]³, stored in the bricks holding a node
-    /// within `band` spacings and clamped there, the other bricks absent on their side.
+    /// A sphere's distance on an `n`³ grid over [−1, 1]³, banded as the encoder samples it.
     fn banded_sphere(n: usize, band: f32) -> (Grid, SparseGrid) {
         let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::splat(1.0), n).unwrap();
         let ball = Sphere {
             centre: Vec3::new(0.03, -0.05, 0.07),
             radius: 0.6,
         };
-        let clamp = band * grid.spacing;
-        let mut out = SparseGrid::new(grid.dims, Background::clamp(clamp));
-        let bricks: Vec<[usize; 3]> = out.all_bricks().collect();
-        // Half the diagonal of a brick: bricks whose centre is farther than this past the
-        // band hold no node within it.
-        let reach = clamp + 0.5 * 3f32.sqrt() * (BRICK_EDGE - 1) as f32 * grid.spacing;
-        for b in bricks {
-            let (lo, m) = out.brick_extent(b);
-            let centre = grid.point(lo[0], lo[1], lo[2])
-                + 0.5 * (BRICK_EDGE - 1) as f32 * Vec3::splat(grid.spacing);
-            let d = ball.distance(centre);
-            if d.abs() > reach {
-                out.set_inside(b, d < 0.0);
-                continue;
-            }
-            let mut values = Box::new([clamp; BRICK_NODES]);
-            let (mut near, mut inside) = (false, false);
-            for k in 0..m[2] {
-                for j in 0..m[1] {
-                    for i in 0..m[0] {
-                        let d = ball.distance(grid.point(lo[0] + i, lo[1] + j, lo[2] + k));
-                        near |= d.abs() < clamp;
-                        inside = d < 0.0;
-                        values[brick_offset([i, j, k])] = d.clamp(-clamp, clamp);
-                    }
-                }
-            }
-            if near {
-                out.insert(b, values);
-            } else if inside {
-                out.set_inside(b, true);
-            }
-        }
-        (grid, out)
+        let samples = crate::analytic::banded_samples(&ball, &grid, band);
+        (grid, samples)
     }
 
     /// Largest difference over the stored bricks of `a`, which `b` must store too.
