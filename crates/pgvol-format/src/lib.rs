@@ -9,6 +9,7 @@ mod error;
 mod fixed_step;
 pub mod grid_files;
 mod header;
+pub mod implicit;
 pub mod nrrd;
 pub mod perturbation;
 pub mod pgv;

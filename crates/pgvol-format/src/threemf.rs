@@ -1,7 +1,8 @@
 //! 3MF package with a level-set object of the Volumetric extension: the field sampled on a grid,
-//! stored as a stack of one-channel 16-bit PNG sheets and read through a `functionfromimage3d`.
-//! Element and attribute names follow the published Volumetric & Implicit extension text (see
-//! `docs/format.md`).
+//! stored as a stack of one-channel 16-bit PNG sheets and read through a `functionfromimage3d`;
+//! optionally the level set is an implicit function (`crate::implicit`) that reads that stack
+//! through a function call. Element and attribute names follow the published Volumetric &
+//! Implicit 1.0 schema (see `docs/format.md` and `docs/interop.md`).
 
 use std::io::Write;
 use std::path::Path;
@@ -10,6 +11,7 @@ use pgvol_field::Grid;
 use zip::write::SimpleFileOptions;
 
 use crate::error::{err, FormatError};
+use crate::implicit::{Binary, ImplicitFunction, Port};
 
 pub const NS_CORE: &str = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02";
 pub const NS_VOLUMETRIC: &str = "http://schemas.3mf.io/3dmanufacturing/volumetric/2022/01";
@@ -18,6 +20,13 @@ const REL_MODEL: &str = "http://schemas.microsoft.com/3dmanufacturing/2013/01/3d
 const REL_TEXTURE: &str = "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dtexture";
 /// Where the sheets go: `/3D/volumetric/<image name>/`, as the extension recommends.
 const SHEET_DIR: &str = "3D/volumetric/sdf";
+/// Resource ids: the evaluation box, the image stack and the function reading it; then the
+/// implicit function when there is one, and the level-set object last.
+const BOX_ID: u32 = 1;
+const IMAGE_ID: u32 = 2;
+const IMAGE_FUNCTION_ID: u32 = 3;
+/// The output of `functionfromimage3d` the sampled field is read from.
+const IMAGE_CHANNEL: &str = "red";
 
 /// How field values map to 16-bit pixels: `value = pixel / 65535 · scale + offset`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,7 +92,7 @@ pub fn object_to_uvw(grid: &Grid) -> [f64; 12] {
     ]
 }
 
-/// One 16-bit greyscale PNG of `columns × rows` pixels (row-major, row 0 first).
+/// One 16-bit greyscale PNG of `columns × rows` pixels (row-major, the top row first).
 fn png_sheet(pixels: &[u16], columns: usize, rows: usize) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     let mut enc = png::Encoder::new(&mut out, columns as u32, rows as u32);
@@ -102,8 +111,34 @@ fn num(v: f64) -> String {
     format!("{v}")
 }
 
-/// The `3D/3dmodel.model` part for `grid` and the sheet paths.
-pub fn model_xml(grid: &Grid, q: Quantisation, sheets: &[String], unit: &str) -> String {
+/// A level set given by an implicit function of the object's coordinates (no transform), with
+/// the value it falls back to where the function is undefined.
+pub struct ImplicitLevelSet<'a> {
+    pub function: &'a ImplicitFunction,
+    pub fallback: f64,
+}
+
+/// The sampled field inside an implicit function: the image stack's function called at the
+/// UVW coordinates of `pos` (object coordinates), [`object_to_uvw`] made of nodes.
+pub fn image_value(f: &mut ImplicitFunction, grid: &Grid, pos: &Port) -> Port {
+    let m = object_to_uvw(grid);
+    let scale = f.constvec([m[0], m[4], m[8]]);
+    let shift = f.constvec([m[9], m[10], m[11]]);
+    let scaled = f.binary(Binary::Mul, pos, &scale);
+    let uvw = f.binary(Binary::Add, &scaled, &shift);
+    let id = f.resource(IMAGE_FUNCTION_ID);
+    f.call(&id, &uvw, IMAGE_CHANNEL)
+}
+
+/// The `3D/3dmodel.model` part for `grid` and the sheet paths; the level set reads the image
+/// stack directly, or through `implicit`.
+pub fn model_xml(
+    grid: &Grid,
+    q: Quantisation,
+    sheets: &[String],
+    unit: &str,
+    implicit: Option<&ImplicitLevelSet>,
+) -> String {
     let [nx, ny, nz] = grid.dims;
     // World coordinates: f32 text near the origin, the offset added in f64 otherwise.
     let corner = |p: glam::Vec3| -> [String; 3] {
@@ -120,14 +155,16 @@ pub fn model_xml(grid: &Grid, q: Quantisation, sheets: &[String], unit: &str) ->
     let t = object_to_uvw(grid).map(num).join(" ");
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    // The level set is geometry: a consumer that does not know an extension in it must refuse.
+    let required = if implicit.is_some() { "v i" } else { "v" };
     s.push_str(&format!(
-        "<model unit=\"{unit}\" xml:lang=\"en-US\" xmlns=\"{NS_CORE}\" xmlns:v=\"{NS_VOLUMETRIC}\" xmlns:i=\"{NS_IMPLICIT}\" requiredextensions=\"v\">\n"
+        "<model unit=\"{unit}\" xml:lang=\"en-US\" xmlns=\"{NS_CORE}\" xmlns:v=\"{NS_VOLUMETRIC}\" xmlns:i=\"{NS_IMPLICIT}\" requiredextensions=\"{required}\">\n"
     ));
     s.push_str(" <metadata name=\"Application\">pgvol</metadata>\n <resources>\n");
     // 1: the grid box as a closed mesh, the level set's evaluation domain.
-    s.push_str(
-        "  <object id=\"1\" type=\"model\" name=\"evaluation box\">\n   <mesh>\n    <vertices>\n",
-    );
+    s.push_str(&format!(
+        "  <object id=\"{BOX_ID}\" type=\"model\" name=\"evaluation box\">\n   <mesh>\n    <vertices>\n",
+    ));
     for k in 0..2 {
         for j in 0..2 {
             for i in 0..2 {
@@ -148,9 +185,9 @@ pub fn model_xml(grid: &Grid, q: Quantisation, sheets: &[String], unit: &str) ->
         ));
     }
     s.push_str("    </triangles>\n   </mesh>\n  </object>\n");
-    // 2: the image stack; columns run along x (U), rows along y (V), sheets along z (W).
+    // The image stack; columns run along x (U), rows along −y (V), sheets along z (W).
     s.push_str(&format!(
-        "  <v:image3d id=\"2\" name=\"sdf\">\n   <v:imagestack rowcount=\"{ny}\" columncount=\"{nx}\" sheetcount=\"{nz}\">\n"
+        "  <v:image3d id=\"{IMAGE_ID}\" name=\"sdf\">\n   <v:imagestack rowcount=\"{ny}\" columncount=\"{nx}\" sheetcount=\"{nz}\">\n"
     ));
     for p in sheets {
         s.push_str(&format!("    <v:imagesheet path=\"/{p}\"/>\n"));
@@ -158,17 +195,37 @@ pub fn model_xml(grid: &Grid, q: Quantisation, sheets: &[String], unit: &str) ->
     s.push_str("   </v:imagestack>\n  </v:image3d>\n");
     // 3: the function reading it; clamp so the border values continue outside the box.
     s.push_str(&format!(
-        "  <v:functionfromimage3d id=\"3\" displayname=\"signed distance\" image3did=\"2\" valueoffset=\"{}\" valuescale=\"{}\" filter=\"linear\" tilestyleu=\"clamp\" tilestylev=\"clamp\" tilestylew=\"clamp\"/>\n",
+        "  <v:functionfromimage3d id=\"{IMAGE_FUNCTION_ID}\" displayname=\"signed distance\" image3did=\"{IMAGE_ID}\" valueoffset=\"{}\" valuescale=\"{}\" filter=\"linear\" tilestyleu=\"clamp\" tilestylev=\"clamp\" tilestylew=\"clamp\"/>\n",
         num(q.offset),
         num(q.scale)
     ));
-    // 4: the object, negative inside.
+    // The object, negative inside: the field itself, or the implicit function of it.
+    let object_id = match implicit {
+        None => {
+            let id = IMAGE_FUNCTION_ID + 1;
+            s.push_str(&format!(
+                "  <object id=\"{id}\" type=\"model\" name=\"pgvol level set\">\n   <v:levelset functionid=\"{IMAGE_FUNCTION_ID}\" channel=\"{IMAGE_CHANNEL}\" transform=\"{t}\" minfeaturesize=\"{}\" meshid=\"{BOX_ID}\" meshbboxonly=\"true\" fallbackvalue=\"{}\"/>\n  </object>\n",
+                grid.spacing,
+                num(q.offset + q.scale)
+            ));
+            id
+        }
+        Some(level_set) => {
+            let function_id = IMAGE_FUNCTION_ID + 1;
+            let channel = level_set.function.output_name().unwrap_or("shape");
+            s.push_str(&level_set.function.xml(function_id, "pgvol lattice", 2));
+            let id = function_id + 1;
+            s.push_str(&format!(
+                "  <object id=\"{id}\" type=\"model\" name=\"pgvol level set\">\n   <v:levelset functionid=\"{function_id}\" channel=\"{channel}\" minfeaturesize=\"{}\" meshid=\"{BOX_ID}\" meshbboxonly=\"true\" fallbackvalue=\"{}\"/>\n  </object>\n",
+                grid.spacing,
+                num(level_set.fallback)
+            ));
+            id
+        }
+    };
     s.push_str(&format!(
-        "  <object id=\"4\" type=\"model\" name=\"pgvol level set\">\n   <v:levelset functionid=\"3\" channel=\"red\" transform=\"{t}\" minfeaturesize=\"{}\" meshid=\"1\" meshbboxonly=\"true\" fallbackvalue=\"{}\"/>\n  </object>\n",
-        grid.spacing,
-        num(q.offset + q.scale)
+        " </resources>\n <build>\n  <item objectid=\"{object_id}\"/>\n </build>\n</model>\n"
     ));
-    s.push_str(" </resources>\n <build>\n  <item objectid=\"4\"/>\n </build>\n</model>\n");
     s
 }
 
@@ -190,6 +247,31 @@ const BOX_TRIANGLES: [[u32; 3]; 12] = [
 
 /// Writes `values` (sampled on `grid`, x fastest) as a 3MF package at `path`, atomically.
 pub fn write_3mf(path: &Path, grid: &Grid, values: &[f32], unit: &str) -> Result<(), FormatError> {
+    write_package(path, grid, values, unit, None)
+}
+
+/// Writes a 3MF package whose level set is `level_set`, an implicit function that may read
+/// `values` (sampled on `grid`) through [`image_value`]; atomically.
+pub fn write_3mf_implicit(
+    path: &Path,
+    grid: &Grid,
+    values: &[f32],
+    unit: &str,
+    level_set: &ImplicitLevelSet,
+) -> Result<(), FormatError> {
+    if level_set.function.output_name().is_none() {
+        return Err(err(path, "the implicit function has no output"));
+    }
+    write_package(path, grid, values, unit, Some(level_set))
+}
+
+fn write_package(
+    path: &Path,
+    grid: &Grid,
+    values: &[f32],
+    unit: &str,
+    implicit: Option<&ImplicitLevelSet>,
+) -> Result<(), FormatError> {
     let [nx, ny, nz] = grid.dims;
     if values.len() != grid.len() {
         return Err(err(
@@ -204,7 +286,7 @@ pub fn write_3mf(path: &Path, grid: &Grid, values: &[f32], unit: &str) -> Result
     let sheets: Vec<String> = (0..nz)
         .map(|k| format!("{SHEET_DIR}/sheet_{k:04}.png"))
         .collect();
-    let model = model_xml(grid, q, &sheets, unit);
+    let model = model_xml(grid, q, &sheets, unit, implicit);
 
     let content_types = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
 <Types xmlns=\"http://schemas.openxmlformats.org/package/2006/content-types\">\n\
@@ -251,8 +333,12 @@ pub fn write_3mf(path: &Path, grid: &Grid, values: &[f32], unit: &str) -> Result
         )?;
         let plane = nx * ny;
         for (k, name) in sheets.iter().enumerate() {
+            // Row index 0 lies at V near 1 (the extension's Figure 3-1: the front row, V = 0,
+            // is the last), as PNG rows run top down: the first row written is y = ny − 1.
             let pixels: Vec<u16> = values[k * plane..(k + 1) * plane]
-                .iter()
+                .chunks_exact(nx)
+                .rev()
+                .flatten()
                 .map(|&v| q.pixel(v))
                 .collect();
             put(name, &png_sheet(&pixels, nx, ny)?, stored)?;
@@ -344,8 +430,9 @@ mod tests {
         let info = dec.next_frame(&mut buf).unwrap();
         assert_eq!((info.width, info.height), (3, 2));
         assert_eq!(info.bit_depth, png::BitDepth::Sixteen);
-        // Node (2, 1, 1) is value 2 + 3 + 6 - 10 = 1, i.e. 11/23 of the range.
-        let px = u16::from_be_bytes([buf[10], buf[11]]);
+        // Node (2, 1, 1) is value 2 + 3 + 6 - 10 = 1, i.e. 11/23 of the range; y = 1 is the
+        // top row (row 0) of a sheet of two rows.
+        let px = u16::from_be_bytes([buf[4], buf[5]]);
         assert_eq!(px, (11.0f64 / 23.0 * 65535.0).round() as u16);
     }
 
