@@ -54,6 +54,22 @@ impl Quantisation {
         Quantisation { offset: lo, scale }
     }
 
+    /// Pixels `step` apart from the minimum of `values`, when their span fits in 16 bits; else
+    /// [`Quantisation::spanning`]. A coarser step than the span needs leaves smooth sheets
+    /// with small differences between neighbours, which PNG's filters and deflate compress.
+    pub fn stepped(values: &[f32], step: f64) -> Quantisation {
+        let full = Quantisation::spanning(values);
+        let scale = step * 65535.0;
+        if step > 0.0 && scale >= full.scale {
+            Quantisation {
+                offset: full.offset,
+                scale,
+            }
+        } else {
+            full
+        }
+    }
+
     pub fn pixel(&self, v: f32) -> u16 {
         ((v as f64 - self.offset) / self.scale * 65535.0)
             .round()
@@ -116,6 +132,8 @@ fn num(v: f64) -> String {
 pub struct ImplicitLevelSet<'a> {
     pub function: &'a ImplicitFunction,
     pub fallback: f64,
+    /// The image stack's value step ([`Quantisation::stepped`]); `None` spans the values.
+    pub value_step: Option<f64>,
 }
 
 /// The sampled field inside an implicit function: the image stack's function called at the
@@ -282,7 +300,10 @@ fn write_package(
     if nx > u32::MAX as usize || ny > u32::MAX as usize {
         return Err(err(path, "grid too large for PNG sheets"));
     }
-    let q = Quantisation::spanning(values);
+    let q = match implicit.and_then(|l| l.value_step) {
+        Some(step) => Quantisation::stepped(values, step),
+        None => Quantisation::spanning(values),
+    };
     let sheets: Vec<String> = (0..nz)
         .map(|k| format!("{SHEET_DIR}/sheet_{k:04}.png"))
         .collect();
@@ -366,6 +387,19 @@ mod tests {
             assert!((q.value(q.pixel(v)) - v as f64).abs() <= 0.5 * q.scale / 65535.0 + 1e-7);
         }
         assert_eq!(Quantisation::spanning(&[3.0, 3.0]).scale, 1.0);
+    }
+
+    #[test]
+    fn a_stepped_quantisation_keeps_its_step_while_the_span_fits() {
+        let values = [-1.0f32, 0.25, 2.0];
+        let q = Quantisation::stepped(&values, 1e-3);
+        assert_eq!((q.offset, q.scale), (-1.0, 65.535));
+        assert_eq!(q.pixel(0.25), 1250);
+        // A step too fine for 16 bits over the span falls back to spanning the values.
+        assert_eq!(
+            Quantisation::stepped(&values, 1e-6),
+            Quantisation::spanning(&values)
+        );
     }
 
     #[test]

@@ -95,6 +95,17 @@ impl Field {
     }
 }
 
+/// Refuses a unit 3MF does not name.
+pub(crate) fn check_unit(unit: &str) -> Result<()> {
+    if !THREEMF_UNITS.contains(&unit) {
+        return Err(Error::parameter(format!(
+            "3MF has no unit '{unit}' (it knows {})",
+            THREEMF_UNITS.join(", ")
+        )));
+    }
+    Ok(())
+}
+
 /// Writes `file` to `path` as `kind`, sampled on `res` nodes along the longest side (`None`:
 /// the stored grid; not for coefficients); a 3MF package names `unit` (one of
 /// [`THREEMF_UNITS`]). Returns the grid written.
@@ -105,11 +116,8 @@ pub fn export(
     res: Option<usize>,
     unit: &str,
 ) -> Result<Grid> {
-    if kind == ExportKind::ThreeMf && !THREEMF_UNITS.contains(&unit) {
-        return Err(Error::parameter(format!(
-            "3MF has no unit '{unit}' (it knows {})",
-            THREEMF_UNITS.join(", ")
-        )));
+    if kind == ExportKind::ThreeMf {
+        check_unit(unit)?;
     }
     let volume = &file.volume;
     if kind == ExportKind::CoefficientsNrrd {

@@ -88,12 +88,15 @@ pub fn build_lattice(
 #[command(
     after_help = "Defaults: sheet style, 128 nodes per axis for a mesh input.\n\n\
     Example: pgvol lattice part.stl -o lattice.stl --surface gyroid --cell 5 --thickness 0.6 \
-    --res 256"
+    --res 256\n\n\
+    As an implicit 3MF: pgvol lattice part.stl -o lattice.3mf --surface gyroid --cell 5 \
+    --thickness 0.6 --grade-linear 0,0,0,0,0,40 --cell-far 8"
 )]
 pub struct LatticeArgs {
     /// A .pgv file, or a mesh (encoded on the fly at --res).
     pub input: PathArg,
-    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    /// Output: .pgv, a mesh (.glb, .gltf, .obj, .stl, .ply), or .3mf (the part as a level-set
+    /// image stack and the lattice as an implicit function of it).
     #[arg(short, long)]
     pub output: PathArg,
     /// The periodic surface: gyroid, schwarz-p, diamond or neovius.
@@ -119,12 +122,27 @@ pub struct LatticeArgs {
 
 pub fn lattice(a: LatticeArgs) -> Result<()> {
     let start = Instant::now();
-    a.shape.check_output(&a.output)?;
+    let implicit = is_3mf(&a.output);
+    if !implicit {
+        a.shape.check_output(&a.output)?;
+    }
     let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
     let bars = Bars::new(a.out.silent());
     let reach = pgvol::checks::lattice_reach(&lattice, 0.0);
     let shape = a.shape.load(&a.input, 0.0, reach, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
+    if implicit {
+        let cut = pgvol::lattices::LatticeCut::Part;
+        return write_implicit(
+            &a.output,
+            &shape,
+            &lattice,
+            cut,
+            &[],
+            &a.out,
+            (start, loaded),
+        );
+    }
     let solid = shape
         .lattice(&lattice, &bars)
         .map_err(|e| at_input(e, &a.input))?;
@@ -141,6 +159,51 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
         &bars,
         (start, stages),
     )
+}
+
+/// Whether `output` names a 3MF package, where a lattice goes as an implicit function.
+pub fn is_3mf(output: &Path) -> bool {
+    output
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("3mf"))
+}
+
+/// Writes `lattice` cut to `shape` as an implicit 3MF package and reports its size.
+pub fn write_implicit(
+    output: &Path,
+    shape: &pgvol::Field,
+    lattice: &pgvol::Lattice,
+    cut: pgvol::lattices::LatticeCut,
+    drains: &[pgvol::edit::Drain],
+    out: &OutputArgs,
+    (start, loaded): (Instant, f64),
+) -> Result<()> {
+    let t = Instant::now();
+    let nodes = pgvol::lattices::lattice_function(lattice, cut, drains, shape.grid()).node_count();
+    let grid = shape
+        .write_lattice_3mf(output, lattice, cut, drains, pgvol::limits::THREEMF_UNIT)
+        .map_err(|e| at_input(e, output))?;
+    let bytes = std::fs::metadata(output).map(|m| m.len()).unwrap_or(0);
+    let write = t.elapsed().as_secs_f64();
+    let [nx, ny, nz] = grid.dims;
+    if out.json {
+        let seconds = Seconds::since(start).stages([("load", loaded), ("write", write)]);
+        return crate::report::print(
+            &serde_json::json!({
+                "output": output, "bytes": bytes, "nodes": nodes, "image_dims": grid.dims
+            }),
+            &seconds,
+        );
+    }
+    if !out.quiet {
+        outln!(
+            "{}: implicit lattice of {nodes} nodes over the part's {nx} x {ny} x {nz} image \
+             stack, {bytes} bytes",
+            output.display()
+        );
+    }
+    Ok(())
 }
 
 /// Writes a lattice solid as .pgv or as a mesh by the output's extension, and reports its

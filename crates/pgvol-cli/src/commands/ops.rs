@@ -215,7 +215,8 @@ pub enum SideArg {
 pub struct ShellArgs {
     /// A .pgv file, or a mesh.
     pub input: PathArg,
-    /// Output: .pgv, or a mesh (.glb, .gltf, .obj, .stl, .ply).
+    /// Output: .pgv, a mesh (.glb, .gltf, .obj, .stl, .ply), or with --infill .3mf (the part as
+    /// a level-set image stack, the infill as an implicit function of it).
     #[arg(short, long)]
     pub output: PathArg,
     /// Wall thickness in model units: at least two grid spacings (a thinner wall is refused,
@@ -275,6 +276,18 @@ fn shell_infill(a: ShellArgs, surface: pgvol::lattices::Tpms, start: Instant) ->
         .shape
         .load_walled(&a.input, 0.0, reach, a.thickness, &bars)?;
     let loaded = start.elapsed().as_secs_f64();
+    if super::lattice::is_3mf(&a.output) {
+        let cut = pgvol::lattices::LatticeCut::Infill { wall: a.thickness };
+        return super::lattice::write_implicit(
+            &a.output,
+            &shape,
+            &lattice,
+            cut,
+            &a.drain,
+            &a.out,
+            (start, loaded),
+        );
+    }
     let solid = shape
         .infill(a.thickness, &lattice, &a.drain, &bars)
         .map_err(|e| grid_error(e, &a.input))?;
@@ -295,7 +308,16 @@ fn shell_infill(a: ShellArgs, surface: pgvol::lattices::Tpms, start: Instant) ->
 
 pub fn shell(a: ShellArgs) -> Result<()> {
     let start = Instant::now();
-    a.shape.check_output(&a.output)?;
+    if super::lattice::is_3mf(&a.output) {
+        if a.infill.is_none() {
+            anyhow::bail!(
+                "a .3mf output holds an --infill lattice as an implicit function; for a plain \
+                 shell write a mesh or .pgv"
+            );
+        }
+    } else {
+        a.shape.check_output(&a.output)?;
+    }
     pgvol::checks::check_thickness(a.thickness).map_err(|e| anyhow::anyhow!("--thickness: {e}"))?;
     if let Some(surface) = a.infill {
         return shell_infill(a, surface, start);
