@@ -210,7 +210,10 @@ pub enum SideArg {
 #[command(
     after_help = "Example: pgvol shell part.stl -o hollow.glb --thickness 1.2 --hollow --drain 0,0,-5,0,0,-1,2\n\n\
     With an infill: pgvol shell part.stl -o infill.stl --thickness 1.2 --infill gyroid --cell 5 \
-    --infill-thickness 0.6 --drain 0,0,-5,0,0,-1,2"
+    --infill-thickness 0.6 --drain 0,0,-5,0,0,-1,2\n\n\
+    As an implicit 3MF (the part as an image stack, the infill as a formula of it): \
+    pgvol shell part.stl -o infill.3mf --thickness 1.2 --infill gyroid --cell 5 \
+    --infill-thickness 0.6 --grade-depth 10 --thickness-far 0.4"
 )]
 pub struct ShellArgs {
     /// A .pgv file, or a mesh.
