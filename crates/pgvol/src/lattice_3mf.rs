@@ -385,3 +385,90 @@ impl Field {
         Ok(grid)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use pgvol_ops::Grade;
+
+    fn lattices() -> Vec<Lattice> {
+        let mut out = Vec::new();
+        for surface in [Tpms::Gyroid, Tpms::SchwarzP, Tpms::Diamond, Tpms::Neovius] {
+            out.push(Lattice::sheet(surface, 2.0, 0.3));
+            out.push(Lattice {
+                style: LatticeStyle::Strut,
+                ..Lattice::sheet(surface, 2.0, -0.2)
+            });
+            out.push(Lattice {
+                grade: Some(Grade {
+                    ramp: Ramp::Depth { depth: 1.5 },
+                    cell: 2.0,
+                    thickness: 0.6,
+                }),
+                ..Lattice::sheet(surface, 2.0, 0.3)
+            });
+        }
+        out
+    }
+
+    /// What pgvol's lattice operations make of the part's value `v` at `p`.
+    fn cut_value(lattice: &Lattice, cut: LatticeCut, p: Vec3, v: f32) -> f32 {
+        let g = lattice.value(p, v);
+        match cut {
+            LatticeCut::Part => v.max(g),
+            LatticeCut::Infill { wall } => v.max((-(v + wall)).min(g)),
+        }
+    }
+
+    #[test]
+    fn clamping_the_part_to_its_range_changes_no_value_inside_and_no_sign_outside() {
+        let h = 0.05;
+        for lattice in lattices() {
+            for cut in [LatticeCut::Part, LatticeCut::Infill { wall: 0.4 }] {
+                let wall = match cut {
+                    LatticeCut::Part => 0.0,
+                    LatticeCut::Infill { wall } => wall,
+                };
+                let (below, above) = part_range(&lattice, wall, h);
+                for i in 0..2000 {
+                    let p = Vec3::new(i as f32 * 0.0137, i as f32 * 0.0291, i as f32 * 0.0073);
+                    // Deep inside: the clamped part gives the same value.
+                    let deep = below - 0.01 * (i % 300) as f32;
+                    let exact = cut_value(&lattice, cut, p, deep);
+                    let clamped = cut_value(&lattice, cut, p, below);
+                    assert!(
+                        (exact - clamped).abs() < 1e-5,
+                        "{lattice:?} {cut:?} at {deep}: {exact} vs {clamped}"
+                    );
+                    // Far outside: still outside.
+                    let far = above + 0.01 * (i % 300) as f32;
+                    assert!(cut_value(&lattice, cut, p, far) > 0.0);
+                    assert!(cut_value(&lattice, cut, p, above) > 0.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_surface_makes_a_graph_with_the_shape_output() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            spacing: 0.1,
+            dims: [8, 8, 8],
+            offset: Default::default(),
+        };
+        for lattice in lattices() {
+            let drain = Drain {
+                point: Vec3::ZERO,
+                direction: Vec3::Z,
+                diameter: 0.2,
+            };
+            let f = lattice_function(&lattice, LatticeCut::Infill { wall: 0.3 }, &[drain], &grid);
+            assert_eq!(f.output_name(), Some("shape"));
+            let xml = f.xml(4, "t", 0);
+            assert!(xml.contains("<i:functioncall ") && xml.contains("<i:clamp "));
+            assert!(xml.contains("ref=\"inputs.pos\""));
+        }
+    }
+}
