@@ -167,3 +167,20 @@ def test_graded_gyroid_infill_of_the_bunny_is_a_twentieth_of_its_stl(pgvol, mesh
     package = Package(tmf)
     assert package.levelset().get("channel") == "shape"
     assert {n[1] for n in xml_graph(package)} >= {"sin", "cos", "functioncall", "clamp"}
+
+
+def test_implicit_outputs_refuse_what_they_cannot_write(pgvol, mesh_path, folder):
+    mesh = mesh_path("spot")
+    out = folder / "refused.3mf"
+    plain = helpers.run([pgvol, "shell", mesh, "-o", out, "--thickness", 0.1, "--res", 32])
+    assert plain.returncode != 0 and "--infill" in plain.stderr, plain.describe()
+    # A part whose band does not reach the depth ramp: named, with the cause.
+    pgv = folder / "narrow.pgv"
+    helpers.run_ok([pgvol, "encode", mesh, "-o", pgv, "--res", 32])
+    deep = helpers.run([pgvol, "lattice", pgv, "-o", out, "--surface", "gyroid", "--cell", 0.4,
+                        "--thickness", 0.08, "--grade-depth", 1.5, "--thickness-far", 0.12])
+    assert deep.returncode == 1 and "narrow.pgv" in deep.stderr and "band" in deep.stderr, deep.describe()
+    bad = helpers.run([pgvol, "lattice", mesh, "-o", out, "--surface", "gyroid", "--cell", 0.4,
+                       "--thickness", 0.3, "--res", 32])
+    assert bad.returncode != 0 and "half the cell" in bad.stderr, bad.describe()
+    assert not out.exists()

@@ -309,6 +309,15 @@ fn drain_distance(g: &mut Graph, drain: &Drain, pos: &Port) -> Port {
     g.add(&inner, &outer)
 }
 
+/// What [`Field::write_lattice_3mf`] wrote.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImplicitPackage {
+    /// The image stack's grid: the part's.
+    pub grid: Grid,
+    /// Nodes of the implicit function.
+    pub nodes: usize,
+}
+
 /// The range of part values the graph needs exactly: below it the lattice wins every min and
 /// max and the ramp has ended, above it the solid is empty (the value only has to stay
 /// positive); two grid spacings either side keep the interpolation near the surface exact.
@@ -331,7 +340,7 @@ impl Field {
     /// Writes `lattice` cut to this part as `cut`, with `drains`, as a 3MF package: the part's
     /// field as the image stack on its stored grid and the lattice as an implicit function of
     /// it. Checked as [`Field::lattice`] and [`Field::infill`] check, except the lattice's
-    /// own resolution (the formula holds any sheet). Returns the part's grid.
+    /// own resolution (the formula holds any sheet).
     pub fn write_lattice_3mf(
         &self,
         path: impl AsRef<Path>,
@@ -339,7 +348,7 @@ impl Field {
         cut: LatticeCut,
         drains: &[Drain],
         unit: &str,
-    ) -> Result<Grid> {
+    ) -> Result<ImplicitPackage> {
         let path = path.as_ref();
         crate::export::check_unit(unit)?;
         crate::frame::require_near(self.file.volume.grid.offset, "a lattice")?;
@@ -382,7 +391,10 @@ impl Field {
             value_step: Some(IMAGE_STEP as f64 * grid.spacing as f64),
         };
         write_3mf_implicit(path, &grid, &values, unit, &level_set).writing()?;
-        Ok(grid)
+        Ok(ImplicitPackage {
+            grid,
+            nodes: function.node_count(),
+        })
     }
 }
 

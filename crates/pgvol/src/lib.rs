@@ -211,7 +211,7 @@ pub mod edit {
 /// Lattices for additive manufacturing: triply periodic surfaces cut to a part or filling it.
 pub mod lattices {
     pub use crate::lattice::make_lattice;
-    pub use crate::lattice_3mf::{lattice_function, LatticeCut};
+    pub use crate::lattice_3mf::{lattice_function, ImplicitPackage, LatticeCut};
     pub use pgvol_ops::{Grade, LatticeSolid, LatticeStyle, Ramp, Tpms};
 }
 

@@ -134,7 +134,7 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
     if implicit {
         let cut = pgvol::lattices::LatticeCut::Part;
         return write_implicit(
-            &a.output,
+            (&a.input, &a.output),
             &shape,
             &lattice,
             cut,
@@ -169,9 +169,10 @@ pub fn is_3mf(output: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("3mf"))
 }
 
-/// Writes `lattice` cut to `shape` as an implicit 3MF package and reports its size.
+/// Writes `lattice` cut to `shape` (read from `input`) as an implicit 3MF package and reports
+/// its size.
 pub fn write_implicit(
-    output: &Path,
+    (input, output): (&Path, &Path),
     shape: &pgvol::Field,
     lattice: &pgvol::Lattice,
     cut: pgvol::lattices::LatticeCut,
@@ -180,10 +181,11 @@ pub fn write_implicit(
     (start, loaded): (Instant, f64),
 ) -> Result<()> {
     let t = Instant::now();
-    let nodes = pgvol::lattices::lattice_function(lattice, cut, drains, shape.grid()).node_count();
-    let grid = shape
+    // Errors without a file are about the part (its band, its frame): name the input.
+    let written = shape
         .write_lattice_3mf(output, lattice, cut, drains, pgvol::limits::THREEMF_UNIT)
-        .map_err(|e| at_input(e, output))?;
+        .map_err(|e| at_input(e, input))?;
+    let (grid, nodes) = (written.grid, written.nodes);
     let bytes = std::fs::metadata(output).map(|m| m.len()).unwrap_or(0);
     let write = t.elapsed().as_secs_f64();
     let [nx, ny, nz] = grid.dims;

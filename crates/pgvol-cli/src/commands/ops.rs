@@ -282,7 +282,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::lattices::Tpms, start: Instant) ->
     if super::lattice::is_3mf(&a.output) {
         let cut = pgvol::lattices::LatticeCut::Infill { wall: a.thickness };
         return super::lattice::write_implicit(
-            &a.output,
+            (&a.input, &a.output),
             &shape,
             &lattice,
             cut,
