@@ -804,6 +804,51 @@ impl Field {
         Ok(Field::from_shape(solid.field))
     }
 
+    /// Writes the lattice (the parameters of `lattice`) cut to this part, or with `wall` the
+    /// infill of the part hollowed to that wall with `drains`, as a 3MF package naming `unit`:
+    /// the part as the level set's image stack, the lattice as an implicit function of it (see
+    /// docs/interop.md). Returns the image stack's grid.
+    #[pyo3(signature = (path, surface, cell, thickness, *, style="sheet", wall=None, drains=None, grade_depth=None, grade_linear=None, cell_far=None, thickness_far=None, unit="millimeter"))]
+    #[allow(clippy::too_many_arguments)]
+    fn lattice_3mf(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        surface: &str,
+        cell: f32,
+        thickness: f32,
+        style: &str,
+        wall: Option<f32>,
+        drains: Option<Vec<Bound<'_, PyAny>>>,
+        grade_depth: Option<f32>,
+        grade_linear: Option<Segment>,
+        cell_far: Option<f32>,
+        thickness_far: Option<f32>,
+        unit: &str,
+    ) -> PyResult<Grid> {
+        let grading = (grade_depth, grade_linear, cell_far, thickness_far);
+        let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
+        let drains = drains
+            .unwrap_or_default()
+            .iter()
+            .map(|d| drain(py, d))
+            .collect::<PyResult<Vec<_>>>()?;
+        let cut = match wall {
+            Some(wall) => pgvol::lattices::LatticeCut::Infill { wall },
+            None if drains.is_empty() => pgvol::lattices::LatticeCut::Part,
+            None => {
+                let e =
+                    pgvol::Error::parameter("drains need a wall: they open the infill's cavity");
+                return Err(errors::to_py(py, e));
+            }
+        };
+        let written = quiet(py, || {
+            self.shape
+                .write_lattice_3mf(&path, &lattice, cut, &drains, unit)
+        })?;
+        Ok(Grid { grid: written.grid })
+    }
+
     /// This shape joined with `other`: sharp, or rounded with `radius` (model units). The
     /// result is re-fitted on a grid covering both shapes (grown by the radius) as fine as the
     /// finer of their grids, a distance within 4 spacings of its surface.

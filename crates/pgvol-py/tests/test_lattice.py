@@ -81,3 +81,47 @@ def voids(mesh: trimesh.Trimesh) -> int:
 
 def sheet_volume(cube) -> float:
     return cube.lattice("gyroid", CELL, SHEET).to_trimesh().volume
+
+
+def test_lattice_3mf_writes_the_implicit_package(cube, tmp_path):
+    """The lattice as a 3MF implicit function: one level set over the package's implicit
+    function, whose constants are the lattice's, over an image stack on the part's grid; an
+    infill adds the wall and the drains."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    ns = {"v": "http://schemas.3mf.io/3dmanufacturing/volumetric/2022/01",
+          "i": "http://schemas.3mf.io/3dmanufacturing/implicit/2023/12"}
+    path = tmp_path / "gyroid.3mf"
+    grid = cube.lattice_3mf(path, "gyroid", CELL, SHEET)
+    assert tuple(grid.dims) == tuple(cube.grid.dims)
+
+    def model(p):
+        with zipfile.ZipFile(p) as z:
+            return ET.fromstring(z.read("3D/3dmodel.model"))
+
+    root = model(path)
+    levelset = root.findall(".//v:levelset", ns)
+    assert len(levelset) == 1 and levelset[0].get("channel") == "shape"
+    function = root.find(".//i:implicitfunction", ns)
+    assert function.get("id") == levelset[0].get("functionid")
+    # Constants are the f32 parameters written as f64.
+    constants = {np.float32(c.get("value")) for c in function.findall("i:constant", ns)}
+    assert set(np.float32([CELL, SHEET, 0.5])) <= constants
+    assert len(function.findall("i:sin", ns)) == 3 and len(function.findall("i:functioncall", ns)) == 1
+    stack = root.find(".//v:imagestack", ns)
+    assert [int(stack.get(k)) for k in ("columncount", "rowcount", "sheetcount")] == list(grid.dims)
+
+    drains = [((5.0, 5.0, 5.0), (0, 0, -1), 1.0)]
+    infill = tmp_path / "infill.3mf"
+    cube.lattice_3mf(infill, "diamond", CELL, 0.6, wall=0.8, drains=drains, grade_depth=1.2, thickness_far=1.0)
+    filled = model(infill).find(".//i:implicitfunction", ns)
+    constants = {np.float32(c.get("value")) for c in filled.findall("i:constant", ns)}
+    assert set(np.float32([-0.8, 0.5])) <= constants  # the wall, the drain's radius
+    assert len(filled.findall("i:functioncall", ns)) == 1
+
+    with pytest.raises(pgvol.ParameterError, match="wall"):
+        cube.lattice_3mf(tmp_path / "x.3mf", "gyroid", CELL, SHEET, drains=drains)
+    with pytest.raises(pgvol.ParameterError, match="furlong"):
+        cube.lattice_3mf(tmp_path / "x.3mf", "gyroid", CELL, SHEET, unit="furlong")  # type: ignore[arg-type]
+    assert not (tmp_path / "x.3mf").exists()

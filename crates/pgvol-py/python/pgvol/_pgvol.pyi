@@ -322,6 +322,28 @@ class Field:
         wall of ``thickness``) or "strut" (a labyrinth bounded at the level ``thickness``).
         Grading: ``grade_depth`` (from the skin to that depth) or ``grade_linear`` (from one
         point to another), towards ``cell_far`` and ``thickness_far``."""
+    def lattice_3mf(
+        self,
+        path: _PathLike,
+        surface: _Surface,
+        cell: float,
+        thickness: float,
+        *,
+        style: Literal["sheet", "strut"] = "sheet",
+        wall: Optional[float] = None,
+        drains: Optional[Sequence[_Drain]] = None,
+        grade_depth: Optional[float] = None,
+        grade_linear: Optional[_Segment] = None,
+        cell_far: Optional[float] = None,
+        thickness_far: Optional[float] = None,
+        unit: Literal[
+            "micron", "millimeter", "centimeter", "inch", "foot", "meter"
+        ] = "millimeter",
+    ) -> Grid:
+        """Writes the lattice (the parameters of ``lattice``) cut to this part, or with ``wall``
+        the infill of the part hollowed to that wall with ``drains``, as a 3MF package: the part
+        as the level set's image stack, the lattice as an implicit function of it. Returns the
+        image stack's grid."""
     def infill(
         self,
         wall: float,
