@@ -91,7 +91,7 @@ def test_implicit_lattice_reads_in_lib3mf_and_evaluates_as_pgvol(pgvol, mesh_pat
     mesh = mesh_path("spot")
     out, pgv = folder / f"{name}.3mf", folder / f"{name}.pgv"
     common = ["--res", RES]
-    helpers.run_ok([pgvol, command, mesh, "-o", out, *args, *common])
+    helpers.run_ok([pgvol, command, mesh, "-o", out, *args, *common, "--unit", "centimeter"])
     helpers.run_ok([pgvol, command, mesh, "-o", pgv, *args, *common, "--dense-file"])
     info = helpers.run_json([pgvol, "info", pgv, "--json"])
     g = info["header"]["grid"]
@@ -101,6 +101,7 @@ def test_implicit_lattice_reads_in_lib3mf_and_evaluates_as_pgvol(pgvol, mesh_pat
     with zipfile.ZipFile(out) as z:
         root = ET.fromstring(z.read("3D/3dmodel.model"))
     assert set(root.get("requiredextensions").split()) == {"v", "i"}
+    assert root.get("unit") == "centimeter"
     stack = root.find(".//v:imagestack", NS)
     assert (int(stack.get("columncount")), int(stack.get("rowcount")), int(stack.get("sheetcount"))) == dims
 
@@ -183,4 +184,7 @@ def test_implicit_outputs_refuse_what_they_cannot_write(pgvol, mesh_path, folder
     bad = helpers.run([pgvol, "lattice", mesh, "-o", out, "--surface", "gyroid", "--cell", 0.4,
                        "--thickness", 0.3, "--res", 32])
     assert bad.returncode != 0 and "half the cell" in bad.stderr, bad.describe()
+    unit = helpers.run([pgvol, "lattice", mesh, "-o", out, "--surface", "gyroid", "--cell", 0.4,
+                        "--thickness", 0.08, "--res", 32, "--unit", "furlong"])
+    assert unit.returncode != 0 and "refused.3mf" in unit.stderr and "millimeter" in unit.stderr, unit.describe()
     assert not out.exists()

@@ -350,7 +350,7 @@ impl Field {
         unit: &str,
     ) -> Result<ImplicitPackage> {
         let path = path.as_ref();
-        crate::export::check_unit(unit)?;
+        crate::export::check_unit(unit).map_err(|e| e.at(path))?;
         crate::frame::require_near(self.file.volume.grid.offset, "a lattice")?;
         lattice.check()?;
         let wall = match cut {

@@ -114,6 +114,10 @@ pub struct LatticeArgs {
     pub thickness: f32,
     #[command(flatten)]
     pub grade: GradeArgs,
+    /// With a .3mf output: the unit it names for the model's coordinates (micron, millimeter,
+    /// centimeter, inch, foot or meter).
+    #[arg(long, default_value = pgvol::limits::THREEMF_UNIT)]
+    pub unit: String,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
     #[command(flatten)]
@@ -123,7 +127,9 @@ pub struct LatticeArgs {
 pub fn lattice(a: LatticeArgs) -> Result<()> {
     let start = Instant::now();
     let implicit = is_3mf(&a.output);
-    if !implicit {
+    if implicit {
+        check_unit(&a.output, &a.unit)?;
+    } else {
         a.shape.check_output(&a.output)?;
     }
     let lattice = build_lattice(a.surface, a.style, a.cell, a.thickness, &a.grade)?;
@@ -134,7 +140,7 @@ pub fn lattice(a: LatticeArgs) -> Result<()> {
     if implicit {
         let cut = pgvol::lattices::LatticeCut::Part;
         return write_implicit(
-            (&a.input, &a.output),
+            (&a.input, &a.output, &a.unit),
             &shape,
             &lattice,
             cut,
@@ -169,10 +175,22 @@ pub fn is_3mf(output: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("3mf"))
 }
 
+/// Refuses a unit 3MF does not name before any work.
+pub fn check_unit(output: &Path, unit: &str) -> Result<()> {
+    if !pgvol::limits::THREEMF_UNITS.contains(&unit) {
+        anyhow::bail!(
+            "{}: --unit {unit}: 3MF knows {}",
+            output.display(),
+            pgvol::limits::THREEMF_UNITS.join(", ")
+        );
+    }
+    Ok(())
+}
+
 /// Writes `lattice` cut to `shape` (read from `input`) as an implicit 3MF package and reports
 /// its size.
 pub fn write_implicit(
-    (input, output): (&Path, &Path),
+    (input, output, unit): (&Path, &Path, &str),
     shape: &pgvol::Field,
     lattice: &pgvol::Lattice,
     cut: pgvol::lattices::LatticeCut,
@@ -183,7 +201,7 @@ pub fn write_implicit(
     let t = Instant::now();
     // Errors without a file are about the part (its band, its frame): name the input.
     let written = shape
-        .write_lattice_3mf(output, lattice, cut, drains, pgvol::limits::THREEMF_UNIT)
+        .write_lattice_3mf(output, lattice, cut, drains, unit)
         .map_err(|e| at_input(e, input))?;
     let (grid, nodes) = (written.grid, written.nodes);
     let bytes = std::fs::metadata(output).map(|m| m.len()).unwrap_or(0);

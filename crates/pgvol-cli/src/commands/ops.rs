@@ -253,6 +253,10 @@ pub struct ShellArgs {
     pub infill_style: StyleArg,
     #[command(flatten)]
     pub grade: GradeArgs,
+    /// With --infill and a .3mf output: the unit it names for the model's coordinates (micron,
+    /// millimeter, centimeter, inch, foot or meter).
+    #[arg(long, default_value = pgvol::limits::THREEMF_UNIT)]
+    pub unit: String,
     #[command(flatten)]
     pub shape: ShapeOutputArgs,
     #[command(flatten)]
@@ -282,7 +286,7 @@ fn shell_infill(a: ShellArgs, surface: pgvol::lattices::Tpms, start: Instant) ->
     if super::lattice::is_3mf(&a.output) {
         let cut = pgvol::lattices::LatticeCut::Infill { wall: a.thickness };
         return super::lattice::write_implicit(
-            (&a.input, &a.output),
+            (&a.input, &a.output, &a.unit),
             &shape,
             &lattice,
             cut,
@@ -318,6 +322,7 @@ pub fn shell(a: ShellArgs) -> Result<()> {
                  shell write a mesh or .pgv"
             );
         }
+        super::lattice::check_unit(&a.output, &a.unit)?;
     } else {
         a.shape.check_output(&a.output)?;
     }
