@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use crate::{read, Mesh, MeshError};
+use crate::io::{read_bytes_with_unit, read_with_unit};
+use crate::{LengthUnit, Mesh, MeshError, MeshFormat};
 
 /// What [`read_clean`] changed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -12,13 +13,27 @@ pub struct CleanReport {
     pub degenerate_dropped: usize,
     /// Triangles repeating an earlier one's vertices.
     pub duplicates_dropped: usize,
+    /// The length unit the file declared, its coordinates now in millimetres (3MF; other
+    /// formats declare none and are read as they are).
+    pub unit: Option<LengthUnit>,
 }
 
 /// Reads `path`, welds bit-identical vertices and drops degenerate and repeated triangles.
 pub fn read_clean(path: &Path) -> Result<(Mesh, CleanReport), MeshError> {
-    let mut mesh = read(path)?;
+    let (mut mesh, unit) = read_with_unit(path)?;
     let report = clean(&mut mesh, path)?;
-    Ok((mesh, report))
+    Ok((mesh, CleanReport { unit, ..report }))
+}
+
+/// [`read_clean`] on bytes already in memory, in `format`; `name` labels errors.
+pub fn read_bytes_clean(
+    bytes: &[u8],
+    format: MeshFormat,
+    name: &Path,
+) -> Result<(Mesh, CleanReport), MeshError> {
+    let (mut mesh, unit) = read_bytes_with_unit(bytes, format, name)?;
+    let report = clean(&mut mesh, name)?;
+    Ok((mesh, CleanReport { unit, ..report }))
 }
 
 /// Welds bit-identical vertices of `mesh` and drops its degenerate and repeated triangles,
@@ -37,5 +52,6 @@ pub fn clean(mesh: &mut Mesh, name: &Path) -> Result<CleanReport, MeshError> {
         vertices_merged,
         degenerate_dropped,
         duplicates_dropped,
+        unit: None,
     })
 }

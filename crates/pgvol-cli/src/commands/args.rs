@@ -193,11 +193,18 @@ impl OutputArgs {
 pub type PathArg = PathBuf;
 
 /// Reads a mesh through the library, warning of what cleaning removed (on standard error unless
-/// `quiet`, and in the report). Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
+/// `quiet`, and in the report). Merged vertices go unmentioned for STL, which stores every
+/// triangle's corners apart.
 pub fn load_mesh(path: &Path, quiet: bool) -> Result<pgvol::Mesh> {
+    load_mesh_with_unit(path, quiet).map(|(mesh, _)| mesh)
+}
+
+/// [`load_mesh`], with how the file's declared length unit was converted (3MF: to millimetres,
+/// as "inch -> millimetre x25.4"), noted on standard error unless `quiet` when it scaled.
+pub fn load_mesh_with_unit(path: &Path, quiet: bool) -> Result<(pgvol::Mesh, Option<String>)> {
     let (mesh, report) = pgvol::io::read_mesh(path)?;
     let is_stl = matches!(
-        pgvol::io::mesh_format(path),
+        pgvol::mesh::MeshFormat::from_path(path),
         Ok(pgvol::mesh::MeshFormat::Stl)
     );
     let merged = if is_stl { 0 } else { report.vertices_merged };
@@ -213,7 +220,12 @@ pub fn load_mesh(path: &Path, quiet: bool) -> Result<pgvol::Mesh> {
             ),
         );
     }
-    Ok(mesh)
+    if let Some(unit) = report.unit {
+        if unit != pgvol::mesh::LengthUnit::Millimetre && !quiet {
+            eprintln!("note: {}: unit {unit}", path.display());
+        }
+    }
+    Ok((mesh, report.unit.map(|u| u.to_string())))
 }
 
 /// A library error without a file, reported against the input that caused it.

@@ -18,7 +18,7 @@ use crate::report::Seconds;
                   pgvol perturb cow.obj -o cow-perturb.obj   (the contoured zero set)"
 )]
 pub struct PerturbArgs {
-    /// Input mesh (.obj, .gltf, .glb, .stl, .ply).
+    /// Input mesh (.obj, .gltf, .glb, .stl, .ply, .3mf; 3MF read in millimetres).
     pub input: PathArg,
     /// Output: a .pgv file (the function list, encoding perturbation-f64, or with --resample a
     /// cubic B-spline coefficient volume; decode, slice, eval, offset, shell and info read

@@ -1,0 +1,93 @@
+//! The length units a 3MF model may declare (core specification, `unit` of `<model>`).
+
+use std::fmt;
+
+/// The length unit a 3MF model declares; the reader converts coordinates to millimetres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LengthUnit {
+    Micron,
+    Millimetre,
+    Centimetre,
+    Inch,
+    Foot,
+    Metre,
+}
+
+impl LengthUnit {
+    const ALL: [LengthUnit; 6] = [
+        LengthUnit::Micron,
+        LengthUnit::Millimetre,
+        LengthUnit::Centimetre,
+        LengthUnit::Inch,
+        LengthUnit::Foot,
+        LengthUnit::Metre,
+    ];
+
+    /// The unit named by a `unit` attribute (3MF's spelling, as in `millimeter`).
+    pub fn from_3mf(name: &str) -> Option<LengthUnit> {
+        Self::ALL.into_iter().find(|u| u.name_3mf() == name)
+    }
+
+    /// The attribute value that names this unit in a 3MF file.
+    pub fn name_3mf(self) -> &'static str {
+        match self {
+            LengthUnit::Micron => "micron",
+            LengthUnit::Millimetre => "millimeter",
+            LengthUnit::Centimetre => "centimeter",
+            LengthUnit::Inch => "inch",
+            LengthUnit::Foot => "foot",
+            LengthUnit::Metre => "meter",
+        }
+    }
+
+    /// Millimetres in one of this unit (exact: the inch is 25.4 mm by definition).
+    pub fn millimetres(self) -> f64 {
+        match self {
+            LengthUnit::Micron => 0.001,
+            LengthUnit::Millimetre => 1.0,
+            LengthUnit::Centimetre => 10.0,
+            LengthUnit::Inch => 25.4,
+            LengthUnit::Foot => 304.8,
+            LengthUnit::Metre => 1000.0,
+        }
+    }
+
+    pub(super) fn expected() -> String {
+        Self::ALL.map(LengthUnit::name_3mf).join(", ")
+    }
+}
+
+/// How coordinates in this unit were brought to millimetres, for reports: `inch -> millimetre
+/// x25.4`, or `millimetre (as in the file)`.
+impl fmt::Display for LengthUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let name = match self {
+            LengthUnit::Micron => "micron",
+            LengthUnit::Millimetre => return f.write_str("millimetre (as in the file)"),
+            LengthUnit::Centimetre => "centimetre",
+            LengthUnit::Inch => "inch",
+            LengthUnit::Foot => "foot",
+            LengthUnit::Metre => "metre",
+        };
+        write!(f, "{name} -> millimetre x{}", self.millimetres())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_unit_reads_back_from_its_name_and_says_its_factor() {
+        for u in LengthUnit::ALL {
+            assert_eq!(LengthUnit::from_3mf(u.name_3mf()), Some(u));
+        }
+        assert_eq!(LengthUnit::from_3mf("Inch"), None);
+        assert_eq!(LengthUnit::Inch.to_string(), "inch -> millimetre x25.4");
+        assert_eq!(
+            LengthUnit::Micron.to_string(),
+            "micron -> millimetre x0.001"
+        );
+        assert!((LengthUnit::Foot.millimetres() - 12.0 * 25.4).abs() < 1e-12);
+    }
+}
