@@ -80,8 +80,12 @@ impl<'a> Package<'a> {
         if declared > part_limit {
             return Err(refuse(format!("declares {declared} bytes")));
         }
-        // The declared size may lie: inflate at most one byte past the limit to find out.
-        let mut bytes = Vec::with_capacity(declared.min(1 << 26) as usize);
+        // The declared size may lie: inflate at most one byte past the limit to find out, and
+        // reserve no more than the compressed bytes can give (deflate expands at most ~1032×).
+        let reserve = declared
+            .min(file.compressed_size().saturating_mul(1032))
+            .min(1 << 26);
+        let mut bytes = Vec::with_capacity(reserve as usize);
         (&mut file)
             .take(part_limit + 1)
             .read_to_end(&mut bytes)
