@@ -9,6 +9,11 @@ pub(crate) struct Limits {
     pub part_bytes: u64,
     /// Uncompressed bytes of all parts read.
     pub package_bytes: u64,
+    /// Uncompressed bytes of a part per compressed byte, past the first [`Limits::slack`]
+    /// bytes. Model XML deflates 4 to 10 times; a zip bomb of repeated bytes about 1000 times.
+    pub inflation: u64,
+    /// Uncompressed bytes any part may have whatever its compressed size.
+    pub slack: u64,
     /// Vertices and triangles the build places, every use of an object counted.
     pub vertices: u64,
     pub triangles: u64,
@@ -25,6 +30,8 @@ impl Limits {
         parts: 100_000,
         part_bytes: 4 << 30,
         package_bytes: 8 << 30,
+        inflation: 100,
+        slack: 1 << 20,
         vertices: 50_000_000,
         triangles: 50_000_000,
         component_depth: 64,

@@ -65,27 +65,31 @@ impl<'a> Package<'a> {
             .archive
             .by_index_with_options(index, options)
             .map_err(|e| format!("part {part}: cannot open it: {e}"))?;
-        let part_limit = self
-            .limits
+        let compressed = file.compressed_size();
+        let limits = self.limits;
+        let part_limit = limits
             .part_bytes
-            .min(self.limits.package_bytes.saturating_sub(self.inflated));
+            .min(limits.package_bytes.saturating_sub(self.inflated))
+            .min(
+                compressed
+                    .saturating_mul(limits.inflation)
+                    .saturating_add(limits.slack),
+            );
         let refuse = |size: String| {
             format!(
-                "part {part}: {size} uncompressed, over the {} bytes allowed ({} per part, {} \
-                 for all parts read); a zip bomb or a model too large to read",
-                part_limit, self.limits.part_bytes, self.limits.package_bytes
+                "part {part}: {size} uncompressed from {compressed} compressed, over the \
+                 {part_limit} allowed (at most {} bytes a part, {} for all parts read, and \
+                 {} times the compressed size past the first {}); a zip bomb or a model too \
+                 large to read",
+                limits.part_bytes, limits.package_bytes, limits.inflation, limits.slack
             )
         };
         let declared = file.size();
         if declared > part_limit {
             return Err(refuse(format!("declares {declared} bytes")));
         }
-        // The declared size may lie: inflate at most one byte past the limit to find out, and
-        // reserve no more than the compressed bytes can give (deflate expands at most ~1032×).
-        let reserve = declared
-            .min(file.compressed_size().saturating_mul(1032))
-            .min(1 << 26);
-        let mut bytes = Vec::with_capacity(reserve as usize);
+        // The declared size may lie: inflate at most one byte past the limit to find out.
+        let mut bytes = Vec::with_capacity(declared.min(1 << 26) as usize);
         (&mut file)
             .take(part_limit + 1)
             .read_to_end(&mut bytes)

@@ -222,6 +222,46 @@ fn instancing_past_the_triangle_limit_is_refused_before_placing() {
 }
 
 #[test]
+fn a_zip_bomb_is_refused_before_inflating_and_when_its_header_lies() {
+    // 20 MB of spaces deflate to about 20 KB: a thousandfold expansion.
+    let padding = " ".repeat(20 << 20);
+    let bomb = model(
+        "millimeter",
+        &format!("{}{padding}", tetra(1, "model")),
+        r#"<item objectid="1"/>"#,
+    );
+    let bytes = single(&bomb);
+    assert!(bytes.len() < 100_000, "{}", bytes.len());
+    let e = error(&bytes, &Limits::DEFAULT);
+    assert!(
+        e.contains("part /3D/3dmodel.model: declares") && e.contains("a zip bomb"),
+        "{e}"
+    );
+    // The same with the sizes in its headers rewritten to 100 bytes.
+    let e = error(&understate("3D/3dmodel.model", &bytes), &Limits::DEFAULT);
+    assert!(e.contains("part /3D/3dmodel.model"), "{e}");
+}
+
+/// `bytes` with the uncompressed size of `entry` set to 100 in its local and central headers.
+fn understate(entry: &str, bytes: &[u8]) -> Vec<u8> {
+    let mut lying = bytes.to_vec();
+    let mut patched = 0;
+    for (sig, at, name_at) in [(b"PK\x03\x04", 22, 30), (b"PK\x01\x02", 24, 46)] {
+        let mut i = 0;
+        while let Some(k) = lying[i..].windows(4).position(|w| w == sig) {
+            let start = i + k;
+            if lying[start + name_at..].starts_with(entry.as_bytes()) {
+                lying[start + at..start + at + 4].copy_from_slice(&100u32.to_le_bytes());
+                patched += 1;
+            }
+            i = start + 4;
+        }
+    }
+    assert_eq!(patched, 2);
+    lying
+}
+
+#[test]
 fn parts_larger_than_the_limit_are_refused_declared_or_not() {
     let limits = Limits {
         part_bytes: 2_000,
@@ -239,21 +279,7 @@ fn parts_larger_than_the_limit_are_refused_declared_or_not() {
 
     // The same archive with its declared sizes rewritten to 100 bytes: inflating must stop at
     // the limit, not trust the header.
-    let mut lying = bytes.clone();
-    let mut patched = 0;
-    for (sig, at) in [(b"PK\x03\x04", 22), (b"PK\x01\x02", 24)] {
-        let mut i = 0;
-        while let Some(k) = lying[i..].windows(4).position(|w| w == sig) {
-            let start = i + k;
-            let name_at = if sig == b"PK\x03\x04" { 30 } else { 46 };
-            if lying[start + name_at..].starts_with(b"3D/3dmodel.model") {
-                lying[start + at..start + at + 4].copy_from_slice(&100u32.to_le_bytes());
-                patched += 1;
-            }
-            i = start + 4;
-        }
-    }
-    assert_eq!(patched, 2);
+    let lying = understate("3D/3dmodel.model", &bytes);
     let e = error(&lying, &limits);
     assert!(e.contains("part /3D/3dmodel.model"), "{e}");
 
