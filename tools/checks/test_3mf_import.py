@@ -171,6 +171,16 @@ def test_inches_are_read_as_millimetres_and_reported(pgvol, work_dir):
     report = remesh_and_compare(pgvol, part, expected, work_dir)
     assert report["unit"] == "inch -> millimetre x25.4", report["unit"]
 
+    # On request the numbers stay as the file writes them, in inches.
+    kept = work_dir / "3mf-inch-kept.ply"
+    report = helpers.run_json(
+        [pgvol, "remesh", part, "-o", kept, "--res", 64, "--mesh-units", "file", "--json"]
+    )
+    assert report["unit"] == "inch (as in the file, not converted)", report["unit"]
+    in_inches = place(SPHERE, affine(np.vstack([np.eye(3), [1, 2, 3]])))
+    off = np.abs(helpers.load_output(kept).bounds - in_inches.bounds).max()
+    assert off <= report["grid"]["spacing"], (off, report["grid"])
+
 
 def test_a_part_exported_by_prusaslicer(pgvol, mesh_path, work_dir):
     slicer = shutil.which("prusa-slicer")

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::io::{read_bytes_with_unit, read_with_unit};
-use crate::{LengthUnit, Mesh, MeshError, MeshFormat};
+use crate::{DeclaredUnit, Mesh, MeshError, MeshFormat, UnitChoice};
 
 /// What [`read_clean`] changed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -13,14 +13,20 @@ pub struct CleanReport {
     pub degenerate_dropped: usize,
     /// Triangles repeating an earlier one's vertices.
     pub duplicates_dropped: usize,
-    /// The length unit the file declared, its coordinates now in millimetres (3MF; other
-    /// formats declare none and are read as they are).
-    pub unit: Option<LengthUnit>,
+    /// The length unit the file declared and whether its coordinates were converted to
+    /// millimetres (3MF; other formats declare none and are read as they are).
+    pub unit: Option<DeclaredUnit>,
 }
 
 /// Reads `path`, welds bit-identical vertices and drops degenerate and repeated triangles.
 pub fn read_clean(path: &Path) -> Result<(Mesh, CleanReport), MeshError> {
-    let (mut mesh, unit) = read_with_unit(path)?;
+    read_clean_in(path, UnitChoice::default())
+}
+
+/// [`read_clean`] with the coordinates of a file that declares a length unit (3MF) converted to
+/// millimetres or kept as declared, as `choice` says.
+pub fn read_clean_in(path: &Path, choice: UnitChoice) -> Result<(Mesh, CleanReport), MeshError> {
+    let (mut mesh, unit) = read_with_unit(path, choice)?;
     let report = clean(&mut mesh, path)?;
     Ok((mesh, CleanReport { unit, ..report }))
 }
@@ -31,7 +37,7 @@ pub fn read_bytes_clean(
     format: MeshFormat,
     name: &Path,
 ) -> Result<(Mesh, CleanReport), MeshError> {
-    let (mut mesh, unit) = read_bytes_with_unit(bytes, format, name)?;
+    let (mut mesh, unit) = read_bytes_with_unit(bytes, format, name, UnitChoice::default())?;
     let report = clean(&mut mesh, name)?;
     Ok((mesh, CleanReport { unit, ..report }))
 }

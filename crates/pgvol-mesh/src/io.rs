@@ -4,39 +4,45 @@ use std::path::Path;
 
 use crate::validate::problem;
 use crate::{
-    gltf_io, obj, ply, stl, threemf, vertex_normals, LengthUnit, Mesh, MeshError, MeshFormat,
+    gltf_io, obj, ply, stl, threemf, vertex_normals, DeclaredUnit, Mesh, MeshError, MeshFormat,
+    UnitChoice,
 };
 use pgvol_core::write_atomic;
 
 /// Reads the mesh in `path`, choosing the format by extension, and validates it.
 pub fn read(path: &Path) -> Result<Mesh, MeshError> {
-    read_with_unit(path).map(|(mesh, _)| mesh)
+    read_with_unit(path, UnitChoice::default()).map(|(mesh, _)| mesh)
 }
 
-/// [`read`], with the length unit the file declared (3MF only; the mesh is in millimetres).
-pub(crate) fn read_with_unit(path: &Path) -> Result<(Mesh, Option<LengthUnit>), MeshError> {
+/// [`read`], with the length unit the file declared (3MF only), the coordinates converted to
+/// millimetres or kept as `choice` says.
+pub(crate) fn read_with_unit(
+    path: &Path,
+    choice: UnitChoice,
+) -> Result<(Mesh, Option<DeclaredUnit>), MeshError> {
     let format = MeshFormat::from_path(path)?;
     let bytes = pgvol_core::read_input(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    parse(&bytes, format, path, Some(dir))
+    parse(&bytes, format, path, Some(dir), choice)
 }
 
 /// Parses a mesh held in memory. `name` is only used in error messages. A `.gltf` whose buffers
 /// live in separate files cannot be read this way and yields an error saying so.
 pub fn read_bytes(bytes: &[u8], format: MeshFormat, name: &Path) -> Result<Mesh, MeshError> {
-    parse(bytes, format, name, None).map(|(mesh, _)| mesh)
+    parse(bytes, format, name, None, UnitChoice::default()).map(|(mesh, _)| mesh)
 }
 
-/// [`read_bytes`], with the length unit the file declared (3MF only).
+/// [`read_bytes`], with the length unit the file declared (3MF only), as `choice` says.
 pub(crate) fn read_bytes_with_unit(
     bytes: &[u8],
     format: MeshFormat,
     name: &Path,
-) -> Result<(Mesh, Option<LengthUnit>), MeshError> {
-    parse(bytes, format, name, None)
+    choice: UnitChoice,
+) -> Result<(Mesh, Option<DeclaredUnit>), MeshError> {
+    parse(bytes, format, name, None, choice)
 }
 
 fn parse(
@@ -44,7 +50,8 @@ fn parse(
     format: MeshFormat,
     name: &Path,
     dir: Option<&Path>,
-) -> Result<(Mesh, Option<LengthUnit>), MeshError> {
+    choice: UnitChoice,
+) -> Result<(Mesh, Option<DeclaredUnit>), MeshError> {
     if bytes.is_empty() {
         return Err(MeshError::new(name, "empty file"));
     }
@@ -56,7 +63,7 @@ fn parse(
         MeshFormat::Stl => stl::read(bytes, name)?,
         MeshFormat::Ply => ply::read(bytes, name)?,
         MeshFormat::ThreeMf => {
-            let (mesh, declared) = threemf::read(bytes, name)?;
+            let (mesh, declared) = threemf::read(bytes, name, choice)?;
             unit = Some(declared);
             mesh
         }

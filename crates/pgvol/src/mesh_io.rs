@@ -16,6 +16,16 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<(Mesh, CleanReport)> {
     pgvol_mesh::read_clean(path).reading()
 }
 
+/// [`read_mesh`], with a 3MF file's coordinates converted to millimetres or kept in the unit
+/// it declares, as `choice` says.
+pub fn read_mesh_in(
+    path: impl AsRef<Path>,
+    choice: pgvol_mesh::UnitChoice,
+) -> Result<(Mesh, CleanReport)> {
+    let path = path.as_ref();
+    pgvol_mesh::read_clean_in(path, choice).reading()
+}
+
 /// [`read_mesh`] on bytes already in memory; `name` labels errors.
 pub fn read_mesh_bytes(
     bytes: &[u8],

@@ -7,8 +7,8 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh_with_unit, non_negative, BasisArgs, GridArgs, MethodArg, OutputArgs,
-    PathArg, SignArg,
+    at_input, load_mesh_with_unit, non_negative, BasisArgs, GridArgs, MeshInputArgs, MethodArg,
+    OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -30,6 +30,8 @@ pub enum FieldArg {
 pub struct RemeshArgs {
     /// Input mesh (.obj, .gltf, .glb, .stl, .ply, .3mf; 3MF read in millimetres).
     pub input: PathArg,
+    #[command(flatten)]
+    pub read: MeshInputArgs,
     /// Output mesh; the format follows the extension (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
     pub output: PathArg,
@@ -75,7 +77,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
     }
     let start = Instant::now();
     let quiet = a.out.silent();
-    let (mesh, unit) = load_mesh_with_unit(&a.input, quiet)?;
+    let (mesh, unit) = load_mesh_with_unit(&a.input, a.read, quiet)?;
     pgvol::io::check_mesh_output(&a.output, &mesh)?;
     let read = start.elapsed().as_secs_f64();
     let options = pgvol::RemeshOptions {

@@ -18,28 +18,36 @@ use std::path::Path;
 use crate::{Mesh, MeshError};
 pub(crate) use limits::Limits;
 use package::Package;
-pub use unit::LengthUnit;
+pub use unit::{DeclaredUnit, LengthUnit, UnitChoice};
 
-/// Reads the 3MF package `bytes` (named `name` in errors) as one mesh in millimetres, and the
-/// unit its model declared.
-pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<(Mesh, LengthUnit), MeshError> {
-    read_with(bytes, name, &Limits::DEFAULT)
+/// Reads the 3MF package `bytes` (named `name` in errors) as one mesh, in millimetres or in the
+/// unit its model declared, and that unit.
+pub(crate) fn read(
+    bytes: &[u8],
+    name: &Path,
+    choice: UnitChoice,
+) -> Result<(Mesh, DeclaredUnit), MeshError> {
+    read_with(bytes, name, choice, &Limits::DEFAULT)
 }
 
 pub(crate) fn read_with(
     bytes: &[u8],
     name: &Path,
+    choice: UnitChoice,
     limits: &Limits,
-) -> Result<(Mesh, LengthUnit), MeshError> {
+) -> Result<(Mesh, DeclaredUnit), MeshError> {
     let fail = |problem: String| MeshError::new(name, problem);
     let mut package = Package::open(bytes, *limits).map_err(fail)?;
     let root = package.start_part().map_err(fail)?;
     let parts = load_parts(&mut package, &root, limits).map_err(fail)?;
-    let unit = parts[&root].unit;
+    let declared = DeclaredUnit {
+        unit: parts[&root].unit,
+        converted: choice == UnitChoice::Millimetres,
+    };
     let placed = assemble::place(&parts, &root, limits).map_err(fail)?;
-    let scale = unit.millimetres();
+    let scale = declared.scale();
     let world: Vec<_> = placed.positions.iter().map(|&p| p * scale).collect();
-    Ok((Mesh::from_world(&world, placed.triangles), unit))
+    Ok((Mesh::from_world(&world, placed.triangles), declared))
 }
 
 /// Parses the start part and every model part its references name (production extension

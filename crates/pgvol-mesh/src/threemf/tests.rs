@@ -5,8 +5,12 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{read, read_with, Limits};
-use crate::LengthUnit;
+use super::{read_with, Limits};
+use crate::{DeclaredUnit, LengthUnit, UnitChoice};
+
+fn read(bytes: &[u8], name: &Path) -> Result<(crate::Mesh, DeclaredUnit), crate::MeshError> {
+    super::read(bytes, name, UnitChoice::Millimetres)
+}
 
 const CORE: &str = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02";
 const PRODUCTION: &str = "http://schemas.microsoft.com/3dmanufacturing/production/2015/06";
@@ -67,7 +71,7 @@ fn signed_volume(mesh: &crate::Mesh) -> f64 {
 }
 
 fn error(bytes: &[u8], limits: &Limits) -> String {
-    let e = read_with(bytes, name(), limits).unwrap_err();
+    let e = read_with(bytes, name(), UnitChoice::Millimetres, limits).unwrap_err();
     assert!(e.to_string().starts_with("part.3mf"), "{e}");
     e.problem
 }
@@ -86,7 +90,7 @@ fn component_transforms_apply_before_the_build_item_transform() {
         r#"<item objectid="2" transform="2 0 0 0 2 0 0 0 2 0 0 10"/>"#,
     ));
     let (mesh, unit) = read(&bytes, name()).unwrap();
-    assert_eq!(unit, LengthUnit::Millimetre);
+    assert_eq!(unit.unit, LengthUnit::Millimetre);
     let p = world(&mesh);
     assert_eq!(p.len(), 4);
     assert_eq!(p[1], DVec3::new(4.0, 0.0, 10.0));
@@ -117,11 +121,21 @@ fn inches_become_millimetres_and_the_unit_is_reported() {
     ));
     let (mesh, report) =
         crate::read_bytes_clean(&bytes, crate::MeshFormat::ThreeMf, name()).unwrap();
-    assert_eq!(report.unit, Some(LengthUnit::Inch));
+    assert_eq!(
+        report.unit,
+        Some(DeclaredUnit {
+            unit: LengthUnit::Inch,
+            converted: true
+        })
+    );
     let p = world(&mesh);
     assert!(p
         .iter()
         .any(|q| (*q - DVec3::new(25.4, 0.0, 0.0)).length() < 1e-5));
+    // Kept as declared on request: the corner stays at 1.
+    let (kept, unit) = super::read(&bytes, name(), UnitChoice::AsDeclared).unwrap();
+    assert!(!unit.converted);
+    assert!(world(&kept).contains(&DVec3::new(1.0, 0.0, 0.0)));
     let e = error(
         &single(&model(
             "furlong",
@@ -201,7 +215,11 @@ fn component_cycles_and_deep_nesting_are_refused() {
         ..Limits::DEFAULT
     };
     assert_eq!(
-        read_with(&bytes, name(), &deep).unwrap().0.triangles.len(),
+        read_with(&bytes, name(), UnitChoice::Millimetres, &deep)
+            .unwrap()
+            .0
+            .triangles
+            .len(),
         4
     );
 }

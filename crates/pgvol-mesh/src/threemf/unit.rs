@@ -57,19 +57,58 @@ impl LengthUnit {
     }
 }
 
-/// How coordinates in this unit were brought to millimetres, for reports: `inch -> millimetre
-/// x25.4`, or `millimetre (as in the file)`.
+/// The unit's English name (`inch`, `millimetre`).
 impl fmt::Display for LengthUnit {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let name = match self {
+        f.write_str(match self {
             LengthUnit::Micron => "micron",
-            LengthUnit::Millimetre => return f.write_str("millimetre (as in the file)"),
+            LengthUnit::Millimetre => "millimetre",
             LengthUnit::Centimetre => "centimetre",
             LengthUnit::Inch => "inch",
             LengthUnit::Foot => "foot",
             LengthUnit::Metre => "metre",
-        };
-        write!(f, "{name} -> millimetre x{}", self.millimetres())
+        })
+    }
+}
+
+/// What a reader does with a length unit the file declares (3MF).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum UnitChoice {
+    /// Coordinates are converted to millimetres, so files in any unit come out alike.
+    #[default]
+    Millimetres,
+    /// Coordinates are kept as the file writes them, in its declared unit.
+    AsDeclared,
+}
+
+/// The length unit a file declared and what reading did with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DeclaredUnit {
+    pub unit: LengthUnit,
+    /// Whether the coordinates were converted to millimetres.
+    pub converted: bool,
+}
+
+impl DeclaredUnit {
+    /// The factor the file's coordinates were multiplied by.
+    pub fn scale(self) -> f64 {
+        if self.converted {
+            self.unit.millimetres()
+        } else {
+            1.0
+        }
+    }
+}
+
+/// For reports: `inch -> millimetre x25.4`, `millimetre (as in the file)`, or `inch (as in the
+/// file, not converted)`.
+impl fmt::Display for DeclaredUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (self.unit, self.converted) {
+            (LengthUnit::Millimetre, _) => f.write_str("millimetre (as in the file)"),
+            (unit, true) => write!(f, "{unit} -> millimetre x{}", unit.millimetres()),
+            (unit, false) => write!(f, "{unit} (as in the file, not converted)"),
+        }
     }
 }
 
@@ -83,10 +122,19 @@ mod tests {
             assert_eq!(LengthUnit::from_3mf(u.name_3mf()), Some(u));
         }
         assert_eq!(LengthUnit::from_3mf("Inch"), None);
-        assert_eq!(LengthUnit::Inch.to_string(), "inch -> millimetre x25.4");
+        let read = |unit, converted| DeclaredUnit { unit, converted }.to_string();
+        assert_eq!(read(LengthUnit::Inch, true), "inch -> millimetre x25.4");
         assert_eq!(
-            LengthUnit::Micron.to_string(),
+            read(LengthUnit::Micron, true),
             "micron -> millimetre x0.001"
+        );
+        assert_eq!(
+            read(LengthUnit::Inch, false),
+            "inch (as in the file, not converted)"
+        );
+        assert_eq!(
+            read(LengthUnit::Millimetre, true),
+            "millimetre (as in the file)"
         );
         assert!((LengthUnit::Foot.millimetres() - 12.0 * 25.4).abs() < 1e-12);
     }
