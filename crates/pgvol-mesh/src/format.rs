@@ -12,7 +12,7 @@ pub enum MeshFormat {
     Glb,
     Stl,
     Ply,
-    /// 3MF packages: read only (the build as one mesh, in millimetres).
+    /// 3MF packages: read only (the build as one mesh, in millimetres unless asked otherwise).
     ThreeMf,
 }
 
