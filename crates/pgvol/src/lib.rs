@@ -145,7 +145,7 @@ pub mod io {
     pub use crate::export::export;
     pub use crate::mesh_io::{
         check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh,
-        read_mesh_bytes, write_mesh, write_mesh_to,
+        read_mesh_bytes, read_mesh_in, write_mesh, write_mesh_to,
     };
     pub use crate::pgv_io::{
         pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes,

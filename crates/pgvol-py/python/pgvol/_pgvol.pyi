@@ -495,8 +495,8 @@ class Field:
         """The file header's key/value metadata."""
 
 def read_mesh(path: _PathLike) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
-    """Reads an OBJ, glTF/GLB, STL or PLY file (by extension), welding bit-identical vertices
-    and dropping degenerate and repeated triangles."""
+    """Reads an OBJ, glTF/GLB, STL, PLY or 3MF file (by extension; a 3MF build in millimetres),
+    welding bit-identical vertices and dropping degenerate and repeated triangles."""
 
 def write_mesh(path: _PathLike, vertices: _Points, faces: _Faces) -> None:
     """Writes a GLB, glTF, OBJ, STL or PLY file (by extension), atomically."""
