@@ -28,6 +28,10 @@ pub const VDB_GRID_NAME: &str = "surface";
 /// The widest band accepted, in voxels: beyond it a level set is a dense grid.
 pub const MAX_VDB_BAND: f32 = 64.0;
 
+/// Peak bytes per leaf near the surface while writing: its encoded buffer (mask, tags and up
+/// to 512 values) and bookkeeping.
+const BYTES_PER_VDB_LEAF: u64 = 2560;
+
 const _: () = assert!(BRICK_EDGE == LEAF_EDGE);
 
 /// Writes `volume` sampled on `grid` (the volume's grid or a resampling of its box) as an
@@ -63,17 +67,26 @@ pub(crate) fn write_vdb(
     }
     let leaves = leaf_counts(grid);
     let bounds = LeafBounds::new(volume, grid);
-    let origins: Vec<VdbLeaf> = (0..leaves[0] * leaves[1] * leaves[2])
+    let candidate = |n: usize| {
+        let b = [
+            n % leaves[0],
+            n / leaves[0] % leaves[1],
+            n / (leaves[0] * leaves[1]),
+        ];
+        (bounds.side(b, background) != Some(Side::Outside)).then(|| origin(b))
+    };
+    let all = leaves[0] * leaves[1] * leaves[2];
+    // Counted before they are listed, so a job too large is refused before it allocates.
+    let count = (0..all)
         .into_par_iter()
-        .filter_map(|n| {
-            let b = [
-                n % leaves[0],
-                n / leaves[0] % leaves[1],
-                n / (leaves[0] * leaves[1]),
-            ];
-            (bounds.side(b, background) != Some(Side::Outside)).then(|| origin(b))
-        })
-        .collect();
+        .filter(|&n| candidate(n).is_some())
+        .count();
+    crate::memory::check_memory(
+        "writing the OpenVDB level set",
+        (count as u64).saturating_mul(BYTES_PER_VDB_LEAF),
+        "lower the resolution or the band",
+    )?;
+    let origins: Vec<VdbLeaf> = (0..all).into_par_iter().filter_map(candidate).collect();
     let world = pgvol_core::frame::to_world(grid.origin, grid.offset);
     let header = LevelSetGrid {
         name: VDB_GRID_NAME,

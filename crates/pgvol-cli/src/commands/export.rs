@@ -82,6 +82,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
     let grid = pgvol::io::export(&a.output, &file, &options)?;
     let what = match kind {
         pgvol::ExportKind::CoefficientsNrrd => "coefficients",
+        pgvol::ExportKind::Vdb => "level set",
         _ => "sdf",
     };
     let bytes = std::fs::metadata(&a.output)?.len();
