@@ -5,10 +5,8 @@
 use std::collections::HashMap;
 use std::io::Read;
 
-use pgvol_format::vdb::{
-    write_level_set, LevelSetGrid, UniformScaleTranslate, VdbCompression, VdbLeafValues,
-    LEAF_VOXELS,
-};
+use pgvol_format::vdb::write::{write_level_set, LevelSetGrid, VdbCompression, VdbLeafValues};
+use pgvol_format::vdb::{UniformScaleTranslate, LEAF_VOXELS};
 
 const CENTRE: [f64; 3] = [64.0, 64.0, 64.0];
 const RADIUS: f64 = 120.0;

@@ -9,7 +9,7 @@ use pgvol_format::PgvFile;
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::field_value::Field;
 pub use crate::vdb_export::VDB_BAND;
-pub use pgvol_format::vdb::VdbCompression;
+pub use pgvol_format::vdb::write::VdbCompression;
 
 /// Export targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

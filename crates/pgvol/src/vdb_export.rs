@@ -10,10 +10,10 @@ use std::path::Path;
 
 use pgvol_core::BRICK_EDGE;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
-use pgvol_format::vdb::{
-    write_level_set, LevelSetGrid, UniformScaleTranslate, VdbCompression, VdbLeaf, VdbLeafValues,
-    LEAF_EDGE, LEAF_LOG2, LEAF_VOXELS,
+use pgvol_format::vdb::write::{
+    write_level_set, LevelSetGrid, VdbCompression, VdbLeaf, VdbLeafValues,
 };
+use pgvol_format::vdb::{UniformScaleTranslate, LEAF_EDGE, LEAF_LOG2, LEAF_VOXELS};
 use rayon::prelude::*;
 
 use crate::error::{Error, FileResult, Result};

@@ -7,8 +7,6 @@
 
 pub mod write;
 
-pub use write::{write_level_set, LevelSetGrid, VdbCompression, VdbLeaf, VdbLeafValues};
-
 /// The first 8 bytes of every `.vdb` file (`OPENVDB_MAGIC`, as an i64).
 pub const MAGIC: i64 = 0x5644_4220;
 
