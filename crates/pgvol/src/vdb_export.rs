@@ -203,32 +203,58 @@ impl<'a> LeafBounds<'a> {
             g.to_grid(self.grid.point(hi[0], hi[1], hi[2])),
         );
         // Every basis bounded here reaches at most 2 nodes beyond the cell holding a point.
-        let range: [[usize; 2]; 3] = std::array::from_fn(|a| {
+        let nodes: [[usize; 2]; 3] = std::array::from_fn(|a| {
             let n = g.dims[a] as i64;
-            let first = (ulo[a].floor() as i64 - 2).clamp(0, n - 1) as usize;
-            let last = (uhi[a].ceil() as i64 + 2).clamp(0, n - 1) as usize;
-            [first / BRICK_EDGE, last / BRICK_EDGE]
+            [
+                (ulo[a].floor() as i64 - 2).clamp(0, n - 1) as usize,
+                (uhi[a].ceil() as i64 + 2).clamp(0, n - 1) as usize,
+            ]
         });
+        // First from the bounds of whole bricks, then, near the surface, from the coefficients
+        // themselves: sampling a leaf costs far more than reading its support.
         let [bx, by, _] = self.volume.coeffs.brick_counts();
-        let (mut min, mut max) = (f32::INFINITY, f32::NEG_INFINITY);
-        for k in range[2][0]..=range[2][1] {
-            for j in range[1][0]..=range[1][1] {
-                for i in range[0][0]..=range[0][1] {
+        let mut range = [f32::INFINITY, f32::NEG_INFINITY];
+        for k in nodes[2][0] / BRICK_EDGE..=nodes[2][1] / BRICK_EDGE {
+            for j in nodes[1][0] / BRICK_EDGE..=nodes[1][1] / BRICK_EDGE {
+                for i in nodes[0][0] / BRICK_EDGE..=nodes[0][1] / BRICK_EDGE {
                     let [lo, hi] = self.bricks[i + bx * (j + by * k)];
-                    min = min.min(lo);
-                    max = max.max(hi);
+                    range = [range[0].min(lo), range[1].max(hi)];
                 }
             }
-            if min < background && max > -background {
-                return None;
+        }
+        one_side(range, background).or_else(|| self.gathered_side(nodes, background))
+    }
+
+    /// The side of a leaf from the coefficients in its support, `nodes` (first and last
+    /// coefficient node per axis).
+    fn gathered_side(&self, nodes: [[usize; 2]; 3], background: f32) -> Option<Side> {
+        let [[i0, i1], [j0, j1], [k0, k1]] = nodes;
+        let mut row = vec![0.0f32; i1 - i0 + 1];
+        let mut range = [f32::INFINITY, f32::NEG_INFINITY];
+        for k in k0..=k1 {
+            for j in j0..=j1 {
+                self.volume
+                    .coeffs
+                    .gather([i0, j, k], [row.len(), 1, 1], &mut row);
+                for &c in &row {
+                    range = [range[0].min(c), range[1].max(c)];
+                }
+                if range[0] < background && range[1] > -background {
+                    return None;
+                }
             }
         }
-        if min >= background {
-            Some(Side::Outside)
-        } else if max <= -background {
-            Some(Side::Inside)
-        } else {
-            None
-        }
+        one_side(range, background)
+    }
+}
+
+/// The side of values in `[min, max]` when all are at or beyond `±background`.
+fn one_side([min, max]: [f32; 2], background: f32) -> Option<Side> {
+    if min >= background {
+        Some(Side::Outside)
+    } else if max <= -background {
+        Some(Side::Inside)
+    } else {
+        None
     }
 }
