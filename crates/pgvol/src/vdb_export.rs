@@ -49,7 +49,8 @@ pub(crate) fn write_vdb(
 ) -> Result<()> {
     if !(band.is_finite() && band > 0.0 && band <= MAX_VDB_BAND) {
         return Err(Error::parameter(format!(
-            "the level set's band must be between 0 and {MAX_VDB_BAND} voxels, got {band}"
+            "the level set's band must be more than 0 and at most {MAX_VDB_BAND} voxels, \
+             got {band}"
         )));
     }
     let background = band * grid.spacing;
