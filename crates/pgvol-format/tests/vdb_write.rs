@@ -415,4 +415,8 @@ fn bad_settings_are_refused_before_writing() {
     }
     let e = write_level_set(&path, &good, &[[3, 0, 0]], leaf_values).unwrap_err();
     assert!(e.to_string().contains("multiple of 8"), "{e}");
+    let inside = |_| VdbLeafValues::Inside;
+    let e = write_level_set(&path, &good, &[[8, 0, 0], [8, 0, 0]], inside).unwrap_err();
+    assert!(e.to_string().contains("listed twice"), "{e}");
+    assert!(!path.exists());
 }

@@ -1,7 +1,7 @@
 //! Writing a float level set as an OpenVDB file.
 //!
-//! Leaves are sampled and encoded in parallel, one at a time, so memory holds only the encoded
-//! band; the small tree above them is built afterwards. Inactive values are `+background`
+//! Each leaf is encoded as soon as its values are given (leaves in parallel), so memory holds
+//! only the encoded band; the small tree above the leaves is built afterwards. Inactive values are `+background`
 //! outside and `-background` inside, and every chunk is written with OpenVDB's active-mask
 //! compression: the active values only, plus a mask choosing the sign of the inactive ones
 //! where both occur.
@@ -86,7 +86,7 @@ struct Upper {
 }
 
 /// Writes a float level set at `path` atomically: `leaf(origin)` gives the values of each
-/// leaf in `origins` (called in parallel); leaves not listed are outside.
+/// leaf in `origins` (each listed once; called in parallel); leaves not listed are outside.
 pub fn write_level_set(
     path: &Path,
     grid: &LevelSetGrid,
@@ -108,7 +108,8 @@ pub fn write_level_set(
         .par_iter()
         .map(|&o| encode_leaf(o, leaf(o), background, grid))
         .collect();
-    pgvol_core::write_atomic(path, |w| write_file(w, grid, background, origins, &encoded))
+    let uppers = build_tree(origins, &encoded).map_err(|e| err(path, e))?;
+    pgvol_core::write_atomic(path, |w| write_file(w, grid, background, &uppers, &encoded))
         .map_err(|e| err(path, e.problem))
 }
 
@@ -310,7 +311,10 @@ fn coord_bytes(c: [i32; 3]) -> Vec<u8> {
 }
 
 /// The leaves sorted into lower and upper internal nodes, inside lower nodes made tiles.
-fn build_tree(origins: &[VdbLeaf], encoded: &[Encoded]) -> BTreeMap<[i32; 3], Upper> {
+fn build_tree(
+    origins: &[VdbLeaf],
+    encoded: &[Encoded],
+) -> Result<BTreeMap<[i32; 3], Upper>, String> {
     const LOWER_SPAN: i32 = 1 << (LEAF_LOG2 + LOWER_LOG2);
     const UPPER_SPAN: i32 = 1 << (LEAF_LOG2 + LOWER_LOG2 + UPPER_LOG2);
     let mut uppers: BTreeMap<[i32; 3], Upper> = BTreeMap::new();
@@ -324,7 +328,7 @@ fn build_tree(origins: &[VdbLeaf], encoded: &[Encoded]) -> BTreeMap<[i32; 3], Up
         let lower_at = std::array::from_fn(|a| ((o[a] - upper[a]) / LOWER_SPAN) as usize);
         let leaf_at =
             std::array::from_fn(|a| ((o[a].rem_euclid(LOWER_SPAN)) >> LEAF_LOG2) as usize);
-        uppers
+        let before = uppers
             .entry(upper)
             .or_default()
             .children
@@ -332,6 +336,9 @@ fn build_tree(origins: &[VdbLeaf], encoded: &[Encoded]) -> BTreeMap<[i32; 3], Up
             .or_default()
             .slots
             .insert(node_offset(LOWER_LOG2, leaf_at), slot);
+        if before.is_some() {
+            return Err(format!("leaf origin {o:?} is listed twice"));
+        }
     }
     for upper in uppers.values_mut() {
         let full = 1usize << (3 * LOWER_LOG2);
@@ -349,7 +356,7 @@ fn build_tree(origins: &[VdbLeaf], encoded: &[Encoded]) -> BTreeMap<[i32; 3], Up
         upper.inside = inside;
     }
     uppers.retain(|_, u| !u.children.is_empty() || !u.inside.is_empty());
-    uppers
+    Ok(uppers)
 }
 
 /// The tree's topology (`Tree::writeTopology`): buffer count, root, then each internal node
@@ -489,10 +496,9 @@ fn write_file(
     w: &mut dyn Write,
     grid: &LevelSetGrid,
     background: f32,
-    origins: &[VdbLeaf],
+    uppers: &BTreeMap<[i32; 3], Upper>,
     encoded: &[Encoded],
 ) -> io::Result<()> {
-    let uppers = build_tree(origins, encoded);
     // The grid up to its buffers, so the descriptor can give the offsets before it.
     let mut body = Vec::new();
     let mut compression = COMPRESS_ACTIVE_MASK;
@@ -502,7 +508,7 @@ fn write_file(
     put_u32(&mut body, compression);
     grid_metadata(&mut body, grid, encoded);
     transform(&mut body, grid.transform);
-    let order = topology(&mut body, &uppers, encoded, background, grid);
+    let order = topology(&mut body, uppers, encoded, background, grid);
     let buffers: usize = order
         .iter()
         .map(|&i| match &encoded[i] {
