@@ -277,3 +277,11 @@ def test_far_from_the_origin_keeps_world_positions(pgvol, mesh_path, work_dir):
     assert inner.sum() > 100 and active[inner].all()
     err = np.abs(values[inner] - expected[inner]).max()
     assert err <= 0.1 * h, f"values differ from pgvol eval by up to {err / h:.3g} voxel"
+
+
+def test_vdb_options_need_a_vdb_output(pgvol, spot):
+    folder, pgv, _, _, _ = spot
+    out = folder / "not-a-level-set.npy"
+    run = helpers.run([pgvol, "export", pgv, "-o", out, "--half"])
+    assert run.returncode != 0 and ".vdb" in run.stderr, run.stderr
+    assert not out.exists()

@@ -31,15 +31,15 @@ pub struct ExportArgs {
     #[arg(long, default_value = pgvol::limits::THREEMF_UNIT)]
     pub unit: String,
     /// A .vdb's narrow band half-width in voxels: nodes nearer the surface are active, the
-    /// others hold ±W·spacing.
-    #[arg(long, value_name = "W", default_value_t = pgvol::limits::VDB_BAND)]
-    pub band: f32,
+    /// others hold ±W·spacing [default: 3].
+    #[arg(long, value_name = "W")]
+    pub band: Option<f32>,
     /// Store a .vdb's values as 16-bit half floats.
     #[arg(long)]
     pub half: bool,
-    /// How a .vdb's value chunks are stored: zip (zlib) or none.
-    #[arg(long, value_enum, default_value_t)]
-    pub vdb_compression: VdbCompressionArg,
+    /// How a .vdb's value chunks are stored [default: zip].
+    #[arg(long, value_enum)]
+    pub vdb_compression: Option<VdbCompressionArg>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -67,14 +67,18 @@ pub enum VdbCompressionArg {
 pub fn run(a: ExportArgs) -> Result<()> {
     let start = std::time::Instant::now();
     let kind = pgvol::ExportKind::from_path(&a.output, a.what == WhatArg::Coefficients)?;
+    let vdb_options = a.band.is_some() || a.half || a.vdb_compression.is_some();
+    if vdb_options && kind != pgvol::ExportKind::Vdb {
+        anyhow::bail!("--band, --half and --vdb-compression apply to a .vdb output");
+    }
     let file = pgvol::io::read_pgv(&a.input)?;
     let options = pgvol::ExportOptions {
         kind: Some(kind),
         res: a.res.map(|r| r as usize),
         unit: &a.unit,
-        band: a.band,
+        band: a.band.unwrap_or(pgvol::limits::VDB_BAND),
         half: a.half,
-        compression: match a.vdb_compression {
+        compression: match a.vdb_compression.unwrap_or_default() {
             VdbCompressionArg::Zip => pgvol::io::VdbCompression::Zip,
             VdbCompressionArg::None => pgvol::io::VdbCompression::None,
         },
