@@ -216,13 +216,14 @@ def test_vdb_print_lists_the_grid(spot):
 
 
 @pytest.mark.skipif(shutil.which("blender") is None, reason="blender is missing (Debian package blender)")
-def test_blender_volume_to_mesh(spot):
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_blender_volume_to_mesh(spot, variant):
     folder, _, (_, h, _), decoded, files = spot
     script = folder / "blender_vdb.py"
     script.write_text(BLENDER_SCRIPT)
-    out = folder / "spot-blender.stl"
+    out = folder / f"spot-blender-{variant}.stl"
     run = helpers.run(
-        ["blender", "-b", "--factory-startup", "--python", script, "--", files["zip"], GRID_NAME, out]
+        ["blender", "-b", "--factory-startup", "--python", script, "--", files[variant], GRID_NAME, out]
     )
     assert run.returncode == 0 and out.is_file(), f"Blender failed:\n{run.stdout}\n{run.stderr}"
     assert f"GRIDS ['{GRID_NAME}']" in run.stdout, run.stdout
