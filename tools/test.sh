@@ -32,6 +32,24 @@ python3 tools/check_cycles.py
 section "cargo build --release"
 cargo build --release
 
+section "system tools (apt: OpenVDB, Blender, PrusaSlicer)"
+# The interop checks read pgvol's files back with other tools: OpenVDB (pyopenvdb under the
+# system Python, vdb_print), Blender's volume import and PrusaSlicer's 3MF export. Installed only
+# where dpkg does not list them.
+apt_missing=()
+for pkg in python3-openvdb libopenvdb-tools blender prusa-slicer; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || apt_missing+=("$pkg")
+done
+if [[ ${#apt_missing[@]} -gt 0 ]]; then
+    sudo_cmd=()
+    [[ "$(id -u)" != 0 ]] && sudo_cmd=(sudo)
+    "${sudo_cmd[@]}" apt-get update -q
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -q \
+        --no-install-recommends "${apt_missing[@]}"
+else
+    echo "python3-openvdb, libopenvdb-tools, blender and prusa-slicer are installed"
+fi
+
 section "python environment (.venv)"
 PY="${PYTHON:-python3}"
 if [[ ! -x .venv/bin/python ]]; then

@@ -12,12 +12,14 @@ pub enum MeshFormat {
     Glb,
     Stl,
     Ply,
+    /// 3MF packages: read only (the build as one mesh, in millimetres unless asked otherwise).
+    ThreeMf,
 }
 
 impl MeshFormat {
     /// The format named by the extension of `path`, ignoring case.
     pub fn from_path(path: &Path) -> Result<MeshFormat, MeshError> {
-        const EXPECTED: &str = "(expected .obj, .gltf, .glb, .stl, .ply)";
+        const EXPECTED: &str = "(expected .obj, .gltf, .glb, .stl, .ply, .3mf)";
         let Some(ext) = path.extension() else {
             return Err(MeshError::new(
                 path,
@@ -31,6 +33,7 @@ impl MeshFormat {
             "glb" => Ok(MeshFormat::Glb),
             "stl" => Ok(MeshFormat::Stl),
             "ply" => Ok(MeshFormat::Ply),
+            "3mf" => Ok(MeshFormat::ThreeMf),
             _ => Err(MeshError::new(
                 path,
                 format!("unknown extension '.{ext}' {EXPECTED}"),
@@ -46,6 +49,26 @@ impl MeshFormat {
             MeshFormat::Glb => "glb",
             MeshFormat::Stl => "stl",
             MeshFormat::Ply => "ply",
+            MeshFormat::ThreeMf => "3mf",
         }
+    }
+
+    /// Whether meshes can be written in this format (3MF is read only).
+    pub fn writable(self) -> bool {
+        self != MeshFormat::ThreeMf
+    }
+
+    /// The format of an output file named `path`: as [`MeshFormat::from_path`], refusing the
+    /// formats that are only read.
+    pub fn for_output(path: &Path) -> Result<MeshFormat, MeshError> {
+        let format = MeshFormat::from_path(path)?;
+        if !format.writable() {
+            return Err(MeshError::new(
+                path,
+                "3MF meshes are read but not written (write .obj, .gltf, .glb, .stl or .ply; \
+                 a field is exported to 3MF as a level set instead)",
+            ));
+        }
+        Ok(format)
     }
 }

@@ -3,24 +3,46 @@
 use std::path::Path;
 
 use crate::validate::problem;
-use crate::{gltf_io, obj, ply, stl, vertex_normals, Mesh, MeshError, MeshFormat};
+use crate::{
+    gltf_io, obj, ply, stl, threemf, vertex_normals, DeclaredUnit, Mesh, MeshError, MeshFormat,
+    UnitChoice,
+};
 use pgvol_core::write_atomic;
 
 /// Reads the mesh in `path`, choosing the format by extension, and validates it.
 pub fn read(path: &Path) -> Result<Mesh, MeshError> {
+    read_with_unit(path, UnitChoice::default()).map(|(mesh, _)| mesh)
+}
+
+/// [`read`], with the length unit the file declared (3MF only), the coordinates converted to
+/// millimetres or kept as `choice` says.
+pub(crate) fn read_with_unit(
+    path: &Path,
+    choice: UnitChoice,
+) -> Result<(Mesh, Option<DeclaredUnit>), MeshError> {
     let format = MeshFormat::from_path(path)?;
     let bytes = pgvol_core::read_input(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    parse(&bytes, format, path, Some(dir))
+    parse(&bytes, format, path, Some(dir), choice)
 }
 
 /// Parses a mesh held in memory. `name` is only used in error messages. A `.gltf` whose buffers
 /// live in separate files cannot be read this way and yields an error saying so.
 pub fn read_bytes(bytes: &[u8], format: MeshFormat, name: &Path) -> Result<Mesh, MeshError> {
-    parse(bytes, format, name, None)
+    parse(bytes, format, name, None, UnitChoice::default()).map(|(mesh, _)| mesh)
+}
+
+/// [`read_bytes`], with the length unit the file declared (3MF only), as `choice` says.
+pub(crate) fn read_bytes_with_unit(
+    bytes: &[u8],
+    format: MeshFormat,
+    name: &Path,
+    choice: UnitChoice,
+) -> Result<(Mesh, Option<DeclaredUnit>), MeshError> {
+    parse(bytes, format, name, None, choice)
 }
 
 fn parse(
@@ -28,27 +50,34 @@ fn parse(
     format: MeshFormat,
     name: &Path,
     dir: Option<&Path>,
-) -> Result<Mesh, MeshError> {
+    choice: UnitChoice,
+) -> Result<(Mesh, Option<DeclaredUnit>), MeshError> {
     if bytes.is_empty() {
         return Err(MeshError::new(name, "empty file"));
     }
+    let mut unit = None;
     let mesh = match format {
         MeshFormat::Obj => obj::read(bytes, name)?,
         MeshFormat::Gltf => gltf_io::read(bytes, name, false, dir)?,
         MeshFormat::Glb => gltf_io::read(bytes, name, true, dir)?,
         MeshFormat::Stl => stl::read(bytes, name)?,
         MeshFormat::Ply => ply::read(bytes, name)?,
+        MeshFormat::ThreeMf => {
+            let (mesh, declared) = threemf::read(bytes, name, choice)?;
+            unit = Some(declared);
+            mesh
+        }
     };
     match problem(&mesh, "file") {
         Some(p) => Err(MeshError::new(name, p)),
-        None => Ok(mesh),
+        None => Ok((mesh, unit)),
     }
 }
 
 /// Writes `mesh` to `path` in the format named by its extension, atomically, with unit
 /// per-vertex normals (facet normals for STL).
 pub fn write(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
-    let format = MeshFormat::from_path(path)?;
+    let format = MeshFormat::for_output(path)?;
     check_writable(mesh, format, path)?;
     write_atomic(path, |w| encode(w, mesh, format))
 }
@@ -66,6 +95,12 @@ pub fn write_to(
 }
 
 fn check_writable(mesh: &Mesh, format: MeshFormat, name: &Path) -> Result<(), MeshError> {
+    if !format.writable() {
+        return Err(MeshError::new(
+            name,
+            format!("meshes are not written as .{}", format.extension()),
+        ));
+    }
     if let Some(p) = problem(mesh, "mesh") {
         return Err(MeshError::new(name, format!("refusing to write: {p}")));
     }
@@ -104,6 +139,8 @@ fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: MeshFormat) -> std::i
         MeshFormat::Glb => gltf_io::write(w, mesh, &normals, true),
         MeshFormat::Stl => stl::write(w, mesh),
         MeshFormat::Ply => ply::write(w, mesh, &normals),
+        // Refused by `check_writable` before any byte is written.
+        MeshFormat::ThreeMf => Err(std::io::Error::other("3MF meshes are not written")),
     }
 }
 

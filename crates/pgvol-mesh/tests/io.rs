@@ -163,8 +163,15 @@ fn format_from_path_is_case_insensitive_and_names_bad_extensions() {
     let e = MeshFormat::from_path(Path::new("dir/model.xyz")).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "dir/model.xyz: unknown extension '.xyz' (expected .obj, .gltf, .glb, .stl, .ply)"
+        "dir/model.xyz: unknown extension '.xyz' (expected .obj, .gltf, .glb, .stl, .ply, .3mf)"
     );
+    // 3MF is read, not written.
+    assert_eq!(
+        MeshFormat::from_path(Path::new("x.3MF")).unwrap(),
+        MeshFormat::ThreeMf
+    );
+    let e = MeshFormat::for_output(Path::new("x.3mf")).unwrap_err();
+    assert!(e.problem.contains("read but not written"), "{e}");
     assert!(read(Path::new("noext"))
         .unwrap_err()
         .to_string()
@@ -926,9 +933,10 @@ fn fuzz_seeds_read_or_are_refused_as_named() {
         "trailing-text.ply",
         "trailing-bytes.stl",
         "trailing-bytes.glb",
+        "cycle.3mf",
     ];
     let mut seen = 0;
-    for target in ["read_ply", "read_stl", "read_glb"] {
+    for target in ["read_ply", "read_stl", "read_glb", "read_3mf"] {
         for entry in fs::read_dir(corpus.join(target)).unwrap() {
             let path = entry.unwrap().path();
             let name = path.file_name().unwrap().to_str().unwrap().to_string();

@@ -1108,9 +1108,13 @@ impl Field {
 
     /// Writes the field for other tools, by the extension of `path`: ".nrrd" or ".npy" the
     /// field sampled on a grid (the stored grid, or `res` nodes along the box's longest side),
-    /// ".3mf" a 3MF volumetric level set naming `unit`; with `coefficients=True`, ".nrrd" holds
-    /// the coefficients with the basis in its key/value fields. Returns the grid written.
-    #[pyo3(signature = (path, *, res=None, coefficients=false, unit="millimeter"))]
+    /// ".3mf" a 3MF volumetric level set naming `unit`, ".vdb" an OpenVDB level set (nodes
+    /// within `band` voxels of the surface active, as half floats with `half=True`, value
+    /// chunks zlib-compressed or raw by `vdb_compression`); with `coefficients=True`, ".nrrd"
+    /// holds the coefficients with the basis in its key/value fields. Returns the grid written.
+    /// (`band`'s default is `pgvol::limits::VDB_BAND`, spelled out for the signature.)
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (path, *, res=None, coefficients=false, unit="millimeter", band=3.0, half=false, vdb_compression="zip"))]
     fn export(
         &self,
         py: Python<'_>,
@@ -1118,12 +1122,19 @@ impl Field {
         res: Option<usize>,
         coefficients: bool,
         unit: &str,
+        band: f32,
+        half: bool,
+        vdb_compression: &str,
     ) -> PyResult<Grid> {
+        let compression = names::vdb_compression(py, vdb_compression)?;
         let grid = quiet(py, || {
             let options = pgvol::ExportOptions {
                 kind: Some(pgvol::ExportKind::from_path(&path, coefficients)?),
                 res,
                 unit,
+                band,
+                half,
+                compression,
             };
             self.shape.export(&path, &options)
         })?;

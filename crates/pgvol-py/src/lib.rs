@@ -26,8 +26,9 @@ use pyo3::prelude::*;
 use crate::json::json_to_py;
 use crate::progress::{quiet, run};
 
-/// Reads a mesh file (OBJ, glTF/GLB, STL or PLY by extension), with bit-identical vertices
-/// welded and degenerate or repeated triangles dropped: (vertices (N, 3), faces (M, 3) int32).
+/// Reads a mesh file (OBJ, glTF/GLB, STL, PLY or 3MF by extension; a 3MF build in millimetres),
+/// with bit-identical vertices welded and degenerate or repeated triangles dropped: (vertices
+/// (N, 3), faces (M, 3) int32).
 /// Vertices are float32, or float64 for a mesh far from the origin (more than 64 times its
 /// size away), whose positions single precision would round.
 #[pyfunction]

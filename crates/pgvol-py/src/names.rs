@@ -27,6 +27,15 @@ pub(crate) fn basis(py: Python<'_>, name: &str) -> PyResult<pgvol::Basis> {
     })
 }
 
+/// "zip" (zlib) or "none": how a `.vdb`'s value chunks are stored.
+pub(crate) fn vdb_compression(py: Python<'_>, name: &str) -> PyResult<pgvol::io::VdbCompression> {
+    match name {
+        "zip" => Ok(pgvol::io::VdbCompression::Zip),
+        "none" => Ok(pgvol::io::VdbCompression::None),
+        _ => Err(unknown(py, "vdb compression", name, "zip or none")),
+    }
+}
+
 /// "interp", "iso" (with an optional step in grid spacings) or "wls".
 pub(crate) fn fit(py: Python<'_>, name: &str, z_step: Option<f32>) -> PyResult<pgvol::FitMethod> {
     let method = match name {

@@ -3,6 +3,7 @@ volumes and against readers no one here wrote (trimesh, manifold3d, numpy, pynrr
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 
@@ -148,6 +149,68 @@ def test_export_npy_reads_back_with_numpy(balls, tmp_path):
     assert np.allclose(values.transpose(2, 1, 0), a.to_dense(), atol=1e-5)
     coarse = a.export(tmp_path / "coarse.npy", res=40)
     assert max(coarse.dims) == 40 and np.load(tmp_path / "coarse.npy").shape == coarse.dims[::-1]
+
+
+OPENVDB_READ = """
+import json, sys
+import pyopenvdb as vdb
+path, probes = sys.argv[1], json.loads(sys.argv[2])
+grid = vdb.read(path, "surface")
+acc = grid.getConstAccessor()
+print(json.dumps({
+    "class": str(grid.gridClass),
+    "voxel_size": grid.transform.voxelSize()[0],
+    "origin": list(grid.transform.indexToWorld((0, 0, 0))),
+    "background": grid.background,
+    "half": bool(grid.metadata.get("is_saved_as_half_float", False)),
+    "values": [acc.getValue(tuple(p)) for p in probes],
+    "active": [acc.isValueOn(tuple(p)) for p in probes],
+}))
+"""
+
+
+def test_export_vdb_reads_back_with_openvdb(balls, tmp_path):
+    """OpenVDB's own reader (Debian's python3-openvdb, under the system Python) reads the
+    level set: pgvol's spacing and origin, its values in the band, ±band beyond it."""
+    import shutil
+    import subprocess
+
+    a, _ = balls
+    with pytest.raises(pgvol.ParameterError):
+        a.export(tmp_path / "bad.vdb", vdb_compression="lz4")
+    with pytest.raises(pgvol.ParameterError):
+        a.export(tmp_path / "bad.vdb", band=0.0)
+    system = shutil.which("python3", path="/usr/bin")
+    if system is None or subprocess.run([system, "-c", "import pyopenvdb"]).returncode != 0:
+        pytest.skip("pyopenvdb is missing (Debian package python3-openvdb)")
+    nx, ny, nz = a.grid.dims
+    h = a.grid.spacing
+    # Along the x axis through the centre: inside, across the surface, outside.
+    probes = [[i, ny // 2, nz // 2] for i in range(nx)]
+    points = np.asarray(a.grid.origin) + h * np.asarray(probes, float)
+    expected = a(points)
+    for half, band in [(False, 3.0), (True, 2.0)]:
+        path = tmp_path / f"ball-{half}.vdb"
+        grid = a.export(path, band=band, half=half)
+        assert grid == a.grid
+        run = subprocess.run(
+            [system, "-c", OPENVDB_READ, str(path), json.dumps(probes)],
+            capture_output=True,
+            text=True,
+        )
+        assert run.returncode == 0, run.stderr
+        got = json.loads(run.stdout)
+        assert got["class"] == "level set" and got["half"] == half
+        assert abs(got["voxel_size"] - h) <= 1e-6 * h
+        assert np.allclose(got["origin"], a.grid.origin, atol=1e-6)
+        background = got["background"]
+        assert abs(background - band * h) <= 1e-3 * h
+        values, active = np.asarray(got["values"]), np.asarray(got["active"])
+        inner = np.abs(expected) < background - 1e-3 * h
+        outer = np.abs(expected) > background + 1e-3 * h
+        assert inner.sum() >= 4 and active[inner].all() and not active[outer].any()
+        assert np.abs(values[inner] - expected[inner]).max() <= 0.01 * h
+        assert np.array_equal(values[outer], np.sign(expected[outer]) * background)
 
 
 def test_export_nrrd_reads_back_with_pynrrd(balls, tmp_path):

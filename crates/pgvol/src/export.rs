@@ -1,4 +1,5 @@
-//! A field as NRRD (its coefficients, or the field sampled) or as a 3MF level set.
+//! A field as NRRD (its coefficients, or the field sampled), as a 3MF level set or as an
+//! OpenVDB level set.
 
 use std::path::Path;
 
@@ -7,6 +8,8 @@ use pgvol_format::PgvFile;
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::field_value::Field;
+pub use crate::vdb_export::VDB_BAND;
+pub use pgvol_format::vdb::write::VdbCompression;
 
 /// Export targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,6 +22,8 @@ pub enum ExportKind {
     SdfNpy,
     /// The sampled field as a 3MF Volumetric level set (16-bit PNG image stack).
     ThreeMf,
+    /// The narrow band of the sampled field as an OpenVDB FloatGrid level set (`.vdb`).
+    Vdb,
 }
 
 impl ExportKind {
@@ -33,13 +38,14 @@ impl ExportKind {
             (Some("nrrd"), false) => Ok(ExportKind::SdfNrrd),
             (Some("npy"), false) => Ok(ExportKind::SdfNpy),
             (Some("3mf"), false) => Ok(ExportKind::ThreeMf),
-            (Some("3mf" | "npy"), true) => Err(Error::parameter(
-                "coefficients export to .nrrd only; .3mf and .npy hold the sampled field",
+            (Some("vdb"), false) => Ok(ExportKind::Vdb),
+            (Some("3mf" | "npy" | "vdb"), true) => Err(Error::parameter(
+                "coefficients export to .nrrd only; .3mf, .npy and .vdb hold the sampled field",
             )
             .at(path)),
             _ => Err(Error::new(
                 ErrorKind::OutputFile,
-                "expected a .nrrd, .npy or .3mf file name",
+                "expected a .nrrd, .npy, .3mf or .vdb file name",
             )
             .at(path)),
         }
@@ -64,13 +70,20 @@ pub const THREEMF_UNIT: &str = "millimeter";
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExportOptions<'a> {
     /// The target; `None` (the default) picks the sampled field in the format of the path's
-    /// extension (.nrrd, .npy or .3mf).
+    /// extension (.nrrd, .npy, .3mf or .vdb).
     pub kind: Option<ExportKind>,
     /// Sample on this many nodes along the longest side; `None` (the default) samples the
     /// stored grid. Not for coefficients.
     pub res: Option<usize>,
     /// The unit a 3MF package names, one of [`THREEMF_UNITS`] (default [`THREEMF_UNIT`]).
     pub unit: &'a str,
+    /// A `.vdb`'s narrow band half-width in voxels: nodes nearer the surface are active, the
+    /// others hold ±band·spacing (default [`VDB_BAND`]).
+    pub band: f32,
+    /// Store a `.vdb`'s values as 16-bit floats (default false).
+    pub half: bool,
+    /// How a `.vdb`'s value chunks are stored (default zlib).
+    pub compression: VdbCompression,
 }
 
 impl Default for ExportOptions<'_> {
@@ -79,6 +92,9 @@ impl Default for ExportOptions<'_> {
             kind: None,
             res: None,
             unit: THREEMF_UNIT,
+            band: VDB_BAND,
+            half: false,
+            compression: VdbCompression::Zip,
         }
     }
 }
@@ -87,11 +103,7 @@ impl Field {
     /// Writes the field to `path` for other tools as `options` say; returns the grid written.
     pub fn export(&self, path: impl AsRef<Path>, options: &ExportOptions) -> Result<Grid> {
         let path = path.as_ref();
-        let kind = match options.kind {
-            Some(kind) => kind,
-            None => ExportKind::from_path(path, false)?,
-        };
-        export(path, &self.file, kind, options.res, options.unit)
+        export(path, &self.file, options)
     }
 }
 
@@ -106,16 +118,16 @@ pub(crate) fn check_unit(unit: &str) -> Result<()> {
     Ok(())
 }
 
-/// Writes `file` to `path` as `kind`, sampled on `res` nodes along the longest side (`None`:
-/// the stored grid; not for coefficients); a 3MF package names `unit` (one of
-/// [`THREEMF_UNITS`]). Returns the grid written.
-pub fn export(
-    path: &Path,
-    file: &PgvFile,
-    kind: ExportKind,
-    res: Option<usize>,
-    unit: &str,
-) -> Result<Grid> {
+/// Writes `file` to `path` as `options` say: `options.kind` (by default from the path's
+/// extension), sampled on `options.res` nodes along the longest side (`None`: the stored grid;
+/// not for coefficients); a 3MF package names `options.unit` (one of [`THREEMF_UNITS`]).
+/// Returns the grid written.
+pub fn export(path: &Path, file: &PgvFile, options: &ExportOptions) -> Result<Grid> {
+    let kind = match options.kind {
+        Some(kind) => kind,
+        None => ExportKind::from_path(path, false)?,
+    };
+    let (res, unit) = (options.res, options.unit);
     if kind == ExportKind::ThreeMf {
         check_unit(unit)?;
     }
@@ -130,6 +142,20 @@ pub fn export(
         return Ok(volume.grid);
     }
     let grid = crate::decode::target_grid(volume, res)?;
+    if kind == ExportKind::Vdb {
+        // Only the band is sampled, leaf by leaf: no dense array.
+        let recorded = crate::band::recorded_band(file);
+        crate::vdb_export::write_vdb(
+            path,
+            volume,
+            &grid,
+            options.band,
+            recorded,
+            options.half,
+            options.compression,
+        )?;
+        return Ok(grid);
+    }
     crate::memory::check_grid("sampling", &grid, crate::memory::BYTES_PER_SDF_NODE)?;
     let values = volume.sample(&grid);
     match kind {

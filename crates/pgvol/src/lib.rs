@@ -105,6 +105,7 @@ mod repair;
 mod resolution;
 mod slice;
 mod timings;
+mod vdb_export;
 
 pub use csg::{CsgOptions, ResultUse};
 pub use decode::DecodeOptions;
@@ -143,10 +144,10 @@ pub mod io {
         check_pgv_name, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv, write_pgv_to,
     };
     pub use crate::eval::{read_points, read_points_file};
-    pub use crate::export::export;
+    pub use crate::export::{export, VdbCompression};
     pub use crate::mesh_io::{
         check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh,
-        read_mesh_bytes, write_mesh, write_mesh_to,
+        read_mesh_bytes, read_mesh_in, write_mesh, write_mesh_to,
     };
     pub use crate::pgv_io::{
         pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes,
@@ -172,7 +173,7 @@ pub mod limits {
     pub use crate::decode::SPECK_VOXELS;
     pub use crate::encode::{ENCODE_BAND, MIN_BAND, PG_ORDER, PG_RADIUS};
     pub use crate::exact_field::NODE_BAND;
-    pub use crate::export::{THREEMF_UNIT, THREEMF_UNITS};
+    pub use crate::export::{THREEMF_UNIT, THREEMF_UNITS, VDB_BAND};
     pub use crate::field_value::{SHAPE_RES, SLICE_RES};
     pub use crate::grid::{DEFAULT_RES, MAX_RES, MIN_RES};
     pub use crate::lattice::BYTES_PER_LATTICE_BRICK;
@@ -181,6 +182,7 @@ pub mod limits {
     pub use crate::repair::{DEFAULT_ALPHA, DEFAULT_COARSE};
     pub use crate::resolution::{EXTRA_PIECES, MIN_WALL_SPACINGS, PIECES_FACTOR};
     pub use crate::slice::DEFAULT_UNITS_MM;
+    pub use crate::vdb_export::{MAX_VDB_BAND, VDB_GRID_NAME};
     pub use pgvol_ops::{MAX_CONTINUITY, TPMS_NAMES};
 
     /// Area-uniform samples drawn on each mesh by [`crate::compare`] unless told otherwise.

@@ -8,11 +8,22 @@ use pgvol_mesh::{CleanReport, MeshFormat};
 
 use crate::error::{Error, FileResult, Result};
 
-/// Reads a mesh file (OBJ, glTF/GLB, STL, PLY by extension), welds bit-identical vertices and
-/// drops degenerate triangles; the report says how many of each.
+/// Reads a mesh file (OBJ, glTF/GLB, STL, PLY, 3MF by extension), welds bit-identical vertices
+/// and drops degenerate triangles; the report says how many of each, and the length unit a 3MF
+/// file declared (its mesh comes in millimetres).
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<(Mesh, CleanReport)> {
     let path = path.as_ref();
     pgvol_mesh::read_clean(path).reading()
+}
+
+/// [`read_mesh`], with a 3MF file's coordinates converted to millimetres or kept in the unit
+/// it declares, as `choice` says.
+pub fn read_mesh_in(
+    path: impl AsRef<Path>,
+    choice: pgvol_mesh::UnitChoice,
+) -> Result<(Mesh, CleanReport)> {
+    let path = path.as_ref();
+    pgvol_mesh::read_clean_in(path, choice).reading()
 }
 
 /// [`read_mesh`] on bytes already in memory; `name` labels errors.
@@ -21,9 +32,7 @@ pub fn read_mesh_bytes(
     format: MeshFormat,
     name: &Path,
 ) -> Result<(Mesh, CleanReport)> {
-    let mut mesh = pgvol_mesh::read_bytes(bytes, format, name).reading()?;
-    let report = pgvol_mesh::clean(&mut mesh, name).reading()?;
-    Ok((mesh, report))
+    pgvol_mesh::read_bytes_clean(bytes, format, name).reading()
 }
 
 /// A mesh given as vertex positions and triangles in memory (by a binding, say), checked as a
@@ -53,10 +62,11 @@ pub fn mesh_from_world(
     Ok((mesh, report))
 }
 
-/// The mesh format a file name asks for, refused (as an output error) when there is none.
+/// The mesh format an output file name asks for, refused (as an output error) when there is
+/// none or it is only read (3MF).
 pub fn mesh_format(path: impl AsRef<Path>) -> Result<MeshFormat> {
     let path = path.as_ref();
-    MeshFormat::from_path(path).writing()
+    MeshFormat::for_output(path).writing()
 }
 
 /// Refuses, before the work, an output `path` whose format cannot hold a mesh in `like`'s frame

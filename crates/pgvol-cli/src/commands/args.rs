@@ -192,12 +192,50 @@ impl OutputArgs {
 
 pub type PathArg = PathBuf;
 
+/// What a mesh file that declares its length unit (3MF) is read in.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MeshUnitsArg {
+    /// Millimetres: an inch file's coordinates are multiplied by 25.4.
+    #[default]
+    Mm,
+    /// The unit the file declares: its numbers as written.
+    File,
+}
+
+/// How the commands that take a mesh read it.
+#[derive(Args, Clone, Copy, Debug, Default)]
+pub struct MeshInputArgs {
+    /// Unit of a mesh from a file that declares one (3MF); other formats are read as written.
+    #[arg(long, value_enum, default_value_t)]
+    pub mesh_units: MeshUnitsArg,
+}
+
+impl MeshInputArgs {
+    fn choice(self) -> pgvol::mesh::UnitChoice {
+        match self.mesh_units {
+            MeshUnitsArg::Mm => pgvol::mesh::UnitChoice::Millimetres,
+            MeshUnitsArg::File => pgvol::mesh::UnitChoice::AsDeclared,
+        }
+    }
+}
+
 /// Reads a mesh through the library, warning of what cleaning removed (on standard error unless
-/// `quiet`, and in the report). Merged vertices go unmentioned for STL, which stores every triangle's corners apart.
-pub fn load_mesh(path: &Path, quiet: bool) -> Result<pgvol::Mesh> {
-    let (mesh, report) = pgvol::io::read_mesh(path)?;
+/// `quiet`, and in the report). Merged vertices go unmentioned for STL, which stores every
+/// triangle's corners apart.
+pub fn load_mesh(path: &Path, input: MeshInputArgs, quiet: bool) -> Result<pgvol::Mesh> {
+    load_mesh_with_unit(path, input, quiet).map(|(mesh, _)| mesh)
+}
+
+/// [`load_mesh`], with what was done with the file's declared length unit (3MF: "inch ->
+/// millimetre x25.4", say), noted on standard error unless `quiet` when it scaled.
+pub fn load_mesh_with_unit(
+    path: &Path,
+    input: MeshInputArgs,
+    quiet: bool,
+) -> Result<(pgvol::Mesh, Option<String>)> {
+    let (mesh, report) = pgvol::io::read_mesh_in(path, input.choice())?;
     let is_stl = matches!(
-        pgvol::io::mesh_format(path),
+        pgvol::mesh::MeshFormat::from_path(path),
         Ok(pgvol::mesh::MeshFormat::Stl)
     );
     let merged = if is_stl { 0 } else { report.vertices_merged };
@@ -213,7 +251,12 @@ pub fn load_mesh(path: &Path, quiet: bool) -> Result<pgvol::Mesh> {
             ),
         );
     }
-    Ok(mesh)
+    if let Some(unit) = report.unit {
+        if unit.scale() != 1.0 && !quiet {
+            eprintln!("note: {}: unit {unit}", path.display());
+        }
+    }
+    Ok((mesh, report.unit.map(|u| u.to_string())))
 }
 
 /// A library error without a file, reported against the input that caused it.

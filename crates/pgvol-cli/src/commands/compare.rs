@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 
-use super::args::{load_mesh, OutputArgs, PathArg};
+use super::args::{load_mesh, MeshInputArgs, OutputArgs, PathArg};
 use crate::output::outln;
 use crate::report::{self, Seconds};
 
@@ -20,6 +20,8 @@ pub struct CompareArgs {
     pub a: PathArg,
     /// The reference mesh (its bounding-box diagonal is the unit of the % figures).
     pub b: PathArg,
+    #[command(flatten)]
+    pub read: MeshInputArgs,
     /// Area-uniform samples drawn on each mesh.
     #[arg(long, default_value_t = pgvol::limits::COMPARE_SAMPLES as u64, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
     pub samples: u64,
@@ -33,8 +35,8 @@ pub struct CompareArgs {
 pub fn run(a: CompareArgs) -> Result<()> {
     let start = std::time::Instant::now();
     let quiet = a.out.silent();
-    let ma = load_mesh(&a.a, quiet)?;
-    let mb = load_mesh(&a.b, quiet)?;
+    let ma = load_mesh(&a.a, a.read, quiet)?;
+    let mb = load_mesh(&a.b, a.read, quiet)?;
     let c = pgvol::compare(&ma, &mb, a.samples as usize, a.seed)?;
     if a.out.json {
         return report::print(&c, &Seconds::since(start));

@@ -1,4 +1,5 @@
-//! `pgvol export`: a .pgv file as NRRD (coefficients or sampled field) or as a 3MF level set.
+//! `pgvol export`: a .pgv file as NRRD (coefficients or sampled field), as a 3MF level set or
+//! as an OpenVDB level set.
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
@@ -8,11 +9,14 @@ use crate::output::outln;
 use crate::report::{self, Seconds};
 
 #[derive(Args)]
-#[command(after_help = "Example: pgvol export part.pgv -o part.3mf --res 256")]
+#[command(
+    after_help = "Examples:\n  pgvol export part.pgv -o part.3mf --res 256\n  pgvol export part.pgv -o part.vdb --band 3 --half"
+)]
 pub struct ExportArgs {
     /// Input .pgv file.
     pub input: PathArg,
-    /// Output file: .nrrd, .npy (the sampled field, float32 of shape (nz, ny, nx)) or .3mf.
+    /// Output file: .nrrd, .npy (the sampled field, float32 of shape (nz, ny, nx)), .3mf or
+    /// .vdb (an OpenVDB level-set FloatGrid named "surface", nodes as voxel centres).
     #[arg(short, long)]
     pub output: PathArg,
     /// What a NRRD holds: the coefficient grid itself (readable by `pgvol encode --from`) or
@@ -26,6 +30,16 @@ pub struct ExportArgs {
     /// inch, foot or meter.
     #[arg(long, default_value = pgvol::limits::THREEMF_UNIT)]
     pub unit: String,
+    /// A .vdb's narrow band half-width in voxels: nodes nearer the surface are active, the
+    /// others hold ±W·spacing [default: 3].
+    #[arg(long, value_name = "W")]
+    pub band: Option<f32>,
+    /// Store a .vdb's values as 16-bit half floats.
+    #[arg(long)]
+    pub half: bool,
+    /// How a .vdb's value chunks are stored [default: zip].
+    #[arg(long, value_enum)]
+    pub vdb_compression: Option<VdbCompressionArg>,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -40,13 +54,39 @@ pub enum WhatArg {
     Sdf,
 }
 
+/// How a .vdb's value chunks are stored.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VdbCompressionArg {
+    /// zlib, as OpenVDB's "zip" compression: the smaller file.
+    #[default]
+    Zip,
+    /// Raw values.
+    None,
+}
+
 pub fn run(a: ExportArgs) -> Result<()> {
     let start = std::time::Instant::now();
     let kind = pgvol::ExportKind::from_path(&a.output, a.what == WhatArg::Coefficients)?;
+    let vdb_options = a.band.is_some() || a.half || a.vdb_compression.is_some();
+    if vdb_options && kind != pgvol::ExportKind::Vdb {
+        anyhow::bail!("--band, --half and --vdb-compression apply to a .vdb output");
+    }
     let file = pgvol::io::read_pgv(&a.input)?;
-    let grid = pgvol::io::export(&a.output, &file, kind, a.res.map(|r| r as usize), &a.unit)?;
+    let options = pgvol::ExportOptions {
+        kind: Some(kind),
+        res: a.res.map(|r| r as usize),
+        unit: &a.unit,
+        band: a.band.unwrap_or(pgvol::limits::VDB_BAND),
+        half: a.half,
+        compression: match a.vdb_compression.unwrap_or_default() {
+            VdbCompressionArg::Zip => pgvol::io::VdbCompression::Zip,
+            VdbCompressionArg::None => pgvol::io::VdbCompression::None,
+        },
+    };
+    let grid = pgvol::io::export(&a.output, &file, &options)?;
     let what = match kind {
         pgvol::ExportKind::CoefficientsNrrd => "coefficients",
+        pgvol::ExportKind::Vdb => "level set",
         _ => "sdf",
     };
     let bytes = std::fs::metadata(&a.output)?.len();

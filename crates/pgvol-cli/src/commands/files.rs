@@ -7,7 +7,8 @@ use clap::Args;
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, non_negative, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg,
+    at_input, load_mesh_with_unit, non_negative, BasisArgs, GridArgs, MeshInputArgs, MethodArg,
+    OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -20,6 +21,8 @@ use clap::ValueEnum;
 pub struct EncodeArgs {
     /// Input mesh.
     pub mesh: Option<PathArg>,
+    #[command(flatten)]
+    pub read: MeshInputArgs,
     /// Read the coefficients from a NRRD written by `pgvol export --what coefficients` instead
     /// of fitting a mesh; written dense and unchanged unless --precision is given.
     #[arg(long, value_name = "NRRD", conflicts_with_all = ["res", "voxel", "basis", "pg_n", "pg_r", "fit", "band", "z_step", "sign"])]
@@ -200,7 +203,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
     }
     let quiet = a.out.silent();
     let start = Instant::now();
-    let mesh = load_mesh(mesh_path, quiet)?;
+    let (mesh, unit) = load_mesh_with_unit(mesh_path, a.read, quiet)?;
     let options = pgvol::EncodeOptions {
         grid: a.grid.spec(),
         basis: a.basis.basis()?,
@@ -257,7 +260,7 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         return report::print(
             &serde_json::json!({
                 "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
-                "storage": storage, "fit": report,
+                "storage": storage, "fit": report, "unit": unit,
             }),
             &Seconds::since(start)
                 .stages([("sdf", encoded.timings.sdf), ("fit", encoded.timings.fit)]),

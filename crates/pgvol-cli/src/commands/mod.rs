@@ -45,11 +45,12 @@ pub enum Command {
     Decode(files::DecodeArgs),
     /// Prints what a .pgv file holds.
     Info(files::InfoArgs),
-    /// Exports a .pgv file as NRRD (coefficients or sampled field) or as a 3MF level set.
+    /// Exports a .pgv file as NRRD or .npy (a grid), or as a 3MF or OpenVDB level set.
     ///
     /// A coefficient NRRD carries the basis in key/value fields and reads back with
     /// `pgvol encode --from`; a .3mf holds the field as a 16-bit PNG image stack under a
-    /// Volumetric-extension level set.
+    /// Volumetric-extension level set; a .vdb holds the narrow band as an OpenVDB FloatGrid of
+    /// class level set (for Blender, Houdini and other OpenVDB tools).
     Export(export::ExportArgs),
     /// Evaluates a .pgv field (value and gradient) at the points of a CSV file (x,y,z per line).
     Eval(eval::EvalArgs),

@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::Args;
 use serde::Serialize;
 
-use super::args::{at_input, load_mesh, non_negative, OutputArgs, PathArg};
+use super::args::{at_input, load_mesh, non_negative, MeshInputArgs, OutputArgs, PathArg};
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::Seconds;
@@ -18,8 +18,10 @@ use crate::report::Seconds;
                   pgvol perturb cow.obj -o cow-perturb.obj   (the contoured zero set)"
 )]
 pub struct PerturbArgs {
-    /// Input mesh (.obj, .gltf, .glb, .stl, .ply).
+    /// Input mesh (.obj, .gltf, .glb, .stl, .ply, .3mf; 3MF read in millimetres).
     pub input: PathArg,
+    #[command(flatten)]
+    pub read: MeshInputArgs,
     /// Output: a .pgv file (the function list, encoding perturbation-f64, or with --resample a
     /// cubic B-spline coefficient volume; decode, slice, eval, offset, shell and info read
     /// either) or a mesh (.glb, .gltf, .obj, .stl, .ply: the contoured zero set, every piece
@@ -82,7 +84,7 @@ pub fn run(a: PerturbArgs) -> Result<()> {
     super::args::check_dense_file(a.dense_file, &a.output)?;
     let start = Instant::now();
     let quiet = a.out.silent();
-    let mesh = load_mesh(&a.input, quiet)?;
+    let mesh = load_mesh(&a.input, a.read, quiet)?;
     let read = start.elapsed().as_secs_f64();
     let options = pgvol::perturbation::PerturbOptions {
         max_functions: a.max_functions as usize,

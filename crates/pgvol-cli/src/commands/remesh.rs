@@ -7,7 +7,8 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh, non_negative, BasisArgs, GridArgs, MethodArg, OutputArgs, PathArg, SignArg,
+    at_input, load_mesh_with_unit, non_negative, BasisArgs, GridArgs, MeshInputArgs, MethodArg,
+    OutputArgs, PathArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -27,8 +28,10 @@ pub enum FieldArg {
 #[derive(Args)]
 #[command(after_help = "Example: pgvol remesh scan.stl -o clean.glb --res 256 --method dc")]
 pub struct RemeshArgs {
-    /// Input mesh (.obj, .gltf, .glb, .stl, .ply).
+    /// Input mesh (.obj, .gltf, .glb, .stl, .ply, .3mf; 3MF read in millimetres).
     pub input: PathArg,
+    #[command(flatten)]
+    pub read: MeshInputArgs,
     /// Output mesh; the format follows the extension (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
     pub output: PathArg,
@@ -60,6 +63,8 @@ struct Report<'a> {
     grid: pgvol::Grid,
     basis: &'static str,
     input_triangles: usize,
+    /// How the input's declared length unit was converted (3MF), `null` for other formats.
+    unit: Option<String>,
     triangles: usize,
     vertices: usize,
 }
@@ -72,7 +77,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
     }
     let start = Instant::now();
     let quiet = a.out.silent();
-    let mesh = load_mesh(&a.input, quiet)?;
+    let (mesh, unit) = load_mesh_with_unit(&a.input, a.read, quiet)?;
     pgvol::io::check_mesh_output(&a.output, &mesh)?;
     let read = start.elapsed().as_secs_f64();
     let options = pgvol::RemeshOptions {
@@ -104,6 +109,7 @@ pub fn run(a: RemeshArgs) -> Result<()> {
         grid,
         basis,
         input_triangles: mesh.triangles.len(),
+        unit,
         triangles: remeshed.mesh.triangles.len(),
         vertices: remeshed.mesh.positions.len(),
     };

@@ -4,7 +4,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::args::{at_input, load_mesh, GridArgs, OutputArgs, PathArg, SignArg};
+use super::args::{at_input, load_mesh, GridArgs, MeshInputArgs, OutputArgs, PathArg, SignArg};
 use crate::output::outln;
 use crate::progress::Bars;
 use crate::report::Seconds;
@@ -22,6 +22,8 @@ pub enum GridFormat {
 pub struct SdfArgs {
     /// Input mesh.
     pub mesh: PathArg,
+    #[command(flatten)]
+    pub read: MeshInputArgs,
     /// Output grid file.
     #[arg(short, long)]
     pub output: PathArg,
@@ -53,7 +55,7 @@ pub fn run(a: SdfArgs) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{e}, or give --format"))?,
     };
     let quiet = a.out.silent();
-    let mesh = load_mesh(&a.mesh, quiet)?;
+    let mesh = load_mesh(&a.mesh, a.read, quiet)?;
     let options = pgvol::SdfOptions {
         grid: a.grid.spec(),
         band: a.band,

@@ -472,15 +472,22 @@ class Field:
         unit: Literal[
             "micron", "millimeter", "centimeter", "inch", "foot", "meter"
         ] = "millimeter",
+        band: float = 3.0,
+        half: bool = False,
+        vdb_compression: Literal["zip", "none"] = "zip",
     ) -> Grid:
         """Writes the field for other tools, the format by the extension of ``path``.
 
         ".nrrd" and ".npy": the field sampled on the stored grid, or with ``res`` nodes along
         the box's longest side; NRRD indexed (x, y, z) with the grid's origin and spacing,
         ``.npy`` float32 of shape (nz, ny, nx). ".3mf": a 3MF volumetric level set (a 16-bit
-        PNG image stack) naming ``unit``. With ``coefficients=True``, ".nrrd" holds the
-        coefficients on the stored grid with the basis in its key/value fields, read back
-        bit-exactly. Returns the grid written."""
+        PNG image stack) naming ``unit``. ".vdb": an OpenVDB FloatGrid level set named
+        "surface", voxel (i, j, k) at node (i, j, k); nodes within ``band`` voxels of the
+        surface are active, the others hold -band·spacing inside and +band·spacing outside;
+        values as 16-bit floats with ``half=True``; value chunks zlib-compressed ("zip") or
+        raw ("none"). With ``coefficients=True``, ".nrrd" holds the coefficients on the stored
+        grid with the basis in its key/value fields, read back bit-exactly. Returns the grid
+        written."""
     def slice(
         self,
         layer_height: float,
@@ -517,8 +524,8 @@ class Field:
         """The file header's key/value metadata."""
 
 def read_mesh(path: _PathLike) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
-    """Reads an OBJ, glTF/GLB, STL or PLY file (by extension), welding bit-identical vertices
-    and dropping degenerate and repeated triangles."""
+    """Reads an OBJ, glTF/GLB, STL, PLY or 3MF file (by extension; a 3MF build in millimetres),
+    welding bit-identical vertices and dropping degenerate and repeated triangles."""
 
 def write_mesh(path: _PathLike, vertices: _Points, faces: _Faces) -> None:
     """Writes a GLB, glTF, OBJ, STL or PLY file (by extension), atomically."""

@@ -110,6 +110,36 @@ fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
     out
 }
 
+/// A field along a segment as one or two cubics in the fraction of the way, the second from
+/// `split` on.
+struct CubicPieces {
+    split: f32,
+    first: [f32; 4],
+    second: [f32; 4],
+}
+
+impl CubicPieces {
+    #[inline]
+    fn at(&self, t: f32) -> f32 {
+        let p = if t < self.split {
+            &self.first
+        } else {
+            &self.second
+        };
+        ((p[3] * t + p[2]) * t + p[1]) * t + p[0]
+    }
+}
+
+/// The cubic `p(x)` (coefficients by power) as a cubic in `t` for `x = x0 + s·t`.
+fn shift_cubic(p: [f32; 4], x0: f32, s: f32) -> [f32; 4] {
+    // Taylor coefficients of p at x0, each scaled by the matching power of s.
+    let d0 = ((p[3] * x0 + p[2]) * x0 + p[1]) * x0 + p[0];
+    let d1 = (3.0 * p[3] * x0 + 2.0 * p[2]) * x0 + p[1];
+    let d2 = 3.0 * p[3] * x0 + p[2];
+    let d3 = p[3];
+    [d0, d1 * s, d2 * s * s, d3 * s * s * s]
+}
+
 /// [`axis_window`] at `u ≥ 0`, the cubic profile's weights computed here by the same
 /// expressions: it is the innermost step of root finding, and inlined it costs a third.
 #[inline]
@@ -320,17 +350,27 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             cells: [Sign::Mixed; CELLS * CELLS],
         });
         // Tap by tap over the whole brick, each value summed in the taps' order.
-        for (w, l, off) in &self.taps {
+        // The brick test is outside the loops and rows along a contiguous first axis are
+        // sliced, so the inner loops vectorise.
+        for &(w, l, off) in &self.taps {
             let s = l.state(k);
-            let brick = (s < INSIDE).then(|| &*l.bricks[s as usize]);
-            let x0 = self.background.value(s == INSIDE);
             for jc in 0..len[1] {
-                for jb in 0..len[0] {
-                    let x = match brick {
-                        Some(values) => values[jb * self.stride[0] + jc * self.stride[1] + off],
-                        None => x0,
-                    };
-                    out.values[jb + E * jc] += w * x;
+                let row = &mut out.values[E * jc..E * jc + len[0]];
+                if s >= INSIDE {
+                    let x = w * self.background.value(s == INSIDE);
+                    row.iter_mut().for_each(|o| *o += x);
+                    continue;
+                }
+                let values = &l.bricks[s as usize];
+                let start = jc * self.stride[1] + off;
+                if self.stride[0] == 1 {
+                    for (o, x) in row.iter_mut().zip(&values[start..start + len[0]]) {
+                        *o += w * x;
+                    }
+                } else {
+                    for (jb, o) in row.iter_mut().enumerate() {
+                        *o += w * values[start + jb * self.stride[0]];
+                    }
                 }
             }
         }
@@ -410,6 +450,61 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             }
         }
         all.unwrap_or(Sign::Mixed)
+    }
+
+    /// The cubic B-spline field along plane axis `k` from `x[0]` to `x[1]` (at most one spacing,
+    /// inside the box) as polynomials in the fraction of the way, one per knot interval crossed;
+    /// `line(r)` is the coefficient at index `first + r` with the fixed axis summed out. `None`
+    /// for other profiles and for segments that leave the box, which [`LayerField::value`] serves.
+    fn cubic_pieces(
+        &self,
+        k: usize,
+        x: [f32; 2],
+        first: i64,
+        len: usize,
+        line: impl Fn(usize) -> f32,
+    ) -> Option<CubicPieces> {
+        let inside = |x: f32| x >= self.origin[k] && x <= self.top(k);
+        if self.profile != Profile::Cubic || !inside(x[0]) || !inside(x[1]) {
+            return None;
+        }
+        let g = x.map(|x| (x - self.origin[k]) / self.spacing);
+        let n = self.dims[k] as i64;
+        // The knot interval of a grid coordinate, as `window_at` picks it.
+        let knot = |g: f32| (g as i64).clamp(0, n - 2);
+        let (c0, c1) = (knot(g[0].min(g[1])), knot(g[0].max(g[1])));
+        if c1 > c0 + 1 {
+            return None;
+        }
+        let piece = |c: i64| -> Option<[f32; 4]> {
+            let r = usize::try_from(c - 1 - first).ok()?;
+            if r + 4 > len {
+                return None;
+            }
+            let [a, b, cc, d] = [line(r), line(r + 1), line(r + 2), line(r + 3)];
+            // The four uniform cubic B-splines over the interval, in powers of x = g − c,
+            // then x = g0 − c + (g1 − g0)·t substituted.
+            let p = [
+                (a + 4.0 * b + cc) / 6.0,
+                0.5 * (cc - a),
+                0.5 * (a - 2.0 * b + cc),
+                (3.0 * (b - cc) + d - a) / 6.0,
+            ];
+            Some(shift_cubic(p, g[0] - c as f32, g[1] - g[0]))
+        };
+        // With a knot inside the segment, the split is where g crosses it.
+        let split = if c1 > c0 {
+            let t = (c1 as f32 - g[0]) / (g[1] - g[0]);
+            t.is_finite().then_some(t)?
+        } else {
+            f32::INFINITY
+        };
+        let (below, above) = if g[1] >= g[0] { (c0, c1) } else { (c1, c0) };
+        Some(CubicPieces {
+            split,
+            first: piece(below)?,
+            second: if c1 > c0 { piece(above)? } else { [0.0; 4] },
+        })
     }
 
     fn top(&self, k: usize) -> f32 {
@@ -553,6 +648,16 @@ impl LayerField for CollapsedPlane<'_, '_> {
                     self.coefficient(j, i)
                 };
             }
+        }
+        if let Some(pieces) = self.cubic_pieces(k, [at(0.0)[k], at(1.0)[k]], first, len, |r| {
+            let mut sum = 0.0f32;
+            for (ws, c) in fixed.w.iter().zip(&patch[r]).take(fixed.len) {
+                sum += ws[0] * c;
+            }
+            sum
+        }) {
+            let outside = Vec3::new(0.0, d_fixed, self.off_axis).length();
+            return Box::new(move |t| pieces.at(t) + outside);
         }
         Box::new(move |t| {
             let q = at(t);

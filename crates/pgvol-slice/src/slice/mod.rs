@@ -441,6 +441,27 @@ mod tests {
                             }
                         }
                     }
+                    // Segments of a spacing or less along either plane axis, across knots,
+                    // inside the box and leaving it: the fraction-of-the-way function agrees
+                    // with the point values.
+                    for (p, step) in [
+                        ([0.03f32, 0.11], [0.1f32, 0.0]),
+                        ([0.03, 0.11], [0.0, 0.1]),
+                        ([-0.51, 0.2], [0.07, 0.0]),
+                        ([0.25, -0.5], [0.0, 0.1]),
+                        ([0.95, 0.3], [0.1, 0.0]),
+                        ([-1.45, 0.3], [0.1, 0.0]),
+                    ] {
+                        let along = plane.along(p, step);
+                        for t in [0.0f32, 0.13, 0.5, 0.77, 1.0] {
+                            let (u, v) = (p[0] + step[0] * t, p[1] + step[1] * t);
+                            let (want, got) = (plane.value(u, v), along(t));
+                            assert!(
+                                (want - got).abs() < 1e-5,
+                                "{basis:?} {axis:?} h={h} along {p:?}+{t}·{step:?}: {got} vs {want}"
+                            );
+                        }
+                    }
                 }
             }
         }
