@@ -15,6 +15,7 @@ pub mod pgv;
 pub mod sparse;
 mod sparse_params;
 pub mod threemf;
+pub mod vdb;
 
 pub use error::FormatError;
 pub use fixed_step::{FixedScale, FIXED_KNEE, FIXED_RATIO, FIXED_STEP, FREE_TOLERANCE};
