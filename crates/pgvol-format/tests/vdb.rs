@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use pgvol_format::vdb::{decode_vdb, read_vdb, VdbLevelSet};
+use pgvol_format::vdb::read::{decode_vdb, read_vdb, VdbLevelSet};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -4,8 +4,6 @@
 pub mod blosc;
 pub mod read;
 
-pub use read::{decode_vdb, read_vdb, VdbLeaf, VdbLevelSet, VdbTile};
-
 /// The magic number every `.vdb` file starts with, as a little-endian 64-bit integer.
 pub const MAGIC: u64 = 0x5644_4220;
 

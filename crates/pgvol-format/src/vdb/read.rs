@@ -639,13 +639,13 @@ impl<'a> Cursor<'a> {
     /// A file offset, which must lie within the file.
     fn offset(&mut self, what: &str) -> Result<usize, String> {
         let o = self.i64()?;
+        let len = self.bytes.len();
         usize::try_from(o)
             .ok()
-            .filter(|&o| o <= self.bytes.len())
+            .filter(|&o| o <= len)
             .ok_or_else(|| {
                 format!(
-                    "a {what} offset {o} lies outside the file's {} bytes",
-                    self.bytes.len()
+                    "truncated or corrupt: a {what} offset {o} lies beyond the file's {len} bytes"
                 )
             })
     }
