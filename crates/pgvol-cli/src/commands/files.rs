@@ -271,10 +271,17 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             ),
             None => ", dense f32".to_string(),
         };
+        // Mesh grids are cubes; a .vdb input's grid follows its leaves.
+        let [nx, ny, nz] = grid.dims;
+        let dims = if nx == ny && ny == nz {
+            format!("{nx}^3")
+        } else {
+            format!("{nx} x {ny} x {nz}")
+        };
         outln!(
-            "{}: {}^3 {} coefficients, {} bytes{}",
+            "{}: {} {} coefficients, {} bytes{}",
             a.output.display(),
-            grid.dims[0],
+            dims,
             file.volume.basis,
             bytes,
             detail
