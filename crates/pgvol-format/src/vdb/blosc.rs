@@ -44,9 +44,10 @@ pub fn decompress(src: &[u8], expected: usize) -> Result<Vec<u8>, String> {
             "the Blosc frame holds {nbytes} bytes where {expected} were expected"
         ));
     }
-    if cbytes > src.len() {
+    if cbytes > src.len() || cbytes < HEADER_BYTES {
         return Err(format!(
-            "the Blosc frame says {cbytes} bytes but only {} are there",
+            "the Blosc frame says {cbytes} bytes, which is not between its header's \
+             {HEADER_BYTES} and the {} there are",
             src.len()
         ));
     }
@@ -265,6 +266,10 @@ mod tests {
         bad[last] ^= 0xff;
         bad.truncate(last);
         assert!(decompress(&bad, 512).is_err());
+        // A frame size shorter than the header itself.
+        let mut short = f.clone();
+        short[12..16].copy_from_slice(&3u32.to_le_bytes());
+        assert!(decompress(&short, 512).unwrap_err().contains("not between"));
         let mut zstd = f.clone();
         zstd[2] = (zstd[2] & 0x1f) | (4 << 5);
         assert!(decompress(&zstd, 512).unwrap_err().contains("Zstandard"));
