@@ -118,6 +118,11 @@ def test_grids_are_chosen_by_name_and_wrong_ones_refused(pgvol, work_dir):
     centre = np.array([12.0, 12.0, 12.0]) * 0.5 + np.array([1.25, -2.5, 0.75])
     radii = np.linalg.norm(moved.vertices - centre, axis=1)
     assert abs(radii.mean() - 1.75) < 0.05 * 0.5, radii.mean()
+    # Decoded straight from the .vdb, the same ball.
+    direct = folder / "moved-direct.ply"
+    helpers.run_ok([pgvol, "decode", several, "-o", direct])
+    radii = np.linalg.norm(helpers.load_output(direct).vertices - centre, axis=1)
+    assert abs(radii.mean() - 1.75) < 0.05 * 0.5, radii.mean()
     pgv2 = folder / "second.pgv"
     helpers.run_ok([pgvol, "encode", several, "-o", pgv2, "--vdb-grid", "second"])
     info = helpers.run_json([pgvol, "info", pgv2, "--json"])

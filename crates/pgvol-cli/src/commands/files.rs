@@ -95,7 +95,7 @@ pub enum FitArg {
 #[derive(Args)]
 #[command(after_help = "Example: pgvol decode bunny.pgv -o bunny.glb --method dc")]
 pub struct DecodeArgs {
-    /// Input .pgv file.
+    /// Input .pgv file, or an OpenVDB level set (.vdb: its first float level set, fitted first).
     pub input: PathArg,
     /// Output mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
