@@ -102,8 +102,8 @@ fn decode(bytes: &[u8], wanted: Option<&str>) -> Result<VdbLevelSet, String> {
     if !(FILE_VERSION_NODE_MASK_COMPRESSION..=FILE_VERSION).contains(&version) {
         return Err(format!(
             "OpenVDB file version {version} is not read: versions \
-             {FILE_VERSION_NODE_MASK_COMPRESSION} to {FILE_VERSION} (OpenVDB 3 to 12) are; \
-             resave the file with a current OpenVDB"
+             {FILE_VERSION_NODE_MASK_COMPRESSION} to {FILE_VERSION} are ({FILE_VERSION} is what \
+             OpenVDB 10 writes); resave the file with a current OpenVDB"
         ));
     }
     let _library = (c.u32()?, c.u32()?);
