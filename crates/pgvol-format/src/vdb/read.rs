@@ -542,7 +542,8 @@ impl Tree {
             let lower_masks = 2 * (1usize << (3 * INTERNAL1_LOG2)) / 8;
             c.check_count(count, lower_masks, "internal node children")?;
         } else {
-            c.check_count(count, LEAF_MASK_BYTES, "leaf nodes")?;
+            // Each leaf's mask here, and its buffer later: the mask again and a metadata byte.
+            c.check_count(count, 2 * LEAF_MASK_BYTES + 1, "leaf nodes")?;
             if self.leaves.len() + count > MAX_LEAVES {
                 return Err(format!(
                     "more than {MAX_LEAVES} leaf nodes (the limit of {} voxels)",
