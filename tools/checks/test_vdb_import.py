@@ -136,3 +136,24 @@ def test_grids_are_chosen_by_name_and_wrong_ones_refused(pgvol, work_dir):
     bad = helpers.run([pgvol, "encode", cut, "-o", folder / "z.pgv"])
     assert bad.returncode == 1 and "cut.vdb" in bad.stderr and "truncated" in bad.stderr, bad.stderr
     assert "panicked" not in bad.stderr
+
+
+def test_pgvols_own_vdb_export_reads_back_to_the_same_surface(pgvol, mesh_path, work_dir):
+    """Export and import together: a field written as .vdb and encoded again decodes to the
+    surface the first field decodes to (both readings of the format agree with OpenVDB's in the
+    tests above and in test_vdb_export.py; this ties them to each other)."""
+    folder = work_dir / "vdb-round-trip"
+    folder.mkdir(parents=True, exist_ok=True)
+    first = folder / "spot.pgv"
+    helpers.run_ok([pgvol, "encode", mesh_path("spot"), "-o", first, "--res", "96"])
+    vdb = folder / "spot.vdb"
+    helpers.run_ok([pgvol, "export", first, "-o", vdb])
+    second, again = encode_decode(pgvol, vdb)
+    ply = folder / "spot-first.ply"
+    helpers.run_ok([pgvol, "decode", first, "-o", ply])
+    spacing = helpers.run_json([pgvol, "info", first, "--json"])["header"]["grid"]["spacing"]
+    _, _, chamfer = helpers.chamfer_l1(helpers.load_output(ply), again, SAMPLES)
+    print(f"spot via .vdb: Chamfer-L1 {chamfer / spacing:.4f} spacing")
+    assert chamfer <= 0.02 * spacing, chamfer / spacing
+    info = helpers.run_json([pgvol, "info", second, "--json"])
+    assert abs(info["header"]["grid"]["spacing"] - spacing) <= 1e-6 * spacing
