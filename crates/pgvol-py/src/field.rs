@@ -532,11 +532,30 @@ impl Field {
         Ok(cls.getattr("from_mesh")?.call(args, kwargs)?.unbind())
     }
 
-    /// Reads a `.pgv` file.
+    /// Reads a `.pgv` file, or an OpenVDB `.vdb` level set (its first float level set, as
+    /// `from_vdb` reads it).
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Field> {
+        if pgvol::io::is_vdb(&path) {
+            return Field::from_vdb(py, path, None);
+        }
         let file = quiet(py, || pgvol::io::read_pgv(&path))?;
         Ok(Field::from_file(file))
+    }
+
+    /// Fits an OpenVDB level set (a float grid of class "level set" in a `.vdb` file, by
+    /// default the first) on its own voxel grid, a node at each voxel centre, within its band.
+    #[staticmethod]
+    #[pyo3(signature = (path, grid=None))]
+    fn from_vdb(py: Python<'_>, path: PathBuf, grid: Option<String>) -> PyResult<Field> {
+        let options = pgvol::io::VdbEncodeOptions {
+            grid_name: grid,
+            ..Default::default()
+        };
+        let encoded = quiet(py, || {
+            pgvol::io::encode_vdb(&path, &options, &pgvol::Silent)
+        })?;
+        Ok(Field::from_file(encoded.file))
     }
 
     /// Decodes the bytes of a `.pgv` file.

@@ -16,7 +16,8 @@ use crate::field_value::{check_reach_within, Field};
 use crate::pgv_io::read_pgv_bytes;
 use crate::progress::{self, Progress};
 
-/// Contours the `options.iso` level set of the `.pgv` file at `path`, as [`crate::decode_shape`]
+/// Contours the `options.iso` level set of the `.pgv` file at `path` (or of an OpenVDB `.vdb`
+/// level set, fitted first as [`crate::io::encode_vdb`] does), as [`crate::decode_shape`]
 /// of the file's shape does. Marching cubes of a sparse file reads the file one window of brick
 /// slabs at a time and contours it run by run along z, so memory is the file's bytes, the mesh
 /// and one window; other methods and encodings read the whole volume first.
@@ -26,11 +27,19 @@ pub fn decode_file(
     progress: &dyn Progress,
 ) -> Result<Mesh> {
     let path = path.as_ref();
-    let bytes = pgvol_core::read_input(path).reading()?;
     let at = |e: Error| match e.path() {
         Some(_) => e,
         None => e.at(path),
     };
+    if crate::vdb_in::is_vdb(path) {
+        // An OpenVDB level set is fitted in memory first, then contoured as a whole.
+        let options_vdb = crate::vdb_in::VdbEncodeOptions::default();
+        let file = crate::vdb_in::encode_vdb(path, &options_vdb, progress)?.file;
+        return Field::from_file(file)
+            .to_mesh(options, progress)
+            .map_err(at);
+    }
+    let bytes = pgvol_core::read_input(path).reading()?;
     let reader = match options.method {
         Method::MarchingCubes => SlabReader::open(&bytes, path).reading()?,
         _ => None,

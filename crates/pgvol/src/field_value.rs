@@ -139,7 +139,9 @@ impl Field {
         ))
     }
 
-    /// A `.pgv` file, or a mesh file by extension encoded as `options` say: on `options.res`
+    /// A `.pgv` file, an OpenVDB `.vdb` level set (its first float level set, fitted on its
+    /// own voxel grid: see [`crate::io::encode_vdb`]), or a mesh file by extension encoded as
+    /// `options` say: on `options.res`
     /// nodes per axis over its box grown by `options.grow`, with exact distances
     /// `options.reach` beyond the usual band, so that an operation reaching that far from the
     /// surface reads exact distances.
@@ -163,6 +165,22 @@ impl Field {
                 .at(path));
             }
             let field = Field::from_file(read_pgv(path)?);
+            if let Some(wall) = options.wall {
+                check_wall("the wall thickness", wall, &field.file.volume.grid).map_err(at_path)?;
+            }
+            return Ok(field);
+        }
+        if crate::vdb_in::is_vdb(path) {
+            if options.sign != SignMode::Auto {
+                return Err(Error::new(
+                    ErrorKind::BadParameter,
+                    "a sign method applies to mesh inputs; a .vdb level set stores its signs",
+                )
+                .at(path));
+            }
+            let vdb_options = crate::vdb_in::VdbEncodeOptions::default();
+            let file = crate::vdb_in::encode_vdb(path, &vdb_options, progress)?.file;
+            let field = Field::from_file(file);
             if let Some(wall) = options.wall {
                 check_wall("the wall thickness", wall, &field.file.volume.grid).map_err(at_path)?;
             }

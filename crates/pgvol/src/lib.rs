@@ -106,6 +106,7 @@ mod resolution;
 mod slice;
 mod timings;
 mod vdb_export;
+mod vdb_in;
 
 pub use csg::{CsgOptions, ResultUse};
 pub use decode::DecodeOptions;
@@ -157,6 +158,7 @@ pub mod io {
         read_cloud_text, read_layers, read_point_cloud, POINT_TEXT_EXTENSIONS,
     };
     pub use crate::slice::{write_layers, LayerFormat};
+    pub use crate::vdb_in::{encode_vdb, is_vdb, VdbEncodeOptions};
 }
 
 /// Work on a `.pgv` file window by window, so memory follows the surface rather than the grid.

@@ -17,12 +17,18 @@ use clap::ValueEnum;
 
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("input").args(["mesh", "from"]).required(true)))]
-#[command(after_help = "Example: pgvol encode bunny.obj -o bunny.pgv --res 256")]
+#[command(
+    after_help = "Examples:\n  pgvol encode bunny.obj -o bunny.pgv --res 256\n  pgvol encode bunny.vdb -o bunny.pgv --vdb-grid surface"
+)]
 pub struct EncodeArgs {
-    /// Input mesh.
+    /// Input mesh, or an OpenVDB level set (.vdb), fitted on its own voxel grid (a node at
+    /// each voxel centre) within its band.
     pub mesh: Option<PathArg>,
     #[command(flatten)]
     pub read: MeshInputArgs,
+    /// The grid of a .vdb input to encode [default: the first float level set].
+    #[arg(long, value_name = "NAME")]
+    pub vdb_grid: Option<String>,
     /// Read the coefficients from a NRRD written by `pgvol export --what coefficients` instead
     /// of fitting a mesh; written dense and unchanged unless --precision is given.
     #[arg(long, value_name = "NRRD", conflicts_with_all = ["res", "voxel", "basis", "pg_n", "pg_r", "fit", "band", "z_step", "sign"])]
@@ -92,7 +98,7 @@ pub enum FitArg {
 #[derive(Args)]
 #[command(after_help = "Example: pgvol decode bunny.pgv -o bunny.glb --method dc")]
 pub struct DecodeArgs {
-    /// Input .pgv file.
+    /// Input .pgv file, or an OpenVDB level set (.vdb: its first float level set, fitted first).
     pub input: PathArg,
     /// Output mesh (.glb, .gltf, .obj, .stl, .ply).
     #[arg(short, long)]
@@ -203,20 +209,14 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
     }
     let quiet = a.out.silent();
     let start = Instant::now();
-    let (mesh, unit) = load_mesh_with_unit(mesh_path, a.read, quiet)?;
-    let options = pgvol::EncodeOptions {
-        grid: a.grid.spec(),
-        basis: a.basis.basis()?,
-        fit: match a.fit {
-            FitArg::Interp => pgvol::FitMethod::Interp,
-            FitArg::Iso => pgvol::FitMethod::Iso { z_step: a.z_step },
-            FitArg::Wls => pgvol::FitMethod::Wls,
-        },
-        band: a.band,
-        sign: a.sign.into(),
+    let (encoded, unit) = if pgvol::io::is_vdb(mesh_path) {
+        (encode_vdb(&a, mesh_path)?, None)
+    } else {
+        if a.vdb_grid.is_some() {
+            bail!("--vdb-grid applies to .vdb inputs");
+        }
+        encode_mesh(&a, mesh_path)?
     };
-    let encoded =
-        pgvol::encode(&mesh, &options, &Bars::new(quiet)).map_err(|e| at_input(e, mesh_path))?;
     let report = &encoded.fit;
     if a.verbose && !a.out.json {
         eprintln!(
@@ -274,16 +274,64 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
             ),
             None => ", dense f32".to_string(),
         };
+        // Mesh grids are cubes; a .vdb input's grid follows its leaves.
+        let [nx, ny, nz] = grid.dims;
+        let dims = if nx == ny && ny == nz {
+            format!("{nx}^3")
+        } else {
+            format!("{nx} x {ny} x {nz}")
+        };
         outln!(
-            "{}: {}^3 {} coefficients, {} bytes{}",
+            "{}: {} {} coefficients, {} bytes{}",
             a.output.display(),
-            grid.dims[0],
+            dims,
             file.volume.basis,
             bytes,
             detail
         );
     }
     Ok(())
+}
+
+/// `encode` of a mesh: sampled and fitted on the grid the options give.
+/// `encode` of a mesh, with what was done with the file's declared length unit.
+fn encode_mesh(
+    a: &EncodeArgs,
+    mesh_path: &std::path::Path,
+) -> Result<(pgvol::Encoded, Option<String>)> {
+    let (mesh, unit) = load_mesh_with_unit(mesh_path, a.read, a.out.silent())?;
+    let options = pgvol::EncodeOptions {
+        grid: a.grid.spec(),
+        basis: a.basis.basis()?,
+        fit: match a.fit {
+            FitArg::Interp => pgvol::FitMethod::Interp,
+            FitArg::Iso => pgvol::FitMethod::Iso { z_step: a.z_step },
+            FitArg::Wls => pgvol::FitMethod::Wls,
+        },
+        band: a.band,
+        sign: a.sign.into(),
+    };
+    let encoded = pgvol::encode(&mesh, &options, &Bars::new(a.out.silent()))
+        .map_err(|e| at_input(e, mesh_path))?;
+    Ok((encoded, unit))
+}
+
+/// `encode` of an OpenVDB level set: fitted on the file's own voxel grid and band.
+fn encode_vdb(a: &EncodeArgs, path: &std::path::Path) -> Result<pgvol::Encoded> {
+    if a.grid.res.is_some() || a.grid.voxel.is_some() {
+        bail!("a .vdb input keeps its own voxel grid: --res and --voxel apply to meshes");
+    }
+    if !matches!(a.fit, FitArg::Interp) {
+        bail!("a .vdb input is fitted by interpolating its voxels: --fit applies to meshes");
+    }
+    let options = pgvol::io::VdbEncodeOptions {
+        grid_name: a.vdb_grid.clone(),
+        basis: a.basis.basis()?,
+    };
+    Ok(
+        pgvol::io::encode_vdb(path, &options, &Bars::new(a.out.silent()))
+            .map_err(|e| at_input(e, path))?,
+    )
 }
 
 pub fn decode(a: DecodeArgs) -> Result<()> {

@@ -1,22 +1,31 @@
-//! OpenVDB `.vdb` files: the facts of the format shared by its writer and reader.
+//! OpenVDB `.vdb` files: the facts of the format shared by its writer and reader. The layout is
+//! described in `docs/format.md` ("OpenVDB .vdb files").
 //!
 //! Values from OpenVDB's file format (`openvdb/io`, `openvdb/tree`): a file header, grid
 //! descriptors, then per grid its metadata, transform and a 5-4-3 tree (a root table of
 //! 32³-child internal nodes, each holding 16³-child internal nodes, each holding 8³-voxel
 //! leaves), topology first and leaf buffers after. Everything is little-endian.
 
+pub mod blosc;
+pub mod read;
 pub mod write;
 
-/// The first 8 bytes of every `.vdb` file (`OPENVDB_MAGIC`, as an i64).
-pub const MAGIC: i64 = 0x5644_4220;
+/// The magic number every `.vdb` file starts with, as a little-endian 64-bit integer
+/// (`OPENVDB_MAGIC`).
+pub const MAGIC: u64 = 0x5644_4220;
 
-/// The file format version OpenVDB 6 to 12 write (`OPENVDB_FILE_VERSION`).
+/// The file version OpenVDB 6 to 12 write (`OPENVDB_FILE_VERSION`, multipass I/O).
 pub const FILE_VERSION: u32 = 224;
+
+/// The first file version with per-grid compression flags and per-node mask metadata
+/// (`OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION`).
+pub const FILE_VERSION_NODE_MASK_COMPRESSION: u32 = 222;
 
 /// The library version written in the header: the OpenVDB release whose files these match.
 pub const LIBRARY_VERSION: (u32, u32) = (10, 0);
 
-/// log2 of the edge, in children, of a leaf (voxels), a lower and an upper internal node.
+/// Log2 of the edge, in children, of a leaf (voxels), a lower internal node (16³ leaves) and
+/// an upper internal node (32³ lower nodes): the standard `Tree_float_5_4_3` configuration.
 pub const LEAF_LOG2: u32 = 3;
 pub const LOWER_LOG2: u32 = 4;
 pub const UPPER_LOG2: u32 = 5;
@@ -25,30 +34,41 @@ pub const UPPER_LOG2: u32 = 5;
 pub const LEAF_EDGE: usize = 1 << LEAF_LOG2;
 pub const LEAF_VOXELS: usize = 1 << (3 * LEAF_LOG2);
 
-/// The tree type of a float grid with this configuration, and the suffix a grid type takes
-/// when its values are stored as half floats.
-pub const TREE_FLOAT_543: &str = "Tree_float_5_4_3";
+/// Grid type name of a float tree of this configuration, and the suffix a grid type takes when
+/// its values are stored as 16-bit floats.
+pub const FLOAT_TREE: &str = "Tree_float_5_4_3";
 pub const HALF_FLOAT_SUFFIX: &str = "_HalfFloat";
 
-/// Grid compression flags (`io::COMPRESS_*`).
+/// The `class` metadata value of a level set.
+pub const LEVEL_SET_CLASS: &str = "level set";
+
+/// Transform types: the one written, and the other one read.
+pub const UNIFORM_SCALE_TRANSLATE_MAP: &str = "UniformScaleTranslateMap";
+pub const UNIFORM_SCALE_MAP: &str = "UniformScaleMap";
+
+/// Per-grid compression flags (`io::COMPRESS_*`).
 pub const COMPRESS_ZIP: u32 = 0x1;
 pub const COMPRESS_ACTIVE_MASK: u32 = 0x2;
 pub const COMPRESS_BLOSC: u32 = 0x4;
 
-/// Per-node tags saying which inactive values a mask-compressed chunk leaves out
-/// (`io::NO_MASK_OR_INACTIVE_VALS` ...).
-pub const NO_MASK_OR_INACTIVE_VALS: u8 = 0;
-pub const NO_MASK_AND_MINUS_BG: u8 = 1;
-pub const NO_MASK_AND_ONE_INACTIVE_VAL: u8 = 2;
-pub const MASK_AND_NO_INACTIVE_VALS: u8 = 3;
-pub const MASK_AND_ONE_INACTIVE_VAL: u8 = 4;
-pub const MASK_AND_TWO_INACTIVE_VALS: u8 = 5;
-pub const NO_MASK_AND_ALL_VALS: u8 = 6;
-
-/// The transform type written, and the grid class metadata value of level sets.
-pub const UNIFORM_SCALE_TRANSLATE_MAP: &str = "UniformScaleTranslateMap";
-pub const UNIFORM_SCALE_MAP: &str = "UniformScaleMap";
-pub const CLASS_LEVEL_SET: &str = "level set";
+/// The metadata byte before each node's values: which inactive values the node holds and
+/// whether only its active values are stored (`io::NO_MASK_OR_INACTIVE_VALS`, ...).
+pub mod mask_metadata {
+    /// Inactive values are all +background.
+    pub const NO_MASK_OR_INACTIVE_VALS: u8 = 0;
+    /// Inactive values are all −background.
+    pub const NO_MASK_AND_MINUS_BG: u8 = 1;
+    /// Inactive values are all one stored value.
+    pub const NO_MASK_AND_ONE_INACTIVE_VAL: u8 = 2;
+    /// Inactive values are ±background, chosen by a selection mask.
+    pub const MASK_AND_NO_INACTIVE_VALS: u8 = 3;
+    /// Inactive values are background or one stored value, chosen by a selection mask.
+    pub const MASK_AND_ONE_INACTIVE_VAL: u8 = 4;
+    /// Inactive values are one of two stored values, chosen by a selection mask.
+    pub const MASK_AND_TWO_INACTIVE_VALS: u8 = 5;
+    /// Every value is stored, active or not.
+    pub const NO_MASK_AND_ALL_VALS: u8 = 6;
+}
 
 /// Offset of voxel (or child) `(x, y, z)`, each below `1 << log2`, in a node's value array: z
 /// varies fastest.

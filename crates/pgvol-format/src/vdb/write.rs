@@ -13,6 +13,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+use super::mask_metadata::*;
 use super::*;
 use crate::error::{err, FormatError};
 
@@ -455,7 +456,7 @@ fn grid_metadata(out: &mut Vec<u8>, grid: &LevelSetGrid, encoded: &[Encoded]) {
         }
     }
     let mut entries: Vec<(&str, &str, Vec<u8>)> = vec![
-        ("class", "string", CLASS_LEVEL_SET.as_bytes().to_vec()),
+        ("class", "string", LEVEL_SET_CLASS.as_bytes().to_vec()),
         ("name", "string", grid.name.as_bytes().to_vec()),
         ("file_voxel_count", "int64", count.to_le_bytes().to_vec()),
     ];
@@ -529,9 +530,9 @@ fn write_file(
     out.extend_from_slice(&1i32.to_le_bytes()); // one grid
     put_str(out, grid.name);
     let type_name = if grid.half {
-        format!("{TREE_FLOAT_543}{HALF_FLOAT_SUFFIX}")
+        format!("{FLOAT_TREE}{HALF_FLOAT_SUFFIX}")
     } else {
-        TREE_FLOAT_543.to_string()
+        FLOAT_TREE.to_string()
     };
     put_str(out, &type_name);
     put_str(out, ""); // not an instance of another grid

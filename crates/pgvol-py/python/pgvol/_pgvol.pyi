@@ -238,7 +238,11 @@ class Field:
         """Encodes a trimesh.Trimesh; the keywords are those of from_mesh."""
     @staticmethod
     def load(path: _PathLike) -> "Field":
-        """Reads a .pgv file."""
+        """Reads a .pgv file, or an OpenVDB .vdb level set (as from_vdb reads it)."""
+    @staticmethod
+    def from_vdb(path: _PathLike, grid: Optional[str] = None) -> "Field":
+        """Fits an OpenVDB level set (the first float level set of a .vdb file, or the one
+        named `grid`) on its own voxel grid, within its band."""
     @staticmethod
     def from_bytes(data: bytes) -> "Field":
         """Decodes the bytes of a .pgv file."""
