@@ -407,6 +407,37 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         }
     }
 
+    /// The coefficients at `u0 + r` (r < `nu`) and `v0 + t` (t < `out.len() / nu`), mirrored
+    /// into the grid, into `out[r + nu · t]`; the same values as [`Self::coefficient`], a
+    /// tile's run along u copied at once.
+    fn gather(&self, u0: i64, nu: usize, v0: i64, out: &mut [f32]) {
+        let inside_u = u0 >= 0 && u0 + nu as i64 <= self.dims[0] as i64;
+        for (t, row) in out.chunks_exact_mut(nu).enumerate() {
+            let iv = mirror(v0 + t as i64, self.dims[1]);
+            if !inside_u {
+                for (r, c) in row.iter_mut().enumerate() {
+                    *c = self.coefficient(mirror(u0 + r as i64, self.dims[0]), iv);
+                }
+                continue;
+            }
+            let mut done = 0;
+            while done < nu {
+                let iu = u0 as usize + done;
+                let run = (E - iu % E).min(nu - done);
+                let k = iu / E + self.counts[0] * (iv / E);
+                let part = &mut row[done..done + run];
+                match &self.tiles[self.slots[k] as usize] {
+                    Tile::Uniform(v) => part.fill(*v),
+                    Tile::Stored { .. } => {
+                        let first = iu % E + E * (iv % E);
+                        part.copy_from_slice(&self.stored(k).values[first..first + run]);
+                    }
+                }
+                done += run;
+            }
+        }
+    }
+
     /// The sign of the coefficients `[u0, u1] × [v0, v1]`, at the finest resolution held.
     fn sign_over(&self, u: (usize, usize), v: (usize, usize)) -> Sign {
         let mut all = None;
@@ -576,13 +607,8 @@ impl LayerField for CollapsedPlane<'_, '_> {
         let gather = nu * nv <= 4 * us.len() * vs.len();
         let mut local = Vec::new();
         if gather {
-            local.reserve(nu * nv);
-            for rv in 0..nv {
-                let iv = mirror(v0 + rv as i64, self.dims[1]);
-                for ru in 0..nu {
-                    local.push(self.coefficient(mirror(u0 + ru as i64, self.dims[0]), iv));
-                }
-            }
+            local.resize(nu * nv, 0.0);
+            self.gather(u0, nu, v0, &mut local);
         }
         let mut line = vec![0.0f32; nu];
         for (j, (wv, dv)) in wvs.iter().enumerate() {
@@ -638,14 +664,19 @@ impl LayerField for CollapsedPlane<'_, '_> {
         let (fixed, d_fixed) = self.window(1 - k, p[1 - k]);
         // patch[r][s]: r along the segment's axis, s over the fixed axis' taps.
         let mut patch = [[0.0f32; 4]; 8];
+        let mut block = [0.0f32; 32];
+        let block = &mut block[..len * fixed.len];
+        if k == 0 {
+            self.gather(first, len, fixed.first, block);
+        } else {
+            self.gather(fixed.first, fixed.len, first, block);
+        }
         for (r, row) in patch.iter_mut().enumerate().take(len) {
-            let i = mirror(first + r as i64, self.dims[k]);
             for (s, c) in row.iter_mut().enumerate().take(fixed.len) {
-                let j = mirror(fixed.first + s as i64, self.dims[1 - k]);
                 *c = if k == 0 {
-                    self.coefficient(i, j)
+                    block[r + len * s]
                 } else {
-                    self.coefficient(j, i)
+                    block[s + fixed.len * r]
                 };
             }
         }

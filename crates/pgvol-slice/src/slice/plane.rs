@@ -291,11 +291,26 @@ impl Plane {
         // places its lower and left edges (and the grid's last column and row their far ones),
         // so every edge of an evaluated cell is placed once.
         let mut crossings: Vec<(usize, [f32; 2])> = Vec::new();
-        for b in &blocks {
+        // Cells whose corners are not all on one side, for the second pass. Only they hold
+        // crossed edges: a crossed edge's ends differ, and they are corners of its cell.
+        let mut mixed: Vec<(usize, usize, usize)> = Vec::new();
+        for (index, b) in blocks.iter().enumerate() {
             let cells = [b.len[0] - 1, b.len[1] - 1];
             for cj in 0..cells[1] {
+                let row = &b.values[b.len[0] * cj..b.len[0] * (cj + 2)];
                 for ci in 0..cells[0] {
+                    let corners = [
+                        row[ci],
+                        row[ci + 1],
+                        row[b.len[0] + ci],
+                        row[b.len[0] + ci + 1],
+                    ];
+                    let inside = corners.map(|x| x < 0.0);
+                    if inside == [inside[0]; 4] {
+                        continue;
+                    }
                     let (i, j) = (b.first[0] + ci, b.first[1] + cj);
+                    mixed.push((index, i, j));
                     let far_u = (i + 2 == nu).then_some((i + 1, j, 1));
                     let far_v = (j + 2 == nv).then_some((i, j + 1, 0));
                     let own = [Some((i, j, 0)), Some((i, j, 1)), far_u, far_v];
@@ -337,44 +352,36 @@ impl Plane {
         // orders of the two cells are opposite, so a crossing starts a segment in one cell and
         // ends one in the other.
         let mut next = vec![u32::MAX; crossings.len()];
-        for b in &blocks {
-            let cells = [b.len[0] - 1, b.len[1] - 1];
-            for cj in 0..cells[1] {
-                for ci in 0..cells[0] {
-                    let (i, j) = (b.first[0] + ci, b.first[1] + cj);
-                    let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
-                    let values = corners.map(|(i, j)| b.at(i, j).0);
-                    let ins = values.map(|x| x < 0.0);
-                    if ins.iter().all(|&x| x) || ins.iter().all(|&x| !x) {
-                        continue;
-                    }
-                    // Cell edges counter-clockwise: corner k to corner k + 1.
-                    let edges = [
-                        edge_id(i, j, 0),
-                        edge_id(i + 1, j, 1),
-                        edge_id(i, j + 1, 0),
-                        edge_id(i, j, 1),
-                    ];
-                    let vert = |e: usize| vertex_of(edges[e]);
-                    let starts = (0..4).filter(|&k| ins[k] && !ins[(k + 1) % 4]);
-                    let ambiguous = ins[0] == ins[2] && ins[1] == ins[3];
-                    if ambiguous {
-                        let v = values.map(|x| x as f64);
-                        // The bilinear interpolant's saddle; the denominator is non-zero here
-                        // since the diagonals have opposite signs.
-                        let saddle = (v[0] * v[2] - v[1] * v[3]) / (v[0] + v[2] - v[1] - v[3]);
-                        // Inside joined through the centre: each start meets the next edge;
-                        // otherwise the previous one, cutting off the inside corner.
-                        let turn = if saddle < 0.0 { 1 } else { 3 };
-                        for k in starts {
-                            next[vert(k) as usize] = vert((k + turn) % 4);
-                        }
-                    } else {
-                        let end = (0..4).find(|&k| !ins[k] && ins[(k + 1) % 4]);
-                        if let (Some(k), Some(e)) = (starts.into_iter().next(), end) {
-                            next[vert(k) as usize] = vert(e);
-                        }
-                    }
+        for &(index, i, j) in &mixed {
+            let b = &blocks[index];
+            let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            let values = corners.map(|(i, j)| b.at(i, j).0);
+            let ins = values.map(|x| x < 0.0);
+            // Cell edges counter-clockwise: corner k to corner k + 1.
+            let edges = [
+                edge_id(i, j, 0),
+                edge_id(i + 1, j, 1),
+                edge_id(i, j + 1, 0),
+                edge_id(i, j, 1),
+            ];
+            let vert = |e: usize| vertex_of(edges[e]);
+            let starts = (0..4).filter(|&k| ins[k] && !ins[(k + 1) % 4]);
+            let ambiguous = ins[0] == ins[2] && ins[1] == ins[3];
+            if ambiguous {
+                let v = values.map(|x| x as f64);
+                // The bilinear interpolant's saddle; the denominator is non-zero here
+                // since the diagonals have opposite signs.
+                let saddle = (v[0] * v[2] - v[1] * v[3]) / (v[0] + v[2] - v[1] - v[3]);
+                // Inside joined through the centre: each start meets the next edge;
+                // otherwise the previous one, cutting off the inside corner.
+                let turn = if saddle < 0.0 { 1 } else { 3 };
+                for k in starts {
+                    next[vert(k) as usize] = vert((k + turn) % 4);
+                }
+            } else {
+                let end = (0..4).find(|&k| !ins[k] && ins[(k + 1) % 4]);
+                if let (Some(k), Some(e)) = (starts.into_iter().next(), end) {
+                    next[vert(k) as usize] = vert(e);
                 }
             }
         }
