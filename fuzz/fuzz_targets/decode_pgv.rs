@@ -37,7 +37,9 @@ fn check_agreement(data: &[u8], path: &Path, file: &PgvFile) {
             }
         }
     }
-    if let Some(reader) = pgvol_format::SlabReader::open(data, path).expect("a file that decodes opens") {
+    if let Some(reader) =
+        pgvol_format::SlabReader::open(data, path).expect("a file that decodes opens")
+    {
         let counts = reader.brick_counts();
         for axis in 0..3 {
             for s in 0..counts[axis] {
@@ -46,7 +48,9 @@ fn check_agreement(data: &[u8], path: &Path, file: &PgvFile) {
                     assert_eq!(file.volume.coeffs.brick(*m), Some(&**values));
                 }
                 for m in &slab.inside {
-                    assert!(file.volume.coeffs.brick(*m).is_none() && file.volume.coeffs.is_inside(*m));
+                    assert!(
+                        file.volume.coeffs.brick(*m).is_none() && file.volume.coeffs.is_inside(*m)
+                    );
                 }
             }
         }

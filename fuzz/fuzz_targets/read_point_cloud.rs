@@ -18,7 +18,10 @@ static SEEDS_READ: Once = Once::new();
 fn check(points: &[pgvol::glam::Vec3], normals: Option<&Vec<pgvol::glam::Vec3>>) {
     assert!(!points.is_empty());
     for p in points {
-        assert!(p.is_finite() && p.abs().max_element() < MAX_COORDINATE, "{p}");
+        assert!(
+            p.is_finite() && p.abs().max_element() < MAX_COORDINATE,
+            "{p}"
+        );
     }
     if let Some(n) = normals {
         assert_eq!(n.len(), points.len());

@@ -17,7 +17,7 @@
 use std::path::Path;
 
 /// The largest frame offset a header may declare: the coordinate range meshes are accepted in.
-const MAX_OFFSET: f64 = 1e8;
+pub(crate) const MAX_OFFSET: f64 = 1e8;
 
 use crate::error::{err, FormatError};
 use crate::header::{PgvHeader, ENCODING_DENSE_F32, ENCODING_PERTURBATION};

@@ -326,6 +326,15 @@ pub fn decode_nrrd(bytes: &[u8], path: &Path) -> Result<NrrdGrid, FormatError> {
             "origin or spacing does not fit in f32".into(),
         ));
     }
+    // The .pgv header holds the same offset and refuses it beyond this; refused here first, so
+    // no file is written that cannot be read.
+    let max = crate::container::MAX_OFFSET;
+    if offset.abs().max_element() >= max {
+        return Err(bad(
+            "space origin",
+            format!("'{origin_text}' puts the grid {max:e} or more from the origin"),
+        ));
+    }
 
     // Sizes against the data before anything is allocated from them.
     let nodes = dims
@@ -504,6 +513,29 @@ mod tests {
             e.contains("pgvol_source_bounds") && e.contains("single precision"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn an_origin_a_pgv_header_could_not_hold_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.nrrd");
+        write_coefficients_nrrd(&p, &sample_file(Basis::Bspline3)).unwrap();
+        let text = std::fs::read(&p).unwrap();
+        let good = b"space origin: (-1.25,";
+        let at = text.windows(good.len()).position(|w| w == good).unwrap();
+        // Found by fuzzing: read, then written as a .pgv whose header refuses the offset.
+        let mut far = text[..at].to_vec();
+        far.extend_from_slice(b"space origin: (-100000000000000.25,");
+        far.extend_from_slice(&text[at + good.len()..]);
+        let e = decode_coefficients_nrrd(&far, &p).unwrap_err().to_string();
+        assert!(e.contains("space origin") && e.contains("1e8"), "{e}");
+        // Just inside the limit the file reads and its .pgv bytes decode.
+        let mut near = text[..at].to_vec();
+        near.extend_from_slice(b"space origin: (-90000000.25,");
+        near.extend_from_slice(&text[at + good.len()..]);
+        let file = decode_coefficients_nrrd(&near, &p).unwrap();
+        let pgv = crate::pgv::encode_pgv(&file);
+        assert_eq!(crate::pgv::decode_pgv(&pgv, &p).unwrap(), file);
     }
 
     #[test]

@@ -952,3 +952,31 @@ fn fuzz_seeds_read_or_are_refused_as_named() {
     }
     assert_eq!(seen, refused.len());
 }
+
+/// Found by fuzzing: a tiny mesh far from the origin whose centre sits on a rounding boundary
+/// of its frame. Written as GLB and read back it may take the next frame step; its world
+/// positions stay those it was written with.
+#[test]
+fn a_mesh_read_back_in_another_frame_keeps_its_world_positions() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/corpus/read_glb/frame-on-a-rounding-step.glb");
+    let mesh = read_bytes(&fs::read(&path).unwrap(), MeshFormat::Glb, &path).unwrap();
+    let mut bytes = Vec::new();
+    pgvol_mesh::write_to(&mut bytes, &mesh, MeshFormat::Glb, &path).unwrap();
+    let back = read_bytes(&bytes, MeshFormat::Glb, &path).unwrap();
+    assert_eq!(back.triangles.len(), mesh.triangles.len());
+    let world = |m: &Mesh| -> Vec<glam::DVec3> {
+        corners(m)
+            .into_iter()
+            .flatten()
+            .map(|p| m.offset + p.as_dvec3())
+            .collect()
+    };
+    let size = 2f64.powi(-13);
+    for (a, b) in world(&back).iter().zip(world(&mesh)) {
+        assert!(
+            (*a - b).abs().max_element() <= 1e-6 * size,
+            "{a} read back, {b} written"
+        );
+    }
+}
