@@ -145,6 +145,32 @@ fn unconverged(report: &FitReport) -> Option<String> {
     })
 }
 
+/// The header of `volume`, fitted as `fit` reports (to `mesh` when there is one), with the fit's
+/// residual and solver.
+pub(crate) fn fitted_header(
+    volume: &CoefficientVolume,
+    fit: &FitReport,
+    mesh: Option<&Mesh>,
+) -> pgvol_format::PgvHeader {
+    let mut header = pgvol_format::header_for(volume, fit.method.as_str(), mesh);
+    header
+        .metadata
+        .insert("fit_residual".into(), format!("{:e}", fit.residual));
+    header
+        .metadata
+        .insert("fit_solver".into(), fit.solver.clone());
+    header
+}
+
+/// A coefficient fit that failed, as the facade's error.
+pub(crate) fn fit_failed(e: impl std::error::Error + Send + Sync + 'static) -> Error {
+    Error::new(
+        ErrorKind::Internal,
+        format!("cannot fit the coefficients: {e}"),
+    )
+    .caused_by(e)
+}
+
 /// The file of `volume` fitted to `mesh`: its header records the fit and the band (in grid
 /// spacings) within which the samples were exact distances.
 pub(crate) fn encoded_file(
@@ -154,13 +180,7 @@ pub(crate) fn encoded_file(
     band: Option<f32>,
 ) -> PgvFile {
     let spacing = volume.grid.spacing;
-    let mut header = pgvol_format::header_for(&volume, fit.method.as_str(), Some(mesh));
-    header
-        .metadata
-        .insert("fit_residual".into(), format!("{:e}", fit.residual));
-    header
-        .metadata
-        .insert("fit_solver".into(), fit.solver.clone());
+    let mut header = fitted_header(&volume, fit, Some(mesh));
     if let Some(band) = band {
         header
             .metadata
@@ -232,13 +252,7 @@ pub(crate) fn fit_volume(
             })?
         }
     };
-    let (volume, report) = fitted.map_err(|e| {
-        Error::new(
-            ErrorKind::Internal,
-            format!("cannot fit the coefficients: {e}"),
-        )
-        .caused_by(e)
-    })?;
+    let (volume, report) = fitted.map_err(fit_failed)?;
     timings.fit = report.seconds;
     Ok(Fitted {
         volume,

@@ -17,7 +17,7 @@ use pgvol_format::vdb::read::{read_vdb, VdbLevelSet};
 use pgvol_format::PgvFile;
 
 use crate::band::BAND_KEY;
-use crate::encode::Encoded;
+use crate::encode::{fit_failed, fitted_header, Encoded};
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::memory::{check_memory, BYTES_PER_BAND_BRICK};
 use crate::progress::{self, Progress};
@@ -79,23 +79,11 @@ pub fn encode_vdb(
     let (volume, report) = progress::stage(progress, "fit", |_| {
         pgvol_field::fit::interp_sparse(grid, basis, &samples)
     })?
-    .map_err(|e| {
-        Error::new(
-            ErrorKind::Internal,
-            format!("cannot fit the coefficients: {e}"),
-        )
-        .caused_by(e)
-    })?;
+    .map_err(fit_failed)?;
     timings.fit = report.seconds;
-    let mut header = pgvol_format::header_for(&volume, report.method.as_str(), None);
+    let mut header = fitted_header(&volume, &report, None);
     header.units = "OpenVDB world units".to_string();
     header.metadata.insert(BAND_KEY.into(), format!("{band}"));
-    header
-        .metadata
-        .insert("fit_residual".into(), format!("{:e}", report.residual));
-    header
-        .metadata
-        .insert("fit_solver".into(), report.solver.clone());
     header.metadata.insert("source_vdb_grid".into(), name);
     Ok(Encoded {
         file: PgvFile { header, volume },
