@@ -328,6 +328,18 @@ fn operand(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Operand> {
     }
 }
 
+/// The drains given as a list (none when absent), each read by [`drain`].
+fn drain_list(
+    py: Python<'_>,
+    drains: Option<Vec<Bound<'_, PyAny>>>,
+) -> PyResult<Vec<pgvol::edit::Drain>> {
+    drains
+        .unwrap_or_default()
+        .iter()
+        .map(|d| drain(py, d))
+        .collect()
+}
+
 fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::edit::Drain> {
     let numbers: Vec<f32> = match obj.extract::<Vec<f32>>() {
         Ok(v) => v,
@@ -751,11 +763,7 @@ impl Field {
         } else {
             pgvol::ShellKind::Wall(names::side(py, side)?)
         };
-        let drains = drains
-            .unwrap_or_default()
-            .iter()
-            .map(|d| drain(py, d))
-            .collect::<PyResult<Vec<_>>>()?;
+        let drains = drain_list(py, drains)?;
         let options = pgvol::ShellOptions {
             thickness,
             kind,
@@ -812,11 +820,7 @@ impl Field {
     ) -> PyResult<Field> {
         let grading = (grade_depth, grade_linear, cell_far, thickness_far);
         let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
-        let drains = drains
-            .unwrap_or_default()
-            .iter()
-            .map(|d| drain(py, d))
-            .collect::<PyResult<Vec<_>>>()?;
+        let drains = drain_list(py, drains)?;
         let solid = run(py, progress, |p| {
             self.shape.infill(wall, &lattice, &drains, p)
         })?;
@@ -847,11 +851,7 @@ impl Field {
     ) -> PyResult<Grid> {
         let grading = (grade_depth, grade_linear, cell_far, thickness_far);
         let lattice = make_lattice(py, surface, style, cell, thickness, grading)?;
-        let drains = drains
-            .unwrap_or_default()
-            .iter()
-            .map(|d| drain(py, d))
-            .collect::<PyResult<Vec<_>>>()?;
+        let drains = drain_list(py, drains)?;
         let cut = match wall {
             Some(wall) => pgvol::lattices::LatticeCut::Infill { wall },
             None if drains.is_empty() => pgvol::lattices::LatticeCut::Part,
