@@ -20,6 +20,7 @@ use crate::encode::{
 };
 use crate::error::{Error, ErrorKind, Result};
 use crate::grid::GridSpec;
+use crate::memory;
 use crate::mesh_io;
 use crate::pgv_io::read_pgv;
 use crate::progress::{Progress, Silent};
@@ -57,7 +58,8 @@ pub struct OpenOptions {
     /// the field that far from the surface (default 0).
     pub reach: f32,
     /// A grid that cannot hold walls this thin (see [`check_wall`]) is refused before the mesh
-    /// is encoded, and so is such a `.pgv` file (default none).
+    /// is encoded, and so is such a `.pgv` file (default none). With walls, the memory estimate
+    /// made before the encode includes the shell that follows it.
     pub wall: Option<f32>,
     /// How inside is told from outside in a mesh (default [`SignMode::Auto`]); a `.pgv` file
     /// stores its signs, and any other mode is refused for one.
@@ -212,7 +214,17 @@ impl Field {
             band: ENCODE_BAND + options.reach.abs() / grid.spacing,
             sign: options.sign,
         };
-        crate::memory::check_sparse_encode("encoding the mesh", &mesh, &grid, encode.band)?;
+        let walls = match options.wall {
+            // The walls' operation maps the field and fits it again (see `Field::shell`).
+            Some(_) => memory::band_bricks(memory::mesh_area(&mesh), grid.spacing, encode.band)
+                .saturating_mul(memory::BYTES_PER_REMAP_BRICK),
+            None => 0,
+        };
+        let job = match walls {
+            0 => "encoding the mesh",
+            _ => "encoding the mesh and making its walls",
+        };
+        memory::check_sparse_encode_then(job, &mesh, &grid, encode.band, walls)?;
         let volume = fit_volume(&mesh, grid, &encode, &mut Timings::default(), progress)?.volume;
         let band = encode.band * grid.spacing;
         let mut header = pgvol_format::header_for(&volume, "interp", Some(&mesh));
@@ -493,6 +505,12 @@ impl Field {
         if kind == ShellKind::Hollow {
             check_drains(self, thickness, &drains, progress)?;
         }
+        let stored = self.file.volume.coeffs.stored_count() as u64;
+        memory::check_memory(
+            "the shell",
+            stored.saturating_mul(memory::BYTES_PER_REMAP_BRICK),
+            "lower the resolution",
+        )?;
         let (volume, operation) = match kind {
             ShellKind::Hollow => (
                 pgvol_ops::hollow(&self.file.volume, thickness, &drains)?,

@@ -309,3 +309,29 @@ fn plane(x: f32, y: f32, z: f32) -> pgvol::Operand {
     })
     .into()
 }
+
+#[test]
+fn a_shell_is_refused_before_its_work_with_the_figure_of_its_stored_bricks() {
+    let _limit = Limit::take();
+    // A band of 8 spacings (0.37) holds a wall of 0.2.
+    let options = EncodeOptions {
+        grid: GridSpec::Res(48),
+        band: 8.0,
+        ..Default::default()
+    };
+    let encoded = pgvol::encode(&pgvol::mesh::shapes::octasphere(3), &options, &Silent).unwrap();
+    let shape = pgvol::Field::from_file(encoded.file);
+    let bricks = shape.volume().coeffs.stored_count() as u64;
+    let options = pgvol::ShellOptions {
+        thickness: 0.2,
+        ..Default::default()
+    };
+    // Just under what the shell's node values, brick list and result take for these bricks.
+    pgvol::limits::set_memory_limit(Some(bricks * 8 * 1024 - 1));
+    let refused = shape.shell(&options, &Silent).unwrap_err();
+    pgvol::limits::set_memory_limit(None);
+    assert_eq!(refused.kind(), ErrorKind::ResourceLimit, "{refused}");
+    assert!(refused.message().starts_with("the shell needs about"), "{refused}");
+    let walls = shape.shell(&options, &Silent).unwrap();
+    assert!(walls.volume().coeffs.stored_count() > 0);
+}
