@@ -530,6 +530,29 @@ impl SparseGrid {
         };
     }
 
+    /// The grid with no stored brick, each brick on the side it would take were it absent:
+    /// what `retain` keeping nothing leaves, without copying the bricks first.
+    pub fn sides_only(&self) -> Self {
+        SparseGrid {
+            dims: self.dims,
+            brick_counts: self.brick_counts,
+            tile_counts: self.tile_counts,
+            tile_slots: self.tile_slots.clone(),
+            tile_inside: self.tile_inside.clone(),
+            tiles: self
+                .tiles
+                .iter()
+                .map(|t| Tile {
+                    slots: Box::new([ABSENT; TILE_BRICKS]),
+                    inside: t.inside,
+                })
+                .collect(),
+            bricks: Vec::new(),
+            coords: Vec::new(),
+            background: self.background,
+        }
+    }
+
     /// Keeps the stored bricks for which `keep` is true; the others take their background.
     pub fn retain(&mut self, mut keep: impl FnMut([usize; 3], &BrickValues) -> bool) {
         let old_bricks = std::mem::take(&mut self.bricks);

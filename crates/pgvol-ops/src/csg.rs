@@ -19,6 +19,7 @@ use pgvol_field::{Basis, CoefficientVolume, Grid};
 use rayon::prelude::*;
 
 use crate::error::OpsError;
+use crate::remap::remap;
 
 /// Where a shell's wall lies relative to the original surface.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -93,21 +94,6 @@ pub fn support_reach(volume: &CoefficientVolume) -> f32 {
         _ => 2.0,
     };
     spacings * volume.grid.spacing
-}
-
-/// A map of node values, then interpolated again in the same basis, brick by brick: the
-/// bricks whose node values vary are mapped node by node, every other brick is its side's
-/// background mapped once. `varies(lo, hi, v)` says whether `f` could change with position
-/// over the box `[lo, hi]` for the node value `v` (drains crossing far space).
-pub(crate) fn remap(
-    volume: &CoefficientVolume,
-    f: impl Fn(Vec3, f32) -> f32 + Sync,
-    varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
-) -> Result<CoefficientVolume, OpsError> {
-    let mut values = node_values_sparse(volume);
-    map_nodes(&mut values, volume.grid, f, varies);
-    let (result, _) = pgvol_field::fit::interp_sparse(volume.grid, volume.basis, &values)?;
-    Ok(result)
 }
 
 /// The node values `values` on `grid` mapped by `f` in place, as [`remap`] does before

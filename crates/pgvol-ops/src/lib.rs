@@ -23,6 +23,7 @@ mod error;
 mod lattice;
 mod local_fit;
 mod measure;
+mod remap;
 mod repair;
 
 pub use blend::{

@@ -44,10 +44,10 @@ pub const BYTES_PER_SAMPLE: u64 = 120;
 pub const BYTES_PER_SAMPLED_BRICK: u64 = 72;
 
 /// Bytes per stored brick of 8³ nodes of the input while an operation maps the field's node
-/// values and fits them again (shells, hollowing): the node values, the prefilter's list of
-/// bricks and the result, whose bricks spread one beyond the input's (peak RSS grew by 7.7 KB per
-/// input brick shelling spot at 1024³ and 2048³: 122,863 and 493,440 bricks).
-pub const BYTES_PER_REMAP_BRICK: u64 = 8 * 1024;
+/// values and fits them again (shells, hollowing), a layer of fitting groups at a time: the
+/// result, whose bricks spread one beyond the input's, and the window of node values (peak RSS
+/// grew by 2.8 KB per input brick shelling spot at 1024³ and 2048³: 122,863 and 493,440 bricks).
+pub const BYTES_PER_REMAP_BRICK: u64 = 3584;
 
 /// Bytes per grid node of a dense `.pgv` written from a sparse volume: the dense coefficients,
 /// their little-endian bytes and the file's bytes, 4 each (peak RSS of a 600³ union written

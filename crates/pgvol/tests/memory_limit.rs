@@ -327,11 +327,14 @@ fn a_shell_is_refused_before_its_work_with_the_figure_of_its_stored_bricks() {
         ..Default::default()
     };
     // Just under what the shell's node values, brick list and result take for these bricks.
-    pgvol::limits::set_memory_limit(Some(bricks * 8 * 1024 - 1));
+    pgvol::limits::set_memory_limit(Some(bricks * 3584 - 1));
     let refused = shape.shell(&options, &Silent).unwrap_err();
     pgvol::limits::set_memory_limit(None);
     assert_eq!(refused.kind(), ErrorKind::ResourceLimit, "{refused}");
-    assert!(refused.message().starts_with("the shell needs about"), "{refused}");
+    assert!(
+        refused.message().starts_with("the shell needs about"),
+        "{refused}"
+    );
     let walls = shape.shell(&options, &Silent).unwrap();
     assert!(walls.volume().coeffs.stored_count() > 0);
 }
