@@ -1,7 +1,8 @@
 // The viewer page: the inlined surface, lit, with orbit controls; one axis-aligned section
 // computed from the field's node values, filled in the 3D view and in a 2D inset. The state
 // tests read is set on <body>: data-status, data-triangles and, with a section shown,
-// data-section-axis, data-section-height (model coordinates) and data-section-area.
+// data-section-axis, data-section-height (model coordinates) and data-section-area; and
+// data-ready-ms, the milliseconds from the start of navigation to the first frame drawn.
 
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -156,6 +157,7 @@ function start() {
   });
   update();
   body.dataset.triangles = String(triangles);
+  body.dataset.readyMs = String(Math.round(performance.now()));
   body.dataset.status = 'ready';
 }
 
