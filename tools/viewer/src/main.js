@@ -132,7 +132,7 @@ function start() {
     surfaceMaterial.clippingPlanes = [cut];
     const [u0, u1] = rangeOf(ua);
     const [v0, v1] = rangeOf(va);
-    inset.draw(section, [u0, v0, u1, v1]);
+    inset.draw(plane, data.iso, [u0, v0, u1, v1]);
     const world = local + offset[a];
     const name = 'xyz'[a];
     panel.show(`${name} = ${world.toPrecision(6)}   area = ${section.area.toPrecision(6)}`);

@@ -56,9 +56,21 @@ export function makePanel(title, triangles, onChange) {
   };
 }
 
-/** A 2D inset drawing a section's fill and contours, fitted to the (u, v) box given. */
+/** The colour `#rrggbb` as [r, g, b]. */
+function rgb(hex) {
+  const n = parseInt(hex.slice(1), 16);
+  return [(n >> 16) & 255, (n >> 8) & 255, n & 255];
+}
+
+/**
+ * A 2D inset showing a section: each pixel takes the plane's values interpolated bilinearly
+ * (as the contour's edges are), filled where below the level, dark where the sign changes
+ * between neighbouring pixels. Drawn pixel by pixel, so its cost is the inset's size whatever
+ * the section holds.
+ */
 export function makeInset(colours) {
   const size = 220;
+  const pad = 10;
   const canvas = element('canvas',
     'position:absolute;right:8px;bottom:8px;background:rgba(255,255,255,.9);border-radius:6px;' +
     'box-shadow:0 1px 4px rgba(0,0,0,.2)');
@@ -67,38 +79,52 @@ export function makeInset(colours) {
   canvas.style.display = 'none';
   document.body.append(canvas);
   const ctx = canvas.getContext('2d');
+  const fill = rgb(colours.section);
   return {
-    draw(section, box) {
-      if (!section) {
+    /** Draws `plane` (from BrickField.plane) below `iso` over the (u, v) box, or hides. */
+    draw(plane, iso, box) {
+      if (!plane) {
         canvas.style.display = 'none';
         return;
       }
       canvas.style.display = 'block';
-      ctx.clearRect(0, 0, size, size);
-      const pad = 10;
+      const { values, nu, nv, origin, spacing } = plane;
       const extent = Math.max(box[2] - box[0], box[3] - box[1]) || 1;
-      const k = (size - 2 * pad) / extent;
-      const x = (u) => pad + (u - box[0]) * k;
-      const y = (v) => size - pad - (v - box[1]) * k;
-      ctx.fillStyle = colours.section;
-      ctx.beginPath();
-      const f = section.fill;
-      for (let t = 0; t < f.length; t += 6) {
-        ctx.moveTo(x(f[t]), y(f[t + 1]));
-        ctx.lineTo(x(f[t + 2]), y(f[t + 3]));
-        ctx.lineTo(x(f[t + 4]), y(f[t + 5]));
-        ctx.closePath();
+      const step = extent / (size - 2 * pad);
+      const inside = new Uint8Array(size * size);
+      for (let y = 0; y < size; y++) {
+        const gv = (box[1] + (size - 1 - y - pad + 0.5) * step - origin[1]) / spacing;
+        if (gv < 0 || gv > nv - 1) continue;
+        const j = Math.min(Math.floor(gv), nv - 2);
+        const tv = gv - j;
+        for (let x = 0; x < size; x++) {
+          const gu = (box[0] + (x - pad + 0.5) * step - origin[0]) / spacing;
+          if (gu < 0 || gu > nu - 1) continue;
+          const i = Math.min(Math.floor(gu), nu - 2);
+          const tu = gu - i;
+          const k = i + nu * j;
+          const low = values[k] * (1 - tu) + values[k + 1] * tu;
+          const high = values[k + nu] * (1 - tu) + values[k + nu + 1] * tu;
+          inside[x + size * y] = low * (1 - tv) + high * tv < iso ? 1 : 0;
+        }
       }
-      ctx.fill();
-      ctx.strokeStyle = '#222';
-      ctx.lineWidth = 1;
-      ctx.beginPath();
-      const l = section.lines;
-      for (let s = 0; s < l.length; s += 4) {
-        ctx.moveTo(x(l[s]), y(l[s + 1]));
-        ctx.lineTo(x(l[s + 2]), y(l[s + 3]));
+      const image = ctx.createImageData(size, size);
+      const px = image.data;
+      for (let y = 0; y < size; y++) {
+        for (let x = 0; x < size; x++) {
+          const p = x + size * y;
+          const edge = (x + 1 < size && inside[p + 1] !== inside[p]) ||
+            (y + 1 < size && inside[p + size] !== inside[p]);
+          const c = edge ? [34, 34, 34] : inside[p] ? fill : null;
+          if (!c) continue;
+          px[4 * p] = c[0];
+          px[4 * p + 1] = c[1];
+          px[4 * p + 2] = c[2];
+          px[4 * p + 3] = 255;
+        }
       }
-      ctx.stroke();
+      ctx.clearRect(0, 0, size, size);
+      ctx.putImageData(image, 0, 0);
     },
   };
 }
