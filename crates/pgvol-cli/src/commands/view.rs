@@ -96,8 +96,10 @@ pub fn run(a: ViewArgs) -> Result<()> {
         );
     }
     let bars = Bars::new(a.out.silent());
+    // A mesh is encoded with exact distances out to the level drawn.
     let open = pgvol::OpenOptions {
         res: a.res as usize,
+        reach: a.iso.abs(),
         ..Default::default()
     };
     let field = pgvol::Field::open(&a.input, &open, &bars).map_err(|e| at_input(e, &a.input))?;
