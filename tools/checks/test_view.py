@@ -124,6 +124,30 @@ def test_a_large_grid_is_resampled_onto_the_cap(pgvol, mesh_path, work_dir):
     assert abs(float(state["section-area"]) - reference) <= 0.05 * reference
 
 
+def test_a_mesh_far_from_the_origin_is_viewed_with_its_own_heights(pgvol, mesh_path, work_dir):
+    # Spot moved 1e5 along x and z: the page works in the field's local frame and shows world
+    # heights, and its section matches pgvol slice's there.
+    far = work_dir / "view-spot-far.obj"
+    lines = []
+    for line in mesh_path("spot").read_text().splitlines():
+        if line.startswith("v "):
+            x, y, z = map(float, line.split()[1:4])
+            line = f"v {x + 1e5:.6f} {y:.6f} {z + 1e5:.6f}"
+        lines.append(line)
+    far.write_text("\n".join(lines) + "\n")
+    page = work_dir / "view-spot-far.html"
+    # A mesh input: encoded first (at 128 nodes per axis by default).
+    helpers.run_ok([pgvol, "view", far, "-o", page, "--quiet"])
+    height = 100000.1
+    layers = work_dir / "view-spot-far.json"
+    helpers.run_ok([pgvol, "slice", far, "-o", layers, "--layer-height", 1.0, "--first", height, "--res", 128])
+    reference = json.loads(layers.read_text())["layers"][0]["area"]
+    state = chromium.page_state(page, f"section=z:{height}")
+    assert state.get("status") == "ready" and int(state["triangles"]) > 1000, state
+    assert abs(float(state["section-height"]) - height) < 1e-6
+    assert abs(float(state["section-area"]) - reference) <= 0.02 * reference, (state, reference)
+
+
 @pytest.mark.parametrize(
     "case",
     ["missing", "not-a-mesh", "bad-pgv", "bad-section", "bad-colour", "outside-section", "not-html"],
