@@ -220,3 +220,25 @@ fn choices_out_of_range_are_refused_with_what_would_work() {
     colours.colours.background = "white\"><script>".into();
     refuse(colours, "six hexadecimal digits");
 }
+
+#[test]
+fn a_basis_the_page_does_not_evaluate_is_sampled_at_its_own_nodes() {
+    let options = EncodeOptions {
+        grid: GridSpec::Res(32),
+        basis: pgvol::Basis::Bspline2,
+        ..EncodeOptions::default()
+    };
+    let field = Field::from_mesh(&pgvol::mesh::shapes::octasphere(4), &options, &Silent).unwrap();
+    let data = payload(&field.view_html(&ViewOptions::default(), &Silent).unwrap());
+    let f = &data["field"];
+    assert_eq!(f["source"].as_str(), Some("samples"));
+    assert_eq!(dims(&f["dims"]), field.volume().grid.dims);
+    let (values, _, step) = node_values(f);
+    let grid = field.volume().grid;
+    let [nx, ny, _] = grid.dims;
+    for (n, got) in values.iter().enumerate() {
+        let (i, j, k) = (n % nx, n / nx % ny, n / (nx * ny));
+        let want = field.volume().value(grid.point(i, j, k));
+        assert!((got - want).abs() <= step * 1.01 + 1e-5, "node {i},{j},{k}");
+    }
+}

@@ -95,7 +95,11 @@ impl Payload {
         let bricks = match (volume.basis, capped) {
             (Basis::Bspline3 | Basis::Trilinear, false) => stored_bricks(volume)?,
             _ => {
-                let grid = crate::decode::target_grid(volume, Some(options.max_res))?;
+                // Never finer than the file's own grid (a basis the page does not evaluate is
+                // sampled at its own nodes when within the cap).
+                let longest = volume.grid.dims.into_iter().max().unwrap_or(2);
+                let res = options.max_res.min(longest);
+                let grid = crate::decode::target_grid(volume, Some(res))?;
                 progress::stage(progress, "view: resample the field", |_| {
                     resampled_bricks(volume, &grid)
                 })??
