@@ -50,6 +50,17 @@ else
     echo "python3-openvdb, libopenvdb-tools, blender and prusa-slicer are installed"
 fi
 
+section "chromium (apt: the checks of pgvol view)"
+# tools/checks/test_view.py opens the viewer's pages in headless Chromium.
+if ! dpkg -s chromium >/dev/null 2>&1; then
+    sudo_cmd=()
+    [[ "$(id -u)" != 0 ]] && sudo_cmd=(sudo)
+    "${sudo_cmd[@]}" apt-get update -q
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends chromium
+else
+    echo "chromium is installed"
+fi
+
 section "python environment (.venv)"
 PY="${PYTHON:-python3}"
 if [[ ! -x .venv/bin/python ]]; then

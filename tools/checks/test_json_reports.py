@@ -43,6 +43,7 @@ def test_every_json_report_has_outputs_warnings_and_seconds(tmp_path, pgvol):
         "slice": ([pgvol, "slice", pgv, "-o", layers, "--layer-height", 0.2], ["output", "layers"]),
         "contours": ([pgvol, "contours", layers, "-o", tmp_path / "c.glb", "--res", 32], ["output", "layers"]),
         "csg": ([pgvol, "csg", "union", pgv, "sphere:0,0,0,0.5", "-o", tmp_path / "u.glb"], ["output", "triangles"]),
+        "view": ([pgvol, "view", pgv, "-o", tmp_path / "v.html"], ["output", "bytes"]),
     }
     for name, (args, outputs) in runs.items():
         report = helpers.run_json(args + ["--json"])

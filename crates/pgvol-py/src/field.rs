@@ -1190,6 +1190,37 @@ impl Field {
             .collect())
     }
 
+    /// Writes the viewer page to `path` (.html), atomically: the surface, lit and turnable, and
+    /// an axis-aligned section computed in the browser from the field, in one file that opens
+    /// from disk. `section` is (axis, height) in the model's coordinates; `colours` maps
+    /// "surface", "section" and "background" to "#rrggbb"; above `max_res` nodes per axis the
+    /// page holds the surface and the field resampled onto a coarser grid.
+    // max_res: pgvol::view::VIEW_RES, written out so the signature shows it (tests/test_view.py
+    // checks it against the command line's default).
+    #[pyo3(signature = (path, *, section=None, iso=0.0, colours=None, max_res=256, title=None, progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn view(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        section: Option<(String, f64)>,
+        iso: f32,
+        colours: Option<std::collections::HashMap<String, String>>,
+        max_res: usize,
+        title: Option<String>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<()> {
+        let options = crate::view::options(py, section, iso, colours, max_res, title)?;
+        run(py, progress, |p| self.shape.write_view(&path, &options, p))
+    }
+
+    /// The viewer page in an iframe, as a notebook shows the field.
+    fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
+        let options = pgvol::view::ViewOptions::default();
+        let page = quiet(py, || self.shape.view_html(&options, &pgvol::Silent))?;
+        Ok(crate::view::iframe(&page))
+    }
+
     /// The grid of the coefficients.
     #[getter]
     fn grid(&self) -> Grid {

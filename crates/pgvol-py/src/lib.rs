@@ -17,6 +17,7 @@ mod names;
 mod parts;
 mod perturb;
 mod progress;
+mod view;
 
 use std::path::PathBuf;
 

@@ -107,6 +107,7 @@ mod slice;
 mod timings;
 mod vdb_export;
 mod vdb_in;
+pub mod view;
 
 pub use csg::{CsgOptions, ResultUse};
 pub use decode::DecodeOptions;

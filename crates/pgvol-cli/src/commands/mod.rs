@@ -13,6 +13,7 @@ mod perturb;
 mod points;
 mod remesh;
 mod sdf;
+mod view;
 
 use anyhow::Result;
 use clap::Subcommand;
@@ -112,6 +113,13 @@ pub enum Command {
     /// --max-functions; the loop stops with a report when no bump lowers the error. The field is
     /// resampled into a coefficient volume (.pgv) or contoured into a mesh.
     Perturb(perturb::PerturbArgs),
+    /// Writes one self-contained HTML page showing a field: its surface, lit and turnable, and
+    /// an axis-aligned section with a slider, computed in the browser from the field itself.
+    ///
+    /// The page holds the surface decoded at up to --max-res nodes per axis and the field's
+    /// bricks (resampled above --max-res), inlined; it opens from disk with no network. The
+    /// section's inside is filled, with its height and area shown.
+    View(view::ViewArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -138,6 +146,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Repair(a) => edit::repair(a),
         Command::Blend(a) => blend::blend(a),
         Command::Perturb(a) => perturb::run(a),
+        Command::View(a) => view::run(a),
     }
 }
 
@@ -163,6 +172,7 @@ impl Command {
             Command::Repair(a) => a.out,
             Command::Blend(a) => a.out,
             Command::Perturb(a) => a.out,
+            Command::View(a) => a.out,
         }
     }
 
@@ -185,6 +195,7 @@ impl Command {
             Command::Repair(a) => Some((&a.output, a.out)),
             Command::Blend(a) => Some((&a.output, a.out)),
             Command::Perturb(a) => Some((&a.output, a.out)),
+            Command::View(a) => Some((&a.output, a.out)),
             Command::Compare(_) | Command::Info(_) => None,
         }
     }

@@ -504,6 +504,24 @@ class Field:
     ) -> List[Layer]:
         """Layers of closed contours ``layer_height`` apart along ``axis``, the first half a
         layer above the bottom unless ``first`` is given."""
+    def view(
+        self,
+        path: _PathLike,
+        *,
+        section: Optional[Tuple[Literal["x", "y", "z"], float]] = None,
+        iso: float = 0.0,
+        colours: Optional[Dict[str, str]] = None,
+        max_res: int = 256,
+        title: Optional[str] = None,
+        progress: Optional[_Progress] = None,
+    ) -> None:
+        """Writes the viewer page (.html), atomically: the surface, lit and turnable, and an
+        axis-aligned section computed in the browser from the field, in one file that opens
+        from disk. ``section`` is (axis, height) in the model's coordinates; ``colours`` maps
+        "surface", "section" and "background" to "#rrggbb"; above ``max_res`` nodes per axis
+        the page holds the surface and the field resampled onto a coarser grid."""
+    def _repr_html_(self) -> str:
+        """The viewer page in an iframe, as a notebook shows the field."""
     @property
     def grid(self) -> Grid:
         """The grid of the coefficients."""
