@@ -11,12 +11,8 @@
 //! the crease are unaffected.
 
 use glam::Vec3;
-use pgvol_core::sparse::BrickValues;
-use pgvol_core::sparse::SparseGrid;
-use pgvol_core::{Background, BRICK_EDGE};
 use pgvol_field::fit::node_values_sparse;
-use pgvol_field::{Basis, CoefficientVolume, Grid};
-use rayon::prelude::*;
+use pgvol_field::{Basis, CoefficientVolume};
 
 use crate::error::OpsError;
 use crate::remap::remap;
@@ -94,62 +90,6 @@ pub fn support_reach(volume: &CoefficientVolume) -> f32 {
         _ => 2.0,
     };
     spacings * volume.grid.spacing
-}
-
-/// The node values `values` on `grid` mapped by `f` in place, as [`remap`] does before
-/// interpolating.
-pub(crate) fn map_nodes(
-    values: &mut SparseGrid,
-    grid: Grid,
-    f: impl Fn(Vec3, f32) -> f32 + Sync,
-    varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
-) {
-    let background = values.background();
-    // Absent bricks where `f` depends on position become stored bricks of their background.
-    // Visited layer by layer rather than listed: a 4096³ grid has 134 million bricks.
-    let [bx, by, bz] = values.brick_counts();
-    let moving: Vec<[usize; 3]> = (0..bz)
-        .into_par_iter()
-        .flat_map_iter(|k| {
-            let values = &*values;
-            let varies = &varies;
-            (0..by)
-                .flat_map(move |j| (0..bx).map(move |i| [i, j, k]))
-                .filter(move |&b| {
-                    if values.is_stored(b) {
-                        return false;
-                    }
-                    let (lo, n) = values.brick_extent(b);
-                    let hi = [0, 1, 2].map(|a| lo[a] + n[a] - 1);
-                    varies(
-                        grid.point(lo[0], lo[1], lo[2]),
-                        grid.point(hi[0], hi[1], hi[2]),
-                        values.background_of(b),
-                    )
-                })
-        })
-        .collect();
-    for b in moving {
-        values.brick_or_background(b);
-    }
-    let mut bricks: Vec<([usize; 3], &mut BrickValues)> = values.stored_mut().collect();
-    bricks.par_iter_mut().for_each(|(b, v)| {
-        let lo = b.map(|c| c * BRICK_EDGE);
-        for (at, x) in v.iter_mut().enumerate() {
-            let n = [
-                at % BRICK_EDGE,
-                (at / BRICK_EDGE) % BRICK_EDGE,
-                at / (BRICK_EDGE * BRICK_EDGE),
-            ];
-            let p = grid.point(lo[0] + n[0], lo[1] + n[1], lo[2] + n[2]);
-            *x = f(p, *x);
-        }
-    });
-    drop(bricks);
-    values.set_background(Background {
-        outside: f(grid.origin, background.outside),
-        inside: f(grid.origin, background.inside),
-    });
 }
 
 /// The surface moved by `distance` along its normals (outward when positive): the field minus

@@ -17,9 +17,10 @@ use glam::Vec3;
 use pgvol_field::fit::{interp_sparse, node_values_sparse};
 use pgvol_field::CoefficientVolume;
 
-use crate::csg::{check, cut_drains, drain_reaches, drain_units, map_nodes, Drain};
+use crate::csg::{check, cut_drains, drain_reaches, drain_units, Drain};
 use crate::error::OpsError;
 use crate::measure::{measure_field, FieldMeasure};
+use crate::remap::map_nodes;
 
 /// A lattice solid with the measures of its field and of the part's, taken from the node values
 /// both pass through anyway.
