@@ -95,36 +95,16 @@ pub(crate) fn map_nodes(
             let varies = &varies;
             (0..by)
                 .flat_map(move |j| (0..bx).map(move |i| [i, j, k]))
-                .filter(move |&b| {
-                    if values.is_stored(b) {
-                        return false;
-                    }
-                    let (lo, n) = values.brick_extent(b);
-                    let hi = [0, 1, 2].map(|a| lo[a] + n[a] - 1);
-                    varies(
-                        grid.point(lo[0], lo[1], lo[2]),
-                        grid.point(hi[0], hi[1], hi[2]),
-                        values.background_of(b),
-                    )
-                })
+                .filter(move |&b| !values.is_stored(b) && brick_varies(values, grid, b, varies))
         })
         .collect();
     for b in moving {
         values.brick_or_background(b);
     }
     let mut bricks: Vec<([usize; 3], &mut BrickValues)> = values.stored_mut().collect();
-    bricks.par_iter_mut().for_each(|(b, v)| {
-        let lo = b.map(|c| c * BRICK_EDGE);
-        for (at, x) in v.iter_mut().enumerate() {
-            let n = [
-                at % BRICK_EDGE,
-                (at / BRICK_EDGE) % BRICK_EDGE,
-                at / (BRICK_EDGE * BRICK_EDGE),
-            ];
-            let p = grid.point(lo[0] + n[0], lo[1] + n[1], lo[2] + n[2]);
-            *x = f(p, *x);
-        }
-    });
+    bricks
+        .par_iter_mut()
+        .for_each(|(b, v)| map_brick(grid, *b, v, &f));
     drop(bricks);
     values.set_background(Background {
         outside: f(grid.origin, background.outside),
@@ -163,31 +143,11 @@ fn mapped_layer(
         .flat_map_iter(|j| {
             let near = &near;
             (0..bx).map(move |i| [j, i]).filter(move |&[j, i]| {
-                let b = [i, j, k];
-                if near.binary_search(&[j, i]).is_ok() {
-                    return false;
-                }
-                let (lo, n) = coeffs.brick_extent(b);
-                let hi = [0, 1, 2].map(|a| lo[a] + n[a] - 1);
-                varies(
-                    grid.point(lo[0], lo[1], lo[2]),
-                    grid.point(hi[0], hi[1], hi[2]),
-                    coeffs.background_of(b),
-                )
+                near.binary_search(&[j, i]).is_err()
+                    && brick_varies(coeffs, grid, [i, j, k], varies)
             })
         })
         .collect();
-    let map = |b: [usize; 3], values: &mut BrickValues| {
-        let lo = b.map(|c| c * BRICK_EDGE);
-        for (at, x) in values.iter_mut().enumerate() {
-            let n = [
-                at % BRICK_EDGE,
-                (at / BRICK_EDGE) % BRICK_EDGE,
-                at / (BRICK_EDGE * BRICK_EDGE),
-            ];
-            *x = f(grid.point(lo[0] + n[0], lo[1] + n[1], lo[2] + n[2]), *x);
-        }
-    };
     near.par_iter()
         .map(|&[j, i]| (true, [i, j, k]))
         .chain(moving.par_iter().map(|&[j, i]| (false, [i, j, k])))
@@ -197,10 +157,40 @@ fn mapped_layer(
             } else {
                 Box::new([coeffs.background_of(b); BRICK_NODES])
             };
-            map(b, &mut values);
+            map_brick(grid, b, &mut values, f);
             (b, values)
         })
         .collect()
+}
+
+/// Whether `f` may vary with position over absent brick `b` of `values` (see [`remap`]).
+fn brick_varies(
+    values: &SparseGrid,
+    grid: Grid,
+    b: [usize; 3],
+    varies: &(impl Fn(Vec3, Vec3, f32) -> bool + Sync),
+) -> bool {
+    let (lo, n) = values.brick_extent(b);
+    let hi = [0, 1, 2].map(|a| lo[a] + n[a] - 1);
+    varies(
+        grid.point(lo[0], lo[1], lo[2]),
+        grid.point(hi[0], hi[1], hi[2]),
+        values.background_of(b),
+    )
+}
+
+/// Brick `b`'s node values mapped by `f` in place, every slot of the brick (those past the
+/// grid's end included).
+fn map_brick(grid: Grid, b: [usize; 3], values: &mut BrickValues, f: &impl Fn(Vec3, f32) -> f32) {
+    let lo = b.map(|c| c * BRICK_EDGE);
+    for (at, x) in values.iter_mut().enumerate() {
+        let n = [
+            at % BRICK_EDGE,
+            (at / BRICK_EDGE) % BRICK_EDGE,
+            at / (BRICK_EDGE * BRICK_EDGE),
+        ];
+        *x = f(grid.point(lo[0] + n[0], lo[1] + n[1], lo[2] + n[2]), *x);
+    }
 }
 
 #[cfg(test)]
