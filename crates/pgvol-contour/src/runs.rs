@@ -27,10 +27,11 @@ use crate::extract::{block_triangles, Part, EXTRA_FLAG};
 use crate::samples::{Nodes, Samples, CROSSINGS_PART};
 use crate::sparse_sample::{coefficient_layers, VolumeNodes};
 
-/// Cell layers per run: 8 contour blocks. A run sorts again the brick layer it shares with the
-/// run below (an eighth more sorting), and on the capped bunny at 1024³ a run of 64 layers
-/// peaks at 405 MB against 568 MB for runs of 128, in the same time (`docs/algorithms.md`).
-pub const RUN_LAYERS: usize = 8 * BLOCK;
+/// Cell layers per run: 4 contour blocks. A run sorts again the brick layer it shares with the
+/// run below (a quarter more sorting), and a shorter run holds fewer slabs of the file: decoding
+/// fandisk at 2048³ peaks at 1.28 GB with runs of 32 layers against 1.53 GB with 64, for 6 % more
+/// CPU time (`docs/algorithms.md`).
+pub const RUN_LAYERS: usize = 4 * BLOCK;
 
 /// Where a contoured volume's coefficients come from, a window of node layers at a time.
 pub trait CoefficientWindows {
