@@ -73,7 +73,8 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
     let out = match options.field {
         RemeshField::Exact => {
             crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
-            let mut out = contour_exact(mesh, &grid, options, &mut timings, progress)?;
+            let (method, sign) = (options.method, options.sign);
+            let mut out = contour_exact(mesh, &grid, method, sign, &mut timings, progress)?;
             crate::decode::remove_specks(&mut out, options.min_component, grid.spacing, progress);
             out
         }
@@ -123,18 +124,18 @@ fn vanished() -> Error {
 /// The surface of `mesh` contoured on `grid`, node signs from the banded sampler and every
 /// vertex placed with the exact distance. Dual contouring keeps each crossing's own tangent
 /// plane: exact normals need no offset away from a feature.
-fn contour_exact(
+pub(crate) fn contour_exact(
     mesh: &Mesh,
     grid: &Grid,
-    options: &RemeshOptions,
+    method: Method,
+    sign: SignMode,
     timings: &mut Timings,
     progress: &dyn Progress,
 ) -> Result<Mesh> {
     let start = Instant::now();
-    let method = options.method;
     // The exact field's gradients on the surface come from the faces: orient them first.
-    let mesh = &*oriented(mesh, options.sign);
-    let sdf = pgvol_sdf::MeshSdf::new(mesh, options.sign)?;
+    let mesh = &*oriented(mesh, sign);
+    let sdf = pgvol_sdf::MeshSdf::new(mesh, sign)?;
     let sampled = sample(&sdf, grid, Extent::Band(NODE_BAND), progress)?;
     timings.sdf = start.elapsed().as_secs_f64();
     let start = Instant::now();
