@@ -67,8 +67,9 @@ pub struct EncodeArgs {
     /// `decode --method dc` keeps them sharp (smooth shapes store nothing); `off` stores none.
     #[arg(long, value_enum, default_value_t)]
     pub sharp: SharpArg,
-    /// Crease angle in degrees: where the exact contour's faces meet at more, cells get a
-    /// stored vertex.
+    /// Crease angle in degrees: edges of the mesh whose faces turn by more (and still do a grid
+    /// spacing away, along at least 4 spacings) are creases, and the cells around them get
+    /// stored vertices.
     #[arg(long, value_name = "DEG", default_value_t = pgvol::sharp::DEFAULT_SHARP_ANGLE, value_parser = parse_angle)]
     pub sharp_angle: f32,
     /// Print the solver's iterations and residual.
@@ -300,6 +301,12 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
                 r.bricks_stored, r.bricks_total, r.precision
             ),
             None => ", dense f32".to_string(),
+        };
+        let detail = match sharp {
+            Some(r) if r.stored_cells > 0 => {
+                format!("{detail}, {} cells of sharp-feature vertices", r.stored_cells)
+            }
+            _ => detail,
         };
         // Mesh grids are cubes; a .vdb input's grid follows its leaves.
         let [nx, ny, nz] = grid.dims;
