@@ -38,6 +38,10 @@ pub const SHARP_RING: u64 = 3;
 /// exact one.
 pub const SHARP_TOLERANCE: f32 = 0.005;
 
+/// The largest grid (nodes) on which encoding looks for sharp features (a 320³ grid): the
+/// exact-distance contour holds about 13 bytes per node, 430 MB here.
+pub const MAX_SHARP_NODES: u64 = 1 << 25;
+
 /// Whether and how encoding stores sharp-feature vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SharpOptions {
@@ -88,6 +92,18 @@ pub fn attach(
         )));
     }
     let grid = file.volume.grid;
+    // The exact contour holds a value per grid node.
+    let bytes = crate::memory::BYTES_PER_NODE;
+    let fits = crate::memory::check_grid("finding sharp features", &grid, bytes);
+    if grid.len() as u64 > MAX_SHARP_NODES || fits.is_err() {
+        let [nx, ny, nz] = grid.dims;
+        progress.warn(&format!(
+            "no sharp-feature vertices stored: finding them contours the exact distance over \
+             every node, done on grids of up to {MAX_SHARP_NODES} nodes and within the memory \
+             limit, and this grid is {nx} x {ny} x {nz}"
+        ));
+        return Ok(SharpReport::default());
+    }
     let mut timings = Timings::default();
     let exact = crate::remesh::contour_exact(
         mesh,
