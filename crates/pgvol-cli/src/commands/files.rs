@@ -304,7 +304,10 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
         };
         let detail = match sharp {
             Some(r) if r.stored_cells > 0 => {
-                format!("{detail}, {} cells of sharp-feature vertices", r.stored_cells)
+                format!(
+                    "{detail}, {} cells of sharp-feature vertices",
+                    r.stored_cells
+                )
             }
             _ => detail,
         };
