@@ -19,7 +19,7 @@ if [[ $# -gt 0 && "$1" != -* ]]; then
     what="$1"
     shift
 fi
-case "$what" in sdf|remesh|all|points|scale) ;; *) echo "usage: $0 [sdf|remesh|all|points|scale] [--big]" >&2; exit 2 ;; esac
+case "$what" in sdf|remesh|all|points|scale|sharp) ;; *) echo "usage: $0 [sdf|remesh|all|points|scale|sharp] [--big]" >&2; exit 2 ;; esac
 
 section() { printf '\n==> %s\n' "$*" >&2; }
 
