@@ -522,6 +522,14 @@ pub fn info(a: InfoArgs) -> Result<()> {
     if let Some(hash) = &h.source_hash {
         outln!("source hash   {hash}");
     }
+    if let Some(sharp) = &h.sharp {
+        outln!(
+            "sharp         {} cells with stored dual-contouring vertices ({} bytes), used by \
+             decode --method dc on the stored grid",
+            sharp.cells,
+            sharp.data.len()
+        );
+    }
     for (k, v) in &h.metadata {
         outln!("{k:<13} {v}");
     }
