@@ -109,7 +109,8 @@ def test_sharp_edges_and_corners_survive_the_file(pgvol, work_dir):
     folder.mkdir(parents=True, exist_ok=True)
     src, corners = _rotated_cube(folder)
     pgv = folder / "cube.pgv"
-    info = helpers.run_json([pgvol, "encode", src, "-o", pgv, "--res", RES, "--json"])
+    args = [pgvol, "encode", src, "-o", pgv, "--res", RES, "--sharp", "auto", "--json"]
+    info = helpers.run_json(args)
     assert "sharp" in _header(pgv), "a cube's file has no sharp section"
     assert info["sharp"]["stored_cells"] > 0
     outputs = {}
@@ -148,13 +149,35 @@ def test_the_sharp_section_is_optional(pgvol, work_dir):
 
 
 def test_a_smooth_mesh_gets_no_sharp_section(pgvol, work_dir):
+    # No edge of a sphere is a crease, so encoding stops before any contouring and writes the
+    # same bytes as without the section.
     folder = work_dir / "sharp-file"
     folder.mkdir(parents=True, exist_ok=True)
     src = folder / "sphere.obj"
     trimesh.creation.icosphere(subdivisions=4).export(src)
-    pgv = folder / "sphere.pgv"
-    info = helpers.run_json([pgvol, "encode", src, "-o", pgv, "--res", RES, "--json"])
+    files = {}
+    for sharp in ("off", "auto"):
+        pgv = folder / f"sphere-{sharp}.pgv"
+        args = [pgvol, "encode", src, "-o", pgv, "--res", RES, "--sharp", sharp, "--json"]
+        info = helpers.run_json(args)
+        files[sharp] = pgv.read_bytes()
     assert "sharp" not in _header(pgv), f"a sphere stored sharp cells: {info['sharp']}"
+    assert info["sharp"]["feature_cells"] == 0, info["sharp"]
+    assert info["warnings"] == [], info["warnings"]
+    assert files["auto"] == files["off"], "a sphere's file differs with the sharp section on"
+
+
+def test_a_grid_above_320_cubed_stores_the_section(pgvol, work_dir):
+    # The work follows the creases, not the grid: a fine grid gets its section, unwarned.
+    folder = work_dir / "sharp-file"
+    folder.mkdir(parents=True, exist_ok=True)
+    src, _ = _rotated_cube(folder)
+    pgv = folder / "cube-fine.pgv"
+    args = [pgvol, "encode", src, "-o", pgv, "--res", 400, "--sharp", "auto", "--json"]
+    info = helpers.run_json(args)
+    assert info["warnings"] == [], info["warnings"]
+    assert info["sharp"]["stored_cells"] > 0, info["sharp"]
+    assert "sharp" in _header(pgv)
 
 
 def test_spot_pays_at_most_two_percent(pgvol, mesh_path, work_dir):

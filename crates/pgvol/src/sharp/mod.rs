@@ -5,9 +5,12 @@
 //! the field (values, gradients, other methods and grids) is the smooth fit's.
 //! `docs/algorithms.md`, "Sharp edges through the file", has the measurements.
 
+mod boxes;
 mod cells;
 mod place;
 mod select;
+
+use std::time::Instant;
 
 use pgvol_core::Mesh;
 use pgvol_format::sharp::{decode_sharp, encode_sharp, SharpCells, MAX_SHARP_CELLS};
@@ -16,12 +19,14 @@ use pgvol_sdf::SignMode;
 
 use crate::decode::DecodeOptions;
 use crate::error::{Error, ErrorKind, Result};
-use crate::progress::Progress;
+use crate::progress::{Progress, Silent};
+use crate::remesh::ExactDistance;
 use crate::timings::Timings;
 use pgvol_contour::Method;
+use rayon::prelude::*;
 
 pub(crate) use place::stored_vertex;
-use select::{stored_cells, Selection};
+use select::{feature_cells, sharp_edges, stored_cells, within_ring};
 
 /// Default angle (degrees) between the normals of two triangles around a vertex of the exact
 /// contour above which the vertex is on a crease or corner.
@@ -37,10 +42,6 @@ pub const SHARP_RING: u64 = 3;
 /// A cell is stored only where the smooth fit's vertex is at least this far (in cells) from the
 /// exact one.
 pub const SHARP_TOLERANCE: f32 = 0.005;
-
-/// The largest grid (nodes) on which encoding looks for sharp features (a 320³ grid): the
-/// exact-distance contour holds about 13 bytes per node, 430 MB here.
-pub const MAX_SHARP_NODES: u64 = 1 << 25;
 
 /// Whether and how encoding stores sharp-feature vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -92,45 +93,62 @@ pub fn attach(
         )));
     }
     let grid = file.volume.grid;
-    // The exact contour holds a value per grid node.
-    let bytes = crate::memory::BYTES_PER_NODE;
-    let fits = crate::memory::check_grid("finding sharp features", &grid, bytes);
-    if grid.len() as u64 > MAX_SHARP_NODES || fits.is_err() {
-        let [nx, ny, nz] = grid.dims;
-        progress.warn(&format!(
-            "no sharp-feature vertices stored: finding them contours the exact distance over \
-             every node, done on grids of up to {MAX_SHARP_NODES} nodes and within the memory \
-             limit, and this grid is {nx} x {ny} x {nz}"
-        ));
+    // Creases first: a smooth shape stops here, before any distance query or contour.
+    let angle = options.angle.to_radians();
+    let sharp = sharp_edges(mesh, angle);
+    if sharp.edges.is_empty() {
         return Ok(SharpReport::default());
     }
-    let mut timings = Timings::default();
-    let exact = crate::remesh::contour_exact(
-        mesh,
-        &grid,
-        Method::DualContouring,
-        sign,
-        &mut timings,
-        progress,
-    )?;
-    let decode = DecodeOptions {
-        method: Method::DualContouring,
-        min_component: Some(0.0),
-        ..DecodeOptions::default()
-    };
-    let smooth = crate::decode::decode(&file.volume, &decode, progress)?;
-    let selection = Selection {
-        angle: options.angle.to_radians(),
-        min_length: SHARP_MIN_LENGTH,
-        ring: SHARP_RING,
-        tolerance: SHARP_TOLERANCE,
-    };
     let bvh = pgvol_sdf::Bvh::build(mesh);
-    let closest = |p| bvh.closest(p, f32::INFINITY).map(|c| c.point);
     let triangle = |p| bvh.closest(p, f32::INFINITY).map(|c| c.triangle);
-    let (stored, feature_cells) = stored_cells(
-        mesh, &exact, &smooth, &grid, &selection, &closest, &triangle,
-    );
+    let features = feature_cells(mesh, &sharp, &grid, SHARP_MIN_LENGTH, &triangle);
+    let feature_cells = features.len();
+    if features.is_empty() {
+        return Ok(SharpReport::default());
+    }
+    // Memory follows the cells near creases: at most a cube of the ring's side around each
+    // feature cell. Too many only costs the section, not the encoding.
+    let ring_cells = (feature_cells as u64).saturating_mul((2 * SHARP_RING + 1).pow(3));
+    let bytes = ring_cells.saturating_mul(crate::memory::BYTES_PER_SHARP_RING_CELL);
+    if let Err(e) = crate::memory::check_memory(
+        "finding sharp features",
+        bytes,
+        "encode without the sharp section",
+    ) {
+        progress.warn(&format!("no sharp-feature vertices stored: {e}"));
+        return Ok(SharpReport {
+            feature_cells,
+            ..SharpReport::default()
+        });
+    }
+    let near = within_ring(&features, &grid, SHARP_RING);
+    let exact = ExactDistance::new(mesh, sign)?;
+    let closest = |p| bvh.closest(p, f32::INFINITY).map(|c| c.point);
+    // Each box is contoured on its own sub-grid, exact distance and smooth fit alike; a cell's
+    // vertex depends only on its corners and edges, so an owned cell gets the vertex the whole
+    // grid's contour would give it, to the rounding of the sub-grid's node positions.
+    let per_box: Result<Vec<Vec<(u64, glam::Vec3)>>> = boxes::boxes(&near, &grid)
+        .par_iter()
+        .map(|cell_box| {
+            crate::progress::check(progress)?;
+            let sub = &cell_box.grid;
+            let method = Method::DualContouring;
+            let mut timings = Timings::default();
+            let exact = exact.contour(sub, method, &mut timings, Instant::now(), &Silent)?;
+            let quiet = pgvol_core::progress::QUIET;
+            let smooth = pgvol_contour::contour_volume(&file.volume, sub, 0.0, method, quiet);
+            Ok(stored_cells(
+                &cell_box.owned,
+                &exact,
+                &smooth,
+                &grid,
+                SHARP_TOLERANCE,
+                &closest,
+            ))
+        })
+        .collect();
+    let mut stored: Vec<(u64, glam::Vec3)> = per_box?.into_iter().flatten().collect();
+    stored.sort_unstable_by_key(|s| s.0);
     if stored.is_empty() {
         return Ok(SharpReport {
             feature_cells,

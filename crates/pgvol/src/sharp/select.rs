@@ -1,26 +1,17 @@
 //! Which cells get a stored vertex: those near a crease or corner of the exact contour where the
 //! smooth fit's vertex is off the exact one.
 
-use std::collections::HashSet;
-
 use glam::Vec3;
 use pgvol_core::{Grid, Mesh};
 
 use super::cells::{cell_at, cell_keys, key_of, single_vertices, CellVertex};
 
-/// The cells of `grid` that an edge of `mesh` passes through where the normals of its two
-/// triangles differ by more than `angle` (radians): the cells whose exact crossing normals
-/// disagree. The sign of a normal is ignored, so inconsistent winding makes no feature; only
-/// edges sharper than 180° less `angle` would be missed. Only creases (chains of such edges)
-/// at least `min_length` cells long count: a scan's noise and the facets of a coarse smooth
-/// mesh make short, isolated sharp edges that the grid does not resolve as creases.
-pub(crate) fn feature_cells(
-    mesh: &Mesh,
-    grid: &Grid,
-    angle: f32,
-    min_length: f32,
-    closest: &ClosestTriangle,
-) -> Vec<u64> {
+/// The edges of `mesh` where the normals of its two triangles differ by more than `angle`
+/// (radians), as `(a, b, s, t)`: the vertices of the edge and its two triangles. The sign of a
+/// normal is ignored, so inconsistent winding makes no feature; only edges sharper than 180°
+/// less `angle` would be missed. This needs no distance query: a shape without any is smooth
+/// and costs nothing more.
+pub(crate) fn sharp_edges(mesh: &Mesh, angle: f32) -> SharpEdges {
     let normals: Vec<Vec3> = mesh
         .triangles
         .iter()
@@ -42,15 +33,51 @@ pub(crate) fn feature_cells(
         .collect();
     edges.sort_unstable();
     let cos = angle.cos();
-    let sharp: Vec<(u32, u32)> = edges
+    let edges = edges
         .windows(2)
         .filter(|pair| {
             let ((a, b, s), (c, d, t)) = (pair[0], pair[1]);
-            (a, b) == (c, d)
-                && normals[s as usize].dot(normals[t as usize]).abs() < cos
-                && crease_at_grid_scale(mesh, &normals, (a, b), (s, t), grid.spacing, cos, closest)
+            (a, b) == (c, d) && normals[s as usize].dot(normals[t as usize]).abs() < cos
         })
-        .map(|pair| (pair[0].0, pair[0].1))
+        .map(|pair| (pair[0].0, pair[0].1, pair[0].2, pair[1].2))
+        .collect();
+    SharpEdges {
+        normals,
+        edges,
+        cos,
+    }
+}
+
+/// What [`sharp_edges`] found.
+pub(crate) struct SharpEdges {
+    /// Unit normal of each triangle.
+    normals: Vec<Vec3>,
+    /// `(a, b, s, t)`: the edge's vertices and its two triangles.
+    pub edges: Vec<(u32, u32, u32, u32)>,
+    /// Cosine of the crease angle.
+    cos: f32,
+}
+
+/// The cells of `grid` that a crease of `mesh` passes through: an edge of `sharp` whose
+/// surface still turns by more than the angle a cell away on either side (`closest` gives the
+/// triangle of the mesh closest to a point), on a chain of such edges at least `min_length`
+/// cells long. A scan's noise and the facets of a coarse smooth mesh make short, isolated sharp
+/// edges that the grid does not resolve as creases.
+pub(crate) fn feature_cells(
+    mesh: &Mesh,
+    sharp: &SharpEdges,
+    grid: &Grid,
+    min_length: f32,
+    closest: &ClosestTriangle,
+) -> Vec<u64> {
+    let (normals, cos) = (&sharp.normals, sharp.cos);
+    let sharp: Vec<(u32, u32)> = sharp
+        .edges
+        .iter()
+        .filter(|&&(a, b, s, t)| {
+            crease_at_grid_scale(mesh, normals, (a, b), (s, t), grid.spacing, cos, closest)
+        })
+        .map(|&(a, b, _, _)| (a, b))
         .collect();
     let sharp = long_creases(mesh, &sharp, min_length * grid.spacing);
     // Points along a sharp edge at most half a cell apart reach every cell it passes through.
@@ -147,42 +174,27 @@ fn cell_containing(grid: &Grid, p: Vec3) -> Option<u64> {
     inside.then(|| key_of(grid, u.to_array().map(|x| x as u64)))
 }
 
-/// What decides the stored cells.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Selection {
-    /// Largest angle between the normals of two triangles around a vertex of a smooth part.
-    pub angle: f32,
-    /// Shortest crease, in cells.
-    pub min_length: f32,
-    /// Cells within this many cells (per axis) of a feature cell may be stored.
-    pub ring: u64,
-    /// A cell is stored only where the smooth field's vertex is this far (cells) from the exact.
-    pub tolerance: f32,
-}
-
-/// The stored cells, by ascending key, with the vertex of each in cell units: cells within
-/// `ring` of a cell that a sharp edge of `mesh` passes through whose single vertex in `smooth` lies farther than
-/// `tolerance` from the one it should have: the single vertex of that cell in `exact`, or, in a
-/// cell the exact contour does not cross (the rounded surface left it), the point of the surface
-/// `closest` to the smooth vertex, kept in the cell.
+/// The stored cells among `owned` (ascending keys of `grid`), with the vertex of each in cell
+/// units: the cells whose single vertex in `smooth` lies farther than `tolerance` from the one
+/// it should have: the single vertex of that cell in `exact`, or, in a cell the exact contour
+/// does not cross (the rounded surface left it), the point of the surface `closest` to the
+/// smooth vertex, kept in the cell. `exact` and `smooth` are contours on any grid sharing
+/// `grid`'s nodes whose interior holds the owned cells.
 pub(crate) fn stored_cells(
-    mesh: &Mesh,
+    owned: &[u64],
     exact: &Mesh,
     smooth: &Mesh,
     grid: &Grid,
-    selection: &Selection,
+    tolerance: f32,
     closest: &(dyn Fn(Vec3) -> Option<Vec3> + Sync),
-    triangle: &ClosestTriangle,
-) -> (Vec<(u64, Vec3)>, usize) {
-    let feature_keys = feature_cells(mesh, grid, selection.angle, selection.min_length, triangle);
+) -> Vec<(u64, Vec3)> {
     let exact_cells = single_vertices(exact, grid);
-    let near = within_ring(&feature_keys, grid, selection.ring);
     let smooth_cells = single_vertices(smooth, grid);
     let exact_keys = cell_keys(exact, grid);
     let h = grid.spacing;
-    let stored = smooth_cells
+    smooth_cells
         .iter()
-        .filter(|s| near.contains(&s.key))
+        .filter(|s| owned.binary_search(&s.key).is_ok())
         .filter_map(|s| {
             let target = match find(&exact_cells, s.key) {
                 Some(e) => e.local,
@@ -193,10 +205,9 @@ pub(crate) fn stored_cells(
                     ((closest(p)? - corner) / h).clamp(Vec3::ZERO, Vec3::ONE)
                 }
             };
-            (s.local.distance(target) > selection.tolerance).then_some((s.key, target))
+            (s.local.distance(target) > tolerance).then_some((s.key, target))
         })
-        .collect();
-    (stored, feature_keys.len())
+        .collect()
 }
 
 fn find(cells: &[CellVertex], key: u64) -> Option<&CellVertex> {
@@ -206,10 +217,10 @@ fn find(cells: &[CellVertex], key: u64) -> Option<&CellVertex> {
         .map(|i| &cells[i])
 }
 
-/// The keys of the cells within `ring` cells per axis of one of `keys`.
-fn within_ring(keys: &[u64], grid: &Grid, ring: u64) -> HashSet<u64> {
+/// The keys of the cells within `ring` cells per axis of one of `keys`, ascending.
+pub(crate) fn within_ring(keys: &[u64], grid: &Grid, ring: u64) -> Vec<u64> {
     let cells = grid.dims.map(|n| n as u64 - 1);
-    let mut out = HashSet::with_capacity(keys.len() * (2 * ring as usize + 1).pow(2));
+    let mut out = Vec::with_capacity(keys.len() * (2 * ring as usize + 1).pow(2));
     for &key in keys {
         let c = cell_at(grid, key);
         let lo = c.map(|x| x.saturating_sub(ring));
@@ -217,11 +228,13 @@ fn within_ring(keys: &[u64], grid: &Grid, ring: u64) -> HashSet<u64> {
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {
                 for i in lo[0]..=hi[0] {
-                    out.insert(key_of(grid, [i, j, k]));
+                    out.push(key_of(grid, [i, j, k]));
                 }
             }
         }
     }
+    out.sort_unstable();
+    out.dedup();
     out
 }
 
@@ -249,14 +262,14 @@ mod tests {
             vec![[0, 1, 2], [1, 0, 3]],
         );
         let none = |_| None;
-        let cells = feature_cells(&edge, &grid, angle, 2.0, &none);
+        let cells = feature_cells(&edge, &sharp_edges(&edge, angle), &grid, 2.0, &none);
         assert_eq!(cells.len(), 5, "{cells:?}");
         assert!(cells.contains(&key_of(&grid, [8, 8, 8])));
         let flat = Mesh::new(
             vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
             vec![[0, 1, 2], [0, 2, 3]],
         );
-        assert!(feature_cells(&flat, &grid, angle, 2.0, &none).is_empty());
-        assert!(feature_cells(&edge, &grid, angle, 5.0, &none).is_empty());
+        assert!(sharp_edges(&flat, angle).edges.is_empty());
+        assert!(feature_cells(&edge, &sharp_edges(&edge, angle), &grid, 5.0, &none).is_empty());
     }
 }
