@@ -18,7 +18,7 @@ use clap::ValueEnum;
 #[derive(Args)]
 #[command(group(clap::ArgGroup::new("input").args(["mesh", "from"]).required(true)))]
 #[command(
-    after_help = "Examples:\n  pgvol encode bunny.obj -o bunny.pgv --res 256\n  pgvol encode bunny.vdb -o bunny.pgv --vdb-grid surface"
+    after_help = "Examples:\n  pgvol encode bunny.obj -o bunny.pgv --res 256\n  pgvol encode fandisk.obj -o fandisk.pgv --res 128 --sharp auto\n  pgvol encode bunny.vdb -o bunny.pgv --vdb-grid surface"
 )]
 pub struct EncodeArgs {
     /// Input mesh, or an OpenVDB level set (.vdb), fitted on its own voxel grid (a node at
@@ -63,8 +63,11 @@ pub struct EncodeArgs {
     /// Write every coefficient as f32 instead of the sparse, compressed bricks around the surface.
     #[arg(long, conflicts_with = "precision")]
     pub dense_file: bool,
-    /// Store the exact dual-contouring vertices of the cells at creases and corners, so that
-    /// `decode --method dc` keeps them sharp (smooth shapes store nothing); `off` stores none.
+    /// `auto` stores the exact dual-contouring vertices of the cells at creases and corners, so
+    /// that `decode --method dc` keeps them sharp; smooth shapes store nothing and cost nothing,
+    /// and elsewhere the work follows the cells near creases (measured CPU time of the whole
+    /// encoding at 256³ and 512³: 1.4x that of `off` on the bunny, 2.2-3.4x on fandisk). `off`
+    /// stores none.
     #[arg(long, value_enum, default_value_t)]
     pub sharp: SharpArg,
     /// Crease angle in degrees: edges of the mesh whose faces turn by more (and still do a grid
@@ -83,9 +86,9 @@ pub struct EncodeArgs {
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq)]
 pub enum SharpArg {
     /// Stored where the shape has creases or corners.
-    #[default]
     Auto,
     /// None stored.
+    #[default]
     Off,
 }
 

@@ -97,6 +97,9 @@ mod tests {
         );
         // The last cell keeps its margin below and ends at the grid's last node.
         assert_eq!(boxes[2].grid.dims, [3, 3, 3]);
-        assert_eq!(boxes[2].grid.origin, grid.origin + Vec3::splat(38.0 * 0.125));
+        assert_eq!(
+            boxes[2].grid.origin,
+            grid.origin + Vec3::splat(38.0 * 0.125)
+        );
     }
 }

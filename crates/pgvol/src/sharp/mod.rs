@@ -46,7 +46,9 @@ pub const SHARP_TOLERANCE: f32 = 0.005;
 /// Whether and how encoding stores sharp-feature vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SharpOptions {
-    /// Store them (default `true`); smooth shapes store nothing either way.
+    /// Store them (default `false`: finding them costs time in proportion to the cells near
+    /// creases, more than the encoding's own on crease-rich parts); smooth shapes store
+    /// nothing either way and cost nothing.
     pub enabled: bool,
     /// Crease angle in degrees (default [`DEFAULT_SHARP_ANGLE`]).
     pub angle: f32,
@@ -55,7 +57,7 @@ pub struct SharpOptions {
 impl Default for SharpOptions {
     fn default() -> Self {
         Self {
-            enabled: true,
+            enabled: false,
             angle: DEFAULT_SHARP_ANGLE,
         }
     }
