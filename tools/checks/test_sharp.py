@@ -4,12 +4,13 @@ deviation from the input (`pgvol compare`) is at least 3x smaller than marching 
 same grid, and its output, like that of surface nets, is as closed and manifold as marching
 cubes' on every shared mesh.
 
-Sharp features through a `.pgv` file: `pgvol encode` stores the exact dual-contouring vertices
-of the cells at creases and corners (the header's `sharp` section), and `pgvol decode --method
-dc` keeps the rotated cube's edges and corners: its normals are several times closer to the
-cube's than marching cubes' of the same file, every true corner has an output vertex within a
-fraction of a grid spacing, and the output is closed and manifold. A smooth mesh gets no
-section."""
+Sharp features through a `.pgv` file: `pgvol encode --sharp auto` stores the exact
+dual-contouring vertices of the cells at creases and corners (the header's `sharp` section), and
+`pgvol decode --method dc` keeps the rotated cube's edges and corners: its normals are several
+times closer to the cube's than marching cubes' of the same file, every true corner has an
+output vertex within a fraction of a grid spacing, and the output is closed and manifold. A
+smooth mesh gets no section, and its file is the same as without the section; a grid above 320³
+gets one."""
 
 from __future__ import annotations
 
