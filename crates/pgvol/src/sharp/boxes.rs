@@ -10,9 +10,10 @@ use super::cells::cell_at;
 /// crease's box holds few cells far from it.
 pub(crate) const BOX_CELLS: u64 = 16;
 
-/// Cells of margin around a box's own cells: a cell's dual-contouring vertex depends only on
-/// its own corners and edges, and the contour of a sub-grid closes itself through padding
-/// outside it, so one layer keeps every owned cell clear of that.
+/// Cells of margin around a box's own cells. A cell's dual-contouring vertex depends only on
+/// its own corners and edges, all in the sub-grid even without a margin (the padding that
+/// closes a sub-grid's contour lies outside it); one layer more keeps the owned cells off the
+/// sub-grid's faces for 1.4 times the nodes of a full box.
 const MARGIN: u64 = 1;
 
 /// A box of cells and the sub-grid to contour it on.

@@ -197,3 +197,72 @@ pub(crate) fn cells_for(file: &PgvFile, options: &DecodeOptions) -> Result<Optio
         _ => Ok(None),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat3, Vec3};
+
+    /// The boxes give the cells and vertices that contouring the whole grid gives: a wrong
+    /// margin or origin would change whole rows of cells, while node positions computed from
+    /// another origin move only a few vertices, by rounding.
+    #[test]
+    fn boxes_store_what_the_whole_grid_stores() {
+        let mut cube = pgvol_mesh::shapes::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5));
+        let turn = Mat3::from_rotation_y(0.5) * Mat3::from_rotation_x(0.5);
+        for p in &mut cube.positions {
+            *p = turn * *p;
+        }
+        let options = crate::EncodeOptions {
+            grid: crate::grid::GridSpec::Res(48),
+            ..Default::default()
+        };
+        let mut file = crate::encode(&cube, &options, &Silent).unwrap().file;
+        let sign = options.sign;
+        let sharp = SharpOptions {
+            enabled: true,
+            ..Default::default()
+        };
+        let report = attach(&mut file, &cube, sign, &sharp, &Silent).unwrap();
+        let section = file.header.sharp.as_ref().expect("a cube stores cells");
+        let boxed = decode_sharp(section, file.volume.grid.dims).unwrap();
+        assert!(report.stored_cells > 100, "{report:?}");
+
+        let grid = file.volume.grid;
+        let angle = sharp.angle.to_radians();
+        let bvh = pgvol_sdf::Bvh::build(&cube);
+        let triangle = |p| bvh.closest(p, f32::INFINITY).map(|c| c.triangle);
+        let edges = sharp_edges(&cube, angle);
+        let features = feature_cells(&cube, &edges, &grid, SHARP_MIN_LENGTH, &triangle);
+        let near = within_ring(&features, &grid, SHARP_RING);
+        let dc = Method::DualContouring;
+        let mut timings = Timings::default();
+        let exact =
+            crate::remesh::contour_exact(&cube, &grid, dc, sign, &mut timings, &Silent).unwrap();
+        let decode = DecodeOptions {
+            method: dc,
+            min_component: Some(0.0),
+            ..DecodeOptions::default()
+        };
+        let smooth = crate::decode::decode(&file.volume, &decode, &Silent).unwrap();
+        let closest = |p| bvh.closest(p, f32::INFINITY).map(|c| c.point);
+        let whole = stored_cells(&near, &exact, &smooth, &grid, SHARP_TOLERANCE, &closest);
+
+        let same_cell = whole
+            .iter()
+            .filter(|(key, target)| {
+                let Ok(i) = boxed.keys.binary_search(key) else {
+                    return false;
+                };
+                let q = SharpCells::quantise(target.to_array());
+                (0..3).all(|a| q[a].abs_diff(boxed.positions[i][a]) <= 1)
+            })
+            .count();
+        assert!(
+            same_cell * 100 >= whole.len() * 99 && boxed.keys.len() * 100 <= whole.len() * 101,
+            "{same_cell} of {} whole-grid cells stored alike by the {} boxed cells",
+            whole.len(),
+            boxed.keys.len()
+        );
+    }
+}
