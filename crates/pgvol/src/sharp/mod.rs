@@ -10,6 +10,7 @@ mod cells;
 mod place;
 mod select;
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use pgvol_core::Mesh;
@@ -115,7 +116,7 @@ pub fn attach(
     if let Err(e) = crate::memory::check_memory(
         "finding sharp features",
         bytes,
-        "encode without the sharp section",
+        "a lower resolution stores the section",
     ) {
         progress.warn(&format!("no sharp-feature vertices stored: {e}"));
         return Ok(SharpReport {
@@ -129,26 +130,34 @@ pub fn attach(
     // Each box is contoured on its own sub-grid, exact distance and smooth fit alike; a cell's
     // vertex depends only on its corners and edges, so an owned cell gets the vertex the whole
     // grid's contour would give it, to the rounding of the sub-grid's node positions.
-    let per_box: Result<Vec<Vec<(u64, glam::Vec3)>>> = boxes::boxes(&near, &grid)
-        .par_iter()
-        .map(|cell_box| {
-            crate::progress::check(progress)?;
-            let sub = &cell_box.grid;
-            let method = Method::DualContouring;
-            let mut timings = Timings::default();
-            let exact = exact.contour(sub, method, &mut timings, Instant::now(), &Silent)?;
-            let quiet = pgvol_core::progress::QUIET;
-            let smooth = pgvol_contour::contour_volume(&file.volume, sub, 0.0, method, quiet);
-            Ok(stored_cells(
-                &cell_box.owned,
-                &exact,
-                &smooth,
-                &grid,
-                SHARP_TOLERANCE,
-                &closest,
-            ))
-        })
-        .collect();
+    let boxes = boxes::boxes(&near, &grid);
+    let done = AtomicUsize::new(0);
+    let per_box = crate::progress::stage(progress, "sharp features", |update| {
+        boxes
+            .par_iter()
+            .map(|cell_box| -> Result<Vec<(u64, glam::Vec3)>> {
+                if update.cancelled() {
+                    return Err(Error::new(ErrorKind::Cancelled, "cancelled"));
+                }
+                let sub = &cell_box.grid;
+                let method = Method::DualContouring;
+                let mut timings = Timings::default();
+                let exact = exact.contour(sub, method, &mut timings, Instant::now(), &Silent)?;
+                let quiet = pgvol_core::progress::QUIET;
+                let smooth = pgvol_contour::contour_volume(&file.volume, sub, 0.0, method, quiet);
+                let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+                update.update(finished as f64 / boxes.len() as f64);
+                Ok(stored_cells(
+                    &cell_box.owned,
+                    &exact,
+                    &smooth,
+                    &grid,
+                    SHARP_TOLERANCE,
+                    &closest,
+                ))
+            })
+            .collect::<Result<Vec<_>>>()
+    })?;
     let mut stored: Vec<(u64, glam::Vec3)> = per_box?.into_iter().flatten().collect();
     stored.sort_unstable_by_key(|s| s.0);
     if stored.is_empty() {
