@@ -3,6 +3,7 @@
 # Usage: bash tools/bench/run.sh [sdf|remesh|all] [--big]
 #        bash tools/bench/run.sh points [--quick]   (surfaces through points and contours)
 #        bash tools/bench/run.sh scale [bench_scale.py options]   (encode / decode against OpenVDB)
+#        bash tools/bench/run.sh sharp [bench_sharp.py options]   (sharp edges through the file)
 # Sets up tools/.venv-bench (peers that fail to install are reported as n/a),
 # installs Debian's python3-openvdb, libeigen3-dev and libusb-1.0-0 (which Open3D loads), and
 # what the C++ OpenVDB driver of bench_scale.py builds with (g++, make, libopenvdb-dev,
@@ -18,7 +19,7 @@ if [[ $# -gt 0 && "$1" != -* ]]; then
     what="$1"
     shift
 fi
-case "$what" in sdf|remesh|all|points|scale) ;; *) echo "usage: $0 [sdf|remesh|all|points|scale] [--big]" >&2; exit 2 ;; esac
+case "$what" in sdf|remesh|all|points|scale|sharp) ;; *) echo "usage: $0 [sdf|remesh|all|points|scale|sharp] [--big]" >&2; exit 2 ;; esac
 
 section() { printf '\n==> %s\n' "$*" >&2; }
 
@@ -101,6 +102,10 @@ fi
 if [[ "$what" == points ]]; then
     section "points and contours benchmark"
     "$VENV/bin/python" tools/bench/bench_points.py "$@"
+fi
+if [[ "$what" == sharp ]]; then
+    section "sharp edges through the file"
+    "$VENV/bin/python" tools/bench/bench_sharp.py "$@"
 fi
 if [[ "$what" == scale ]]; then
     section "encode / decode scaling against OpenVDB"

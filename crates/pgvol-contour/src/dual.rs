@@ -22,7 +22,7 @@ use crate::components::{components, ring_slot};
 use crate::crossings::Crossings;
 use crate::cube::{edge_axis, plane_axes, EDGE_START};
 use crate::decider::joins_inside;
-use crate::dual_options::DualContourOptions;
+use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
 use crate::project::project;
@@ -64,8 +64,9 @@ const UNSET: u32 = u32::MAX;
 #[derive(Clone, Copy)]
 pub(crate) enum Placement<'o> {
     /// At the least-squares meeting point of the crossings' tangent planes (dual contouring);
-    /// the crossings must carry normals.
-    Planes(&'o DualContourOptions),
+    /// the crossings must carry normals. Cells crossed once take the vertex the stored
+    /// vertices give, when they give one.
+    Planes(&'o DualContourOptions, Option<&'o StoredVertices<'o>>),
     /// At the mean of the crossings, moved onto the zero set (surface nets).
     Mean,
 }
@@ -228,7 +229,7 @@ fn block_vertices(
             // Work in cell units about the lowest corner, so the QEF is well scaled.
             let p = (verts.positions[g as usize] - corner).as_dvec3() * inv_h;
             let l = comps.edge_loop[e] as usize;
-            if let Placement::Planes(_) = placement {
+            if let Placement::Planes(..) = placement {
                 let mut n = normals[g as usize].as_dvec3();
                 if n == DVec3::ZERO {
                     // No usable gradient: the edge itself, from inside to outside, is the best
@@ -249,13 +250,23 @@ fn block_vertices(
         for (l, qef) in qefs.iter().take(comps.n_loops as usize).enumerate() {
             let x = match placement {
                 Placement::Mean => mean_on_surface(field, samples, corner, qef.mass_point()),
-                Placement::Planes(options) => {
-                    let planes = (0..12).filter(|&e| comps.edge_loop[e] == l as u8).map(|e| {
-                        let s = EDGE_START[e];
-                        let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
-                        (verts.positions[g as usize], normals[g as usize])
-                    });
-                    plane_vertex(qef, planes, field, samples, corner, options)
+                Placement::Planes(options, stored) => {
+                    let given = stored
+                        .filter(|_| comps.n_loops == 1)
+                        .and_then(|f| f(corner))
+                        .map(|x| x.as_dvec3())
+                        .filter(|x| x.is_finite());
+                    if let Some(x) = given {
+                        let margin = DVec3::splat(CELL_MARGIN);
+                        x.clamp(margin, DVec3::ONE - margin)
+                    } else {
+                        let planes = (0..12).filter(|&e| comps.edge_loop[e] == l as u8).map(|e| {
+                            let s = EDGE_START[e];
+                            let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
+                            (verts.positions[g as usize], normals[g as usize])
+                        });
+                        plane_vertex(qef, planes, field, samples, corner, options)
+                    }
                 }
             };
             part.positions.push(corner + x.as_vec3() * samples.spacing);

@@ -6,7 +6,7 @@ use pgvol_core::Mesh;
 
 use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal, Refine};
 use crate::dual::{self, Placement};
-use crate::dual_options::DualContourOptions;
+use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
 use crate::root::cubic_edge_root;
@@ -57,21 +57,27 @@ pub fn dual_contour(
     };
     let nodes = DenseNodes::new(values, dims);
     match Samples::checked(&nodes, origin, spacing, iso) {
-        Some(samples) => dual_contour_with(&samples, field, options, &place),
+        Some(samples) => dual_contour_with(&samples, field, options, &place, None),
         None => Mesh::default(),
     }
 }
 
 /// [`dual_contour`] on any source of samples, with the edge crossings and their normals from
-/// `place`.
+/// `place`, and the vertices of the cells `stored` gives taken from it.
 pub(crate) fn dual_contour_with(
     samples: &Samples,
     field: &dyn Field,
     options: &DualContourOptions,
     place: &PlaceWithNormal,
+    stored: Option<&StoredVertices>,
 ) -> Mesh {
     let crossings = all_crossings(samples, Place::WithNormal(place), EXTRA_FLAG);
-    dual::dual_contour(samples, &crossings, field, Placement::Planes(options))
+    dual::dual_contour(
+        samples,
+        &crossings,
+        field,
+        Placement::Planes(options, stored),
+    )
 }
 
 /// Extracts the surface `value == iso` by surface nets: one vertex per surface component of

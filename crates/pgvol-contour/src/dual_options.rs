@@ -43,6 +43,12 @@ pub struct DualContourOptions {
 /// `default_threshold_is_near_the_best_on_cube_and_sphere` repeats the measurement.
 pub const DEFAULT_SINGULAR_THRESHOLD: f32 = 0.1;
 
+/// Vertices given from outside for some cells: called with a cell's lowest corner (the
+/// contour's local coordinates) for every cell the surface crosses once (one loop), it returns
+/// that cell's vertex in cell units, or `None` to place it as usual. The vertex is kept inside
+/// the cell as every dual contouring vertex is, so the guarantees hold whatever it returns.
+pub type StoredVertices<'a> = dyn Fn(glam::Vec3) -> Option<glam::Vec3> + Sync + 'a;
+
 /// Default of [`DualContourOptions::feature_offset`], in cells.
 pub const DEFAULT_FEATURE_OFFSET: f32 = 0.5;
 

@@ -68,11 +68,15 @@ mod volume_root;
 mod window_or;
 
 pub use dual_methods::{dual_contour, surface_nets};
-pub use dual_options::{DualContourOptions, DEFAULT_FEATURE_OFFSET, DEFAULT_SINGULAR_THRESHOLD};
+pub use dual_options::{
+    DualContourOptions, StoredVertices, DEFAULT_FEATURE_OFFSET, DEFAULT_SINGULAR_THRESHOLD,
+};
 pub use field::Field;
 pub use grids::{resampled_grid, resampled_grid_of};
 pub use marching::{marching_cubes, marching_cubes_on_field, marching_cubes_with};
 pub use pgvol_core::progress::Report;
 pub use quality::min_angle_histogram;
 pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
-pub use volume::{contour_field, contour_sampled, contour_volume, Method, SamplesError};
+pub use volume::{
+    contour_field, contour_sampled, contour_volume, contour_volume_placing, Method, SamplesError,
+};

@@ -6,7 +6,7 @@ use pgvol_field::{CoefficientVolume, Grid};
 
 use crate::crossings::with_normal;
 use crate::dual_methods::{dual_contour_with, surface_nets_with};
-use crate::dual_options::DualContourOptions;
+use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::edge_cubic::crossing_on_grid_edge;
 use crate::field::Field;
 use crate::grids::padded;
@@ -49,6 +49,20 @@ pub fn contour_volume(
     method: Method,
     report: Report,
 ) -> pgvol_core::Mesh {
+    contour_volume_placing(volume, grid, iso, method, report, None)
+}
+
+/// [`contour_volume`], with dual contouring taking the vertices of the cells `stored` gives
+/// (called with each singly crossed cell's lowest corner in `grid`'s local coordinates; the
+/// other methods ignore it). The guarantees of [`contour_volume`] hold whatever it gives.
+pub fn contour_volume_placing(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    iso: f32,
+    method: Method,
+    report: Report,
+    stored: Option<&StoredVertices>,
+) -> pgvol_core::Mesh {
     if method == Method::MarchingCubes {
         let mut mesh = pgvol_core::Mesh::default();
         let collect = &mut |part: crate::runs::RunPart| {
@@ -65,7 +79,7 @@ pub fn contour_volume(
     let sampling = Some(span.part(0.0, SAMPLING_PART));
     let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso, sampling);
     let rest = Some(span.part(SAMPLING_PART, 1.0));
-    let mesh = contour_nodes(volume, &padded(grid), &nodes, iso, method, rest);
+    let mesh = contour_nodes(volume, &padded(grid), &nodes, iso, method, rest, stored);
     in_frame_of(grid, mesh)
 }
 
@@ -82,7 +96,7 @@ pub(crate) fn contour_samples(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
-    contour_nodes(volume, &padded(grid), &nodes, iso, method, None)
+    contour_nodes(volume, &padded(grid), &nodes, iso, method, None, None)
 }
 
 /// Why [`contour_field`] cannot contour the samples it is given.
@@ -153,7 +167,7 @@ pub fn contour_field(
                 let p = refine(a, va, b, vb);
                 with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
             };
-            dual_contour_with(&samples, field, options, &place)
+            dual_contour_with(&samples, field, options, &place, None)
         }
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
     };
@@ -177,7 +191,10 @@ pub fn contour_sampled(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = DenseNodes::new(values, grid.dims);
-    in_frame_of(grid, contour_nodes(volume, grid, &nodes, iso, method, None))
+    in_frame_of(
+        grid,
+        contour_nodes(volume, grid, &nodes, iso, method, None, None),
+    )
 }
 
 /// [`contour_sampled`] with the samples from any source.
@@ -188,6 +205,7 @@ fn contour_nodes(
     iso: f32,
     method: Method,
     span: Option<Span>,
+    stored: Option<&StoredVertices>,
 ) -> pgvol_core::Mesh {
     let Some(samples) = Samples::checked(nodes, grid.origin, grid.spacing, iso) else {
         return pgvol_core::Mesh::default();
@@ -206,7 +224,7 @@ fn contour_nodes(
                     with_normal(a, b, axis, p, |p| volume.value_gradient(p).1)
                 })
             };
-            dual_contour_with(&samples, volume, &options, &place)
+            dual_contour_with(&samples, volume, &options, &place, stored)
         }
         Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
     }
@@ -270,6 +288,36 @@ mod tests {
             assert!(s.watertight && s.winding_consistent, "{method:?}: {s:?}");
             assert!(s.volume > 0.0 && s.volume < 8.0 + 1e-3, "{method:?}: {s:?}");
         }
+    }
+
+    /// Given vertices are taken, kept inside their cells, and the mesh stays closed and
+    /// oriented even where they are far from the surface.
+    #[test]
+    fn dual_contouring_takes_given_vertices() {
+        let volume = sphere_volume(0.6);
+        let h = volume.grid.spacing;
+        let origin = volume.grid.origin;
+        // Every cell's vertex at its far corner, which the margin moves back inside.
+        let given = |_corner: Vec3| Some(Vec3::ONE);
+        let method = Method::DualContouring;
+        let quiet = pgvol_core::progress::QUIET;
+        let mesh = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&given));
+        let s = mesh.stats();
+        assert!(
+            s.watertight && s.winding_consistent && s.volume > 0.0,
+            "{s:?}"
+        );
+        for p in &mesh.positions {
+            let f = (*p - origin) / h;
+            let f = f - f.floor();
+            assert!(f.cmpgt(Vec3::splat(0.99)).all(), "{f}");
+        }
+        let none = |_corner: Vec3| None;
+        let plain = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&none));
+        assert_eq!(
+            plain,
+            contour_volume(&volume, &volume.grid, 0.0, method, quiet)
+        );
     }
 
     #[test]

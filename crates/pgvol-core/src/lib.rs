@@ -6,6 +6,7 @@
 #![forbid(unsafe_code)]
 
 pub mod atomic;
+pub mod base64;
 pub mod file_error;
 pub mod frame;
 pub mod grid;

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use serde::{Deserialize, Serialize};
 
+use crate::sharp::SharpSection;
 use crate::sparse_params::SparseParams;
 
 /// The only payload encoding of version 1: every coefficient as f32, x fastest.
@@ -33,6 +34,10 @@ pub struct PgvHeader {
     /// Parameters of the `sparse-bricks` encoding; absent for `dense-f32`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sparse: Option<SparseParams>,
+    /// Dual-contouring vertices at the source's creases and corners (`crate::sharp`); absent
+    /// for smooth shapes and for fields not encoded from a mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sharp: Option<SharpSection>,
 }
 
 /// A decoded file.
@@ -89,5 +94,6 @@ pub fn header_for(
         source_hash: source.map(mesh_hash),
         metadata: BTreeMap::new(),
         sparse: None,
+        sharp: None,
     }
 }

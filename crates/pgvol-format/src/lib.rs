@@ -13,6 +13,7 @@ pub mod implicit;
 pub mod nrrd;
 pub mod perturbation;
 pub mod pgv;
+pub mod sharp;
 pub mod sparse;
 mod sparse_params;
 pub mod threemf;

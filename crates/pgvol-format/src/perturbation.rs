@@ -126,6 +126,7 @@ mod tests {
             source_hash: None,
             metadata: BTreeMap::new(),
             sparse: None,
+            sharp: None,
         }
     }
 

@@ -13,7 +13,8 @@ use gltf::json::mesh::{Mode, Semantic};
 use gltf::json::validation::{Checked, USize64};
 use gltf::json::{self, Root};
 
-use crate::{base64, Mesh, MeshError};
+use crate::{Mesh, MeshError};
+use pgvol_core::base64;
 
 /// Reads glTF or GLB from memory. External buffers are looked up in `base_dir`; without one
 /// they are reported as unreadable.

@@ -4,7 +4,6 @@
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 #![forbid(unsafe_code)]
 
-mod base64;
 mod clean;
 mod error;
 mod format;

@@ -91,14 +91,30 @@ pub(crate) fn decode(
     options: &DecodeOptions,
     progress: &dyn Progress,
 ) -> Result<Mesh> {
+    decode_placing(volume, options, None, progress)
+}
+
+/// [`decode`], with the vertices of the cells `sharp` stores put where it stores them (a dual
+/// contour on the volume's own grid, see [`crate::sharp`]).
+pub(crate) fn decode_placing(
+    volume: &CoefficientVolume,
+    options: &DecodeOptions,
+    sharp: Option<&pgvol_format::sharp::SharpCells>,
+    progress: &dyn Progress,
+) -> Result<Mesh> {
     if !options.iso.is_finite() {
         return Err(Error::parameter("the level must be a finite number"));
     }
     let grid = target_grid(volume, options.res)?;
     crate::memory::check_contour(volume, &grid)?;
+    let stored = |corner| crate::sharp::stored_vertex(&grid, sharp?, corner);
     let mesh = progress::stage(progress, "contour", |update| {
         let (iso, method) = (options.iso, options.method);
-        pgvol_contour::contour_volume(volume, &grid, iso, method, update)
+        let stored: Option<&pgvol_contour::StoredVertices> = match sharp {
+            Some(_) => Some(&stored),
+            None => None,
+        };
+        pgvol_contour::contour_volume_placing(volume, &grid, iso, method, update, stored)
     })?;
     finish_mesh(mesh, options, grid.spacing, progress)
 }

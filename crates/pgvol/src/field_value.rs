@@ -380,7 +380,8 @@ impl Field {
         if options.iso != 0.0 && options.iso.is_finite() {
             self.check_reach(options.iso)?;
         }
-        crate::decode::decode(&self.file.volume, options, progress)
+        let sharp = crate::sharp::cells_for(&self.file, options)?;
+        crate::decode::decode_placing(&self.file.volume, options, sharp.as_ref(), progress)
     }
 }
 

@@ -103,6 +103,7 @@ mod progress;
 mod remesh;
 mod repair;
 mod resolution;
+pub mod sharp;
 mod slice;
 mod timings;
 mod vdb_export;

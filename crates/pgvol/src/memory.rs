@@ -34,6 +34,11 @@ pub const BYTES_PER_TRIANGLE: u64 = 400;
 /// Bytes per node of a sampled distance grid: the values and the writer's copy.
 pub const BYTES_PER_SDF_NODE: u64 = 8;
 
+/// Bytes per cell within the ring of a crease while encoding finds the sharp-feature vertices:
+/// its key in the list of such cells and in its box's list, with room for the boxes of 16³
+/// cells being contoured and their vertices.
+pub const BYTES_PER_SHARP_RING_CELL: u64 = 64;
+
 /// Bytes per surface sample of a mesh comparison (measured: peak memory grew by 112 bytes per
 /// sample from 2 to 4 million samples).
 pub const BYTES_PER_SAMPLE: u64 = 120;

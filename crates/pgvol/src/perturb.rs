@@ -262,6 +262,7 @@ pub fn perturbation_header(
         source_hash: Some(pgvol_format::pgv::mesh_hash(mesh)),
         metadata,
         sparse: None,
+        sharp: None,
     })
 }
 

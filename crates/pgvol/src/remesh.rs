@@ -73,7 +73,8 @@ pub fn remesh(mesh: &Mesh, options: &RemeshOptions, progress: &dyn Progress) -> 
     let out = match options.field {
         RemeshField::Exact => {
             crate::memory::check_grid("remeshing", &grid, crate::memory::BYTES_PER_NODE)?;
-            let mut out = contour_exact(mesh, &grid, options, &mut timings, progress)?;
+            let (method, sign) = (options.method, options.sign);
+            let mut out = contour_exact(mesh, &grid, method, sign, &mut timings, progress)?;
             crate::decode::remove_specks(&mut out, options.min_component, grid.spacing, progress);
             out
         }
@@ -123,31 +124,58 @@ fn vanished() -> Error {
 /// The surface of `mesh` contoured on `grid`, node signs from the banded sampler and every
 /// vertex placed with the exact distance. Dual contouring keeps each crossing's own tangent
 /// plane: exact normals need no offset away from a feature.
-fn contour_exact(
+pub(crate) fn contour_exact(
     mesh: &Mesh,
     grid: &Grid,
-    options: &RemeshOptions,
+    method: Method,
+    sign: SignMode,
     timings: &mut Timings,
     progress: &dyn Progress,
 ) -> Result<Mesh> {
     let start = Instant::now();
-    let method = options.method;
-    // The exact field's gradients on the surface come from the faces: orient them first.
-    let mesh = &*oriented(mesh, options.sign);
-    let sdf = pgvol_sdf::MeshSdf::new(mesh, options.sign)?;
-    let sampled = sample(&sdf, grid, Extent::Band(NODE_BAND), progress)?;
-    timings.sdf = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let field = MeshField::with_node_signs(mesh, &sdf, grid, &sampled.values);
-    let options = DualContourOptions {
-        feature_offset: 0.0,
-        ..DualContourOptions::default()
-    };
-    let out = progress::stage(progress, "contour", |update| {
-        let values = &sampled.values;
-        pgvol_contour::contour_field(&field, grid, values, 0.0, method, &options, update)
-    })?
-    .map_err(|e| Error::new(ErrorKind::Internal, e.to_string()).caused_by(e))?;
-    timings.contour = start.elapsed().as_secs_f64();
-    Ok(out)
+    let exact = ExactDistance::new(mesh, sign)?;
+    exact.contour(grid, method, timings, start, progress)
+}
+
+/// A mesh oriented for its exact distance, with its distance queries built once for
+/// contouring on several grids.
+pub(crate) struct ExactDistance<'m> {
+    // The exact field's gradients on the surface come from the faces: oriented first.
+    mesh: std::borrow::Cow<'m, Mesh>,
+    sdf: pgvol_sdf::MeshSdf,
+}
+
+impl<'m> ExactDistance<'m> {
+    pub(crate) fn new(mesh: &'m Mesh, sign: SignMode) -> Result<Self> {
+        let mesh = oriented(mesh, sign);
+        let sdf = pgvol_sdf::MeshSdf::new(&mesh, sign)?;
+        Ok(Self { mesh, sdf })
+    }
+
+    /// The surface contoured on `grid` (see [`contour_exact`]); the distance stage's time,
+    /// counted from `start`, and the contour's go to `timings`.
+    pub(crate) fn contour(
+        &self,
+        grid: &Grid,
+        method: Method,
+        timings: &mut Timings,
+        start: Instant,
+        progress: &dyn Progress,
+    ) -> Result<Mesh> {
+        let sampled = sample(&self.sdf, grid, Extent::Band(NODE_BAND), progress)?;
+        timings.sdf = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let field = MeshField::with_node_signs(&self.mesh, &self.sdf, grid, &sampled.values);
+        let options = DualContourOptions {
+            feature_offset: 0.0,
+            ..DualContourOptions::default()
+        };
+        let out = progress::stage(progress, "contour", |update| {
+            let values = &sampled.values;
+            pgvol_contour::contour_field(&field, grid, values, 0.0, method, &options, update)
+        })?
+        .map_err(|e| Error::new(ErrorKind::Internal, e.to_string()).caused_by(e))?;
+        timings.contour = start.elapsed().as_secs_f64();
+        Ok(out)
+    }
 }

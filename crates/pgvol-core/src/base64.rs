@@ -1,8 +1,10 @@
-//! Minimal base64 (RFC 4648) for glTF `data:` URIs; too small a need to justify a dependency.
+//! Minimal base64 (RFC 4648) for glTF `data:` URIs and binary sections of JSON headers; too
+//! small a need to justify a dependency.
 
 const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
-pub(crate) fn encode(bytes: &[u8]) -> String {
+/// Standard base64 with padding.
+pub fn encode(bytes: &[u8]) -> String {
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {
         let b = [
@@ -24,7 +26,7 @@ pub(crate) fn encode(bytes: &[u8]) -> String {
 
 /// Decodes standard or URL-safe base64; padding is optional. The error names the first
 /// offending character position.
-pub(crate) fn decode(text: &str) -> Result<Vec<u8>, String> {
+pub fn decode(text: &str) -> Result<Vec<u8>, String> {
     let body = text.trim_end_matches('=');
     let mut out = Vec::with_capacity(body.len() / 4 * 3 + 3);
     let mut acc: u32 = 0;
