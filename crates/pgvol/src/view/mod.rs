@@ -5,7 +5,6 @@
 //! bricks, quantised and base64'd) and inlines it with the committed script bundle (`page`);
 //! the page never reads `.pgv` bytes itself, so it does not depend on the file layout.
 
-mod base64;
 mod colour;
 mod options;
 mod page;

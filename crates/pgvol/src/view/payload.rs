@@ -8,13 +8,13 @@ use pgvol_field::{Basis, CoefficientVolume};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::base64;
 use super::colour::ViewColours;
 use super::options::ViewOptions;
 use crate::decode::DecodeOptions;
 use crate::error::Result;
 use crate::field_value::Field;
 use crate::progress::{self, Progress};
+use pgvol_core::base64;
 
 /// Brick states in the page's brick table.
 const OUTSIDE: u8 = 0;
