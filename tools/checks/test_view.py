@@ -94,6 +94,21 @@ def test_the_section_written_in_is_shown_and_the_address_overrides_it(pgvol, spo
     assert float(moved["section-area"]) != float(written["section-area"])
 
 
+def test_an_address_outside_the_field_says_so_and_keeps_the_surface(spot_page, work_dir):
+    dom = chromium.dump_dom(spot_page, "section=z:50")
+    state = chromium.body_state(dom)
+    assert (state.get("status"), state.get("section-axis")) == ("ready", "z"), state
+    assert float(state["section-area"]) == 0.0
+    assert "is outside the field" in dom
+    # The surface is not cut away: the view below the panel is drawn as without a section.
+    from PIL import Image
+
+    png = chromium.screenshot(spot_page, work_dir / "view-spot-outside.png", "section=z:50")
+    pixels = np.asarray(Image.open(png).convert("RGB")).astype(np.int32)[PANEL_ROWS:]
+    drawn = np.any(np.abs(pixels - np.array([255, 255, 255])) > 8, axis=2)
+    assert drawn.mean() >= 0.05, f"only {drawn.mean():.1%} of the pixels are drawn"
+
+
 def test_the_page_loads_nothing_from_the_network(spot_page):
     text = spot_page.read_text()
     # Elements and calls that load: none in the page (case-sensitive, as CSS and script spell

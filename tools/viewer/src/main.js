@@ -109,7 +109,21 @@ function start() {
     delete state.local;
     const [a, ua, va] = planeAxes(state.axis);
     const plane = field.plane(state.axis, local);
-    const section = plane ? contour(plane, data.iso) : { fill: [], lines: [], area: 0 };
+    if (!plane) {
+      // A height from the address outside the field: say so, and keep the whole surface.
+      const [lo, hi] = rangeOf(a);
+      const name = 'xyz'[a];
+      const world = local + offset[a];
+      const span = `${(lo + offset[a]).toPrecision(6)} to ${(hi + offset[a]).toPrecision(6)}`;
+      panel.show(`${name} = ${world.toPrecision(6)} is outside the field (${span})`);
+      inset.draw(null);
+      body.dataset.sectionAxis = name;
+      body.dataset.sectionHeight = String(world);
+      body.dataset.sectionArea = '0';
+      render();
+      return;
+    }
+    const section = contour(plane, data.iso);
     const at = (u, v, out, k) => {
       out[k + a] = local;
       out[k + ua] = u;
