@@ -2,6 +2,7 @@
 //! the file's coefficients (or, above the cap, the field's values at the capped grid's nodes,
 //! absent bricks included) within the int16 quantisation step.
 
+use glam::{EulerRot, Quat, Vec3};
 use pgvol::view::ViewOptions;
 use pgvol::{EncodeOptions, Field, GridSpec, Silent};
 use serde_json::Value;
@@ -164,8 +165,8 @@ fn above_the_cap_the_page_holds_the_fields_values_at_the_coarser_nodes() {
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
-                let p = glam::Vec3::new(origin[0], origin[1], origin[2])
-                    + h * glam::Vec3::new(i as f32, j as f32, k as f32);
+                let p = Vec3::new(origin[0], origin[1], origin[2])
+                    + h * Vec3::new(i as f32, j as f32, k as f32);
                 let want = field.volume().value(p);
                 let n = i + nx * (j + ny * k);
                 let got = values[n];
@@ -241,4 +242,41 @@ fn a_basis_the_page_does_not_evaluate_is_sampled_at_its_own_nodes() {
         let want = field.volume().value(grid.point(i, j, k));
         assert!((got - want).abs() <= step * 1.01 + 1e-5, "node {i},{j},{k}");
     }
+}
+
+#[test]
+fn a_file_with_sharp_vertices_is_drawn_with_them() {
+    // A box turned off the grid axes: its edges are creases.
+    let mut cube = pgvol::mesh::shapes::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5));
+    let turn = Quat::from_euler(EulerRot::XYZ, 0.5, 0.4, 0.0);
+    for p in &mut cube.positions {
+        *p = turn * *p;
+    }
+    let options = EncodeOptions {
+        grid: GridSpec::Res(40),
+        ..EncodeOptions::default()
+    };
+    let mut file = pgvol::encode(&cube, &options, &Silent).unwrap().file;
+    let sharp = pgvol::sharp::SharpOptions {
+        enabled: true,
+        ..Default::default()
+    };
+    let report =
+        pgvol::sharp::attach(&mut file, &cube, pgvol::SignMode::Auto, &sharp, &Silent).unwrap();
+    assert!(report.stored_cells > 0, "{report:?}");
+    let field = Field::from_file(file);
+    let data = payload(&field.view_html(&ViewOptions::default(), &Silent).unwrap());
+    let dc = pgvol::DecodeOptions {
+        method: pgvol::Method::DualContouring,
+        ..Default::default()
+    };
+    let placed = field.to_mesh(&dc, &Silent).unwrap();
+    let smooth = field
+        .to_mesh(&pgvol::DecodeOptions::default(), &Silent)
+        .unwrap();
+    assert_ne!(placed.triangles.len(), smooth.triangles.len());
+    assert_eq!(
+        data["surface"]["triangles"].as_u64().unwrap() as usize,
+        placed.triangles.len()
+    );
 }

@@ -2,6 +2,7 @@
 //! with the frame that places them. Serialised as one JSON object read by the page's script.
 
 use glam::Vec3;
+use pgvol_contour::Method;
 use pgvol_core::sparse::{brick_offset, BRICK_EDGE, BRICK_NODES};
 use pgvol_core::{Grid, Mesh, SparseGrid};
 use pgvol_field::{Basis, CoefficientVolume};
@@ -105,9 +106,17 @@ impl Payload {
                 })??
             }
         };
+        // A file with sharp-feature vertices is drawn with them: dual contouring places them on
+        // the file's own grid at level 0 (elsewhere it would only round the edges differently).
+        let sharp = field.header().sharp.is_some() && !capped && options.iso == 0.0;
         let decode = DecodeOptions {
             iso: options.iso,
             res,
+            method: if sharp {
+                Method::DualContouring
+            } else {
+                DecodeOptions::default().method
+            },
             ..DecodeOptions::default()
         };
         let mesh = field.to_mesh(&decode, progress)?;
