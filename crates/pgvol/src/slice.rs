@@ -47,9 +47,10 @@ impl Field {
     /// The layers of the shape, and where they sit in the world.
     pub fn slice(&self, options: &SliceOptions, progress: &dyn Progress) -> Result<Sliced> {
         let stage = slice_options(self, options)?;
-        let layers = progress::stage(progress, "slice", |_| {
+        let mut layers = progress::stage(progress, "slice", |_| {
             pgvol_slice::slice_volume(&self.file.volume, self.bounds, &stage)
         })??;
+        crate::sharp::sharpen_sliced(&mut layers, &self.file.header, options.axis)?;
         let frame = layer_frame(self, options.axis);
         Ok(Sliced { layers, frame })
     }
@@ -119,6 +120,7 @@ pub fn slice_file(
     )
     .map_err(at)?;
     progress.finish();
+    crate::sharp::sharpen_sliced(&mut layers, &header, settings.axis).map_err(at)?;
     Ok(Sliced {
         layers,
         frame: LayerFrame::new(settings.axis, grid.offset),

@@ -7,6 +7,7 @@
 
 mod boxes;
 mod cells;
+mod corners;
 mod place;
 mod select;
 
@@ -205,6 +206,23 @@ pub(crate) fn cells_for(file: &PgvFile, options: &DecodeOptions) -> Result<Optio
             .map_err(|problem| Error::new(ErrorKind::InputFile, problem)),
         _ => Ok(None),
     }
+}
+
+/// Puts back into `layers`, sliced along `axis` from the field of a file with `header`, the
+/// corners its sharp-feature vertices mark (see `corners.rs`); a file without any is left as
+/// sliced.
+pub(crate) fn sharpen_sliced(
+    layers: &mut [pgvol_slice::Layer],
+    header: &pgvol_format::PgvHeader,
+    axis: pgvol_slice::Axis,
+) -> Result<()> {
+    let Some(section) = &header.sharp else {
+        return Ok(());
+    };
+    let cells = decode_sharp(section, header.grid.dims)
+        .map_err(|problem| Error::new(ErrorKind::InputFile, problem))?;
+    corners::sharpen_layers(layers, &header.grid, &cells, axis);
+    Ok(())
 }
 
 #[cfg(test)]

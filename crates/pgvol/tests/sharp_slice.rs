@@ -1,0 +1,72 @@
+//! Slicing a file with sharp-feature vertices keeps the corners of a prism's sections: each
+//! layer's contour passes within a fifth of a spacing of every true corner (the stored vertices'
+//! own accuracy, 0.14 spacing measured), where the smooth field alone rounds them off by 0.45.
+
+use glam::{Mat3, Vec3};
+use pgvol::{EncodeOptions, Field, GridSpec, SignMode, Silent, SliceOptions};
+
+/// The farthest, over the layers and over the prism's four vertical edges,
+/// of the distance from the edge's point in the layer to the nearest contour point, in
+/// spacings; with the file's sharp section or without it.
+fn corner_error(with_section: bool) -> f32 {
+    let turn = Mat3::from_rotation_z(0.5);
+    let mut prism =
+        pgvol::mesh::shapes::cuboid(Vec3::new(-0.5, -0.5, -0.6), Vec3::new(0.5, 0.5, 0.6));
+    for p in &mut prism.positions {
+        *p = turn * *p;
+    }
+    let options = EncodeOptions {
+        grid: GridSpec::Res(64),
+        ..EncodeOptions::default()
+    };
+    let mut file = pgvol::encode(&prism, &options, &Silent).unwrap().file;
+    let sharp = pgvol::sharp::SharpOptions {
+        enabled: true,
+        ..Default::default()
+    };
+    let report = pgvol::sharp::attach(&mut file, &prism, SignMode::Auto, &sharp, &Silent).unwrap();
+    assert!(report.stored_cells > 0, "{report:?}");
+    if !with_section {
+        file.header.sharp = None;
+    }
+    let spacing = file.volume.grid.spacing;
+    let field = Field::from_file(file);
+    let sliced = field.slice(&SliceOptions::new(spacing), &Silent).unwrap();
+    let corners: Vec<Vec3> = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]
+        .iter()
+        .map(|&[x, y]| turn * Vec3::new(x, y, 0.0))
+        .collect();
+    let mut worst = 0.0f32;
+    let mut layers = 0;
+    for layer in &sliced.layers {
+        if layer.height.abs() > 0.6 {
+            continue;
+        }
+        layers += 1;
+        for c in &corners {
+            let nearest = layer
+                .loops
+                .iter()
+                .flat_map(|l| &l.points)
+                .map(|p| (p[0] - c.x).hypot(p[1] - c.y))
+                .fold(f32::INFINITY, f32::min);
+            worst = worst.max(nearest / spacing);
+        }
+    }
+    assert!(layers > 40, "{layers} layers");
+    worst
+}
+
+#[test]
+fn a_prisms_layers_keep_their_corners_with_the_sharp_section() {
+    let sharp = corner_error(true);
+    let smooth = corner_error(false);
+    assert!(
+        sharp <= 0.2,
+        "corners {sharp} spacings off with the section"
+    );
+    assert!(
+        smooth > 2.0 * sharp,
+        "corners {smooth} spacings off without it, {sharp} with it"
+    );
+}
