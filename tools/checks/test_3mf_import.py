@@ -110,16 +110,19 @@ def expected_two_parts() -> trimesh.Trimesh:
     )
 
 
-def test_components_under_a_build_item_written_by_lib3mf(pgvol, work_dir):
-    lib3mf = lib3mf_or_fail()
-    wrapper = lib3mf.get_wrapper()
-    model = wrapper.CreateModel()
-    box = add_mesh(lib3mf, model, BOX)
-    sphere = add_mesh(lib3mf, model, SPHERE)
+def add_assembly(lib3mf, model, box, sphere):
+    """The box and the sphere as components of one object placed by a build item."""
     assembly = model.AddComponentsObject()
     assembly.AddComponent(box, lib3mf_transform(lib3mf, BOX_IN_PART))
     assembly.AddComponent(sphere, lib3mf_transform(lib3mf, SPHERE_IN_PART))
     model.AddBuildItem(assembly, lib3mf_transform(lib3mf, ITEM))
+
+
+def test_components_under_a_build_item_written_by_lib3mf(pgvol, work_dir):
+    lib3mf = lib3mf_or_fail()
+    wrapper = lib3mf.get_wrapper()
+    model = wrapper.CreateModel()
+    add_assembly(lib3mf, model, add_mesh(lib3mf, model, BOX), add_mesh(lib3mf, model, SPHERE))
     part = work_dir / "3mf-components.3mf"
     model.QueryWriter("3mf").WriteToFile(str(part))
 
@@ -137,10 +140,7 @@ def test_meshes_in_a_separate_model_part_written_by_lib3mf(pgvol, work_dir):
     sphere = add_mesh(lib3mf, model, SPHERE)
     box.SetPackagePart(objects_part)
     sphere.SetPackagePart(objects_part)
-    assembly = model.AddComponentsObject()
-    assembly.AddComponent(box, lib3mf_transform(lib3mf, BOX_IN_PART))
-    assembly.AddComponent(sphere, lib3mf_transform(lib3mf, SPHERE_IN_PART))
-    model.AddBuildItem(assembly, lib3mf_transform(lib3mf, ITEM))
+    add_assembly(lib3mf, model, box, sphere)
     part = work_dir / "3mf-production.3mf"
     model.QueryWriter("3mf").WriteToFile(str(part))
 
