@@ -79,6 +79,17 @@ impl<'a> Span<'a> {
     }
 }
 
+/// A span is the interrupt of the part of the work it covers: what a sub-stage reports lands
+/// within the span, and its stop requests are the caller's.
+impl Interrupt for Span<'_> {
+    fn update(&self, done: f64) {
+        self.report(done);
+    }
+    fn cancelled(&self) -> bool {
+        self.report.cancelled()
+    }
+}
+
 /// Items of one stage done so far; reports every `every` items, and polls the caller's stop
 /// request as often.
 pub struct Counter<'a> {

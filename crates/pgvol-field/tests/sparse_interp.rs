@@ -122,7 +122,8 @@ fn matches_the_global_prefilter_in_and_around_the_band() {
     for (grid, sdf, basis) in cases {
         let samples = banded(&grid, sdf);
         let clamp = samples.background().outside;
-        let (sparse, report) = interp_sparse(grid, basis, &samples).unwrap();
+        let (sparse, report) =
+            interp_sparse(grid, basis, &samples, pgvol_core::progress::QUIET).unwrap();
         let dense = CoefficientVolume::interpolate(grid, basis, samples.to_dense()).unwrap();
         let in_samples = max_coeff_diff(&sparse, &dense, |b| samples.is_stored(b)) / clamp;
         let in_coeffs = max_coeff_diff(&sparse, &dense, |b| sparse.coeffs.is_stored(b)) / clamp;
@@ -157,7 +158,8 @@ fn far_bricks_are_the_background_of_their_side() {
     };
     let grid = cube(96);
     let samples = banded(&grid, &ball);
-    let (vol, _) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
+    let (vol, _) =
+        interp_sparse(grid, Basis::Bspline3, &samples, pgvol_core::progress::QUIET).unwrap();
     let c = &vol.coeffs;
     assert_eq!(c.background(), samples.background());
     let mut far = 0;
@@ -190,7 +192,8 @@ fn a_constant_brick_gives_constant_coefficients() {
         samples.set_inside(b, true);
     }
     samples.insert([2, 2, 2], Box::new([-0.25; 512]));
-    let (vol, _) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
+    let (vol, _) =
+        interp_sparse(grid, Basis::Bspline3, &samples, pgvol_core::progress::QUIET).unwrap();
     // The sample brick; its neighbours sit at the background and are left to it.
     assert_eq!(vol.coeffs.stored_count(), 1);
     for (b, values) in vol.coeffs.stored() {
@@ -205,7 +208,8 @@ fn samples_without_bricks_give_the_background() {
     let grid = box_grid([30, 20, 70]);
     let mut samples = SparseGrid::new(grid.dims, Background::clamp(0.5));
     samples.set_inside([1, 2, 8], true);
-    let (vol, report) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
+    let (vol, report) =
+        interp_sparse(grid, Basis::Bspline3, &samples, pgvol_core::progress::QUIET).unwrap();
     assert_eq!(vol.coeffs.stored_count(), 0);
     assert_eq!(vol.coeffs, samples);
     assert_eq!(report.spurious_sign_changes, 0);
@@ -220,7 +224,11 @@ fn bits_do_not_depend_on_the_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| interp_sparse(grid, Basis::Bspline3, &samples).unwrap().0)
+        pool.install(|| {
+            interp_sparse(grid, Basis::Bspline3, &samples, pgvol_core::progress::QUIET)
+                .unwrap()
+                .0
+        })
     };
     let (one, two) = (run(1), run(2));
     let bricks = |v: &CoefficientVolume| -> Vec<([usize; 3], Vec<u32>)> {
@@ -247,7 +255,8 @@ fn grids_not_a_multiple_of_the_brick() {
         };
         let samples = banded(&grid, &sphere());
         let clamp = samples.background().outside;
-        let (sparse, _) = interp_sparse(grid, Basis::Bspline3, &samples).unwrap();
+        let (sparse, _) =
+            interp_sparse(grid, Basis::Bspline3, &samples, pgvol_core::progress::QUIET).unwrap();
         let dense =
             CoefficientVolume::interpolate(grid, Basis::Bspline3, samples.to_dense()).unwrap();
         let diff = max_coeff_diff(&sparse, &dense, |_| true) / clamp;
@@ -270,11 +279,17 @@ fn grids_not_a_multiple_of_the_brick() {
 fn trilinear_keeps_the_samples_and_pseudo_gaussians_fit_densely() {
     let grid = cube(20);
     let samples = banded(&grid, &sphere());
-    let (tri, report) = interp_sparse(grid, Basis::Trilinear, &samples).unwrap();
+    let (tri, report) = interp_sparse(
+        grid,
+        Basis::Trilinear,
+        &samples,
+        pgvol_core::progress::QUIET,
+    )
+    .unwrap();
     assert_eq!(tri.coeffs, samples);
     assert_eq!(report.solver, "none");
     let pg = Basis::Pg { n: 3, r: 1.5 };
-    let (sparse, _) = interp_sparse(grid, pg, &samples).unwrap();
+    let (sparse, _) = interp_sparse(grid, pg, &samples, pgvol_core::progress::QUIET).unwrap();
     let opts = FitOptions::default();
     let (dense, _) = interp_samples(grid, pg, &samples.to_dense(), &opts).unwrap();
     assert_eq!(sparse, dense);
@@ -285,7 +300,7 @@ fn bad_samples_are_refused() {
     let grid = cube(20);
     let other = SparseGrid::new([20, 20, 19], Background::clamp(1.0));
     assert_eq!(
-        interp_sparse(grid, Basis::Bspline3, &other).err(),
+        interp_sparse(grid, Basis::Bspline3, &other, pgvol_core::progress::QUIET).err(),
         Some(FieldError::DimsMismatch {
             got: [20, 20, 19],
             want: [20, 20, 20]
@@ -296,7 +311,7 @@ fn bad_samples_are_refused() {
     values[brick_offset([3, 1, 2])] = f32::NAN;
     bad.insert([1, 0, 0], values);
     assert_eq!(
-        interp_sparse(grid, Basis::Bspline3, &bad).err(),
+        interp_sparse(grid, Basis::Bspline3, &bad, pgvol_core::progress::QUIET).err(),
         Some(FieldError::NonFinite {
             index: grid.index(11, 1, 2)
         })

@@ -151,7 +151,8 @@ pub fn sample_bricks(
         }
     }
     values.compact_tiles();
-    let (volume, _) = pgvol_field::fit::interp_sparse(grid, basis, &values)?;
+    let (volume, _) =
+        pgvol_field::fit::interp_sparse(grid, basis, &values, pgvol_core::progress::QUIET)?;
     Ok(volume)
 }
 

@@ -11,6 +11,7 @@
 //! the crease are unaffected.
 
 use glam::Vec3;
+use pgvol_core::progress::{Report, QUIET};
 use pgvol_field::fit::node_values_sparse;
 use pgvol_field::{Basis, CoefficientVolume};
 
@@ -109,16 +110,18 @@ pub fn offset(volume: &CoefficientVolume, distance: f32) -> Result<CoefficientVo
                 coeffs,
             )?)
         }
-        Basis::Pg { .. } => remap(volume, |_, v| v - distance, |_, _, _| false),
+        Basis::Pg { .. } => remap(volume, |_, v| v - distance, |_, _, _| false, QUIET),
     }
 }
 
 /// A wall of `thickness` following the surface, on the given side: `|f − c| − t/2` with the
 /// wall's mid-surface `c` at `−t/2`, `t/2` or 0.
+/// Layers of the remap are reported to `report`, which may stop it (see [`hollow`]).
 pub fn shell(
     volume: &CoefficientVolume,
     thickness: f32,
     side: ShellSide,
+    report: Report,
 ) -> Result<CoefficientVolume, OpsError> {
     check("shell thickness", thickness, true)?;
     let half = 0.5 * thickness;
@@ -127,15 +130,23 @@ pub fn shell(
         ShellSide::Outer => half,
         ShellSide::Centred => 0.0,
     };
-    remap(volume, |_, v| (v - centre).abs() - half, |_, _, _| false)
+    remap(
+        volume,
+        |_, v| (v - centre).abs() - half,
+        |_, _, _| false,
+        report,
+    )
 }
 
 /// The part with a cavity leaving walls of `wall` thickness, `max(f, −(f + wall))`, and the
-/// drains cut out of it, `max(·, −drain)`.
+/// drains cut out of it, `max(·, −drain)`. The work goes a layer of brick groups at a time,
+/// each reported to `report`, which is polled for a stop between layers; a stopped hollowing
+/// returns an incomplete volume, which the caller who asked for the stop discards.
 pub fn hollow(
     volume: &CoefficientVolume,
     wall: f32,
     drains: &[Drain],
+    report: Report,
 ) -> Result<CoefficientVolume, OpsError> {
     check("wall thickness", wall, true)?;
     let units = drain_units(drains)?;
@@ -144,6 +155,7 @@ pub fn hollow(
         volume,
         |p, v| cut_drains(drains, &units, p, wall_only(v)),
         |lo, hi, v| drain_reaches(drains, &units, lo, hi, wall_only(v)),
+        report,
     )
 }
 

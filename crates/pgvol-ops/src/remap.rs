@@ -3,6 +3,7 @@
 //! so memory is the input, the result and a window, not a second copy of the volume.
 
 use glam::Vec3;
+use pgvol_core::progress::{Report, Span};
 use pgvol_core::sparse::{BrickValues, SparseGrid, BRICK_NODES};
 use pgvol_core::{Background, BRICK_EDGE};
 use pgvol_field::fit::{
@@ -20,13 +21,17 @@ use crate::error::OpsError;
 /// `[lo, hi]` for the node value `v` (drains crossing far space). Bit for bit the whole grid's
 /// interpolation of the whole grid's mapped node values; separable bases are fitted a layer of
 /// groups at a time, pseudo-Gaussians (a global solve) as a whole.
+///
+/// The groups fitted are reported to `report`, which is polled for a stop per group: a stopped
+/// remap returns at once with what is done so far, for the caller to discard.
 pub(crate) fn remap(
     volume: &CoefficientVolume,
     f: impl Fn(Vec3, f32) -> f32 + Sync,
     varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
+    report: Report,
 ) -> Result<CoefficientVolume, OpsError> {
     if matches!(volume.basis, Basis::Pg { .. }) {
-        return remap_whole(volume, f, varies);
+        return remap_whole(volume, f, varies, report);
     }
     let grid = volume.grid;
     let coeffs = &volume.coeffs;
@@ -45,7 +50,11 @@ pub(crate) fn remap(
     let reach = sparse_reach(volume.basis);
     let groups_y = 0..by.div_ceil(SPARSE_GROUP);
     let mut held_to = 0;
-    for gz in 0..bz.div_ceil(SPARSE_GROUP) {
+    let layers = bz.div_ceil(SPARSE_GROUP);
+    for gz in 0..layers {
+        if report.cancelled() {
+            break;
+        }
         let from = (gz * SPARSE_GROUP).saturating_sub(reach);
         let to = ((gz + 1) * SPARSE_GROUP + reach).min(bz);
         window.retain(|b, _| b[2] >= from);
@@ -55,8 +64,16 @@ pub(crate) fn remap(
             }
         }
         held_to = to;
-        let (bricks, _) =
-            interp_sparse_groups(grid, volume.basis, &window, groups_y.clone(), gz..gz + 1)?;
+        let part =
+            Span::whole(report).part(gz as f64 / layers as f64, (gz + 1) as f64 / layers as f64);
+        let (bricks, _) = interp_sparse_groups(
+            grid,
+            volume.basis,
+            &window,
+            groups_y.clone(),
+            gz..gz + 1,
+            &part,
+        )?;
         for (b, values) in bricks {
             out.insert(b, values);
         }
@@ -69,10 +86,11 @@ pub(crate) fn remap_whole(
     volume: &CoefficientVolume,
     f: impl Fn(Vec3, f32) -> f32 + Sync,
     varies: impl Fn(Vec3, Vec3, f32) -> bool + Sync,
+    report: Report,
 ) -> Result<CoefficientVolume, OpsError> {
     let mut values = node_values_sparse(volume);
     map_nodes(&mut values, volume.grid, f, varies);
-    let (result, _) = interp_sparse(volume.grid, volume.basis, &values)?;
+    let (result, _) = interp_sparse(volume.grid, volume.basis, &values, report)?;
     Ok(result)
 }
 
@@ -196,6 +214,7 @@ fn map_brick(grid: Grid, b: [usize; 3], values: &mut BrickValues, f: &impl Fn(Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pgvol_core::progress::QUIET;
 
     /// A ball's signed distance encoded in a band, on a grid of several layers of groups.
     fn ball(n: usize, basis: Basis) -> CoefficientVolume {
@@ -225,7 +244,7 @@ mod tests {
                     (d > 0.0).then_some(false)
                 }
             });
-        interp_sparse(grid, basis, &samples).unwrap().0
+        interp_sparse(grid, basis, &samples, QUIET).unwrap().0
     }
 
     #[test]
@@ -235,8 +254,8 @@ mod tests {
             let volume = ball(150, basis);
             assert!(volume.coeffs.brick_counts()[2] > 2 * SPARSE_GROUP);
             let f = |_: Vec3, v: f32| (v + 0.01).abs() - 0.01;
-            let layered = remap(&volume, f, |_, _, _| false).unwrap();
-            let whole = remap_whole(&volume, f, |_, _, _| false).unwrap();
+            let layered = remap(&volume, f, |_, _, _| false, QUIET).unwrap();
+            let whole = remap_whole(&volume, f, |_, _, _| false, QUIET).unwrap();
             assert!(layered.coeffs.stored_count() > 0);
             assert_eq!(layered.coeffs.stored_count(), whole.coeffs.stored_count());
             assert!(layered.coeffs == whole.coeffs, "{basis:?}");
@@ -245,8 +264,8 @@ mod tests {
             let reaches = |lo: Vec3, hi: Vec3, _: f32| {
                 lo.x <= 0.53 && hi.x >= 0.47 && lo.y <= 0.53 && hi.y >= 0.47
             };
-            let layered = remap(&volume, drain, reaches).unwrap();
-            let whole = remap_whole(&volume, drain, reaches).unwrap();
+            let layered = remap(&volume, drain, reaches, QUIET).unwrap();
+            let whole = remap_whole(&volume, drain, reaches, QUIET).unwrap();
             assert!(layered.coeffs == whole.coeffs, "{basis:?} with a drain");
         }
     }

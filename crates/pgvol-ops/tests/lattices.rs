@@ -36,7 +36,9 @@ fn cube_field_on(res: usize, margin: f32, band: f32) -> CoefficientVolume {
             (v > 0.0).then_some(false)
         }
     });
-    interp_sparse(grid, Basis::Bspline3, &samples).unwrap().0
+    interp_sparse(grid, Basis::Bspline3, &samples, pgvol_core::progress::QUIET)
+        .unwrap()
+        .0
 }
 
 /// The cube on the default grid, with distances exact a wall's thickness deep.

@@ -4,6 +4,7 @@ use std::f64::consts::PI;
 
 use glam::Vec3;
 use pgvol_contour::{contour_volume, Method};
+use pgvol_core::progress::QUIET;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_ops::{hollow, needs_wider_band, offset, shell, stored_band, Drain, ShellSide};
 use rayon::prelude::*;
@@ -43,13 +44,7 @@ fn ball(r: f32) -> impl Fn(Vec3) -> f32 + Sync {
 }
 
 fn contoured_volume(v: &CoefficientVolume) -> f64 {
-    let mesh = contour_volume(
-        v,
-        &v.grid,
-        0.0,
-        Method::MarchingCubes,
-        pgvol_core::progress::QUIET,
-    );
+    let mesh = contour_volume(v, &v.grid, 0.0, Method::MarchingCubes, QUIET);
     let s = mesh.stats();
     assert!(s.watertight && s.winding_consistent, "{s:?}");
     s.volume
@@ -144,14 +139,8 @@ fn pseudo_gaussian_offsets_are_refitted() {
 #[test]
 fn hollowed_ball_is_the_difference_of_two_balls() {
     let v = field(0.6, RES, Basis::Bspline3, ball(0.5));
-    let h = hollow(&v, 0.1, &[]).unwrap();
-    let mesh = contour_volume(
-        &h,
-        &h.grid,
-        0.0,
-        Method::MarchingCubes,
-        pgvol_core::progress::QUIET,
-    );
+    let h = hollow(&v, 0.1, &[], QUIET).unwrap();
+    let mesh = contour_volume(&h, &h.grid, 0.0, Method::MarchingCubes, QUIET);
     let s = mesh.stats();
     // Two spheres: the outside and the cavity's wall.
     assert_eq!((s.components, s.euler_characteristic), (2, 4), "{s:?}");
@@ -167,14 +156,8 @@ fn a_drain_joins_the_cavity_to_the_outside() {
         direction: Vec3::new(0.0, 0.0, 2.0),
         diameter: 0.12,
     };
-    let h = hollow(&v, 0.1, &[drain]).unwrap();
-    let mesh = contour_volume(
-        &h,
-        &h.grid,
-        0.0,
-        Method::MarchingCubes,
-        pgvol_core::progress::QUIET,
-    );
+    let h = hollow(&v, 0.1, &[drain], QUIET).unwrap();
+    let mesh = contour_volume(&h, &h.grid, 0.0, Method::MarchingCubes, QUIET);
     let s = mesh.stats();
     // One surface of genus 0: the cavity's wall continues through the tube to the outside.
     assert_eq!((s.components, s.euler_characteristic), (1, 2), "{s:?}");
@@ -198,7 +181,7 @@ fn shells_have_the_volume_of_their_wall() {
         (ShellSide::Inner, 0.5, 0.5 - t),
         (ShellSide::Outer, 0.5 + t, 0.5),
     ] {
-        let s = shell(&v, t as f32, side).unwrap();
+        let s = shell(&v, t as f32, side, QUIET).unwrap();
         let exact = ball_volume(outer) - ball_volume(inner);
         assert_close(contoured_volume(&s), exact, 0.005, &format!("{side:?}"));
     }
@@ -221,12 +204,12 @@ fn band_checks_follow_the_clamp() {
 fn bad_parameters_are_refused() {
     let v = field(0.6, 8, Basis::Bspline3, ball(0.5));
     assert!(offset(&v, f32::NAN).is_err());
-    assert!(shell(&v, 0.0, ShellSide::Inner).is_err());
-    assert!(hollow(&v, -0.1, &[]).is_err());
+    assert!(shell(&v, 0.0, ShellSide::Inner, QUIET).is_err());
+    assert!(hollow(&v, -0.1, &[], QUIET).is_err());
     let bad = Drain {
         point: Vec3::ZERO,
         direction: Vec3::ZERO,
         diameter: 0.1,
     };
-    assert!(hollow(&v, 0.1, &[bad]).is_err());
+    assert!(hollow(&v, 0.1, &[bad], QUIET).is_err());
 }

@@ -382,7 +382,12 @@ pub fn reconstruct_with(
     };
     report.bricks = samples.stored_count();
     let t = Instant::now();
-    let (mut volume, _) = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?;
+    let (mut volume, _) = pgvol_field::fit::interp_sparse(
+        grid,
+        Basis::Bspline3,
+        &samples,
+        pgvol_core::progress::QUIET,
+    )?;
     report.seconds_fit = t.elapsed().as_secs_f64();
     if matches!(options.method, Method::Spline | Method::RbfWendland) {
         let t = Instant::now();
@@ -426,7 +431,13 @@ pub fn reconstruct_with(
         report.seconds_solve += t.elapsed().as_secs_f64();
         visit(&field);
         let t = Instant::now();
-        volume = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?.0;
+        volume = pgvol_field::fit::interp_sparse(
+            grid,
+            Basis::Bspline3,
+            &samples,
+            pgvol_core::progress::QUIET,
+        )?
+        .0;
         report.seconds_fit += t.elapsed().as_secs_f64();
     }
     Ok((volume, report))
@@ -455,7 +466,12 @@ pub fn reconstruct_stack(
         ..Default::default()
     };
     let t = Instant::now();
-    let (volume, _) = pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)?;
+    let (volume, _) = pgvol_field::fit::interp_sparse(
+        grid,
+        Basis::Bspline3,
+        &samples,
+        pgvol_core::progress::QUIET,
+    )?;
     report.seconds_fit = t.elapsed().as_secs_f64();
     Ok((volume, report))
 }

@@ -221,7 +221,7 @@ mod tests {
                 let (mut lo, mut hi) = bounds;
                 lo.z = h;
                 hi.z = h;
-                pgvol_slice::slice_volume(&volume, (lo, hi), &options)
+                pgvol_slice::slice_volume(&volume, (lo, hi), &options, pgvol_core::progress::QUIET)
                     .unwrap()
                     .remove(0)
             })

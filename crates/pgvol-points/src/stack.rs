@@ -481,7 +481,7 @@ mod tests {
         let grid = Grid::cube_res(glam::Vec3::splat(lo), glam::Vec3::splat(hi), 64).unwrap();
         let samples = stack_samples(planes, 2, &grid, 4.0 * grid.spacing);
         let basis = pgvol_field::Basis::Bspline3;
-        pgvol_field::fit::interp_sparse(grid, basis, &samples)
+        pgvol_field::fit::interp_sparse(grid, basis, &samples, pgvol_core::progress::QUIET)
             .unwrap()
             .0
     }

@@ -311,6 +311,19 @@ fn make_lattice(
     .map_err(|e| errors::to_py(py, e))
 }
 
+/// Two corners of a box, lowest then highest.
+type Corners = ((f32, f32, f32), (f32, f32, f32));
+
+/// The grid of `resample` and `primitive`.
+fn resample_options(res: usize, bounds: Option<Corners>, band: f32) -> pgvol::ResampleOptions {
+    let corner = |c: (f32, f32, f32)| glam::Vec3::new(c.0, c.1, c.2);
+    pgvol::ResampleOptions {
+        res,
+        bounds: bounds.map(|(lo, hi)| (corner(lo), corner(hi))),
+        band,
+    }
+}
+
 /// An operand of `Field.csg`: a Field, a primary's text or a file's path.
 fn operand(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::Operand> {
     if let Ok(field) = obj.cast::<Field>() {
@@ -743,6 +756,71 @@ impl Field {
     fn offset(&self, py: Python<'_>, distance: f32) -> PyResult<Field> {
         let shape = quiet(py, || self.shape.offset(distance))?;
         Ok(Field::from_shape(shape))
+    }
+
+    /// This field sampled on a cube grid of `res` nodes per axis over its box (or over
+    /// `bounds`, two corners) and fitted again: coarser to save bytes, finer to edit on. Node
+    /// values within `band` grid spacings of the surface are kept, clamped beyond.
+    #[pyo3(signature = (res=128, *, bounds=None, band=4.0, progress=None))]
+    fn resample(
+        &self,
+        py: Python<'_>,
+        res: usize,
+        bounds: Option<Corners>,
+        band: f32,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let options = resample_options(res, bounds, band);
+        let shape = run(py, progress, |p| self.shape.resample(&options, p))?;
+        Ok(Field::from_shape(shape))
+    }
+
+    /// An analytic solid as a field, given as text as `csg` takes it ("sphere:x,y,z,r",
+    /// "box:x0,y0,z0,x1,y1,z1", "plane:nx,ny,nz,d", "cylinder:...": see `docs/editing.md`),
+    /// fitted on a cube grid of `res` nodes per axis over its box (`bounds` for planes and
+    /// cylinders), exact within `band` grid spacings of the surface.
+    #[staticmethod]
+    #[pyo3(signature = (solid, *, res=128, bounds=None, band=4.0, progress=None))]
+    fn primitive(
+        py: Python<'_>,
+        solid: &str,
+        res: usize,
+        bounds: Option<Corners>,
+        band: f32,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let primary = match pgvol::Operand::parse(solid).map_err(|e| errors::to_py(py, e))? {
+            pgvol::Operand::Primary(primary) => primary,
+            _ => {
+                return Err(errors::parameter(
+                    py,
+                    format!("{solid:?} is not an analytic solid such as \"sphere:0,0,0,1\""),
+                ))
+            }
+        };
+        let options = resample_options(res, bounds, band);
+        let shape = run(py, progress, |p| {
+            pgvol::Field::primitive(primary, &options, p)
+        })?;
+        Ok(Field::from_shape(shape))
+    }
+
+    /// The field inside `masks` (as `repair` takes them) resampled with `coarse` samples along
+    /// each mask's longest side and blended back: `repair(masks, denoise=True)`.
+    #[pyo3(signature = (masks, *, coarse=30, progress=None))]
+    fn denoise(
+        &self,
+        py: Python<'_>,
+        masks: Vec<Bound<'_, PyAny>>,
+        coarse: usize,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Field> {
+        let masks = masks
+            .iter()
+            .map(|m| crate::edit::mask(py, m))
+            .collect::<PyResult<Vec<_>>>()?;
+        let repaired = run(py, progress, |p| self.shape.denoise(&masks, coarse, p))?;
+        Ok(Field::from_shape(repaired.field))
     }
 
     /// A wall of `thickness` around the surface (`side` "inner", "outer" or "centred"), or with

@@ -12,11 +12,11 @@ mod arrays;
 mod edit;
 mod errors;
 mod field;
-mod json;
 mod names;
 mod parts;
 mod perturb;
 mod progress;
+mod reports;
 mod view;
 
 use std::path::PathBuf;
@@ -24,7 +24,6 @@ use std::path::PathBuf;
 use numpy::{PyArray2, PyArray3};
 use pyo3::prelude::*;
 
-use crate::json::json_to_py;
 use crate::progress::{quiet, run};
 
 /// Reads a mesh file (OBJ, glTF/GLB, STL, PLY or 3MF by extension; a 3MF build in millimetres),
@@ -73,7 +72,7 @@ fn compare<'py>(
     b: &Bound<'py, PyAny>,
     samples: usize,
     seed: u64,
-) -> PyResult<Bound<'py, PyAny>> {
+) -> PyResult<reports::Comparison> {
     let (va, fa) = arrays::mesh_parts(a, "a")?;
     let (vb, fb) = arrays::mesh_parts(b, "b")?;
     let comparison = quiet(py, || {
@@ -81,9 +80,7 @@ fn compare<'py>(
         let (b, _) = pgvol::io::mesh_from_world(&vb, fb)?;
         pgvol::compare(&a, &b, samples, seed)
     })?;
-    let value = serde_json::to_value(&comparison)
-        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
-    json_to_py(py, &value)
+    Ok(comparison.into())
 }
 
 // Python signatures show literal defaults only; this is the library's.
@@ -192,6 +189,16 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<field::Grid>()?;
     m.add_class::<field::Layer>()?;
     m.add_class::<edit::MaskReport>()?;
+    m.add_class::<reports::Comparison>()?;
+    m.add_class::<reports::MeshStats>()?;
+    m.add_class::<reports::VertexDeviation>()?;
+    m.add_class::<reports::DepthDifference>()?;
+    m.add_class::<reports::ViewDifference>()?;
+    m.add_class::<reports::PerturbReport>()?;
+    m.add_class::<reports::PerturbLoop>()?;
+    m.add_class::<reports::Refusals>()?;
+    m.add_class::<reports::Cleanup>()?;
+    m.add_class::<reports::Strays>()?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;

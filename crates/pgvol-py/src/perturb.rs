@@ -9,6 +9,7 @@ use pyo3::prelude::*;
 use crate::arrays;
 use crate::field::Field;
 use crate::progress::run;
+use crate::reports::PerturbReport;
 
 /// Converts the mesh (vertices, faces) by the perturbation method: a base quadric fitted to the
 /// vertices, then up to `max_functions` local bumps until every vertex is within `tolerance` of
@@ -16,7 +17,7 @@ use crate::progress::run;
 /// coefficients (the paper's optimisation step), checked on the cube grid of `res` nodes per axis so that the
 /// field contoured there has the mesh's pieces and no stray ones. Returns the field resampled
 /// on that grid (a cubic B-spline coefficient volume, metadata `source = perturbation`) and the
-/// report as a dict: "perturbation" (the loop), "cleanup" and "strays" (the checks). With
+/// report: `perturbation` (the loop), `cleanup` and `strays` (the checks). With
 /// `list_path`, the function list itself is also written there (a `.pgv` file, encoding
 /// `perturbation-f64`, resampled on the same grid when read).
 #[pyfunction]
@@ -31,7 +32,7 @@ pub(crate) fn perturb<'py>(
     res: usize,
     list_path: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(Field, Bound<'py, PyAny>)> {
+) -> PyResult<(Field, PerturbReport)> {
     let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
     let options = pgvol::perturbation::PerturbOptions {
@@ -48,14 +49,10 @@ pub(crate) fn perturb<'py>(
             pgvol::perturbation::write_perturbation(path, &header, &built.field)?;
         }
         let file = pgvol::perturbation::resample(&built.field, &mesh, spec, p)?;
-        let report = serde_json::json!({
-            "perturbation": built.report,
-            "cleanup": built.cleanup,
-            "strays": built.strays,
-        });
+        let report = PerturbReport::new(built.report, built.cleanup, built.strays);
         Ok((file, report))
     })?;
-    Ok((Field::from_file(file), crate::json_to_py(py, &report)?))
+    Ok((Field::from_file(file), report))
 }
 
 // Python signatures show literal defaults only; these are the library's.

@@ -41,10 +41,10 @@ def test_a_far_cube_encodes_evaluates_and_contours_as_at_the_origin(tmp_path):
     assert abs(far_mesh.volume - trimesh.Trimesh(v0, f0, process=False).volume) < 1e-4
     # The far surface is the origin's, moved: against each other and against their inputs.
     same = pgvol.compare((v, f), (v0.astype(np.float64) + SHIFT, f0), samples=20000)
-    assert same["hausdorff_pct"] < 1e-3
+    assert same.hausdorff_pct < 1e-3
     far_error = pgvol.compare((v, f), (vertices + SHIFT, faces), samples=20000)
     near_error = pgvol.compare((v0, f0), (vertices, faces), samples=20000)
-    assert abs(far_error["hausdorff_pct"] - near_error["hausdorff_pct"]) < 1e-3
+    assert abs(far_error.hausdorff_pct - near_error.hausdorff_pct) < 1e-3
 
     # The file keeps the frame: read back, the far field is the origin's stored alike, moved.
     far.save(tmp_path / "far.pgv")

@@ -295,3 +295,27 @@ def test_contours_of_a_sliced_ball_give_the_ball(balls, tmp_path):
     assert again.to_bytes() == field.to_bytes()
     with pytest.raises(pgvol.ParameterError):
         pgvol.Field.from_contours(42)  # type: ignore[arg-type]
+
+
+def test_a_primitive_ball_matches_trimesh_and_resamples_coarser():
+    ball = pgvol.Field.primitive("sphere:0,0,0,1", res=96)
+    assert ball.grid.dims == (96, 96, 96)
+    assert volume(ball) == pytest.approx(SPHERE, rel=0.005)
+    # The field near the surface is the distance trimesh finds to a fine icosphere.
+    points = np.array([[1.05, 0.0, 0.0], [0.0, 0.0, -0.97], [0.5, 0.5, 0.6]], dtype=np.float32)
+    expected = -trimesh.proximity.signed_distance(icosphere(), points)
+    np.testing.assert_allclose(ball(points), expected, atol=2e-3)
+    coarse = ball.resample(48)
+    assert coarse.grid.dims == (48, 48, 48)
+    assert volume(coarse) == pytest.approx(SPHERE, rel=0.01)
+    with pytest.raises(pgvol.ParameterError, match="not an analytic solid"):
+        pgvol.Field.primitive("fandisk.obj")
+
+
+def test_denoise_is_repair_with_denoise(balls):
+    a, _ = balls
+    mask = (0.6, -0.3, -0.3, 1.2, 0.3, 0.3)
+    denoised = a.denoise([mask], coarse=8)
+    repaired = a.repair([mask], denoise=True, coarse=8)
+    assert denoised.to_bytes() == repaired.to_bytes()
+    assert volume(denoised) == pytest.approx(SPHERE, rel=0.01)

@@ -161,14 +161,17 @@ def section_area(mesh, z):
 def test_compare_agrees_with_trimesh_closest_points(spot_field, spot_trimesh):
     v, t = spot_field.to_mesh(method="mc")
     result = pgvol.compare((v, t), spot_trimesh, samples=20000, seed=3)
-    assert result["a"]["watertight"] and result["b"]["watertight"]
-    assert result["b"]["triangles"] == len(spot_trimesh.faces)
-    assert result["b"]["volume"] == pytest.approx(spot_trimesh.volume, rel=1e-6)
+    assert isinstance(result, pgvol.Comparison)
+    assert result.a.watertight and result.b.watertight
+    assert result.b.triangles == len(spot_trimesh.faces)
+    assert result.b.volume == pytest.approx(spot_trimesh.volume, rel=1e-6)
     samples, _ = trimesh.sample.sample_surface(trimesh.Trimesh(v, t, process=False), 20000, seed=3)
     _, distance, _ = trimesh.proximity.closest_point(spot_trimesh, samples)
-    assert result["mean_a_to_b"] == pytest.approx(distance.mean(), rel=0.1)
-    assert result["hausdorff"] >= 0.9 * distance.max()
-    assert result["hausdorff"] < 0.5 * spot_field.grid.spacing
+    assert result.mean_a_to_b == pytest.approx(distance.mean(), rel=0.1)
+    assert result.hausdorff >= 0.9 * distance.max()
+    assert result.hausdorff < 0.5 * spot_field.grid.spacing
+    assert len(result.depth_buffer.views) == 14
+    assert result.vertex_deviation.vertices == result.a.vertices
     again = pgvol.compare((v, t), spot_trimesh, samples=20000, seed=3)
     assert again == result
     with pytest.raises(ValueError, match="samples must be positive"):

@@ -37,10 +37,13 @@ def test_the_contour_is_one_closed_piece_near_spot(converted, spot_trimesh):
 
 def test_the_report_and_the_metadata_say_what_was_built(converted):
     field, report, _ = converted
-    loop = report["perturbation"]
-    assert 0 < loop["loop_functions"] <= BUDGET
-    assert loop["history"] == sorted(loop["history"], reverse=True)
-    assert report["strays"]["pieces_left"] == 0
+    assert isinstance(report, pgvol.PerturbReport)
+    loop = report.perturbation
+    assert 0 < loop.loop_functions <= BUDGET
+    assert loop.history == sorted(loop.history, reverse=True)
+    assert loop.stop in ("tolerance", "max_functions", "no_improvement")
+    assert report.strays.pieces_left == 0
+    assert report.cleanup.wrong_after <= report.cleanup.wrong_before
     assert field.metadata["source"] == "perturbation"
     assert field.grid.dims == (RES, RES, RES)
 

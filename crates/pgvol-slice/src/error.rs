@@ -5,4 +5,7 @@
 pub enum SliceError {
     #[error("invalid parameter: {0}")]
     BadParameter(String),
+    /// The caller's interrupt asked the slicing to stop.
+    #[error("stopped on request")]
+    Stopped,
 }

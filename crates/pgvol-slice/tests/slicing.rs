@@ -1,5 +1,6 @@
 //! Slicing: exact layer heights, exact cross-section areas, orientation, closure and simplicity.
 
+use pgvol_core::progress::QUIET;
 use std::f64::consts::PI;
 
 use glam::Vec3;
@@ -174,7 +175,7 @@ fn sphere_layers_are_discs() {
     let bounds = (Vec3::splat(-0.5), Vec3::splat(0.5));
     let mut o = SliceOptions::new(Axis::Z, 0.1, 0.01);
     o.tolerance = 2e-4;
-    let layers = slice_volume(&v, bounds, &o).unwrap();
+    let layers = slice_volume(&v, bounds, &o, QUIET).unwrap();
     assert_eq!(layers.len(), 10);
     let mut worst = 0.0f64;
     for (i, layer) in layers.iter().enumerate() {
@@ -203,7 +204,7 @@ fn every_axis_gives_counter_clockwise_discs() {
     for axis in [Axis::X, Axis::Y, Axis::Z] {
         let mut o = SliceOptions::new(axis, 0.3, 0.01);
         o.first = Some(0.0);
-        let layers = slice_volume(&v, (Vec3::splat(-0.5), Vec3::splat(0.5)), &o).unwrap();
+        let layers = slice_volume(&v, (Vec3::splat(-0.5), Vec3::splat(0.5)), &o, QUIET).unwrap();
         let layer = &layers[0];
         assert_eq!(layer.loops.len(), 1, "{axis:?}");
         let h = match axis {
@@ -231,7 +232,7 @@ fn torus_mid_layer_has_an_outer_loop_and_a_hole() {
     let mut o = SliceOptions::new(Axis::Z, 1.0, 0.01);
     o.first = Some(0.0);
     o.tolerance = 2e-4;
-    let layers = slice_volume(&v, (Vec3::splat(-0.75), Vec3::splat(0.75)), &o).unwrap();
+    let layers = slice_volume(&v, (Vec3::splat(-0.75), Vec3::splat(0.75)), &o, QUIET).unwrap();
     assert_eq!(layers.len(), 1);
     let layer = &layers[0];
     assert_eq!(layer.loops.len(), 2);

@@ -2,6 +2,7 @@
 //! what is skipped changes nothing.
 
 use glam::Vec3;
+use pgvol_core::progress::QUIET;
 use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_slice::{slice, slice_bricks, slice_volume, Axis, Layer, LayerCost, SliceOptions};
@@ -147,7 +148,7 @@ fn skipping_changes_no_contour_at(scale: f32) {
         // Unsimplified, so rounding differences cannot pick other points.
         let mut options = SliceOptions::new(axis, 0.07 * scale, grid.spacing);
         options.tolerance = 0.0;
-        let sparse = slice_volume(&volume, bounds, &options).unwrap();
+        let sparse = slice_volume(&volume, bounds, &options, QUIET).unwrap();
         let dense = slice(&|p| volume.value(p), bounds, &options).unwrap();
         assert_eq!(sparse.len(), dense.len());
         let mut loops = 0;

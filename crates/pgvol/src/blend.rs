@@ -104,6 +104,21 @@ fn check_lambda(lambda: f32) -> Result<()> {
     Ok(())
 }
 
+impl Field {
+    /// This field blended with `other` by `operator` on the grid `settings` gives; see
+    /// [`blend`].
+    pub fn blend(
+        &self,
+        other: &Field,
+        operator: &BlendOperator,
+        settings: &BlendOptions,
+        progress: &dyn Progress,
+    ) -> Result<Blended> {
+        let operands = [Operand::from(self.clone()), Operand::from(other.clone())];
+        blend(&operands, operator, settings, progress)
+    }
+}
+
 /// The blend of `primaries` (two for Liming, two or more for functional splines and
 /// I-patches), renormalised to a distance-like field near its surface and re-fitted in the
 /// cubic B-spline brick by brick.

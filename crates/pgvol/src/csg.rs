@@ -255,33 +255,8 @@ fn csg(
             operands.len()
         )));
     }
-    pgvol_ops::check_blend(settings.blend).map_err(ops_error)?;
-    let radius = match settings.blend {
-        Blend::Sharp => 0.0,
-        Blend::Round(r) => r,
-    };
-    let loaded = load_operands(operands)?;
-    let grid = covering_grid(&loaded, settings.bounds, radius, settings.res)?;
-    check_edit_memory("a Boolean", &loaded, &grid, radius, settings.result)?;
-    let fields = operand_fields(operands, &loaded, grid, radius, settings.sign, progress)?;
-    progress.stage("combining the fields");
-    let band = ENCODE_BAND * grid.spacing;
-    let (op, blend) = (settings.op, settings.blend);
-    let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, blend.lipschitz(), |p| {
-        let mut values = [0.0f32; 16];
-        if fields.len() <= values.len() {
-            for (v, f) in values.iter_mut().zip(&fields) {
-                *v = f.value(p);
-            }
-            pgvol_ops::combine(op, blend, &values[..fields.len()])
-        } else {
-            let values: Vec<f32> = fields.iter().map(|f| f.value(p)).collect();
-            pgvol_ops::combine(op, blend, &values)
-        }
-    })
-    .map_err(ops_error)?;
-    crate::progress::check(progress)?;
-    let (result, no_inside) = match op {
+    let volume = combine_operands("a Boolean", operands, settings, ENCODE_BAND, progress)?;
+    let (result, no_inside) = match settings.op {
         BoolOp::Union => (
             "the union",
             "no operand has an inside within the box the result covers",
@@ -304,5 +279,44 @@ fn csg(
                      a surface",
     };
     require_surface(Sides::of_volume(&volume), &why)?;
+    Ok(volume)
+}
+
+/// The operands placed on one grid covering them (as `settings` asks), combined by
+/// `settings.op` node by node within `band` grid spacings of the surface and fitted again; one
+/// operand is resampled. `job` names the work in a refusal for memory.
+pub(crate) fn combine_operands(
+    job: &str,
+    operands: &[Operand],
+    settings: &CsgOptions,
+    band: f32,
+    progress: &dyn Progress,
+) -> Result<CoefficientVolume> {
+    pgvol_ops::check_blend(settings.blend).map_err(ops_error)?;
+    let radius = match settings.blend {
+        Blend::Sharp => 0.0,
+        Blend::Round(r) => r,
+    };
+    let loaded = load_operands(operands)?;
+    let grid = covering_grid(&loaded, settings.bounds, radius, settings.res)?;
+    check_edit_memory(job, &loaded, &grid, radius, settings.result)?;
+    let fields = operand_fields(operands, &loaded, grid, radius, settings.sign, progress)?;
+    progress.stage("combining the fields");
+    let band = band * grid.spacing;
+    let (op, blend) = (settings.op, settings.blend);
+    let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, blend.lipschitz(), |p| {
+        let mut values = [0.0f32; 16];
+        if fields.len() <= values.len() {
+            for (v, f) in values.iter_mut().zip(&fields) {
+                *v = f.value(p);
+            }
+            pgvol_ops::combine(op, blend, &values[..fields.len()])
+        } else {
+            let values: Vec<f32> = fields.iter().map(|f| f.value(p)).collect();
+            pgvol_ops::combine(op, blend, &values)
+        }
+    })
+    .map_err(ops_error)?;
+    crate::progress::check(progress)?;
     Ok(volume)
 }

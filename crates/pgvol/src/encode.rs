@@ -218,8 +218,8 @@ pub(crate) fn fit_volume(
             band = Some(options.band);
             let sampled = sample_sparse(&sdf, &grid, options.band, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
-            progress::stage(progress, "fit", |_| {
-                pgvol_field::fit::interp_sparse(grid, options.basis, &sampled.values)
+            progress::stage(progress, "fit", |update| {
+                pgvol_field::fit::interp_sparse(grid, options.basis, &sampled.values, update)
             })?
         }
         FitMethod::Wls => {

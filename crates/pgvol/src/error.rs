@@ -225,7 +225,11 @@ impl From<pgvol_ops::OpsError> for Error {
 
 impl From<pgvol_slice::SliceError> for Error {
     fn from(e: pgvol_slice::SliceError) -> Self {
-        Error::new(ErrorKind::BadParameter, e.to_string()).caused_by(e)
+        let kind = match e {
+            pgvol_slice::SliceError::Stopped => ErrorKind::Cancelled,
+            pgvol_slice::SliceError::BadParameter(_) => ErrorKind::BadParameter,
+        };
+        Error::new(kind, e.to_string()).caused_by(e)
     }
 }
 

@@ -23,7 +23,7 @@ use crate::grid::GridSpec;
 use crate::memory;
 use crate::mesh_io;
 use crate::pgv_io::read_pgv;
-use crate::progress::{Progress, Silent};
+use crate::progress::{self, Progress, Silent};
 use crate::resolution::{check_pieces, check_wall};
 use crate::timings::Timings;
 
@@ -512,13 +512,18 @@ impl Field {
             stored.saturating_mul(memory::BYTES_PER_REMAP_BRICK),
             "lower the resolution",
         )?;
+        let volume = &self.file.volume;
         let (volume, operation) = match kind {
             ShellKind::Hollow => (
-                pgvol_ops::hollow(&self.file.volume, thickness, &drains)?,
+                progress::stage(progress, "hollow", |update| {
+                    pgvol_ops::hollow(volume, thickness, &drains, update)
+                })??,
                 "the hollowing",
             ),
             ShellKind::Wall(side) => (
-                pgvol_ops::shell(&self.file.volume, thickness, side)?,
+                progress::stage(progress, "shell", |update| {
+                    pgvol_ops::shell(volume, thickness, side, update)
+                })??,
                 "the shell",
             ),
         };

@@ -309,7 +309,12 @@ pub fn resample_onto(
         perturb::sample_band(field, &grid, RESAMPLE_BAND, update)
     })?;
     let (volume, _) = progress::stage(progress, "fit", |_| {
-        pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)
+        pgvol_field::fit::interp_sparse(
+            grid,
+            Basis::Bspline3,
+            &samples,
+            pgvol_core::progress::QUIET,
+        )
     })??;
     let mut out = pgvol_format::header_for(&volume, "interp", None);
     out.source_bounds = header.source_bounds;

@@ -335,9 +335,14 @@ mod tests {
             }
         }
         let samples = SparseGrid::from_dense(grid.dims, &samples, Background::clamp(1.0));
-        pgvol_field::fit::interp_sparse(grid, Basis::Bspline3, &samples)
-            .unwrap()
-            .0
+        pgvol_field::fit::interp_sparse(
+            grid,
+            Basis::Bspline3,
+            &samples,
+            pgvol_core::progress::QUIET,
+        )
+        .unwrap()
+        .0
     }
 
     #[test]

@@ -16,6 +16,7 @@ use pgvol_slice::{Axis, Layer, SliceError};
 use crate::band::BAND_KEY;
 use crate::encode::ENCODE_BAND;
 use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::field_value::Field;
 use crate::grid::GridSpec;
 use crate::progress::{self, Progress};
 
@@ -269,6 +270,30 @@ pub struct Sections {
     pub seconds: f64,
 }
 
+impl Field {
+    /// A field whose zero set passes through `cloud`; see [`points`], which gives the report
+    /// too.
+    pub fn from_points(
+        cloud: &PointCloud,
+        options: &PointsOptions,
+        progress: &dyn Progress,
+    ) -> Result<Field> {
+        Ok(Field::from_file(points(cloud, options, progress)?.file))
+    }
+
+    /// A closed solid through a stack of planar contours along `axis`; see [`contours`].
+    pub fn from_contours(
+        layers: &[Layer],
+        axis: Axis,
+        options: &PointsOptions,
+        progress: &dyn Progress,
+    ) -> Result<Field> {
+        Ok(Field::from_file(
+            contours(layers, axis, options, progress)?.file,
+        ))
+    }
+}
+
 /// Fits a coefficient volume whose zero set passes through `cloud` (normals estimated and
 /// oriented when it has none; see `report.normals_estimated`).
 pub fn points(
@@ -346,6 +371,7 @@ fn section_planes(settings: &SectionOptions, grid: &pgvol_core::Grid) -> Result<
     let planes = SectionPlanes::new(settings.axis, settings.heights.clone(), resolution);
     pgvol_points::sections::check(grid, &planes).map_err(|e| match e {
         SliceError::BadParameter(message) => Error::parameter(message),
+        stopped @ SliceError::Stopped => stopped.into(),
     })?;
     Ok(planes)
 }

@@ -77,6 +77,19 @@ impl Field {
     }
 }
 
+impl Field {
+    /// The field inside `masks` resampled with `coarse` samples along each mask's longest
+    /// side and blended back: [`Field::repair`] with [`Restore::Denoise`].
+    pub fn denoise(
+        &self,
+        masks: &[Mask],
+        coarse: usize,
+        progress: &dyn Progress,
+    ) -> Result<Repaired> {
+        self.repair(masks, Restore::Denoise { coarse }, progress)
+    }
+}
+
 /// Bytes per mask node of a Laplace fill: the solver's f64 vectors and the system's indices.
 const BYTES_PER_FILL_NODE: u64 = 64;
 

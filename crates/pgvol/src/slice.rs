@@ -47,8 +47,8 @@ impl Field {
     /// The layers of the shape, and where they sit in the world.
     pub fn slice(&self, options: &SliceOptions, progress: &dyn Progress) -> Result<Sliced> {
         let stage = slice_options(self, options)?;
-        let mut layers = progress::stage(progress, "slice", |_| {
-            pgvol_slice::slice_volume(&self.file.volume, self.bounds, &stage)
+        let mut layers = progress::stage(progress, "slice", |update| {
+            pgvol_slice::slice_volume(&self.file.volume, self.bounds, &stage, update)
         })??;
         crate::sharp::sharpen_sliced(&mut layers, &self.file.header, options.axis)?;
         let frame = layer_frame(self, options.axis);

@@ -77,7 +77,7 @@ pub fn encode_vdb(
         ..Timings::default()
     };
     let (volume, report) = progress::stage(progress, "fit", |_| {
-        pgvol_field::fit::interp_sparse(grid, basis, &samples)
+        pgvol_field::fit::interp_sparse(grid, basis, &samples, pgvol_core::progress::QUIET)
     })?
     .map_err(fit_failed)?;
     timings.fit = report.seconds;

@@ -5,7 +5,10 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
 use std::sync::Mutex;
 
-use pgvol::{DecodeOptions, EncodeOptions, ErrorKind, Field, GridSpec, Progress, Silent};
+use pgvol::{
+    DecodeOptions, EncodeOptions, ErrorKind, Field, GridSpec, Progress, ShellKind, ShellOptions,
+    Silent, SliceOptions,
+};
 
 /// Asks to stop at the first report of stage `at`, and counts that stage's reports.
 struct StopIn {
@@ -88,6 +91,61 @@ fn a_cancel_stops_contouring_within_a_few_blocks() {
         field
             .to_mesh(&DecodeOptions::default(), &NoCancel(p))
             .unwrap();
+    });
+    assert!(whole >= 20, "{whole} reports in the whole stage");
+}
+
+#[test]
+fn a_cancel_stops_the_fit_within_a_few_brick_groups() {
+    let stop = StopIn::new("fit");
+    let e = encode(&stop).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Cancelled);
+    // Groups in flight on other threads may report once each, and the sign check once before
+    // its first poll.
+    let after = stop.reports.load(Relaxed) - 1;
+    assert!(after <= 3, "{after} reports after the cancel");
+    let whole = reports_of_whole_stage("fit", |p| {
+        let _ = encode(&NoCancel(p));
+    });
+    assert!(whole >= 20, "{whole} reports in the whole stage");
+}
+
+#[test]
+fn a_cancel_stops_a_shell_within_a_few_brick_groups() {
+    // A band wide enough for a wall the grid resolves.
+    let options = EncodeOptions {
+        grid: GridSpec::Res(256),
+        band: 8.0,
+        ..EncodeOptions::default()
+    };
+    let field = Field::from_mesh(&sphere(), &options, &Silent).unwrap();
+    let options = ShellOptions {
+        thickness: 2.5 * field.grid().spacing,
+        kind: ShellKind::Hollow,
+        drains: Vec::new(),
+    };
+    let stop = StopIn::new("hollow");
+    let e = field.shell(&options, &stop).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Cancelled, "{e}");
+    let after = stop.reports.load(Relaxed) - 1;
+    assert!(after <= 2, "{after} reports after the cancel");
+    let whole = reports_of_whole_stage("hollow", |p| {
+        field.shell(&options, &NoCancel(p)).unwrap();
+    });
+    assert!(whole >= 20, "{whole} reports in the whole stage");
+}
+
+#[test]
+fn a_cancel_stops_slicing_at_the_next_layer() {
+    let field = encode(&Silent).unwrap();
+    let options = SliceOptions::new(field.grid().spacing);
+    let stop = StopIn::new("slice");
+    let e = field.slice(&options, &stop).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Cancelled);
+    // The layer that reported is the last one handed on.
+    assert_eq!(stop.reports.load(Relaxed), 1);
+    let whole = reports_of_whole_stage("slice", |p| {
+        field.slice(&options, &NoCancel(p)).unwrap();
     });
     assert!(whole >= 20, "{whole} reports in the whole stage");
 }

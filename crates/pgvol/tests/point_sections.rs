@@ -63,7 +63,7 @@ fn volume_section(volume: &pgvol::CoefficientVolume, axis: Axis, h: f32) -> Laye
     hi[a] = h;
     let mut options = pgvol::slicing::SliceOptions::new(axis, 1.0, volume.grid.spacing);
     options.first = Some(h);
-    pgvol::slicing::slice_volume(volume, (lo, hi), &options)
+    pgvol::slicing::slice_volume(volume, (lo, hi), &options, pgvol_core::progress::QUIET)
         .unwrap()
         .remove(0)
 }

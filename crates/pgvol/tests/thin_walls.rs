@@ -127,7 +127,13 @@ fn a_wall_thinner_than_two_spacings_is_refused_with_the_grid_that_holds_it() {
 fn a_result_broken_into_pieces_is_refused() {
     let shape = rocker(0.5);
     // The 0.5 wall built without the check before: it falls apart on the nodes.
-    let shredded = pgvol::ops::shell(shape.volume(), 0.5, ShellSide::Inner).unwrap();
+    let shredded = pgvol::ops::shell(
+        shape.volume(),
+        0.5,
+        ShellSide::Inner,
+        pgvol_core::progress::QUIET,
+    )
+    .unwrap();
     let e = pgvol::checks::check_pieces("the shell", shape.volume(), &shredded).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Unresolved, "{e}");
     assert!(e.message().contains("where the shape has 1"), "{e}");

@@ -110,36 +110,48 @@ pub fn interp_samples(
 /// ([`interp_samples`] with default options on `samples.to_dense()`), with its memory and time.
 ///
 /// The report's sign check covers the nodes of the stored coefficient bricks.
+///
+/// Both loops report to `report` per group of bricks and poll it for a stop: a stopped fit
+/// returns at once with an incomplete volume, which the caller who asked for the stop discards.
 pub fn interp_sparse(
     grid: Grid,
     basis: Basis,
     samples: &SparseGrid,
+    report: Report,
 ) -> Result<(CoefficientVolume, FitReport), FieldError> {
     let start = Instant::now();
     crate::volume::check_sparse(&grid, basis, samples)?;
-    let (coeffs, mut report) = match basis {
+    // The sign check visits each stored brick once; the filter, several times over its halo.
+    let span = Span::whole(report);
+    let (filter, check) = (span.part(0.0, 0.8), span.part(0.8, 1.0));
+    let (coeffs, mut fit_report) = match basis {
         Basis::Trilinear => (samples.clone(), report::report("none", None)),
         Basis::Bspline2 => (
-            sparse_interp::prefilter_sparse(samples, QUADRATIC_POLE),
+            sparse_interp::prefilter_sparse(samples, QUADRATIC_POLE, Some(filter)),
             report::report("prefilter", None),
         ),
         Basis::Bspline3 => (
-            sparse_interp::prefilter_sparse(samples, CUBIC_POLE),
+            sparse_interp::prefilter_sparse(samples, CUBIC_POLE, Some(filter)),
             report::report("prefilter", None),
         ),
         Basis::Pg { .. } => {
             return interp_samples(grid, basis, &samples.to_dense(), &FitOptions::default());
         }
     };
-    report.method = FitMethod::Interp.name().to_string();
-    report.stages.warm_start = start.elapsed().as_secs_f64();
+    fit_report.method = FitMethod::Interp.name().to_string();
+    fit_report.stages.warm_start = start.elapsed().as_secs_f64();
     let volume = CoefficientVolume::from_sparse(grid, basis, coeffs)?;
     let t = Instant::now();
-    report.spurious_sign_changes =
-        sparse_interp::sparse_sign_changes(basis, &volume.coeffs, samples, grid.spacing);
-    report.stages.check = t.elapsed().as_secs_f64();
-    report.seconds = start.elapsed().as_secs_f64();
-    Ok((volume, report))
+    fit_report.spurious_sign_changes = sparse_interp::sparse_sign_changes(
+        basis,
+        &volume.coeffs,
+        samples,
+        grid.spacing,
+        Some(check),
+    );
+    fit_report.stages.check = t.elapsed().as_secs_f64();
+    fit_report.seconds = start.elapsed().as_secs_f64();
+    Ok((volume, fit_report))
 }
 
 /// Coefficient bricks of one slab of a sparse interpolation, for fitting a grid in parts.
@@ -150,18 +162,20 @@ pub type LayerBricks = Vec<([usize; 3], Box<pgvol_core::sparse::BrickValues>)>;
 /// order, from samples that hold the whole grid's bricks within [`sparse_reach`] grid bricks
 /// of those groups (others may be absent). With the report `interp_sparse` gives, less its timings and sign check.
 /// Unstored bricks take the samples' sides, as in `interp_sparse`. Pseudo-Gaussians have no
-/// local fit and are refused.
+/// local fit and are refused. Groups are reported to `report` and polled for a stop as in
+/// `interp_sparse`.
 pub fn interp_sparse_groups(
     grid: Grid,
     basis: Basis,
     samples: &SparseGrid,
     gy: std::ops::Range<usize>,
     gz: std::ops::Range<usize>,
+    report: Report,
 ) -> Result<(LayerBricks, FitReport), FieldError> {
     crate::volume::check_sparse(&grid, basis, samples)?;
     let in_layers =
         |b: [usize; 3]| gy.contains(&(b[1] / SPARSE_GROUP)) && gz.contains(&(b[2] / SPARSE_GROUP));
-    let (bricks, mut report) =
+    let (bricks, mut fit_report) =
         match basis {
             Basis::Trilinear => (
                 samples
@@ -172,11 +186,11 @@ pub fn interp_sparse_groups(
                 report::report("none", None),
             ),
             Basis::Bspline2 => (
-                sparse_interp::prefilter_groups(samples, QUADRATIC_POLE, gy, gz),
+                sparse_interp::prefilter_groups(samples, QUADRATIC_POLE, gy, gz, report),
                 report::report("prefilter", None),
             ),
             Basis::Bspline3 => (
-                sparse_interp::prefilter_groups(samples, CUBIC_POLE, gy, gz),
+                sparse_interp::prefilter_groups(samples, CUBIC_POLE, gy, gz, report),
                 report::report("prefilter", None),
             ),
             Basis::Pg { .. } => return Err(FieldError::BadFit(
@@ -185,8 +199,8 @@ pub fn interp_sparse_groups(
                     .into(),
             )),
         };
-    report.method = FitMethod::Interp.name().to_string();
-    Ok((bricks, report))
+    fit_report.method = FitMethod::Interp.name().to_string();
+    Ok((bricks, fit_report))
 }
 
 /// Grid bricks of samples needed around a box of groups by [`interp_sparse_groups`].

@@ -9,6 +9,7 @@
 
 use rayon::prelude::*;
 
+use pgvol_core::progress::{self, Span};
 use pgvol_core::sparse::{brick_offset, BrickValues};
 use pgvol_core::{SparseGrid, BRICK_EDGE, BRICK_NODES};
 
@@ -19,9 +20,11 @@ use crate::stencil::mirror;
 
 /// Bricks per edge of a group: the groups of `GROUP`³ bricks share one halo, whose cost per
 /// brick falls as the group grows, while a group only partly in the band filters nodes no brick
-/// needs (its window is trimmed to its bricks' bounding box). On banded spheres at 128³–256³,
-/// 8 gathers and x-filters 4.5–4.9 window nodes per coefficient, against 8 at 4 and 19 at 2,
-/// and measured fastest (`tests::timing`); its windows of up to 88³ nodes take ~10 MB per thread.
+/// needs (its window is trimmed to its bricks' bounding box). On banded spheres at 128³–256³
+/// (`tests::window_nodes_per_coefficient`), 8 gathers and x-filters 4.5–4.9 window nodes per
+/// coefficient, against 8.0–8.4 at 4 and 19 at 2; 16 gathers 2.7–4.0, but its windows of up to
+/// 216³ nodes take ~175 MB per thread with the filter's f64 passes (8: up to 88³, ~10 MB), and a
+/// 256³ grid has only 8 such groups to share among the threads.
 const GROUP: usize = 8;
 
 /// Weight below which samples past the halo are ignored, relative to the largest: the halo is
@@ -50,8 +53,10 @@ pub(crate) fn halo(z: f64) -> usize {
 /// on the thread count. Unstored bricks keep the samples' sides: the samples are cloned and
 /// emptied first, at a cost in their stored bricks and tiles and none per absent brick, and
 /// before the new bricks exist, so the peak memory is that of the samples and the result.
-pub(crate) fn prefilter_sparse(samples: &SparseGrid, z: f64) -> SparseGrid {
-    prefilter_sparse_with(samples, z, halo(z), GROUP, DROP_TOLERANCE)
+/// Groups are counted through `span`; after a stop request the groups not yet begun are left
+/// out, and the incomplete result is for the caller to discard.
+pub(crate) fn prefilter_sparse(samples: &SparseGrid, z: f64, span: Option<Span>) -> SparseGrid {
+    prefilter_sparse_with(samples, z, halo(z), GROUP, DROP_TOLERANCE, span)
 }
 
 /// A computed neighbour brick whose coefficients all lie within this fraction of the clamp of
@@ -67,12 +72,13 @@ pub const SPARSE_GROUP: usize = GROUP;
 /// (in groups) lie in `gy` and `gz`, in the order it stores them. `samples` must hold every
 /// brick within [`layer_reach`] grid bricks of those groups as the whole grid's samples do;
 /// then the bricks are bit for bit the ones of the whole grid, since each group is filtered
-/// alone from its own window.
+/// alone from its own window. Groups not begun by a stop request of `report` are left out.
 pub(crate) fn prefilter_groups(
     samples: &SparseGrid,
     z: f64,
     gy: std::ops::Range<usize>,
     gz: std::ops::Range<usize>,
+    report: progress::Report,
 ) -> Vec<([usize; 3], Box<BrickValues>)> {
     let bricks = output_bricks(samples, GROUP);
     let group_of = |b: &[usize; 3]| b.map(|c| c / GROUP);
@@ -80,10 +86,16 @@ pub(crate) fn prefilter_groups(
         .chunk_by(|a, b| group_of(a) == group_of(b))
         .filter(|g| gy.contains(&(g[0][1] / GROUP)) && gz.contains(&(g[0][2] / GROUP)))
         .collect();
+    let counter = Span::whole(report).counter(groups.len());
     let computed: Vec<Vec<([usize; 3], Box<BrickValues>)>> = groups
         .par_iter()
         .map_init(Scratch::default, |scratch, group| {
-            filter_group(samples, z, halo(z), group, DROP_TOLERANCE, scratch)
+            if counter.stopped() {
+                return Vec::new();
+            }
+            let bricks = filter_group(samples, z, halo(z), group, DROP_TOLERANCE, scratch);
+            counter.tick();
+            bricks
         })
         .collect();
     computed.into_iter().flatten().collect()
@@ -103,16 +115,23 @@ fn prefilter_sparse_with(
     h: usize,
     group: usize,
     drop: f32,
+    span: Option<Span>,
 ) -> SparseGrid {
     let bricks = output_bricks(samples, group);
     let group_of = |b: &[usize; 3]| b.map(|c| c / group);
     let groups: Vec<&[[usize; 3]]> = bricks.chunk_by(|a, b| group_of(a) == group_of(b)).collect();
+    let counter = span.map(|s| s.counter(groups.len()));
     let mut out = samples.clone();
     out.retain(|_, _| false);
     let computed: Vec<Vec<([usize; 3], Box<BrickValues>)>> = groups
         .par_iter()
         .map_init(Scratch::default, |scratch, group| {
-            filter_group(samples, z, h, group, drop, scratch)
+            if progress::stopped(counter.as_ref()) {
+                return Vec::new();
+            }
+            let bricks = filter_group(samples, z, h, group, drop, scratch);
+            progress::tick(counter.as_ref());
+            bricks
         })
         .collect();
     for (b, values) in computed.into_iter().flatten() {
@@ -156,17 +175,17 @@ struct Scratch {
     ys: Vec<f64>,
 }
 
-/// The coefficient bricks of one group (bricks sorted and all in one group).
-fn filter_group(
-    samples: &SparseGrid,
-    z: f64,
-    h: usize,
-    group: &[[usize; 3]],
-    drop: f32,
-    s: &mut Scratch,
-) -> Vec<([usize; 3], Box<BrickValues>)> {
+/// Where a group is filtered, in nodes: the kept box `lo..hi` (its bricks' bounding box) and
+/// the window `w_lo..w_hi` (the kept box and the halo, clipped to the grid).
+struct GroupWindow {
+    lo: [usize; 3],
+    hi: [usize; 3],
+    w_lo: [usize; 3],
+    w_hi: [usize; 3],
+}
+
+fn group_window(samples: &SparseGrid, group: &[[usize; 3]], h: usize) -> GroupWindow {
     let dims = samples.dims();
-    // The kept box: the group's bricks' bounding box, in nodes.
     let mut lo = [usize::MAX; 3];
     let mut hi = [0usize; 3];
     for &b in group {
@@ -178,6 +197,19 @@ fn filter_group(
     }
     let w_lo = lo.map(|c| c.saturating_sub(h));
     let w_hi = [0, 1, 2].map(|a| (hi[a] + h).min(dims[a]));
+    GroupWindow { lo, hi, w_lo, w_hi }
+}
+
+/// The coefficient bricks of one group (bricks sorted and all in one group).
+fn filter_group(
+    samples: &SparseGrid,
+    z: f64,
+    h: usize,
+    group: &[[usize; 3]],
+    drop: f32,
+    s: &mut Scratch,
+) -> Vec<([usize; 3], Box<BrickValues>)> {
+    let GroupWindow { lo, hi, w_lo, w_hi } = group_window(samples, group, h);
     let wn = [0, 1, 2].map(|a| w_hi[a] - w_lo[a]);
     let off = [0, 1, 2].map(|a| lo[a] - w_lo[a]);
     let kn = [0, 1, 2].map(|a| hi[a] - lo[a]);
@@ -257,21 +289,28 @@ fn filter_group(
 
 /// Nodes of the stored coefficient bricks farther than `spacing` from the surface where the
 /// field's sign differs from the samples'. Elsewhere every coefficient a node reads is within
-/// ≈ 1e-5 of the background of its side, so the field there has the samples' sign.
+/// ≈ 1e-5 of the background of its side, so the field there has the samples' sign. Bricks are
+/// counted through `span`, and those not begun by a stop request are not checked.
 pub(crate) fn sparse_sign_changes(
     basis: Basis,
     coeffs: &SparseGrid,
     samples: &SparseGrid,
     spacing: f32,
+    span: Option<Span>,
 ) -> usize {
     let Some((side, centre)) = taps(basis) else {
         return 0;
     };
     let dims = coeffs.dims();
     let stored: Vec<[usize; 3]> = coeffs.stored().map(|(b, _)| b).collect();
+    let counter = span.map(|s| s.counter(stored.len()));
     stored
         .par_iter()
         .map(|&b| {
+            if progress::stopped(counter.as_ref()) {
+                return 0;
+            }
+            progress::tick(counter.as_ref());
             let (lo, n) = coeffs.brick_extent(b);
             // The brick and one node around it, mirrored at the grid's borders.
             let w_lo = lo.map(|c| c.saturating_sub(1));
@@ -381,10 +420,10 @@ mod tests {
         let (_, samples) = banded_sphere(100, 4.0);
         let clamp = samples.background().outside;
         for z in [CUBIC_POLE, QUADRATIC_POLE] {
-            let whole = prefilter_sparse_with(&samples, z, 100, GROUP, 0.0);
+            let whole = prefilter_sparse_with(&samples, z, 100, GROUP, 0.0, None);
             for group in [2, GROUP] {
-                let local = prefilter_sparse_with(&samples, z, halo(z), group, 0.0);
-                let short = prefilter_sparse_with(&samples, z, 6, group, 0.0);
+                let local = prefilter_sparse_with(&samples, z, halo(z), group, 0.0, None);
+                let short = prefilter_sparse_with(&samples, z, 6, group, 0.0, None);
                 let err = max_diff(&local, &whole) / clamp;
                 let short_err = max_diff(&short, &whole) / clamp;
                 eprintln!(
@@ -405,8 +444,8 @@ mod tests {
     fn dropped_neighbours_stay_within_the_tolerance() {
         let (_, samples) = banded_sphere(100, 4.0);
         let clamp = samples.background().outside;
-        let kept = prefilter_sparse_with(&samples, CUBIC_POLE, 12, GROUP, 0.0);
-        let dropped = prefilter_sparse_with(&samples, CUBIC_POLE, 12, GROUP, DROP_TOLERANCE);
+        let kept = prefilter_sparse_with(&samples, CUBIC_POLE, 12, GROUP, 0.0, None);
+        let dropped = prefilter_sparse_with(&samples, CUBIC_POLE, 12, GROUP, DROP_TOLERANCE, None);
         assert!(dropped.stored_count() < kept.stored_count());
         for (b, v) in kept.stored() {
             let (_, n) = kept.brick_extent(b);
@@ -427,13 +466,49 @@ mod tests {
         );
     }
 
+    /// Window nodes gathered and x-filtered per coefficient computed, for the bricks of the
+    /// default encode's band (4 spacings) around a sphere.
+    fn window_nodes_per_coefficient_of(n: usize, group: usize) -> f64 {
+        let (_, samples) = banded_sphere(n, 4.0);
+        let h = halo(CUBIC_POLE);
+        let bricks = output_bricks(&samples, group);
+        let group_of = |b: &[usize; 3]| b.map(|c| c / group);
+        let (mut window, mut kept) = (0usize, 0usize);
+        for g in bricks.chunk_by(|a, b| group_of(a) == group_of(b)) {
+            let w = group_window(&samples, g, h);
+            window += (0..3).map(|a| w.w_hi[a] - w.w_lo[a]).product::<usize>();
+            kept += g
+                .iter()
+                .map(|&b| samples.brick_extent(b).1.iter().product::<usize>())
+                .sum::<usize>();
+        }
+        window as f64 / kept as f64
+    }
+
+    /// The measurement behind `GROUP`: `cargo test --release -p pgvol-field --lib
+    /// window_nodes_per_coefficient -- --nocapture` prints the table.
+    #[test]
+    fn window_nodes_per_coefficient() {
+        for n in [128, 256] {
+            let per = [2, 4, 8, 16].map(|g| window_nodes_per_coefficient_of(n, g));
+            eprintln!(
+                "{n}³: groups of 2³ {:.1}, 4³ {:.1}, 8³ {:.1}, 16³ {:.1} window nodes per coefficient",
+                per[0], per[1], per[2], per[3]
+            );
+            // Larger groups share their halo among more bricks.
+            assert!(per[2] < per[1] && per[1] < per[0], "{n}³: {per:?}");
+            assert!(per[2] < 6.0, "{n}³: {per:?}");
+        }
+    }
+
     #[test]
     fn group_sizes_agree() {
         let (_, samples) = banded_sphere(45, 3.0);
         let clamp = samples.background().outside;
-        let base = prefilter_sparse_with(&samples, CUBIC_POLE, halo(CUBIC_POLE), GROUP, 0.0);
+        let base = prefilter_sparse_with(&samples, CUBIC_POLE, halo(CUBIC_POLE), GROUP, 0.0, None);
         for group in [1, 2, 3, 4] {
-            let other = prefilter_sparse_with(&samples, CUBIC_POLE, halo(CUBIC_POLE), group, 0.0);
+            let other =
+                prefilter_sparse_with(&samples, CUBIC_POLE, halo(CUBIC_POLE), group, 0.0, None);
             let diff = max_diff(&base, &other) / clamp;
             eprintln!("group {group}: {diff:e}");
             assert!(diff < 3e-7, "group {group}: {diff:e}");

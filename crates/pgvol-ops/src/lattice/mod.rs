@@ -41,7 +41,12 @@ fn solid_of(
     let part = measure_field(&values, &volume.grid);
     map_nodes(&mut values, volume.grid, f, varies);
     let solid = measure_field(&values, &volume.grid);
-    let (volume, _) = interp_sparse(volume.grid, volume.basis, &values)?;
+    let (volume, _) = interp_sparse(
+        volume.grid,
+        volume.basis,
+        &values,
+        pgvol_core::progress::QUIET,
+    )?;
     Ok(LatticeSolid {
         volume,
         solid,

@@ -23,6 +23,16 @@ __all__ = [
     "Grid",
     "Layer",
     "MaskReport",
+    "Comparison",
+    "MeshStats",
+    "VertexDeviation",
+    "DepthDifference",
+    "ViewDifference",
+    "PerturbReport",
+    "PerturbLoop",
+    "Refusals",
+    "Cleanup",
+    "Strays",
     "read_mesh",
     "write_mesh",
     "compare",
@@ -135,6 +145,258 @@ class MaskReport:
     def fit_error(self) -> float:
         """The largest difference between the re-fitted field and the restored values at the
         mask's nodes."""
+
+@final
+class MeshStats:
+    """Topology and size of a mesh."""
+
+    @property
+    def vertices(self) -> int:
+        """Vertices referenced by at least one triangle."""
+    @property
+    def triangles(self) -> int: ...
+    @property
+    def edges(self) -> int:
+        """Unique undirected edges."""
+    @property
+    def boundary_edges(self) -> int:
+        """Edges used by exactly one triangle."""
+    @property
+    def non_manifold_edges(self) -> int:
+        """Edges used by three or more triangles."""
+    @property
+    def watertight(self) -> bool:
+        """Every edge used by exactly two triangles."""
+    @property
+    def winding_consistent(self) -> bool:
+        """Every edge shared by two triangles is traversed once in each direction."""
+    @property
+    def euler_characteristic(self) -> int:
+        """V - E + F."""
+    @property
+    def volume(self) -> float:
+        """Signed volume by the divergence theorem; positive for outward-facing closed meshes."""
+    @property
+    def area(self) -> float: ...
+    @property
+    def components(self) -> int:
+        """Connected components, where triangles sharing a vertex are connected."""
+
+@final
+class VertexDeviation:
+    """Distances from the vertices of mesh A to mesh B, and the angles between their normals."""
+
+    @property
+    def vertices(self) -> int: ...
+    @property
+    def mean(self) -> float: ...
+    @property
+    def max(self) -> float: ...
+    @property
+    def normal_mean_deg(self) -> float:
+        """Angle between A's vertex normal and B's normal at the closest point, in degrees."""
+    @property
+    def normal_max_deg(self) -> float: ...
+
+@final
+class ViewDifference:
+    """The depth-buffer difference of one view."""
+
+    @property
+    def direction(self) -> Tuple[float, float, float]:
+        """The view's depth direction."""
+    @property
+    def covered(self) -> int:
+        """Pixels covered by either mesh."""
+    @property
+    def mean_abs(self) -> float:
+        """Mean absolute depth difference over those pixels, in mesh units."""
+
+@final
+class DepthDifference:
+    """Depth buffers of two meshes rendered from the same views, compared."""
+
+    @property
+    def views(self) -> List[ViewDifference]: ...
+    @property
+    def resolution(self) -> int:
+        """Pixels per side of each view."""
+    @property
+    def mean_abs(self) -> float:
+        """Mean absolute difference over every covered pixel of every view, in mesh units."""
+
+@final
+class Comparison:
+    """Mesh ``a`` measured against reference mesh ``b``; ``_pct`` figures are percent of b's
+    bounding-box diagonal."""
+
+    @property
+    def a(self) -> MeshStats: ...
+    @property
+    def b(self) -> MeshStats: ...
+    @property
+    def samples(self) -> int:
+        """Samples drawn on each mesh."""
+    @property
+    def diagonal(self) -> float:
+        """Bounding-box diagonal of b."""
+    @property
+    def hausdorff(self) -> float: ...
+    @property
+    def hausdorff_pct(self) -> float: ...
+    @property
+    def chamfer_l1(self) -> float: ...
+    @property
+    def chamfer_l1_pct(self) -> float: ...
+    @property
+    def mean_a_to_b(self) -> float: ...
+    @property
+    def mean_b_to_a(self) -> float: ...
+    @property
+    def normal_deviation_mean_deg(self) -> float:
+        """Angle between the normals at each sample and at its closest point on the other mesh, pooled over both directions, in degrees."""
+    @property
+    def normal_deviation_p95_deg(self) -> float: ...
+    @property
+    def vertex_deviation(self) -> VertexDeviation: ...
+    @property
+    def vertex_deviation_mean_pct(self) -> float: ...
+    @property
+    def vertex_deviation_max_pct(self) -> float: ...
+    @property
+    def depth_buffer(self) -> DepthDifference:
+        """Depth buffers from 14 views."""
+    @property
+    def depth_buffer_pct(self) -> float: ...
+
+@final
+class Refusals:
+    """Seeds of the perturbation loop refused, by reason."""
+
+    @property
+    def too_few_points(self) -> int:
+        """Fewer than ten vertices of the seed's sign within the trial radius."""
+    @property
+    def not_local(self) -> int:
+        """No solve gave a local bump."""
+    @property
+    def no_gain(self) -> int:
+        """The best bump did not lower the functional."""
+    @property
+    def probes(self) -> int:
+        """The bump put more probes on the wrong side."""
+
+@final
+class PerturbLoop:
+    """What the perturbation loop did; deviations in mesh units."""
+
+    @property
+    def functions(self) -> int:
+        """Perturbations in the field: the loop's plus the clearing bumps."""
+    @property
+    def loop_functions(self) -> int:
+        """Perturbations the loop added."""
+    @property
+    def sign_points(self) -> int:
+        """Sign points given."""
+    @property
+    def wrong_side_of_base(self) -> int:
+        """Sign points on the wrong side of the base quadric."""
+    @property
+    def wrong_side_before_clearing(self) -> int:
+        """Sign points on the wrong side after the loop, before its clearing pass."""
+    @property
+    def wrong_side_after(self) -> int:
+        """Sign points on the wrong side at the end."""
+    @property
+    def vertices(self) -> int: ...
+    @property
+    def diagonal(self) -> float:
+        """The mesh's bounding-box diagonal."""
+    @property
+    def base_mean(self) -> float:
+        """Mean vertex deviation estimate of the base quadric alone."""
+    @property
+    def base_max(self) -> float:
+        """Largest vertex deviation estimate of the base quadric alone."""
+    @property
+    def mean(self) -> float:
+        """Mean vertex deviation estimate after the last perturbation."""
+    @property
+    def max(self) -> float:
+        """Largest vertex deviation estimate after the last perturbation."""
+    @property
+    def base_functional(self) -> float:
+        """The functional the loop lowers (mean |M| over the vertices) for the base quadric."""
+    @property
+    def history(self) -> List[float]:
+        """The functional after each accepted perturbation (never increasing)."""
+    @property
+    def base_exact(self) -> bool:
+        """Whether the base quadric took the exact least-squares fit."""
+    @property
+    def trials(self) -> int:
+        """Trial perturbations evaluated."""
+    @property
+    def seeds_set_aside(self) -> int: ...
+    @property
+    def exact_solves(self) -> int:
+        """Perturbations whose ten-point system was solved exactly."""
+    @property
+    def descent_steps(self) -> int:
+        """Descent steps taken on the chosen perturbations' coefficients."""
+    @property
+    def refusals(self) -> Refusals: ...
+    @property
+    def stop(self) -> str:
+        """Why the loop ended: "tolerance", "max_functions", "no_improvement" or "cancelled"."""
+    @property
+    def seconds(self) -> float: ...
+
+@final
+class Cleanup:
+    """The pass clearing wrong nodes of the check grid away from the surface."""
+
+    @property
+    def wrong_before(self) -> int:
+        """Checked points on the wrong side of the field before the pass."""
+    @property
+    def bumps(self) -> int:
+        """Clearing bumps added."""
+    @property
+    def wrong_after(self) -> int:
+        """Checked points still on the wrong side after it."""
+
+@final
+class Strays:
+    """The passes removing stray pieces left on the check grid."""
+
+    @property
+    def pieces(self) -> int:
+        """Stray pieces found before the passes."""
+    @property
+    def nodes(self) -> int:
+        """Their nodes, each given a bump."""
+    @property
+    def against_mesh(self) -> int:
+        """Of those, nodes on the mesh's side held by a stray piece (parts thinner than the grid)."""
+    @property
+    def rounds(self) -> int:
+        """Passes that found stray pieces."""
+    @property
+    def pieces_left(self) -> int:
+        """Stray pieces left after the last pass."""
+
+@final
+class PerturbReport:
+    """What a conversion by the perturbation method did: the loop, then the two checks."""
+
+    @property
+    def perturbation(self) -> PerturbLoop: ...
+    @property
+    def cleanup(self) -> Cleanup: ...
+    @property
+    def strays(self) -> Strays: ...
 
 @final
 class Field:
@@ -298,6 +560,38 @@ class Field:
     def offset(self, distance: float) -> "Field":
         """The shape grown (distance > 0) or shrunk (distance < 0); |distance| must be below
         exact_band."""
+    def resample(
+        self,
+        res: int = 128,
+        *,
+        bounds: Optional[Tuple[_Vec3, _Vec3]] = None,
+        band: float = 4.0,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """This field sampled on a cube grid of ``res`` nodes per axis over its box (or over
+        ``bounds``) and fitted again; node values within ``band`` grid spacings of the surface
+        kept, clamped beyond."""
+    @staticmethod
+    def primitive(
+        solid: str,
+        *,
+        res: int = 128,
+        bounds: Optional[Tuple[_Vec3, _Vec3]] = None,
+        band: float = 4.0,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """An analytic solid given as ``csg`` takes it (``"sphere:x,y,z,r"``, ``"box:..."``,
+        ``"plane:..."``, ``"cylinder:..."``) as a field on a cube grid of ``res`` nodes over its
+        box (``bounds`` for planes and cylinders), exact within ``band`` grid spacings."""
+    def denoise(
+        self,
+        masks: Sequence[_Mask],
+        *,
+        coarse: int = 30,
+        progress: Optional[_Progress] = None,
+    ) -> "Field":
+        """The field inside ``masks`` resampled with ``coarse`` samples along each mask's longest
+        side and blended back: ``repair(masks, denoise=True)``."""
     def shell(
         self,
         thickness: float,
@@ -554,12 +848,12 @@ def write_mesh(path: _PathLike, vertices: _Points, faces: _Faces) -> None:
 
 def compare(
     a: _MeshLike, b: _MeshLike, *, samples: int = 200000, seed: int = 0
-) -> Dict[str, Any]:
+) -> Comparison:
     """Mesh ``a`` against reference ``b``: symmetric Hausdorff and Chamfer-L1 distances (also
     in percent of b's bounding-box diagonal), mean distances each way, normal deviation in
-    degrees, the deviation of a's vertices and vertex normals from b ("vertex_deviation"), the
-    mean depth-buffer difference over 14 views ("depth_buffer", "depth_buffer_pct"), and the
-    topology statistics of both ("a", "b")."""
+    degrees, the deviation of a's vertices and vertex normals from b (``vertex_deviation``), the
+    mean depth-buffer difference over 14 views (``depth_buffer``, ``depth_buffer_pct``), and the
+    topology statistics of both (``a``, ``b``)."""
 
 def remesh(
     vertices: _Points,
@@ -605,14 +899,14 @@ def perturb(
     res: int = 128,
     list_path: Optional[_PathLike] = None,
     progress: Optional[_Progress] = None,
-) -> Tuple[Field, Dict[str, Any]]:
+) -> Tuple[Field, PerturbReport]:
     """Converts a mesh by the perturbation method (docs/perturbation.md): a base quadric plus up
     to ``max_functions`` local bumps, until every vertex is within ``tolerance`` of the
     bounding-box diagonal, each refined by up to ``descent_steps`` descent steps on its
     coefficients (the paper's optimisation step), checked on the cube grid of ``res`` nodes per axis so that its
     contour there has the mesh's pieces and no stray ones. Returns the field resampled on that
-    grid (metadata ``source = perturbation``) and the report: "perturbation" (the loop),
-    "cleanup" and "strays" (the checks). With ``list_path``, also writes the function list
+    grid (metadata ``source = perturbation``) and the report: ``perturbation`` (the loop),
+    ``cleanup`` and ``strays`` (the checks). With ``list_path``, also writes the function list
     there (a .pgv file that reads back as the same field)."""
 
 def set_memory_limit(limit: Optional[int]) -> None:

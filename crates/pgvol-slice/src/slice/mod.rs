@@ -12,6 +12,7 @@ mod plane;
 mod window;
 
 use glam::Vec3;
+use pgvol_core::progress::{Counter, Report, Span};
 use pgvol_core::{Background, BRICK_EDGE};
 use pgvol_field::kernel::Profile;
 use pgvol_field::{Basis, CoefficientVolume, Grid};
@@ -184,23 +185,31 @@ pub fn slice_volume(
     volume: &CoefficientVolume,
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
+    report: Report,
 ) -> Result<Vec<Layer>, SliceError> {
-    slice_volume_range(volume, bounds, options, 0..usize::MAX)
+    slice_volume_range(volume, bounds, options, 0..usize::MAX, report)
 }
 
 /// The layers of [`slice_volume`] numbered `range` (from 0 at the first plane), each the same
 /// as in the whole slicing: every layer is computed alone from its own plane, so layers can be
 /// sliced in parts and concatenated. A layer needs only the coefficients within the basis
 /// support of its plane.
+///
+/// Finished layers are reported to `report`, which is polled for a stop as they finish: a
+/// stopped slicing returns [`SliceError::Stopped`].
 pub fn slice_volume_range(
     volume: &CoefficientVolume,
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
     range: std::ops::Range<usize>,
+    report: Report,
 ) -> Result<Vec<Layer>, SliceError> {
+    let all = layer_heights(bounds, options)?.len();
+    let count = range.end.min(all).saturating_sub(range.start);
+    let counter = Span::whole(report).counter(count);
     if !volume.basis.is_separable() {
         let field = &|p| volume.value(p);
-        return slice_points(field, bounds, options, range);
+        return slice_points(field, bounds, options, range, Some(&counter));
     }
     let mut layers = Vec::new();
     slice_bricks(
@@ -213,6 +222,10 @@ pub fn slice_volume_range(
         range,
         &mut |layer| {
             layers.push(layer);
+            counter.tick();
+            if counter.stopped() {
+                return Err(SliceError::Stopped);
+            }
             Ok(())
         },
     )?;
@@ -295,7 +308,7 @@ pub fn slice(
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
 ) -> Result<Vec<Layer>, SliceError> {
-    slice_points(field, bounds, options, 0..usize::MAX)
+    slice_points(field, bounds, options, 0..usize::MAX, None)
 }
 
 /// [`slice`] of the layers numbered `range`, every node of every layer evaluated.
@@ -304,14 +317,21 @@ fn slice_points(
     bounds: (Vec3, Vec3),
     options: &SliceOptions,
     range: std::ops::Range<usize>,
+    counter: Option<&Counter>,
 ) -> Result<Vec<Layer>, SliceError> {
     let job = Job::new(bounds, options, range)?;
     let axis = options.axis;
-    Ok(job
-        .heights
+    job.heights
         .par_iter()
-        .map(|&h| job.layer(&PointField { field, axis, h }, h).0)
-        .collect())
+        .map(|&h| {
+            if pgvol_core::progress::stopped(counter) {
+                return Err(SliceError::Stopped);
+            }
+            let layer = job.layer(&PointField { field, axis, h }, h).0;
+            pgvol_core::progress::tick(counter);
+            Ok(layer)
+        })
+        .collect()
 }
 
 struct PointField<'a> {

@@ -178,5 +178,6 @@ pub fn slice_part(
         bounds,
         &options,
         layers,
+        pgvol_core::progress::QUIET,
     )?)
 }

@@ -295,6 +295,7 @@ impl EncodeJob {
             &sampled.values,
             part.gy.clone(),
             part.gz.clone(),
+            pgvol_core::progress::QUIET,
         )
         .map_err(|e| Error::new(ErrorKind::Internal, format!("cannot fit a part: {e}")))?;
         let owned_box = [0..counts[0], oy, oz];
@@ -375,8 +376,15 @@ pub fn assemble_encode(mesh: &Mesh, options: &EncodeOptions, parts: &[&[u8]]) ->
     coeffs.compact_tiles();
     // The report interp_sparse gives, from no samples: it depends only on the basis.
     let empty = SparseGrid::new(grid.dims, coeffs.background());
-    let (_, fit) = pgvol_field::interp_sparse_groups(grid, options.basis, &empty, 0..0, 0..0)
-        .map_err(|e| Error::new(ErrorKind::Internal, format!("{e}")))?;
+    let (_, fit) = pgvol_field::interp_sparse_groups(
+        grid,
+        options.basis,
+        &empty,
+        0..0,
+        0..0,
+        pgvol_core::progress::QUIET,
+    )
+    .map_err(|e| Error::new(ErrorKind::Internal, format!("{e}")))?;
     let volume = CoefficientVolume::from_sparse(grid, options.basis, coeffs).map_err(|e| {
         Error::new(
             ErrorKind::Internal,

@@ -9,6 +9,7 @@
 use std::time::Instant;
 
 use glam::Vec3;
+use pgvol_core::progress::QUIET;
 use pgvol_core::sparse::brick_offset;
 use pgvol_core::{Grid, SparseGrid};
 use pgvol_field::analytic::Sphere;
@@ -70,7 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let dense_secs = t.elapsed().as_secs_f64();
         drop(dense);
         let t = Instant::now();
-        let (sparse_fit, report) = interp_sparse(grid, Basis::Bspline3, &samples)?;
+        let (sparse_fit, report) = interp_sparse(grid, Basis::Bspline3, &samples, QUIET)?;
         let sparse_secs = t.elapsed().as_secs_f64();
         let diff = max_diff(&sparse_fit.coeffs, &dense_fit.coeffs) / clamp;
         println!(
@@ -85,7 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for n in sparse_only {
         let (grid, samples) = banded_sphere(n, BAND);
         let t = Instant::now();
-        let (fit, _) = interp_sparse(grid, Basis::Bspline3, &samples)?;
+        let (fit, _) = interp_sparse(grid, Basis::Bspline3, &samples, QUIET)?;
         println!(
             "{n}³: {} stored bricks, {} coefficient bricks; sparse fit {:.3} s",
             samples.stored_count(),
