@@ -61,7 +61,7 @@ pub fn shared_mesh_path(name: &str) -> PathBuf {
 pub fn load_shared(name: &str) -> Mesh {
     let path = shared_mesh_path(name);
     match pgvol::io::read_mesh(&path) {
-        Ok((mesh, _)) => mesh,
+        Ok(read) => read.mesh,
         Err(e) => panic!("cannot read shared mesh {}: {e}", path.display()),
     }
 }

@@ -33,7 +33,7 @@ fn pipeline_output_is_identical_with_one_and_two_threads() {
             let encoded = encode(&mesh, 32);
             let bytes = pgvol::io::pgv_bytes(&encoded.file, &pgvol::StorageOptions::default())
                 .expect("file bytes")
-                .0;
+                .bytes;
             (
                 bits(&encoded.file.volume.dense_coeffs()),
                 bytes,

@@ -68,10 +68,14 @@ fn encoding_in_parts_gives_the_same_file_bytes() {
             ..EncodeOptions::default()
         };
         let whole = pgvol::encode(&mesh, &options, &Silent).unwrap();
-        let (want, _) = pgvol::io::pgv_bytes(&whole.file, &StorageOptions::default()).unwrap();
+        let want = pgvol::io::pgv_bytes(&whole.file, &StorageOptions::default())
+            .unwrap()
+            .bytes;
         for parts in [1, 2, 8] {
             let got = encode_in_parts(&mesh, &options, parts);
-            let (bytes, _) = pgvol::io::pgv_bytes(&got.file, &StorageOptions::default()).unwrap();
+            let bytes = pgvol::io::pgv_bytes(&got.file, &StorageOptions::default())
+                .unwrap()
+                .bytes;
             assert!(bytes == want, "{name}: {parts} parts give other bytes");
         }
     }

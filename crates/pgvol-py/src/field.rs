@@ -416,7 +416,7 @@ impl Field {
             sign: names::sign(py, sign)?,
         };
         let encoded = run(py, progress, |p| {
-            let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+            let mesh = pgvol::io::mesh_from_world(&positions, triangles)?.mesh;
             pgvol::encode(&mesh, &options, p)
         })?;
         Ok(Field::from_file(encoded.file))
@@ -626,7 +626,7 @@ impl Field {
         precision: Option<&str>,
     ) -> PyResult<Bound<'py, PyBytes>> {
         let storage = self.storage(py, dense, precision)?;
-        let (bytes, _) = quiet(py, || pgvol::io::pgv_bytes(&self.file(), &storage))?;
+        let bytes = quiet(py, || pgvol::io::pgv_bytes(&self.file(), &storage))?.bytes;
         Ok(PyBytes::new(py, &bytes))
     }
 

@@ -37,7 +37,7 @@ fn read_mesh(
     py: Python<'_>,
     path: PathBuf,
 ) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyArray2<i32>>)> {
-    let (mesh, _) = quiet(py, || pgvol::io::read_mesh(&path))?;
+    let mesh = quiet(py, || pgvol::io::read_mesh(&path))?.mesh;
     let n = mesh.positions.len();
     let triangles = mesh.triangles.clone();
     Ok((
@@ -76,8 +76,8 @@ fn compare<'py>(
     let (va, fa) = arrays::mesh_parts(a, "a")?;
     let (vb, fb) = arrays::mesh_parts(b, "b")?;
     let comparison = quiet(py, || {
-        let (a, _) = pgvol::io::mesh_from_world(&va, fa)?;
-        let (b, _) = pgvol::io::mesh_from_world(&vb, fb)?;
+        let a = pgvol::io::mesh_from_world(&va, fa)?.mesh;
+        let b = pgvol::io::mesh_from_world(&vb, fb)?.mesh;
         pgvol::compare(&a, &b, samples, seed)
     })?;
     Ok(comparison.into())
@@ -111,7 +111,7 @@ fn signed_distance<'py>(
         sign: names::sign(py, sign)?,
     };
     let sampled = run(py, progress, |p| {
-        let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+        let mesh = pgvol::io::mesh_from_world(&positions, triangles)?.mesh;
         // The grid is returned in the mesh's local coordinates, exact only near the origin.
         pgvol::checks::require_near(mesh.offset, "signed_distance")?;
         pgvol::distances::signed_distance(&mesh, &options, p)
@@ -157,7 +157,7 @@ fn remesh<'py>(
         sign: names::sign(py, sign)?,
     };
     let remeshed = run(py, progress, |p| {
-        let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+        let mesh = pgvol::io::mesh_from_world(&positions, triangles)?.mesh;
         pgvol::remesh(&mesh, &options, p)
     })?;
     let mesh = remeshed.mesh;

@@ -44,7 +44,7 @@ fn mesh(
     let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
     quiet(py, || {
-        Ok(pgvol::io::mesh_from_world(&positions, triangles)?.0)
+        Ok(pgvol::io::mesh_from_world(&positions, triangles)?.mesh)
     })
 }
 

@@ -42,7 +42,7 @@ pub(crate) fn perturb<'py>(
     };
     let spec = pgvol::GridSpec::Res(res);
     let (file, report) = run(py, progress, |p| {
-        let (mesh, _) = pgvol::io::mesh_from_world(&positions, triangles)?;
+        let mesh = pgvol::io::mesh_from_world(&positions, triangles)?.mesh;
         let built = pgvol::perturbation::perturb_on(&mesh, &options, spec, p)?;
         if let Some(path) = &list_path {
             let header = pgvol::perturbation::perturbation_header(&built.field, &mesh, spec)?;

@@ -12,7 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let [mesh_path, res, stem] = args.as_slice() else {
         return Err("usage: encode_decode MESH RES OUT_STEM".into());
     };
-    let (mesh, _cleaned) = pgvol::io::read_mesh(mesh_path)?;
+    let mesh = pgvol::io::read_mesh(mesh_path)?.mesh;
 
     let options = EncodeOptions {
         grid: GridSpec::Res(res.parse()?),

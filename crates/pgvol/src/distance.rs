@@ -169,7 +169,8 @@ pub enum GridFormat {
 
 impl GridFormat {
     /// The format named by `path`'s extension (`.nrrd` or `.npy`).
-    pub fn from_path(path: &Path) -> Result<GridFormat> {
+    pub fn from_path(path: impl AsRef<Path>) -> Result<GridFormat> {
+        let path = path.as_ref();
         match path
             .extension()
             .and_then(|e| e.to_str())

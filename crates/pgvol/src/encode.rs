@@ -274,12 +274,24 @@ pub struct StorageOptions {
 /// What writing a file stored, `None` parts for dense files.
 pub type StorageReport = Option<pgvol_format::EncodeReport>;
 
+/// A `.pgv` file's bytes and what they store.
+#[derive(Clone, Debug)]
+pub struct PgvBytes {
+    /// The whole file.
+    pub bytes: Vec<u8>,
+    /// The stored bricks and their sizes; `None` for a dense file.
+    pub storage: StorageReport,
+}
+
 /// The bytes of `file` as `storage` asks. Sparse files keep the bricks around nodes within the
 /// recorded band less one spacing, dilated by the basis support: that covers every cell of a
 /// level set the band supports without storing the clamped nodes at the band's edge.
-pub fn pgv_bytes(file: &PgvFile, storage: &StorageOptions) -> Result<(Vec<u8>, StorageReport)> {
+pub fn pgv_bytes(file: &PgvFile, storage: &StorageOptions) -> Result<PgvBytes> {
     let (encoded, report) = encoded_pgv(file, storage)?;
-    Ok((encoded.to_bytes(), report))
+    Ok(PgvBytes {
+        bytes: encoded.to_bytes(),
+        storage: report,
+    })
 }
 
 /// A file encoded as `storage` asks, held in pieces: a sparse file's blobs are written as they

@@ -20,7 +20,8 @@ use crate::field_value::Field;
 ///
 /// The points are world coordinates, parsed in f64 so that points far from the origin keep
 /// their precision until [`eval`] takes them into the field's frame.
-pub fn read_points(r: impl Read, name: &Path) -> Result<Vec<DVec3>> {
+pub fn read_points(r: impl Read, name: impl AsRef<Path>) -> Result<Vec<DVec3>> {
+    let name = name.as_ref();
     let fail = |message: String| Error::new(ErrorKind::InputFile, message).at(name);
     let mut points = Vec::new();
     let mut seen_data = false;

@@ -28,7 +28,8 @@ pub enum ExportKind {
 
 impl ExportKind {
     /// The target of `path`'s extension; `coefficients` asks for the coefficients (NRRD only).
-    pub fn from_path(path: &Path, coefficients: bool) -> Result<ExportKind> {
+    pub fn from_path(path: impl AsRef<Path>, coefficients: bool) -> Result<ExportKind> {
+        let path = path.as_ref();
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -122,7 +123,8 @@ pub(crate) fn check_unit(unit: &str) -> Result<()> {
 /// extension), sampled on `options.res` nodes along the longest side (`None`: the stored grid;
 /// not for coefficients); a 3MF package names `options.unit` (one of [`THREEMF_UNITS`]).
 /// Returns the grid written.
-pub fn export(path: &Path, file: &PgvFile, options: &ExportOptions) -> Result<Grid> {
+pub fn export(path: impl AsRef<Path>, file: &PgvFile, options: &ExportOptions) -> Result<Grid> {
+    let path = path.as_ref();
     let kind = match options.kind {
         Some(kind) => kind,
         None => ExportKind::from_path(path, false)?,

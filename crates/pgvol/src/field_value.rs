@@ -188,7 +188,7 @@ impl Field {
             }
             return Ok(field);
         }
-        let (mesh, _) = mesh_io::read_mesh(path)?;
+        let mesh = mesh_io::read_mesh(path)?.mesh;
         Field::for_operations(mesh, options, progress).map_err(at_path)
     }
 
@@ -359,7 +359,7 @@ impl Field {
 
     /// The bytes of the field's `.pgv` file; see [`Field::save`].
     pub fn to_bytes(&self, storage: &StorageOptions) -> Result<Vec<u8>> {
-        Ok(crate::encode::pgv_bytes(&self.file, storage)?.0)
+        Ok(crate::encode::pgv_bytes(&self.file, storage)?.bytes)
     }
 
     /// Writes the field's `.pgv` file to any writer; see [`Field::save`].

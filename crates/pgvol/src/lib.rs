@@ -25,7 +25,7 @@
 //! // vertices welded, degenerate triangles dropped).
 //! let sphere_path = dir.path().join("sphere.obj");
 //! pgvol::io::write_mesh(&sphere_path, &pgvol::mesh::shapes::octasphere(4))?;
-//! let (mesh, _cleaned) = pgvol::io::read_mesh(&sphere_path)?;
+//! let mesh = pgvol::io::read_mesh(&sphere_path)?.mesh;
 //!
 //! // Encode: signed distance on a 48³ grid, cubic B-spline coefficients, distances kept 8 grid
 //! // spacings out so that the operations below read exact distances.
@@ -148,12 +148,13 @@ pub mod io {
     pub use crate::distance::{write_grid, GridFormat};
     pub use crate::encode::{
         check_pgv_name, is_pgv, pgv_bytes, read_coefficients_nrrd, write_pgv, write_pgv_to,
+        PgvBytes,
     };
     pub use crate::eval::{read_points, read_points_file};
     pub use crate::export::{export, VdbCompression};
     pub use crate::mesh_io::{
         check_mesh_output, mesh_format, mesh_from_parts, mesh_from_world, read_mesh,
-        read_mesh_bytes, read_mesh_in, write_mesh, write_mesh_to,
+        read_mesh_bytes, read_mesh_in, write_mesh, write_mesh_to, ReadMesh,
     };
     pub use crate::pgv_io::{
         pgv_info, read_field_source, read_field_source_bytes, read_pgv, read_pgv_bytes,

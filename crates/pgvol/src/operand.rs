@@ -122,7 +122,7 @@ impl LoadedOperand {
                 LoadedOperand::Field(Arc::new(shape))
             }
             Operand::File(path) => {
-                let (mesh, _) = mesh_io::read_mesh(path)?;
+                let mesh = mesh_io::read_mesh(path)?.mesh;
                 if mesh.bounds().is_none() {
                     return Err(Error::parameter("the mesh has no triangles").at(path));
                 }

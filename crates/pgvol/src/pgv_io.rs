@@ -59,7 +59,8 @@ pub fn read_field_source(path: impl AsRef<Path>) -> Result<FieldSource> {
 /// Decodes and checks the bytes of a `.pgv` file of either kind; `name` labels errors. The
 /// grid the header declares is checked against the memory limit before any coefficient is
 /// allocated.
-pub fn read_field_source_bytes(bytes: &[u8], name: &Path) -> Result<FieldSource> {
+pub fn read_field_source_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<FieldSource> {
+    let name = name.as_ref();
     let info = pgv_info(bytes, name)?;
     if pgvol_format::is_perturbation(&info.header) {
         crate::memory::check_grid("resampling the perturbation field", &info.header.grid, 4)
@@ -88,7 +89,8 @@ pub fn read_pgv(path: impl AsRef<Path>) -> Result<PgvFile> {
 }
 
 /// Decodes and checks the bytes of a `.pgv` file as a coefficient volume; `name` labels errors.
-pub fn read_pgv_bytes(bytes: &[u8], name: &Path) -> Result<PgvFile> {
+pub fn read_pgv_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<PgvFile> {
+    let name = name.as_ref();
     read_field_source_bytes(bytes, name)?
         .into_file(&Silent)
         .map_err(|e| match e.path() {
@@ -111,7 +113,8 @@ fn read_bytes(info: &PgvInfo) -> u64 {
 }
 
 /// Reads a `.pgv` file from any reader to its end; `name` labels errors.
-pub fn read_pgv_from(r: &mut dyn Read, name: &Path) -> Result<PgvFile> {
+pub fn read_pgv_from(r: &mut dyn Read, name: impl AsRef<Path>) -> Result<PgvFile> {
+    let name = name.as_ref();
     let mut bytes = Vec::new();
     r.read_to_end(&mut bytes).map_err(|e| {
         Error::new(ErrorKind::InputFile, format!("cannot read: {e}"))
@@ -122,6 +125,7 @@ pub fn read_pgv_from(r: &mut dyn Read, name: &Path) -> Result<PgvFile> {
 }
 
 /// What a file holds and how its bytes divide, without decoding the coefficients.
-pub fn pgv_info(bytes: &[u8], name: &Path) -> Result<PgvInfo> {
+pub fn pgv_info(bytes: &[u8], name: impl AsRef<Path>) -> Result<PgvInfo> {
+    let name = name.as_ref();
     pgvol_format::pgv_info(bytes, name).reading()
 }

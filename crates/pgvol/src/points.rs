@@ -96,7 +96,8 @@ pub fn read_point_cloud(path: impl AsRef<Path>) -> Result<PointCloud> {
 /// byte-order mark is ignored. Coordinates must be finite and below
 /// [`MAX_COORDINATE`](pgvol_mesh::MAX_COORDINATE) in magnitude, normals finite; `name` labels
 /// errors.
-pub fn read_cloud_text(r: impl Read, name: &Path) -> Result<PointCloud> {
+pub fn read_cloud_text(r: impl Read, name: impl AsRef<Path>) -> Result<PointCloud> {
+    let name = name.as_ref();
     let fail = |message: String| Error::new(ErrorKind::InputFile, message).at(name);
     let mut cloud = PointCloud::default();
     let mut normals = Vec::new();

@@ -207,7 +207,8 @@ pub enum LayerFormat {
 impl LayerFormat {
     /// The format of `path`'s extension (`.svg`, `.cli`, `.json`); `binary` asks for the
     /// binary form of `.cli` and is refused for the others.
-    pub fn from_path(path: &Path, binary: bool) -> Result<LayerFormat> {
+    pub fn from_path(path: impl AsRef<Path>, binary: bool) -> Result<LayerFormat> {
+        let path = path.as_ref();
         let ext = path
             .extension()
             .and_then(|e| e.to_str())

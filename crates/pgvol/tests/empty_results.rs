@@ -41,7 +41,9 @@ fn sheet(n: u32) -> Mesh {
             triangles.push([a, a + n + 2, a + n + 1]);
         }
     }
-    pgvol::io::mesh_from_parts(positions, triangles).unwrap().0
+    pgvol::io::mesh_from_parts(positions, triangles)
+        .unwrap()
+        .mesh
 }
 
 /// The sheet tilted: open and without thickness, though not flat along an axis.
@@ -55,7 +57,7 @@ fn tilted(n: u32) -> Mesh {
         .collect();
     pgvol::io::mesh_from_world(&world, mesh.triangles.clone())
         .unwrap()
-        .0
+        .mesh
 }
 
 /// Counts the stages a call starts.

@@ -57,7 +57,10 @@ fn pgv_bytes_writers_and_paths_give_the_same_file() {
             ..StorageOptions::default()
         },
     ] {
-        let (bytes, report) = pgvol::io::pgv_bytes(&file, &storage).unwrap();
+        let pgvol::io::PgvBytes {
+            bytes,
+            storage: report,
+        } = pgvol::io::pgv_bytes(&file, &storage).unwrap();
         assert_eq!(report.is_none(), storage.dense);
 
         let path = dir.path().join("s.pgv");
@@ -103,9 +106,14 @@ fn mesh_bytes_writers_and_paths_agree_in_every_format() {
         pgvol::io::write_mesh_to(&mut sink, &mesh, format, &path).unwrap();
         assert_eq!(sink, on_disk, "{format:?}");
 
-        let (from_path, report) = pgvol::io::read_mesh(&path).unwrap();
-        let (from_bytes, report_bytes) =
-            pgvol::io::read_mesh_bytes(&on_disk, format, Path::new("memory")).unwrap();
+        let pgvol::io::ReadMesh {
+            mesh: from_path,
+            cleaned: report,
+        } = pgvol::io::read_mesh(&path).unwrap();
+        let pgvol::io::ReadMesh {
+            mesh: from_bytes,
+            cleaned: report_bytes,
+        } = pgvol::io::read_mesh_bytes(&on_disk, format, Path::new("memory")).unwrap();
         assert_eq!(from_bytes, from_path, "{format:?}");
         assert_eq!(report_bytes, report, "{format:?}");
         assert_eq!(
@@ -292,7 +300,9 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
     };
     let file = pgvol::encode(&sphere(), &options, &Silent).unwrap().file;
     let h = file.volume.grid.spacing;
-    let (encoded, _) = pgvol::io::pgv_bytes(&file, &StorageOptions::default()).unwrap();
+    let encoded = pgvol::io::pgv_bytes(&file, &StorageOptions::default())
+        .unwrap()
+        .bytes;
     let shape = Field::from_file(file);
     let band = shape.band().unwrap();
     let dense = StorageOptions {
@@ -329,7 +339,10 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
         assert!((recorded - (band - shift)).abs() <= 1e-6 * band, "{what}");
 
         // Sparse and quantised as `encode` writes, about as small.
-        let (bytes, report) = pgvol::io::pgv_bytes(&derived, &StorageOptions::default()).unwrap();
+        let pgvol::io::PgvBytes {
+            bytes,
+            storage: report,
+        } = pgvol::io::pgv_bytes(&derived, &StorageOptions::default()).unwrap();
         let report = report.expect("a sparse file");
         assert_eq!(report.precision, pgvol::Precision::Fixed, "{what}");
         assert!(
@@ -343,7 +356,10 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
             encoded.len()
         );
         // Dense on request, every coefficient as it is.
-        let (full, none) = pgvol::io::pgv_bytes(&derived, &dense).unwrap();
+        let pgvol::io::PgvBytes {
+            bytes: full,
+            storage: none,
+        } = pgvol::io::pgv_bytes(&derived, &dense).unwrap();
         assert!(none.is_none() && full.len() > 4 * bytes.len(), "{what}");
         let name = Path::new("d.pgv");
         let exact = pgvol::io::read_pgv_bytes(&full, name).unwrap();
@@ -368,7 +384,9 @@ fn derived_files_are_sparse_and_keep_the_band_they_are_exact_in() {
         let reread = Field::from_file(back.clone());
         assert_eq!(reread.band(), Some(recorded));
         assert!((reread.exact_band() - (recorded - 2.0 * h)).abs() <= 1e-5 * band);
-        let (again, _) = pgvol::io::pgv_bytes(&back, &StorageOptions::default()).unwrap();
+        let again = pgvol::io::pgv_bytes(&back, &StorageOptions::default())
+            .unwrap()
+            .bytes;
         assert!(again == bytes, "{what}: writing the read file changed it");
     }
 }
@@ -895,7 +913,10 @@ fn meshes_from_parts_are_checked_and_cleaned_like_read_meshes() {
     positions.push(Vec3::ZERO);
     let last = positions.len() as u32 - 1;
     triangles.push([last, last, 0]);
-    let (mesh, report) = pgvol::io::mesh_from_parts(positions, triangles).unwrap();
+    let pgvol::io::ReadMesh {
+        mesh,
+        cleaned: report,
+    } = pgvol::io::mesh_from_parts(positions, triangles).unwrap();
     assert_eq!(report.degenerate_dropped, 1);
     assert_eq!(mesh.triangles.len(), s.triangles.len());
     assert!(mesh.stats().watertight);

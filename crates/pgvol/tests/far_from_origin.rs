@@ -20,7 +20,7 @@ const SAME_PCT: f64 = 1e-2;
 
 fn torus_knot() -> Mesh {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/torus-knot.obj");
-    pgvol::io::read_mesh(&path).expect("fixture").0
+    pgvol::io::read_mesh(&path).expect("fixture").mesh
 }
 
 fn unit_cube() -> Mesh {
@@ -39,7 +39,7 @@ fn moved_file(mesh: &Mesh, shift: DVec3, dir: &Path, name: &str) -> (PathBuf, Me
     }
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
-    let (read, _) = pgvol::io::read_mesh(&path).expect("moved mesh reads");
+    let read = pgvol::io::read_mesh(&path).expect("moved mesh reads").mesh;
     (path, read)
 }
 
@@ -98,7 +98,7 @@ fn remesh_far_matches_remesh_at_the_origin() {
             // And through a file: OBJ keeps the world positions in f64.
             let out = dir.path().join("out.obj");
             pgvol::io::write_mesh(&out, &far).unwrap();
-            let (back, _) = pgvol::io::read_mesh(&out).unwrap();
+            let back = pgvol::io::read_mesh(&out).unwrap().mesh;
             assert_same_surface(&back, &moved, &format!("remesh {name} by {shift}, OBJ"));
         }
     }
@@ -226,7 +226,7 @@ fn glb_and_ply_keep_far_positions_and_stl_is_refused_with_advice() {
     for ext in ["glb", "gltf", "ply", "obj"] {
         let path = dir.path().join(format!("cube.{ext}"));
         pgvol::io::write_mesh(&path, &far).unwrap();
-        let (back, _) = pgvol::io::read_mesh(&path).unwrap();
+        let back = pgvol::io::read_mesh(&path).unwrap().mesh;
         for i in 0..back.positions.len() {
             let nearest = (0..8)
                 .map(|j| (back.world(i) - moved.world(j)).length())

@@ -41,7 +41,9 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
         ..Default::default()
     };
     let encoded = pgvol::encode(&mesh, &options, &Silent).unwrap();
-    let (bytes, _) = pgvol::io::pgv_bytes(&encoded.file, &StorageOptions::default()).unwrap();
+    let bytes = pgvol::io::pgv_bytes(&encoded.file, &StorageOptions::default())
+        .unwrap()
+        .bytes;
     let name = std::path::Path::new("sphere.pgv");
 
     // 32³ coefficients are 131 kB: a 100 kB limit refuses reading, encoding and remeshing.

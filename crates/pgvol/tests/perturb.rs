@@ -33,7 +33,7 @@ fn a_resampled_field_reads_back_and_contours_closed() {
     assert_eq!(file.header.metadata["source"], "perturbation");
     let bytes = pgvol::io::pgv_bytes(&file, &pgvol::StorageOptions::default())
         .unwrap()
-        .0;
+        .bytes;
     let back = pgvol::io::read_pgv_bytes(&bytes, Path::new("bumpy.pgv")).unwrap();
     let out = pgvol::perturbation::perturbation_mesh(&back, &Silent).unwrap();
     let stats = out.stats();

@@ -20,7 +20,9 @@ fn shared_mesh(name: &str) -> PathBuf {
 
 /// The rocker arm scaled to 100 units along its longest side.
 fn rocker_mesh() -> pgvol::Mesh {
-    let (mut mesh, _) = pgvol::io::read_mesh(shared_mesh("rocker-arm")).unwrap();
+    let mut mesh = pgvol::io::read_mesh(shared_mesh("rocker-arm"))
+        .unwrap()
+        .mesh;
     let (lo, hi) = mesh.bounds().unwrap();
     let scale = 100.0 / (hi - lo).max_element();
     mesh.positions.iter_mut().for_each(|p| *p *= scale);

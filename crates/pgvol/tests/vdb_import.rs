@@ -51,8 +51,8 @@ fn encoded_vdb_files_read_back_and_wrong_grid_names_are_refused() {
     };
     let encoded = pgvol::io::encode_vdb(&path, &options, &Silent).unwrap();
     let storage = pgvol::StorageOptions::default();
-    let (bytes, _) = pgvol::io::pgv_bytes(&encoded.file, &storage).unwrap();
-    let back = pgvol::io::read_pgv_bytes(&bytes, "second.pgv".as_ref()).unwrap();
+    let bytes = pgvol::io::pgv_bytes(&encoded.file, &storage).unwrap().bytes;
+    let back = pgvol::io::read_pgv_bytes(&bytes, "second.pgv").unwrap();
     assert_eq!(pgvol::io::recorded_band(&back), Some(3.0));
     let field = Field::from_file(back);
     // 'second' is OpenVDB's sphere of radius 2.5 about (12, 12, 12).

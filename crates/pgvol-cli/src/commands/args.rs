@@ -233,7 +233,10 @@ pub fn load_mesh_with_unit(
     input: MeshInputArgs,
     quiet: bool,
 ) -> Result<(pgvol::Mesh, Option<String>)> {
-    let (mesh, report) = pgvol::io::read_mesh_in(path, input.choice())?;
+    let pgvol::io::ReadMesh {
+        mesh,
+        cleaned: report,
+    } = pgvol::io::read_mesh_in(path, input.choice())?;
     let is_stl = matches!(
         pgvol::mesh::MeshFormat::from_path(path),
         Ok(pgvol::mesh::MeshFormat::Stl)

@@ -15,7 +15,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mesh_path = PathBuf::from(args.get(1).expect("usage: format_sizes MESH N"));
     let n: usize = args.get(2).map_or(64, |s| s.parse().expect("N"));
-    let (mesh, _) = pgvol::io::read_mesh(&mesh_path).expect("mesh");
+    let mesh = pgvol::io::read_mesh(&mesh_path).expect("mesh").mesh;
     let options = EncodeOptions {
         grid: GridSpec::Res(n),
         ..EncodeOptions::default()
@@ -29,7 +29,7 @@ fn main() {
     let file_size = |storage: StorageOptions| {
         pgvol::io::pgv_bytes(&file, &storage)
             .expect("pgv bytes")
-            .0
+            .bytes
             .len()
     };
     let dense = file_size(StorageOptions {

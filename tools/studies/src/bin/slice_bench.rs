@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let layers: usize = args.next().map_or(Ok(500), |s| s.parse())?;
 
     let t = Instant::now();
-    let (mesh, _) = pgvol::io::read_mesh(&path)?;
+    let mesh = pgvol::io::read_mesh(&path)?.mesh;
     let options = EncodeOptions {
         grid: GridSpec::Res(res),
         ..EncodeOptions::default()
