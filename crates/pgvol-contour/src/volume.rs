@@ -11,6 +11,7 @@ use crate::edge_cubic::crossing_on_grid_edge;
 use crate::field::Field;
 use crate::grids::padded;
 use crate::marching::marching_cubes_samples;
+use crate::place::onto_edge;
 use crate::root::edge_root;
 use crate::samples::{DenseNodes, Nodes, PaddedNodes, Samples};
 use crate::volume_root::volume_refine;
@@ -134,6 +135,21 @@ pub fn contour_field(
     options: &DualContourOptions,
     report: Report,
 ) -> Result<pgvol_core::Mesh, SamplesError> {
+    contour_field_placing(field, grid, inner, iso, method, options, None, report)
+}
+
+/// [`contour_field`], with dual contouring's Hermite data from `hermite` where it answers.
+#[allow(clippy::too_many_arguments)]
+fn contour_field_placing(
+    field: &dyn Field,
+    grid: &Grid,
+    inner: &[f32],
+    iso: f32,
+    method: Method,
+    options: &DualContourOptions,
+    hermite: Option<&EdgeHermite>,
+    report: Report,
+) -> Result<pgvol_core::Mesh, SamplesError> {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
     if nodes != Some(inner.len()) {
         return Err(SamplesError::Count {
@@ -163,7 +179,13 @@ pub fn contour_field(
     let mesh = match method {
         Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
-            let place = |a, va, b, vb, axis| {
+            let place = |a: Vec3, va, b: Vec3, vb, axis| {
+                let given = hermite
+                    .filter(|_| in_box(a) && in_box(b))
+                    .and_then(|h| h(a, b, axis, va < iso));
+                if let Some((p, n)) = given {
+                    return (onto_edge(a, b, axis, p), n.normalize_or_zero());
+                }
                 let p = refine(a, va, b, vb);
                 with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
             };
@@ -172,6 +194,41 @@ pub fn contour_field(
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
     };
     Ok(in_frame_of(grid, mesh))
+}
+
+/// Hermite data of a grid edge given from outside: called with the edge's ends `a` (lower) and
+/// `b`, which lie on either side of iso, its axis and whether `a` is the inside end, it returns
+/// the crossing and the unit normal there (pointing to the outside end), or `None` to find them
+/// on the field as usual.
+pub type EdgeHermite<'a> = dyn Fn(Vec3, Vec3, usize, bool) -> Option<(Vec3, Vec3)> + Sync + 'a;
+
+/// Dual contouring as in [`contour_field`], with the crossings and normals of the edges that
+/// `hermite` answers taken from it (a mesh's own faces, where they are known exactly); the
+/// other edges, and the vertices' projection onto the zero set, use `field`. A crossing is kept
+/// on its edge as every crossing is, so the guarantees hold whatever `hermite` gives.
+///
+/// # Errors
+///
+/// As [`contour_field`].
+pub fn contour_field_hermite(
+    field: &dyn Field,
+    grid: &Grid,
+    inner: &[f32],
+    iso: f32,
+    options: &DualContourOptions,
+    hermite: &EdgeHermite,
+    report: Report,
+) -> Result<pgvol_core::Mesh, SamplesError> {
+    contour_field_placing(
+        field,
+        grid,
+        inner,
+        iso,
+        Method::DualContouring,
+        options,
+        Some(hermite),
+        report,
+    )
 }
 
 /// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
