@@ -79,5 +79,5 @@ pub use quality::min_angle_histogram;
 pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
 pub use volume::{
     contour_field, contour_field_hermite, contour_sampled, contour_volume, contour_volume_placing,
-    EdgeHermite, Method, SamplesError,
+    dual_contour_interior, EdgeHermite, Method, SamplesError,
 };

@@ -139,10 +139,9 @@ pub fn attach(
                     return Err(Error::new(ErrorKind::Cancelled, "cancelled"));
                 }
                 let sub = &cell_box.grid;
-                let method = Method::DualContouring;
                 let exact = exact.contour_from_faces(sub, &Silent)?;
                 let quiet = pgvol_core::progress::QUIET;
-                let smooth = pgvol_contour::contour_volume(&file.volume, sub, 0.0, method, quiet);
+                let smooth = pgvol_contour::dual_contour_interior(&file.volume, sub, 0.0, quiet);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
                 update.update(finished as f64 / boxes.len() as f64);
                 Ok(stored_cells(
