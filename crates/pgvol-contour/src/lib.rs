@@ -78,5 +78,6 @@ pub use pgvol_core::progress::Report;
 pub use quality::min_angle_histogram;
 pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
 pub use volume::{
-    contour_field, contour_sampled, contour_volume, contour_volume_placing, Method, SamplesError,
+    contour_field, contour_field_hermite, contour_sampled, contour_volume, contour_volume_placing,
+    dual_contour_interior, EdgeHermite, Method, SamplesError,
 };

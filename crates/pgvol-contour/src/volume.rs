@@ -11,6 +11,7 @@ use crate::edge_cubic::crossing_on_grid_edge;
 use crate::field::Field;
 use crate::grids::padded;
 use crate::marching::marching_cubes_samples;
+use crate::place::onto_edge;
 use crate::root::edge_root;
 use crate::samples::{DenseNodes, Nodes, PaddedNodes, Samples};
 use crate::volume_root::volume_refine;
@@ -63,6 +64,35 @@ pub fn contour_volume_placing(
     report: Report,
     stored: Option<&StoredVertices>,
 ) -> pgvol_core::Mesh {
+    contour_volume_with(volume, grid, iso, method, report, stored, false)
+}
+
+/// Dual contouring of `volume` on `grid` for callers that keep only the vertices of the cells
+/// a cell or more inside `grid`: those are [`contour_volume`]'s, while the field is not
+/// evaluated outside `grid` to place vertices (the padding's cells keep their planes' point; a
+/// border cell's offset planes reaching outside fall back to its crossings'). On a small grid
+/// through a solid, where the padding closes whole faces, those cells are most of the work.
+pub fn dual_contour_interior(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    iso: f32,
+    report: Report,
+) -> pgvol_core::Mesh {
+    let method = Method::DualContouring;
+    contour_volume_with(volume, grid, iso, method, report, None, true)
+}
+
+/// [`contour_volume_placing`], the padding's cells refined on the field or (`interior_only`)
+/// not.
+fn contour_volume_with(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    iso: f32,
+    method: Method,
+    report: Report,
+    stored: Option<&StoredVertices>,
+    interior_only: bool,
+) -> pgvol_core::Mesh {
     if method == Method::MarchingCubes {
         let mut mesh = pgvol_core::Mesh::default();
         let collect = &mut |part: crate::runs::RunPart| {
@@ -79,7 +109,16 @@ pub fn contour_volume_placing(
     let sampling = Some(span.part(0.0, SAMPLING_PART));
     let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso, sampling);
     let rest = Some(span.part(SAMPLING_PART, 1.0));
-    let mesh = contour_nodes(volume, &padded(grid), &nodes, iso, method, rest, stored);
+    let interior = interior_only.then(|| (grid.origin, grid.max_corner()));
+    let mesh = contour_nodes(
+        volume,
+        &padded(grid),
+        &nodes,
+        iso,
+        (method, interior),
+        rest,
+        stored,
+    );
     in_frame_of(grid, mesh)
 }
 
@@ -96,7 +135,15 @@ pub(crate) fn contour_samples(
     method: Method,
 ) -> pgvol_core::Mesh {
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
-    contour_nodes(volume, &padded(grid), &nodes, iso, method, None, None)
+    contour_nodes(
+        volume,
+        &padded(grid),
+        &nodes,
+        iso,
+        (method, None),
+        None,
+        None,
+    )
 }
 
 /// Why [`contour_field`] cannot contour the samples it is given.
@@ -134,6 +181,21 @@ pub fn contour_field(
     options: &DualContourOptions,
     report: Report,
 ) -> Result<pgvol_core::Mesh, SamplesError> {
+    contour_field_placing(field, grid, inner, iso, method, options, None, report)
+}
+
+/// [`contour_field`], with dual contouring's Hermite data from `hermite` where it answers.
+#[allow(clippy::too_many_arguments)]
+fn contour_field_placing(
+    field: &dyn Field,
+    grid: &Grid,
+    inner: &[f32],
+    iso: f32,
+    method: Method,
+    options: &DualContourOptions,
+    hermite: Option<&EdgeHermite>,
+    report: Report,
+) -> Result<pgvol_core::Mesh, SamplesError> {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
     if nodes != Some(inner.len()) {
         return Err(SamplesError::Count {
@@ -163,15 +225,77 @@ pub fn contour_field(
     let mesh = match method {
         Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
-            let place = |a, va, b, vb, axis| {
+            let place = |a: Vec3, va, b: Vec3, vb, axis| {
+                if let Some(h) = hermite {
+                    if !(in_box(a) && in_box(b)) {
+                        // Into the padding: only the cells outside the grid use it, and those
+                        // are artificial; the edge itself is the normal (as for a missing
+                        // gradient), which costs no query of the field.
+                        let p = crate::place::lerp_crossing(a, va, b, vb, iso);
+                        let mut n = Vec3::ZERO;
+                        n[axis] = if va < iso { 1.0 } else { -1.0 };
+                        return (onto_edge(a, b, axis, p), n);
+                    }
+                    if let Some((p, n)) = h(a, b, axis, va < iso) {
+                        return (onto_edge(a, b, axis, p), n.normalize_or_zero());
+                    }
+                }
                 let p = refine(a, va, b, vb);
                 with_normal(a, b, axis, p, |p| field.value_gradient(p).1)
             };
-            dual_contour_with(&samples, field, options, &place, None)
+            // With Hermite data given, the padding's cells are not projected onto the field
+            // either: a vanishing gradient leaves their vertices where the planes put them.
+            let inside_only = |p: Vec3| match in_box(p) {
+                true => field.value_gradient(p),
+                false => (f32::NAN, Vec3::ZERO),
+            };
+            let placing: &dyn Field = if hermite.is_some() {
+                &inside_only
+            } else {
+                field
+            };
+            dual_contour_with(&samples, placing, options, &place, None)
         }
         Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
     };
     Ok(in_frame_of(grid, mesh))
+}
+
+/// Hermite data of a grid edge given from outside: called with the edge's ends `a` (lower) and
+/// `b`, which lie on either side of iso, its axis and whether `a` is the inside end, it returns
+/// the crossing and the unit normal there (pointing to the outside end), or `None` to find them
+/// on the field as usual.
+pub type EdgeHermite<'a> = dyn Fn(Vec3, Vec3, usize, bool) -> Option<(Vec3, Vec3)> + Sync + 'a;
+
+/// Dual contouring as in [`contour_field`], with the crossings and normals of the edges that
+/// `hermite` answers taken from it (a mesh's own faces, where they are known exactly); the
+/// other edges, and the vertices' projection onto the zero set, use `field`, but for the cells
+/// and edges of the padding, which take the edge's direction as normal and are not projected:
+/// only cells outside the grid use them. A crossing is kept
+/// on its edge as every crossing is, so the guarantees hold whatever `hermite` gives.
+///
+/// # Errors
+///
+/// As [`contour_field`].
+pub fn contour_field_hermite(
+    field: &dyn Field,
+    grid: &Grid,
+    inner: &[f32],
+    iso: f32,
+    options: &DualContourOptions,
+    hermite: &EdgeHermite,
+    report: Report,
+) -> Result<pgvol_core::Mesh, SamplesError> {
+    contour_field_placing(
+        field,
+        grid,
+        inner,
+        iso,
+        Method::DualContouring,
+        options,
+        Some(hermite),
+        report,
+    )
 }
 
 /// Contours the `iso` level set of `volume` given its samples `values` on `grid` (x fastest),
@@ -193,17 +317,19 @@ pub fn contour_sampled(
     let nodes = DenseNodes::new(values, grid.dims);
     in_frame_of(
         grid,
-        contour_nodes(volume, grid, &nodes, iso, method, None, None),
+        contour_nodes(volume, grid, &nodes, iso, (method, None), None, None),
     )
 }
 
 /// [`contour_sampled`] with the samples from any source.
+/// With `interior` (a box), dual contouring evaluates the field only inside it to place the
+/// vertices of cells.
 fn contour_nodes(
     volume: &CoefficientVolume,
     grid: &Grid,
     nodes: &dyn Nodes,
     iso: f32,
-    method: Method,
+    (method, interior): (Method, Option<(Vec3, Vec3)>),
     span: Option<Span>,
     stored: Option<&StoredVertices>,
 ) -> pgvol_core::Mesh {
@@ -224,7 +350,16 @@ fn contour_nodes(
                     with_normal(a, b, axis, p, |p| volume.value_gradient(p).1)
                 })
             };
-            dual_contour_with(&samples, volume, &options, &place, stored)
+            let inside_only = |p: Vec3| match interior {
+                Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => {
+                    (f32::NAN, Vec3::ZERO)
+                }
+                _ => volume.value_gradient(p),
+            };
+            match interior {
+                Some(_) => dual_contour_with(&samples, &inside_only, &options, &place, stored),
+                None => dual_contour_with(&samples, volume, &options, &place, stored),
+            }
         }
         Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
     }
@@ -270,6 +405,43 @@ mod tests {
             .map(|(a, b)| a.distance(*b))
             .fold(0.0, f32::max);
         assert!(worst < 1e-3 * v.grid.spacing, "{worst}");
+    }
+
+    /// On a sub-grid cutting through the shape, the cells a cell or more inside the sub-grid get
+    /// the vertices [`contour_volume`] gives them, and the padding's own cells differ.
+    #[test]
+    fn interior_dual_contouring_keeps_the_inside_cells_vertices() {
+        let v = two_balls(Basis::Bspline3);
+        let h = v.grid.spacing;
+        let sub = Grid {
+            origin: v.grid.point(8, 10, 12),
+            spacing: h,
+            dims: [14, 12, 10],
+            offset: Default::default(),
+        };
+        let quiet = pgvol_core::progress::QUIET;
+        let full = contour_volume(&v, &sub, 0.0, Method::DualContouring, quiet);
+        let interior = dual_contour_interior(&v, &sub, 0.0, quiet);
+        // The same cells (quads next to the padding may split the other way).
+        assert_eq!(full.positions.len(), interior.positions.len());
+        assert_eq!(full.triangles.len(), interior.triangles.len());
+        let inside = |p: Vec3| {
+            let u = (p - sub.origin) / h;
+            u.cmpgt(Vec3::ONE).all() && u.cmplt(Vec3::from(sub.dims.map(|n| n as f32 - 2.0))).all()
+        };
+        let (mut same, mut moved) = (0, 0);
+        for (a, b) in full.positions.iter().zip(&interior.positions) {
+            if inside(*a) {
+                assert_eq!(a, b, "an inside vertex moved");
+                same += 1;
+            } else if a != b {
+                moved += 1;
+            }
+        }
+        assert!(
+            same > 100 && moved > 10,
+            "{same} inside, {moved} padding vertices moved"
+        );
     }
 
     #[test]

@@ -382,6 +382,51 @@ impl Bvh {
             .map(|(into_back, into_front)| into_back - into_front)
     }
 
+    /// The one triangle the segment from `a` to `b` crosses, with where: the Hermite data of a
+    /// grid edge whose ends lie on either side of the surface. Anything else (no crossing,
+    /// several, or one too close to an edge, a vertex or an end of the segment to be sure of)
+    /// is [`SegmentHit::NotOne`], for the caller's own fallback.
+    pub fn segment_hit(&self, a: Vec3, b: Vec3) -> SegmentHit {
+        let (pa, pb) = (Vec3A::from(a), Vec3A::from(b));
+        let (lo, hi) = (pa.min(pb), pa.max(pb));
+        let dir = pb - pa;
+        let mut found = None;
+        let mut stack: Vec<u32> = Vec::with_capacity(32);
+        if !self.nodes.is_empty() {
+            stack.push(0);
+        }
+        while let Some(id) = stack.pop() {
+            let node = &self.nodes[id as usize];
+            if node.min.cmpgt(hi).any() || node.max.cmplt(lo).any() {
+                continue;
+            }
+            if !node.is_leaf() {
+                stack.push(node.first);
+                stack.push(node.first + 1);
+                continue;
+            }
+            for slot in node.first..node.first + node.count {
+                let t = &self.tris[slot as usize];
+                match segment_crossing(pa, dir, t, JUMP_END_MARGIN) {
+                    Crossing::None => {}
+                    Crossing::Unsure => return SegmentHit::NotOne,
+                    Crossing::IntoBack(s) | Crossing::IntoFront(s) => {
+                        if found.is_some() {
+                            return SegmentHit::NotOne;
+                        }
+                        let [p, q, r] = *t;
+                        found = Some(SegmentHit::One {
+                            point: (pa + dir * s).into(),
+                            normal: (q - p).cross(r - p).normalize_or_zero().into(),
+                            triangle: self.tri_ids[slot as usize],
+                        });
+                    }
+                }
+            }
+        }
+        found.unwrap_or(SegmentHit::NotOne)
+    }
+
     /// How many triangles the ray `origin + s·dir`, `s > 0`, crosses; `None` when a crossing is
     /// too close to an edge, a vertex or the origin to count reliably.
     pub fn ray_crossings(&self, origin: Vec3, dir: Vec3) -> Option<u32> {
@@ -433,8 +478,8 @@ impl Bvh {
                 match segment_crossing(a, dir, t, end_margin) {
                     Crossing::None => {}
                     Crossing::Unsure => return None,
-                    Crossing::IntoBack => into_back += 1,
-                    Crossing::IntoFront => into_front += 1,
+                    Crossing::IntoBack(_) => into_back += 1,
+                    Crossing::IntoFront(_) => into_front += 1,
                 }
             }
         }
@@ -456,6 +501,21 @@ impl Bvh {
     }
 }
 
+/// What [`Bvh::segment_hit`] found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SegmentHit {
+    /// The segment crosses exactly one triangle, well inside it: the crossing, the triangle's
+    /// unit normal (by its winding, counter-clockwise seen from its front) and its index in the
+    /// mesh.
+    One {
+        point: Vec3,
+        normal: Vec3,
+        triangle: u32,
+    },
+    /// No crossing, several, or one too close to a triangle's edge or the segment's ends.
+    NotOne,
+}
+
 /// Crossings this close to an end of a segment (as a fraction of its length) are unsure.
 const JUMP_END_MARGIN: f32 = 1e-4;
 
@@ -465,8 +525,8 @@ pub(crate) fn triangle_jump(a: Vec3A, b: Vec3A, t: &[Vec3A; 3]) -> Option<i32> {
     match segment_crossing(a, b - a, t, JUMP_END_MARGIN) {
         Crossing::None => Some(0),
         Crossing::Unsure => None,
-        Crossing::IntoBack => Some(1),
-        Crossing::IntoFront => Some(-1),
+        Crossing::IntoBack(_) => Some(1),
+        Crossing::IntoFront(_) => Some(-1),
     }
 }
 
@@ -475,10 +535,11 @@ enum Crossing {
     None,
     /// Too close to an edge, a vertex or a segment end, or parallel within rounding.
     Unsure,
-    /// Through the triangle against its normal (from outside to inside).
-    IntoBack,
+    /// Through the triangle against its normal (from outside to inside), at this parameter
+    /// of the segment.
+    IntoBack(f32),
     /// Through the triangle along its normal.
-    IntoFront,
+    IntoFront(f32),
 }
 
 /// Möller–Trumbore on the segment `a + s·dir`, `s ∈ [0, 1]`, with margins (1e-4 in barycentric
@@ -517,9 +578,9 @@ fn segment_crossing(a: Vec3A, dir: Vec3A, t: &[Vec3A; 3], end_margin: f32) -> Cr
     }
     // det > 0 means dir · normal < 0: the segment enters through the front face.
     if det > 0.0 {
-        Crossing::IntoBack
+        Crossing::IntoBack(s)
     } else {
-        Crossing::IntoFront
+        Crossing::IntoFront(s)
     }
 }
 
@@ -543,6 +604,49 @@ mod tests {
             triangles.push([b, b + 1, b + 2]);
         }
         Mesh::new(positions, triangles)
+    }
+
+    /// On a sphere of 8192 triangles, a short segment across the surface crosses one
+    /// triangle: the point must lie on the segment and in that triangle's plane, with the
+    /// triangle's own normal pointing out of the sphere; a segment through the whole sphere
+    /// crosses two and one outside it none.
+    #[test]
+    fn segment_hits_give_the_one_crossed_triangle_and_its_normal() {
+        let mesh = octasphere(5);
+        let bvh = Bvh::build(&mesh);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let mut found = 0;
+        for _ in 0..500 {
+            let d = Vec3::new(rng.gen(), rng.gen(), rng.gen()) * 2.0 - Vec3::ONE;
+            let Some(d) = d.try_normalize() else { continue };
+            let (a, b) = (d * 0.9, d * 1.1);
+            let SegmentHit::One {
+                point,
+                normal,
+                triangle,
+            } = bvh.segment_hit(a, b)
+            else {
+                continue;
+            };
+            found += 1;
+            let [p, q, r] = mesh.triangle(triangle as usize);
+            let plane = (q - p).cross(r - p).normalize();
+            assert!(
+                (point - p).dot(plane).abs() < 1e-5,
+                "{point} off its triangle"
+            );
+            assert!(
+                (point - a).cross(b - a).length() < 1e-5,
+                "{point} off the segment"
+            );
+            assert!(normal.distance(plane) < 1e-5 && normal.dot(d) > 0.9);
+        }
+        // Only segments through a triangle's edge or corner (within 1e-4) are unsure.
+        assert!(found > 480, "{found} of 500");
+        let through = bvh.segment_hit(Vec3::new(-2.0, 0.1, 0.2), Vec3::new(2.0, 0.1, 0.2));
+        assert_eq!(through, SegmentHit::NotOne);
+        let outside = bvh.segment_hit(Vec3::new(2.0, 0.1, 0.2), Vec3::new(3.0, 0.1, 0.2));
+        assert_eq!(outside, SegmentHit::NotOne);
     }
 
     #[test]

@@ -18,7 +18,7 @@ pub mod triangle;
 mod wide;
 pub mod winding;
 
-pub use bvh::{Bvh, Closest};
+pub use bvh::{Bvh, Closest, SegmentHit};
 pub use consistency::sparse_sign_contradictions_in;
 pub use grid::{Grid, GridError};
 pub use pgvol_core::grid;

@@ -4,7 +4,7 @@
 use glam::Vec3;
 use pgvol_contour::Field as ContourField;
 use pgvol_core::{Grid, Mesh};
-use pgvol_sdf::{Closest, MeshSdf, SignMode};
+use pgvol_sdf::{Closest, MeshSdf, SegmentHit, SignMode};
 
 /// Exact node distances within this many grid spacings of the surface when remeshing; farther
 /// nodes need only their sign, since contouring reads values only at crossed edges.
@@ -104,6 +104,31 @@ impl<'a> MeshField<'a> {
         #[cfg(test)]
         self.signs[1].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.sdf.is_inside_near(p, closest)
+    }
+
+    /// The crossing of the grid edge from `a` to `b` (along `axis`, `a` inside when
+    /// `a_inside`) and the normal there, from the mesh itself: where the edge meets its one
+    /// crossed triangle, and that triangle's normal, exact on a planar face and on either side
+    /// of a crease (a root found on the distance sees the crease's blended closest points
+    /// instead). `None` where the edge meets no triangle, several, or one within rounding of
+    /// its border, or one facing against the nodes' signs (inconsistent winding): the caller
+    /// finds those on the distance.
+    pub fn edge_hermite(
+        &self,
+        a: Vec3,
+        b: Vec3,
+        axis: usize,
+        a_inside: bool,
+    ) -> Option<(Vec3, Vec3)> {
+        let SegmentHit::One { point, normal, .. } = self.sdf.bvh().segment_hit(a, b) else {
+            return None;
+        };
+        let outwards = if a_inside {
+            normal[axis]
+        } else {
+            -normal[axis]
+        };
+        (outwards > 0.0).then_some((point, normal))
     }
 
     /// Outward unit normal of triangle `t` (counter-clockwise seen from outside), zero when it

@@ -66,8 +66,8 @@ pub struct EncodeArgs {
     /// `auto` stores the exact dual-contouring vertices of the cells at creases and corners, so
     /// that `decode --method dc` keeps them sharp; smooth shapes store nothing and cost nothing,
     /// and elsewhere the work follows the cells near creases (measured CPU time of the whole
-    /// encoding at 256³ and 512³: 1.4x that of `off` on the bunny, 2.2-3.4x on fandisk). `off`
-    /// stores none.
+    /// encoding at 256³ and 512³: 1.2-1.3x that of `off` on the bunny, 1.7-2.3x on fandisk).
+    /// `off` stores none.
     #[arg(long, value_enum, default_value_t)]
     pub sharp: SharpArg,
     /// Crease angle in degrees: edges of the mesh whose faces turn by more (and still do a grid

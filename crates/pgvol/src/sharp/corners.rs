@@ -25,6 +25,23 @@ const CORNER_RUN: f32 = 2.0;
 /// crease whose rounding shrinks the layers near it.
 const CORNER_TURN: f32 = 30.0;
 
+/// The straight sides on either side of a corner: the loop's points from the end of the run
+/// that gives way to it to the first one this many spacings beyond the run.
+const SIDE_LENGTH: f32 = 3.0;
+
+/// A side is straight when every one of its points lies within this many spacings of its line.
+const SIDE_STRAIGHT: f32 = 0.1;
+
+/// Stored vertices within this many spacings of a side's line lie on its face.
+const ON_SIDE: f32 = 0.25;
+
+/// ... farther than this many spacings from the stored vertex: nearer ones are in cells whose
+/// planes meet outside them, kept in the cell off either face, as the stored vertex is.
+const CORNER_CLEAR: f32 = 1.0;
+
+/// The sides' lines meeting within this many spacings of the stored vertex give the corner.
+const CORNER_SNAP: f32 = 0.5;
+
 /// Puts the corners that the stored vertices `cells` of a file on `grid` mark into `layers`,
 /// sliced along `axis` from that file's field. A layer at height `h` takes the vertices of the
 /// cells whose span along the axis holds `h`, projected onto its plane (exact for creases
@@ -81,7 +98,7 @@ pub(crate) fn sharpen_layers(layers: &mut [Layer], grid: &Grid, cells: &SharpCel
             };
             if off > CORNER_OFF * spacing
                 && off < CORNER_REACH * spacing
-                && place_corner(&mut layer.loops[l].points, c, CORNER_RUN * spacing)
+                && place_corner(&mut layer.loops[l].points, c, &by_cell[t as usize], spacing)
             {
                 placed.push(c);
             }
@@ -125,10 +142,18 @@ fn segment_distance(c: [f32; 2], p: [f32; 2], q: [f32; 2]) -> f32 {
     (e[0] * e[0] + e[1] * e[1]).sqrt()
 }
 
-/// Replaces the points of closed loop `points` within `run` of `c`, around its segment nearest
-/// `c`, by `c`, when the loop turns by more than [`CORNER_TURN`] across them; returns whether it
-/// did. A loop all within reach is left as it is.
-fn place_corner(points: &mut Vec<[f32; 2]>, c: [f32; 2], run: f32) -> bool {
+/// Replaces the points of closed loop `points` within [`CORNER_RUN`] spacings of `c`, around its
+/// segment nearest `c`, by the corner, when the loop turns by more than [`CORNER_TURN`] across
+/// them; returns whether it did. A loop all within reach is left as it is. The corner is where
+/// the loop's sides next to the run meet, moved onto the `stored` vertices of the layer that lie
+/// on them (see [`sides_meet`]), or `c` itself.
+fn place_corner(
+    points: &mut Vec<[f32; 2]>,
+    c: [f32; 2],
+    stored: &[[f32; 2]],
+    spacing: f32,
+) -> bool {
+    let run = CORNER_RUN * spacing;
     let n = points.len();
     if n < 3 {
         return false;
@@ -169,10 +194,102 @@ fn place_corner(points: &mut Vec<[f32; 2]>, c: [f32; 2], run: f32) -> bool {
     if turn <= CORNER_TURN {
         return false;
     }
+    let corner = sides_meet(points, (first, next), c, stored, spacing).unwrap_or(c);
     // Rotated so the run starts the loop, the run gives way to the corner.
     points.rotate_left(first % n);
-    points.splice(0..count, [c]);
+    points.splice(0..count, [corner]);
     true
+}
+
+/// The corner near the stored vertex `c` where the two sides of closed loop `points` meet that
+/// end the run from index `first` to `next` (cyclic, `next` excluded).
+///
+/// `c` is dual contouring's vertex of its cell, kept in the cell: where the crease passes
+/// through a cell that the decoded field does not cross (its rounding cuts inside), `c` is the
+/// nearest crossed cell's vertex, on that cell's face, a fraction of a spacing from the corner.
+/// The loop's sides away from the rounding give each face's direction (each side runs from the
+/// run's end to the first point [`SIDE_LENGTH`] spacings beyond it; a simplified loop's side is
+/// one long segment), and the stored vertices of the layer within [`ON_SIDE`] of a side and
+/// [`CORNER_CLEAR`] or more from `c`, which lie on the face exactly, its offset. `None` when a side is not straight within
+/// [`SIDE_STRAIGHT`] or the lines meet farther than [`CORNER_SNAP`] from `c`.
+fn sides_meet(
+    points: &[[f32; 2]],
+    (first, next): (usize, usize),
+    c: [f32; 2],
+    stored: &[[f32; 2]],
+    spacing: f32,
+) -> Option<[f32; 2]> {
+    let n = points.len();
+    let distance = |p: [f32; 2]| (p[0] - c[0]).hypot(p[1] - c[1]);
+    let reach = (CORNER_RUN + SIDE_LENGTH) * spacing;
+    let side = |start: usize, backwards: bool| -> Vec<[f32; 2]> {
+        let mut out = Vec::new();
+        for k in 0..n / 2 {
+            let p = points[if backwards { start + n - k } else { start + k } % n];
+            out.push(p);
+            if distance(p) >= reach {
+                break;
+            }
+        }
+        out
+    };
+    let on_faces = |line: Line| -> Line {
+        let (m, d) = line;
+        let normal = [-d[1], d[0]];
+        let offsets: Vec<f32> = stored
+            .iter()
+            .filter(|&&q| (CORNER_CLEAR * spacing..reach).contains(&distance(q)))
+            .map(|q| (q[0] - m[0]) * normal[0] + (q[1] - m[1]) * normal[1])
+            .filter(|off| off.abs() < ON_SIDE * spacing)
+            .collect();
+        if offsets.is_empty() {
+            return line;
+        }
+        let shift = offsets.iter().sum::<f32>() / offsets.len() as f32;
+        ([m[0] + shift * normal[0], m[1] + shift * normal[1]], d)
+    };
+    let straight = SIDE_STRAIGHT * spacing;
+    let before = on_faces(line_through(&side(first, true), straight)?);
+    let after = on_faces(line_through(&side(next + n - 1, false), straight)?);
+    let x = meet(before, after)?;
+    (distance(x) < CORNER_SNAP * spacing).then_some(x)
+}
+
+/// A line as a point and a unit direction.
+type Line = ([f32; 2], [f32; 2]);
+
+/// The least-squares line through `points`, when there are two or more and all lie within
+/// `tolerance` of it.
+fn line_through(points: &[[f32; 2]], tolerance: f32) -> Option<Line> {
+    if points.len() < 2 {
+        return None;
+    }
+    let count = points.len() as f32;
+    let m = points.iter().fold([0.0, 0.0], |s, p| {
+        [s[0] + p[0] / count, s[1] + p[1] / count]
+    });
+    let (mut xx, mut xy, mut yy) = (0.0f32, 0.0f32, 0.0f32);
+    for p in points {
+        let (x, y) = (p[0] - m[0], p[1] - m[1]);
+        xx += x * x;
+        xy += x * y;
+        yy += y * y;
+    }
+    // The principal direction of the points' spread.
+    let angle = 0.5 * (2.0 * xy).atan2(xx - yy);
+    let d = [angle.cos(), angle.sin()];
+    let off = |p: &[f32; 2]| ((p[0] - m[0]) * d[1] - (p[1] - m[1]) * d[0]).abs();
+    points.iter().all(|p| off(p) <= tolerance).then_some((m, d))
+}
+
+/// Where two lines meet; `None` when they are within a degree of parallel.
+fn meet((p, d): Line, (q, e): Line) -> Option<[f32; 2]> {
+    let cross = d[0] * e[1] - d[1] * e[0];
+    if cross.abs() < 1f32.to_radians().sin() {
+        return None;
+    }
+    let t = ((q[0] - p[0]) * e[1] - (q[1] - p[1]) * e[0]) / cross;
+    Some([p[0] + t * d[0], p[1] + t * d[1]])
 }
 
 #[cfg(test)]
@@ -190,7 +307,7 @@ mod tests {
             [0.8, 1.0],
             [0.0, 1.0],
         ];
-        assert!(place_corner(&mut points, [1.0, 1.0], 0.3));
+        assert!(place_corner(&mut points, [1.0, 1.0], &[], 0.15));
         assert_eq!(points.len(), 4);
         assert!(points.contains(&[1.0, 1.0]));
         for p in [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] {
@@ -216,7 +333,7 @@ mod tests {
             [0.0, 1.0],
         ];
         let before = side.clone();
-        assert!(!place_corner(&mut side, [1.05, 0.5], 0.2));
+        assert!(!place_corner(&mut side, [1.05, 0.5], &[], 0.1));
         assert_eq!(side, before);
     }
 }

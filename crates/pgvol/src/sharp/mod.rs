@@ -12,7 +12,6 @@ mod place;
 mod select;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Instant;
 
 use pgvol_core::Mesh;
 use pgvol_format::sharp::{decode_sharp, encode_sharp, SharpCells, MAX_SHARP_CELLS};
@@ -23,7 +22,6 @@ use crate::decode::DecodeOptions;
 use crate::error::{Error, ErrorKind, Result};
 use crate::progress::{Progress, Silent};
 use crate::remesh::ExactDistance;
-use crate::timings::Timings;
 use pgvol_contour::Method;
 use rayon::prelude::*;
 
@@ -141,11 +139,9 @@ pub fn attach(
                     return Err(Error::new(ErrorKind::Cancelled, "cancelled"));
                 }
                 let sub = &cell_box.grid;
-                let method = Method::DualContouring;
-                let mut timings = Timings::default();
-                let exact = exact.contour(sub, method, &mut timings, Instant::now(), &Silent)?;
+                let exact = exact.contour_from_faces(sub, &Silent)?;
                 let quiet = pgvol_core::progress::QUIET;
-                let smooth = pgvol_contour::contour_volume(&file.volume, sub, 0.0, method, quiet);
+                let smooth = pgvol_contour::dual_contour_interior(&file.volume, sub, 0.0, quiet);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
                 update.update(finished as f64 / boxes.len() as f64);
                 Ok(stored_cells(
@@ -263,9 +259,10 @@ mod tests {
         let features = feature_cells(&cube, &edges, &grid, SHARP_MIN_LENGTH, &triangle);
         let near = within_ring(&features, &grid, SHARP_RING);
         let dc = Method::DualContouring;
-        let mut timings = Timings::default();
-        let exact =
-            crate::remesh::contour_exact(&cube, &grid, dc, sign, &mut timings, &Silent).unwrap();
+        let exact = ExactDistance::new(&cube, sign)
+            .unwrap()
+            .contour_from_faces(&grid, &Silent)
+            .unwrap();
         let decode = DecodeOptions {
             method: dc,
             min_component: Some(0.0),
