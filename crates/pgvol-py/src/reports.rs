@@ -3,12 +3,48 @@
 
 use pyo3::prelude::*;
 
-/// `Name(a=…, b=…)` from a report's fields.
+/// `Name(a=…, b=…)` from a report's fields, each as Python would print it.
 macro_rules! report_repr {
     ($name:literal, $self:ident, $($field:ident),+) => {{
-        let fields: Vec<String> = vec![$(format!("{}={:?}", stringify!($field), $self.$field)),+];
+        let fields: Vec<String> =
+            vec![$(format!("{}={}", stringify!($field), $self.$field.py_repr())),+];
         format!("{}({})", $name, fields.join(", "))
     }};
+}
+
+/// A report field as Python's `repr` shows the value it converts to.
+trait PyRepr {
+    fn py_repr(&self) -> String;
+}
+
+impl PyRepr for usize {
+    fn py_repr(&self) -> String {
+        self.to_string()
+    }
+}
+
+impl PyRepr for f64 {
+    fn py_repr(&self) -> String {
+        format!("{self:?}")
+    }
+}
+
+impl PyRepr for bool {
+    fn py_repr(&self) -> String {
+        if *self { "True" } else { "False" }.to_string()
+    }
+}
+
+impl PyRepr for String {
+    fn py_repr(&self) -> String {
+        format!("'{self}'")
+    }
+}
+
+impl PyRepr for (f64, f64, f64) {
+    fn py_repr(&self) -> String {
+        format!("({:?}, {:?}, {:?})", self.0, self.1, self.2)
+    }
 }
 
 /// Topology and size of a mesh.
@@ -330,6 +366,12 @@ impl From<pgvol::perturbation::PerturbReport> for PerturbLoop {
     }
 }
 
+impl PyRepr for PerturbLoop {
+    fn py_repr(&self) -> String {
+        self.__repr__()
+    }
+}
+
 #[pymethods]
 impl PerturbLoop {
     fn __repr__(&self) -> String {
@@ -347,6 +389,12 @@ pub(crate) struct Cleanup {
     bumps: usize,
     /// Checked points still on the wrong side after it.
     wrong_after: usize,
+}
+
+impl PyRepr for Cleanup {
+    fn py_repr(&self) -> String {
+        self.__repr__()
+    }
 }
 
 #[pymethods]
@@ -370,6 +418,12 @@ pub(crate) struct Strays {
     rounds: usize,
     /// Stray pieces left after the last pass.
     pieces_left: usize,
+}
+
+impl PyRepr for Strays {
+    fn py_repr(&self) -> String {
+        self.__repr__()
+    }
 }
 
 #[pymethods]

@@ -172,6 +172,7 @@ def test_compare_agrees_with_trimesh_closest_points(spot_field, spot_trimesh):
     assert result.hausdorff < 0.5 * spot_field.grid.spacing
     assert len(result.depth_buffer.views) == 14
     assert result.vertex_deviation.vertices == result.a.vertices
+    assert "watertight=True" in repr(result.a)
     again = pgvol.compare((v, t), spot_trimesh, samples=20000, seed=3)
     assert again == result
     with pytest.raises(ValueError, match="samples must be positive"):
