@@ -158,7 +158,7 @@ def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Pat
         del job
     row["mesh_bytes"] = int(v.nbytes + f.nbytes)
     row["returned_bytes_per_task"] = (row["file_bytes"] * 1.0) / len(plan)
-    row["smallest_part_returned"] = len(r["bricks"])
+    row["smallest_part_returned"] = len(r.bricks)
     return row
 
 

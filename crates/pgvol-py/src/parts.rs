@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use numpy::PyArray2;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::PyBytes;
 
 use pgvol::distributed as parts;
 
@@ -84,6 +84,62 @@ pub(crate) fn plan_encode(
     })
 }
 
+/// One part of an encode in parts: its coefficient bricks and what its sign check found.
+/// Pickles, so that it can travel from a worker process to the client.
+#[pyclass(frozen, get_all, module = "pgvol._pgvol")]
+pub(crate) struct EncodedPart {
+    /// The coefficient bricks and sides of the part's box, as slab bytes.
+    bricks: Py<PyBytes>,
+    /// Pairs of neighbouring nodes whose signs contradict their distances.
+    contradictions: usize,
+    /// Whether the samples were signed by the pseudonormal an automatic sign chose.
+    may_fall_back: bool,
+    /// Nodes of the part's stored sample bricks within the band.
+    exact_nodes: usize,
+}
+
+#[pymethods]
+impl EncodedPart {
+    #[new]
+    fn new(
+        bricks: Py<PyBytes>,
+        contradictions: usize,
+        may_fall_back: bool,
+        exact_nodes: usize,
+    ) -> Self {
+        EncodedPart {
+            bricks,
+            contradictions,
+            may_fall_back,
+            exact_nodes,
+        }
+    }
+
+    /// Rebuilt from its four fields when unpickled.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> (Bound<'py, PyAny>, (Py<PyBytes>, usize, bool, usize)) {
+        let me = slf.get();
+        let fields = (
+            me.bricks.clone_ref(slf.py()),
+            me.contradictions,
+            me.may_fall_back,
+            me.exact_nodes,
+        );
+        (slf.get_type().into_any(), fields)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!(
+            "EncodedPart(bricks=<{} bytes>, contradictions={}, may_fall_back={}, exact_nodes={})",
+            self.bricks.bind(py).as_bytes().len(),
+            self.contradictions,
+            if self.may_fall_back { "True" } else { "False" },
+            self.exact_nodes
+        )
+    }
+}
+
 /// The distance query of a mesh for encoding any of its parts; build one per process.
 #[pyclass(frozen, module = "pgvol.distributed")]
 pub(crate) struct EncodeJob {
@@ -110,29 +166,28 @@ impl EncodeJob {
         Ok(EncodeJob { job })
     }
 
-    /// Samples and fits the fitting groups `y0..y1` along y and `z0..z1` along z: a dict with
-    /// `bricks` (bytes), `contradictions`, `may_fall_back` and `exact_nodes`.
+    /// Samples and fits the fitting groups `y0..y1` along y and `z0..z1` along z.
     #[pyo3(signature = (y0, y1, z0, z1, *, winding=false))]
-    fn encode_part<'py>(
+    fn encode_part(
         &self,
-        py: Python<'py>,
+        py: Python<'_>,
         y0: usize,
         y1: usize,
         z0: usize,
         z1: usize,
         winding: bool,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<EncodedPart> {
         let part = parts::GroupBox {
             gy: y0..y1,
             gz: z0..z1,
         };
         let part = quiet(py, || self.job.encode_part(&part, winding))?;
-        let out = PyDict::new(py);
-        out.set_item("bricks", PyBytes::new(py, &part.bricks))?;
-        out.set_item("contradictions", part.contradictions)?;
-        out.set_item("may_fall_back", part.may_fall_back)?;
-        out.set_item("exact_nodes", part.exact_nodes)?;
-        Ok(out)
+        Ok(EncodedPart {
+            bricks: PyBytes::new(py, &part.bricks).unbind(),
+            contradictions: part.contradictions,
+            may_fall_back: part.may_fall_back,
+            exact_nodes: part.exact_nodes,
+        })
     }
 
     /// Estimated peak bytes of encoding the groups `y0..y1`, `z0..z1` in a fresh process.
@@ -377,6 +432,7 @@ pub(crate) fn write_layers(
 /// Registers the classes and functions of this module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<EncodeJob>()?;
+    m.add_class::<EncodedPart>()?;
     m.add_function(wrap_pyfunction!(plan_encode, m)?)?;
     m.add_function(wrap_pyfunction!(needs_winding, m)?)?;
     m.add_function(wrap_pyfunction!(assemble_encode, m)?)?;

@@ -207,3 +207,21 @@ def test_options_that_cannot_be_split_are_refused(mesh_path, spot_field):
         distributed.encode(mesh, res=64, basis="pg")
     with pytest.raises(ValueError, match="at least 1"):
         distributed.encode(mesh, res=64, parts=0)
+
+
+def test_an_encoded_part_pickles_whole():
+    import pickle
+
+    from pgvol import _pgvol
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    job = _pgvol.EncodeJob(sphere.vertices, sphere.faces, res=32)
+    part = job.encode_part(0, 1, 0, 1)
+    back = pickle.loads(pickle.dumps(part))
+    assert isinstance(back, _pgvol.EncodedPart)
+    assert len(part.bricks) > 0 and back.bricks == part.bricks
+    assert (back.contradictions, back.may_fall_back, back.exact_nodes) == (
+        part.contradictions,
+        part.may_fall_back,
+        part.exact_nodes,
+    )

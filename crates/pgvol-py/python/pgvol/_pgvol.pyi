@@ -48,6 +48,7 @@ __all__ = [
     "ENCODE_BAND",
     "COMPARE_SAMPLES",
     "EncodeJob",
+    "EncodedPart",
     "plan_encode",
     "needs_winding",
     "assemble_encode",
@@ -919,6 +920,26 @@ def memory_limit() -> Optional[int]:
 # Jobs in parts, for pgvol.distributed (see docs/distributed.md).
 
 @final
+class EncodedPart:
+    """One part of an encode in parts: its coefficient bricks and what its sign check found."""
+
+    def __new__(
+        cls, bricks: bytes, contradictions: int, may_fall_back: bool, exact_nodes: int
+    ) -> "EncodedPart": ...
+    @property
+    def bricks(self) -> bytes:
+        """The coefficient bricks and sides of the part's box, as slab bytes."""
+    @property
+    def contradictions(self) -> int:
+        """Pairs of neighbouring nodes whose signs contradict their distances."""
+    @property
+    def may_fall_back(self) -> bool:
+        """Whether the samples were signed by the pseudonormal an automatic sign chose."""
+    @property
+    def exact_nodes(self) -> int:
+        """Nodes of the part's stored sample bricks within the band."""
+
+@final
 class EncodeJob:
     """The distance queries of a mesh for encoding any of its parts."""
 
@@ -935,7 +956,7 @@ class EncodeJob:
     ) -> "EncodeJob": ...
     def encode_part(
         self, y0: int, y1: int, z0: int, z1: int, *, winding: bool = False
-    ) -> Dict[str, Any]: ...
+    ) -> EncodedPart: ...
     def part_bytes(self, y0: int, y1: int, z0: int, z1: int) -> int: ...
 
 def plan_encode(

@@ -108,7 +108,8 @@ def _job(key: str, mesh: tuple[np.ndarray, np.ndarray], options: dict) -> Encode
         return job
 
 
-def _encode_part(job_key: str, mesh, options: dict, part: tuple, winding: bool) -> dict:
+def _encode_part(job_key: str, mesh, options: dict, part: tuple,
+                 winding: bool) -> _pgvol.EncodedPart:
     """Task: the coefficient bricks of one box of fitting groups."""
     y0, y1, z0, z1 = part
     return _job(job_key, mesh, options).encode_part(y0, y1, z0, z1, winding=winding)
@@ -154,7 +155,7 @@ def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, ban
         # Once to every worker, not once per task.
         [shipped] = client.scatter([shipped], broadcast=True, hash=False)
 
-    def run(winding: bool) -> list[dict]:
+    def run(winding: bool) -> list[_pgvol.EncodedPart]:
         boxes = [p[:4] for p in plan]
         calls = [(key, shipped, options, box, winding) for box in boxes]
         names = [f"pgvol-encode-{key}-{'-'.join(map(str, box))}-{int(winding)}"
@@ -162,10 +163,10 @@ def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, ban
         return _run(client, _encode_part, calls, names, retries)
 
     results = run(False)
-    if _pgvol.needs_winding([r["contradictions"] for r in results],
-                            [r["may_fall_back"] for r in results]):
+    if _pgvol.needs_winding([r.contradictions for r in results],
+                            [r.may_fall_back for r in results]):
         results = run(True)
-    field = _pgvol.assemble_encode(vertices, faces, [r["bricks"] for r in results], **options)
+    field = _pgvol.assemble_encode(vertices, faces, [r.bricks for r in results], **options)
     if output is not None:
         field.save(output)
     return field
