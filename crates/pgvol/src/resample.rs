@@ -55,6 +55,7 @@ impl Field {
     /// This field sampled on the grid `options` gives (by default over its own box) and
     /// fitted again there in the cubic B-spline: coarser to save bytes, finer to edit on.
     pub fn resample(&self, options: &ResampleOptions, progress: &dyn Progress) -> Result<Field> {
+        crate::frame::require_near(self.file.volume.grid.offset, "resampling")?;
         let name = format!("resample {}", options.res);
         let exact = self.exact_band();
         fitted(Operand::from(self.clone()), options, exact, &name, progress)

@@ -87,6 +87,22 @@ fn primitive(text: &str, res: usize) -> Field {
 }
 
 #[test]
+fn resampling_a_field_far_from_the_origin_is_refused_by_name() {
+    let mut mesh = pgvol::mesh::shapes::octasphere(3);
+    mesh.offset = DVec3::splat(1e6);
+    let options = pgvol::EncodeOptions {
+        grid: GridSpec::Res(32),
+        ..Default::default()
+    };
+    let far = Field::from_mesh(&mesh, &options, &Silent).unwrap();
+    let e = far
+        .resample(&ResampleOptions::default(), &Silent)
+        .unwrap_err();
+    assert_eq!(e.kind(), pgvol::ErrorKind::BadParameter, "{e}");
+    assert!(e.message().contains("resampling"), "{e}");
+}
+
+#[test]
 fn the_blend_method_is_the_blend_of_the_two_fields() {
     // P₁ = x, P₂ = y, C = (−x − y − 0.6)/√2, λ = ½: on the bisector x = y = −s the blend
     // vanishes where (2s − 0.6)² / 2 = s², s = 0.6 / (2 + √2).
