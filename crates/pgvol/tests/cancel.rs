@@ -44,12 +44,24 @@ impl Progress for StopIn {
     }
 }
 
-/// Counts every report of stage `at` in `run`, which passes the counter on through
-/// [`NoCancel`].
-fn reports_of_whole_stage(at: &'static str, run: impl Fn(&StopIn)) -> usize {
-    let counting = StopIn::new(at);
-    run(&counting);
-    counting.reports.load(Relaxed)
+/// Checks that `run`, stopped at the first report of stage `at`, fails as cancelled after at
+/// most `max_after` further reports of that stage, and that run to the end (through
+/// [`NoCancel`]) the stage reports at least 20 times: enough that stopping early is seen.
+fn stops_within<T>(
+    at: &'static str,
+    max_after: usize,
+    run: impl Fn(&dyn Progress) -> pgvol::Result<T>,
+) {
+    let stop = StopIn::new(at);
+    let e = run(&stop).err().expect("a cancelled call fails");
+    assert_eq!(e.kind(), ErrorKind::Cancelled, "{e}");
+    // The first report asks to stop; what was already running may report again.
+    let after = stop.reports.load(Relaxed) - 1;
+    assert!(after <= max_after, "{after} reports after the cancel");
+    let whole = StopIn::new(at);
+    run(&NoCancel(&whole)).unwrap();
+    let whole = whole.reports.load(Relaxed);
+    assert!(whole >= 20, "{whole} reports in the whole stage");
 }
 
 fn sphere() -> pgvol::Mesh {
@@ -66,48 +78,23 @@ fn encode(progress: &dyn Progress) -> pgvol::Result<Field> {
 
 #[test]
 fn a_cancel_stops_the_distance_sampling_within_a_few_rows() {
-    let stop = StopIn::new("distance");
-    let e = encode(&stop).unwrap_err();
-    assert_eq!(e.kind(), ErrorKind::Cancelled);
-    // The first report asks to stop; rows already running may report once more each.
-    let after = stop.reports.load(Relaxed) - 1;
-    assert!(after <= 2, "{after} reports after the cancel");
-    // Uncancelled, the stage reports many times over.
-    let whole = reports_of_whole_stage("distance", |p| {
-        let _ = encode(&NoCancel(p));
-    });
-    assert!(whole >= 20, "{whole} reports in the whole stage");
+    // Rows already running may report once more each.
+    stops_within("distance", 2, encode);
 }
 
 #[test]
 fn a_cancel_stops_contouring_within_a_few_blocks() {
     let field = encode(&Silent).unwrap();
-    let stop = StopIn::new("contour");
-    let e = field.to_mesh(&DecodeOptions::default(), &stop).unwrap_err();
-    assert_eq!(e.kind(), ErrorKind::Cancelled);
-    let after = stop.reports.load(Relaxed) - 1;
-    assert!(after <= 3, "{after} reports after the cancel");
-    let whole = reports_of_whole_stage("contour", |p| {
-        field
-            .to_mesh(&DecodeOptions::default(), &NoCancel(p))
-            .unwrap();
+    stops_within("contour", 3, |p| {
+        field.to_mesh(&DecodeOptions::default(), p)
     });
-    assert!(whole >= 20, "{whole} reports in the whole stage");
 }
 
 #[test]
 fn a_cancel_stops_the_fit_within_a_few_brick_groups() {
-    let stop = StopIn::new("fit");
-    let e = encode(&stop).unwrap_err();
-    assert_eq!(e.kind(), ErrorKind::Cancelled);
     // Groups in flight on other threads may report once each, and the sign check once before
     // its first poll.
-    let after = stop.reports.load(Relaxed) - 1;
-    assert!(after <= 3, "{after} reports after the cancel");
-    let whole = reports_of_whole_stage("fit", |p| {
-        let _ = encode(&NoCancel(p));
-    });
-    assert!(whole >= 20, "{whole} reports in the whole stage");
+    stops_within("fit", 3, encode);
 }
 
 #[test]
@@ -124,30 +111,15 @@ fn a_cancel_stops_a_shell_within_a_few_brick_groups() {
         kind: ShellKind::Hollow,
         drains: Vec::new(),
     };
-    let stop = StopIn::new("hollow");
-    let e = field.shell(&options, &stop).unwrap_err();
-    assert_eq!(e.kind(), ErrorKind::Cancelled, "{e}");
-    let after = stop.reports.load(Relaxed) - 1;
-    assert!(after <= 2, "{after} reports after the cancel");
-    let whole = reports_of_whole_stage("hollow", |p| {
-        field.shell(&options, &NoCancel(p)).unwrap();
-    });
-    assert!(whole >= 20, "{whole} reports in the whole stage");
+    stops_within("hollow", 2, |p| field.shell(&options, p));
 }
 
 #[test]
 fn a_cancel_stops_slicing_at_the_next_layer() {
     let field = encode(&Silent).unwrap();
     let options = SliceOptions::new(field.grid().spacing);
-    let stop = StopIn::new("slice");
-    let e = field.slice(&options, &stop).unwrap_err();
-    assert_eq!(e.kind(), ErrorKind::Cancelled);
     // The layer that reported is the last one handed on.
-    assert_eq!(stop.reports.load(Relaxed), 1);
-    let whole = reports_of_whole_stage("slice", |p| {
-        field.slice(&options, &NoCancel(p)).unwrap();
-    });
-    assert!(whole >= 20, "{whole} reports in the whole stage");
+    stops_within("slice", 0, |p| field.slice(&options, p));
 }
 
 /// Forwards stages and reports to a [`StopIn`] but never cancels.
