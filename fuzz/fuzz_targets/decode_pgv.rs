@@ -10,12 +10,16 @@ use libfuzzer_sys::fuzz_target;
 use pgvol_format::PgvFile;
 
 /// The valid files of the seed corpus.
-const SEEDS: [&[u8]; 5] = [
+const SEEDS: [&[u8]; 9] = [
     include_bytes!("../corpus/decode_pgv/dense.pgv"),
     include_bytes!("../corpus/decode_pgv/sparse-f16.pgv"),
     include_bytes!("../corpus/decode_pgv/sparse-f32.pgv"),
     include_bytes!("../corpus/decode_pgv/sparse-fixed.pgv"),
     include_bytes!("../corpus/decode_pgv/sparse-q16.pgv"),
+    include_bytes!("../corpus/decode_pgv/sparse-f16-v1.pgv"),
+    include_bytes!("../corpus/decode_pgv/sparse-f32-v1.pgv"),
+    include_bytes!("../corpus/decode_pgv/sparse-fixed-v1.pgv"),
+    include_bytes!("../corpus/decode_pgv/sparse-q16-v1.pgv"),
 ];
 
 /// Checks that a file that decoded to `file` reads the same through the other entry points, and

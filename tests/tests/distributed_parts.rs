@@ -4,14 +4,14 @@
 use pgvol::distributed::{
     assemble_encode, decode_part, decode_part_bricks, needs_winding, part_encode_bytes,
     plan_decode, plan_encode, plan_encode_bytes, plan_slice, slice_part, slice_part_bricks,
-    weld_parts, EncodeJob,
+    weld_parts, write_encode_parts, write_encode_parts_to, EncodeJob, EncodedPart, PartsWritten,
 };
 use pgvol::{Basis, DecodeOptions, EncodeOptions, GridSpec, Mesh, Silent, StorageOptions};
 use pgvol_tests::load_shared;
 
-/// The file of `mesh` encoded in `parts` parts, with the winding fallback as the assembly
+/// The parts of `mesh` encoded in `parts` parts, with the winding fallback as the assembly
 /// decides it.
-fn encode_in_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> pgvol::Encoded {
+fn encoded_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> Vec<EncodedPart> {
     let plan = plan_encode(mesh, options, parts).unwrap();
     if parts == 8 {
         // More parts than z layers of groups: the slabs are cut along y too.
@@ -28,12 +28,32 @@ fn encode_in_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> pgvol:
             .map(|p| job.encode_part(p, winding).unwrap())
             .collect()
     };
-    let mut results = run(false);
+    let results = run(false);
     if needs_winding(&results) {
-        results = run(true);
+        // Streaming the first run's parts stops at the contradiction and writes nothing.
+        let mut out = Vec::new();
+        let mut first = results.into_iter().map(Ok);
+        let got = write_encode_parts_to(&mut out, mesh, options, &mut first).unwrap();
+        assert_eq!(got, PartsWritten::NeedsWinding);
+        return run(true);
     }
+    results
+}
+
+/// The file of `mesh` assembled in memory from `parts` parts.
+fn encode_in_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> pgvol::Encoded {
+    let results = encoded_parts(mesh, options, parts);
     let bytes: Vec<&[u8]> = results.iter().map(|r| r.bricks.as_slice()).collect();
     assemble_encode(mesh, options, &bytes).unwrap()
+}
+
+/// The file of `mesh` written from `parts` parts as they come.
+fn streamed_in_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut results = encoded_parts(mesh, options, parts).into_iter().map(Ok);
+    let got = write_encode_parts_to(&mut out, mesh, options, &mut results).unwrap();
+    assert!(matches!(got, PartsWritten::Written(_)), "{got:?}");
+    out
 }
 
 /// Triangles as sorted triples of vertex bit patterns, sorted: equal for equal meshes in any
@@ -77,8 +97,52 @@ fn encoding_in_parts_gives_the_same_file_bytes() {
                 .unwrap()
                 .bytes;
             assert!(bytes == want, "{name}: {parts} parts give other bytes");
+            let streamed = streamed_in_parts(&mesh, &options, parts);
+            assert!(
+                streamed == want,
+                "{name}: {parts} streamed parts give other bytes"
+            );
         }
     }
+}
+
+#[test]
+fn streamed_parts_that_stop_leave_the_file_as_it_was() {
+    let mesh = load_shared("spot");
+    let options = EncodeOptions {
+        grid: GridSpec::Res(72),
+        ..EncodeOptions::default()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("spot.pgv");
+    std::fs::write(&path, b"the file before").unwrap();
+    let mut parts = encoded_parts(&mesh, &options, 2);
+    // A part reporting contradictions under the pseudonormal asks for the winding number.
+    let mut contradicted = parts.clone();
+    contradicted[1].contradictions = 3;
+    contradicted[1].may_fall_back = true;
+    let mut results = contradicted.into_iter().map(Ok);
+    let got = write_encode_parts(&path, &mesh, &options, &mut results).unwrap();
+    assert_eq!(got, PartsWritten::NeedsWinding);
+    assert_eq!(std::fs::read(&path).unwrap(), b"the file before");
+    // Parts out of order are refused, naming the file.
+    parts.swap(0, 1);
+    let mut results = parts.clone().into_iter().map(Ok);
+    let err = write_encode_parts(&path, &mesh, &options, &mut results).unwrap_err();
+    assert!(err.to_string().contains("do not tile"), "{err}");
+    assert!(err.to_string().contains("spot.pgv"), "{err}");
+    assert_eq!(std::fs::read(&path).unwrap(), b"the file before");
+    // In order, the file is the single-process one.
+    parts.swap(0, 1);
+    let mut results = parts.into_iter().map(Ok);
+    let got = write_encode_parts(&path, &mesh, &options, &mut results).unwrap();
+    let PartsWritten::Written(report) = got else {
+        panic!("{got:?}");
+    };
+    let whole = pgvol::encode(&mesh, &options, &Silent).unwrap();
+    let want = pgvol::io::pgv_bytes(&whole.file, &StorageOptions::default()).unwrap();
+    assert!(std::fs::read(&path).unwrap() == want.bytes);
+    assert_eq!(Some(report), want.storage);
 }
 
 #[test]

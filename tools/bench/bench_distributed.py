@@ -10,8 +10,8 @@ weak-scaling figures that predict larger clusters and grids.
 Per mesh ("NAME-1m" is NAME subdivided at its edge midpoints until it has 1M triangles or more):
   * single process: `pgvol encode MESH -o single.pgv --res N` under /usr/bin/time -v (wall
     clock and peak RSS of the whole process);
-  * distributed: pgvol.distributed.encode on a LocalCluster of --workers single-threaded worker
-    processes, with the fewest parts (from 4 per worker up) whose largest estimated part fits
+  * distributed: pgvol.distributed.encode_file on a LocalCluster of --workers single-threaded
+    worker processes, with the fewest parts (from 4 per worker up) whose largest estimated part fits
     --worker-budget; wall clock from the call to the written file, each worker's peak resident
     memory over the encode (VmHWM, reset before), the client's; the file compared byte for byte
     with the single-process one.
@@ -128,7 +128,7 @@ def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Pat
     base = client.run(reset_peak)
     client_base = reset_peak()
     start = time.perf_counter()
-    distributed.encode((v, f), res=res, client=client, parts=parts, output=out)
+    distributed.encode_file((v, f), out, res=res, client=client, parts=parts)
     row["s"] = time.perf_counter() - start
     peaks = client.run(peak_rss)
     row["worker_peak"] = max(peaks.values())

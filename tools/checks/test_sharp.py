@@ -89,11 +89,19 @@ CORNER_SPACINGS = 0.2
 
 
 def _header(path) -> dict:
-    """The JSON header of a .pgv file, read by the layout of docs/format.md."""
+    """The JSON header of a .pgv file, read by the layout of docs/format.md: after the version
+    in version 1, before the 32-byte trailer in version 2."""
     data = path.read_bytes()
     assert data[:8] == b"PGVOL\0\r\n", f"{path}: not a .pgv file"
-    (hlen,) = struct.unpack_from("<I", data, 12)
-    return json.loads(data[16 : 16 + hlen])
+    (version,) = struct.unpack_from("<I", data, 8)
+    if version == 1:
+        (hlen,) = struct.unpack_from("<I", data, 12)
+        return json.loads(data[16 : 16 + hlen])
+    assert version == 2, f"{path}: version {version}"
+    assert data[-8:] == data[:8], f"{path}: no trailer"
+    dlen, ilen, hlen = struct.unpack_from("<QQI", data, len(data) - 32)
+    start = 12 + dlen + ilen
+    return json.loads(data[start : start + hlen])
 
 
 def _rotated_cube(folder):

@@ -1,7 +1,7 @@
 //! The `.pgv` container: the framing of a header and a payload, each with its CRC, written and
 //! checked.
 //!
-//! Layout (all integers little-endian):
+//! Version 1 (all integers little-endian):
 //! ```text
 //! magic    8 bytes  "PGVOL\0\r\n" (the CR/LF catch text-mode mangling)
 //! version  u32      1
@@ -11,6 +11,20 @@
 //! plen     u64      payload length
 //! payload  plen     the coefficients as described by header.encoding
 //! pcrc     u32      CRC-32 of the payload
+//! ```
+//! Version 2 (`sparse-bricks` only) puts everything whose size is known only at the end after
+//! the bricks, so a writer can stream them:
+//! ```text
+//! magic    8 bytes  as above
+//! version  u32      2
+//! data     dlen     the stored bricks' blobs
+//! index    ilen     the brick maps, the index and its CRC
+//! header   hlen     UTF-8 JSON
+//! dlen     u64
+//! ilen     u64
+//! hlen     u32      at most 1 MiB
+//! hcrc     u32      CRC-32 of the header bytes
+//! magic    8 bytes  again, so a truncated file is told apart from a damaged one
 //! ```
 //! Every size is checked against the file and the grid before anything is allocated from it.
 
@@ -24,7 +38,12 @@ use crate::header::{PgvHeader, ENCODING_DENSE_F32, ENCODING_PERTURBATION};
 use crate::sparse_params::ENCODING_SPARSE;
 
 pub const MAGIC: &[u8; 8] = b"PGVOL\0\r\n";
+/// The version of the layout with the header first (every encoding).
 pub const VERSION: u32 = 1;
+/// The version of the layout with the header and the index last (`sparse-bricks`).
+pub const VERSION_STREAMED: u32 = 2;
+/// Bytes after the header of a version 2 file: dlen, ilen, hlen, hcrc and the magic.
+pub(crate) const TRAILER: usize = 8 + 8 + 4 + 4 + 8;
 const MAX_HEADER: usize = 1 << 20;
 
 /// Frames a header and a payload: magic, version, header with its CRC, payload with its CRC.
@@ -34,9 +53,34 @@ pub(crate) fn container(header: &PgvHeader, payload: &[u8]) -> Vec<u8> {
     out
 }
 
-/// Bytes of the container around a header of `header_len` bytes, without the payload.
-pub(crate) const fn framing_bytes(header_len: usize) -> usize {
-    MAGIC.len() + 4 + 4 + header_len + 4 + 8 + 4
+/// Bytes of the version 2 container around a header of `header_len` bytes, without the brick
+/// data and the index.
+pub(crate) const fn streamed_framing_bytes(header_len: usize) -> usize {
+    MAGIC.len() + 4 + header_len + TRAILER
+}
+
+/// The start of a version 2 file, before its brick data.
+pub(crate) fn write_streamed_start(w: &mut dyn std::io::Write) -> std::io::Result<()> {
+    w.write_all(MAGIC)?;
+    w.write_all(&VERSION_STREAMED.to_le_bytes())
+}
+
+/// The end of a version 2 file after `data_len` bytes of brick data: the index, the header and
+/// the trailer.
+pub(crate) fn write_streamed_end(
+    w: &mut dyn std::io::Write,
+    data_len: u64,
+    index: &[u8],
+    header: &PgvHeader,
+) -> std::io::Result<()> {
+    let header = serde_json::to_vec(header).expect("header serialises");
+    w.write_all(index)?;
+    w.write_all(&header)?;
+    w.write_all(&data_len.to_le_bytes())?;
+    w.write_all(&(index.len() as u64).to_le_bytes())?;
+    w.write_all(&(header.len() as u32).to_le_bytes())?;
+    w.write_all(&crc32fast::hash(&header).to_le_bytes())?;
+    w.write_all(MAGIC)
 }
 
 /// Writes the container of `header` and the payload made of `parts` back to back, so a
@@ -106,15 +150,22 @@ impl<'a> Reader<'a> {
 /// A checked container: the header and the payload.
 pub(crate) struct Container<'a> {
     pub header: PgvHeader,
+    /// Version 1: the whole payload. Version 2: the brick data.
     pub payload: &'a [u8],
-    /// The stored CRC-32 of the payload.
-    pub payload_crc: u32,
+    /// Version 2: the brick maps and index, which follow the data.
+    pub index: Option<&'a [u8]>,
+    /// The stored CRC-32 of a version 1 payload (version 2 has a CRC per brick and one for
+    /// the index instead).
+    pub payload_crc: Option<u32>,
 }
 
 impl Container<'_> {
-    /// Hashes the payload and compares it with its stored CRC.
+    /// Hashes a version 1 payload and compares it with its stored CRC.
     pub(crate) fn check_payload(&self, path: &Path) -> Result<(), FormatError> {
-        if !crc_ok(self.payload_crc, crc32fast::hash(self.payload)) {
+        let Some(stored) = self.payload_crc else {
+            return Ok(());
+        };
+        if !crc_ok(stored, crc32fast::hash(self.payload)) {
             return Err(err(
                 path,
                 "coefficient checksum mismatch: the file is corrupt",
@@ -140,23 +191,135 @@ pub(crate) fn parse_container<'a>(
         return Err(err(path, "not a .pgv file (wrong magic number)"));
     }
     let version = r.u32("the version", path)?;
-    if version != VERSION {
+    let c = match version {
+        VERSION => parse_v1(r, path)?,
+        VERSION_STREAMED => parse_v2(bytes, path)?,
+        _ => {
+            return Err(err(
+                path,
+                format!(
+                    "format version {version} is not supported (this reader knows versions \
+                     {VERSION} and {VERSION_STREAMED})"
+                ),
+            ))
+        }
+    };
+    if check_payload {
+        c.check_payload(path)?;
+    }
+    Ok(c)
+}
+
+/// The rest of a version 1 file after its version.
+fn parse_v1<'a>(mut r: Reader<'a>, path: &Path) -> Result<Container<'a>, FormatError> {
+    let hlen = r.u32("the header length", path)? as usize;
+    check_header_len(hlen, path)?;
+    let header_bytes = r.take(hlen, "the header", path)?;
+    let hcrc = r.u32("the header checksum", path)?;
+    let (header, nodes) = checked_header(header_bytes, hcrc, path)?;
+    let plen = r.u64("the payload length", path)?;
+    if header.encoding == ENCODING_DENSE_F32 && plen != nodes * 4 {
         return Err(err(
             path,
             format!(
-                "format version {version} is not supported (this reader knows version {VERSION})"
+                "payload holds {plen} bytes but a {:?} grid of f32 needs {}",
+                header.grid.dims,
+                nodes * 4
             ),
         ));
     }
-    let hlen = r.u32("the header length", path)? as usize;
+    let left = (r.bytes.len() - r.at) as u64;
+    if plen > left {
+        return Err(err(
+            path,
+            format!("truncated file: the payload needs {plen} bytes, {left} left"),
+        ));
+    }
+    let payload = r.take(plen as usize, "the payload", path)?;
+    let payload_crc = r.u32("the payload checksum", path)?;
+    if r.at != r.bytes.len() {
+        return Err(err(
+            path,
+            format!(
+                "{} unexpected bytes after the end of the data",
+                r.bytes.len() - r.at
+            ),
+        ));
+    }
+    Ok(Container {
+        header,
+        payload,
+        index: None,
+        payload_crc: Some(payload_crc),
+    })
+}
+
+/// A version 2 file, read from its trailer back.
+fn parse_v2<'a>(bytes: &'a [u8], path: &Path) -> Result<Container<'a>, FormatError> {
+    let start = MAGIC.len() + 4;
+    if bytes.len() < start + TRAILER || &bytes[bytes.len() - MAGIC.len()..] != MAGIC {
+        return Err(err(
+            path,
+            "truncated file: a version 2 .pgv ends with its index, header and the magic number \
+             again, and this one does not (an interrupted copy or write?)",
+        ));
+    }
+    let t = &bytes[bytes.len() - TRAILER..];
+    let dlen = u64::from_le_bytes(t[0..8].try_into().expect("8 bytes"));
+    let ilen = u64::from_le_bytes(t[8..16].try_into().expect("8 bytes"));
+    let hlen = u32::from_le_bytes(t[16..20].try_into().expect("4 bytes")) as usize;
+    let hcrc = u32::from_le_bytes(t[20..24].try_into().expect("4 bytes"));
+    check_header_len(hlen, path)?;
+    let sized = (start as u64)
+        .checked_add(dlen)
+        .and_then(|n| n.checked_add(ilen))
+        .and_then(|n| n.checked_add((hlen + TRAILER) as u64));
+    if sized != Some(bytes.len() as u64) {
+        return Err(err(
+            path,
+            format!(
+                "the trailer gives {dlen} bytes of bricks, {ilen} of index and {hlen} of header, \
+                 which do not add up to the file's {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
+    let (dlen, ilen) = (dlen as usize, ilen as usize);
+    let header_at = start + dlen + ilen;
+    let (header, _) = checked_header(&bytes[header_at..header_at + hlen], hcrc, path)?;
+    if header.encoding != ENCODING_SPARSE {
+        return Err(err(
+            path,
+            format!(
+                "a version 2 file holds the '{ENCODING_SPARSE}' encoding, not '{}'",
+                header.encoding
+            ),
+        ));
+    }
+    Ok(Container {
+        header,
+        payload: &bytes[start..start + dlen],
+        index: Some(&bytes[start + dlen..header_at]),
+        payload_crc: None,
+    })
+}
+
+fn check_header_len(hlen: usize, path: &Path) -> Result<(), FormatError> {
     if hlen > MAX_HEADER {
         return Err(err(
             path,
             format!("header length {hlen} exceeds the limit of {MAX_HEADER} bytes"),
         ));
     }
-    let header_bytes = r.take(hlen, "the header", path)?;
-    let hcrc = r.u32("the header checksum", path)?;
+    Ok(())
+}
+
+/// The header of `header_bytes` checked against its CRC `hcrc`, and its grid's node count.
+fn checked_header(
+    header_bytes: &[u8],
+    hcrc: u32,
+    path: &Path,
+) -> Result<(PgvHeader, u64), FormatError> {
     if !crc_ok(hcrc, crc32fast::hash(header_bytes)) {
         return Err(err(path, "header checksum mismatch: the file is corrupt"));
     }
@@ -203,51 +366,11 @@ pub(crate) fn parse_container<'a>(
         .dims
         .iter()
         .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
-    let nodes = match nodes {
-        Some(n) if n as u128 <= pgvol_field::MAX_GRID_NODES => n,
-        _ => {
-            return Err(err(
-                path,
-                format!("grid dimensions {:?} are too large", g.dims),
-            ))
-        }
-    };
-    let plen = r.u64("the payload length", path)?;
-    if header.encoding == ENCODING_DENSE_F32 && plen != nodes * 4 {
-        return Err(err(
+    match nodes {
+        Some(n) if n as u128 <= pgvol_field::MAX_GRID_NODES => Ok((header, n)),
+        _ => Err(err(
             path,
-            format!(
-                "payload holds {plen} bytes but a {:?} grid of f32 needs {}",
-                g.dims,
-                nodes * 4
-            ),
-        ));
+            format!("grid dimensions {:?} are too large", g.dims),
+        )),
     }
-    let left = (bytes.len() - r.at) as u64;
-    if plen > left {
-        return Err(err(
-            path,
-            format!("truncated file: the payload needs {plen} bytes, {left} left"),
-        ));
-    }
-    let payload = r.take(plen as usize, "the payload", path)?;
-    let payload_crc = r.u32("the payload checksum", path)?;
-    let c = Container {
-        header,
-        payload,
-        payload_crc,
-    };
-    if check_payload {
-        c.check_payload(path)?;
-    }
-    if r.at != bytes.len() {
-        return Err(err(
-            path,
-            format!(
-                "{} unexpected bytes after the end of the data",
-                bytes.len() - r.at
-            ),
-        ));
-    }
-    Ok(c)
 }

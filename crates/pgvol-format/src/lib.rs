@@ -29,5 +29,5 @@ pub use pgv::{decode_pgv, encode_pgv, read_pgv, write_pgv};
 pub use sparse::{
     encode_pgv_with, pgv_info, read_brick, sparse_pgv, write_pgv_with, Brick, Compression,
     EncodeOptions, EncodeReport, PgvInfo, Precision, Predictor, SlabBricks, SlabReader,
-    SparseParams, SparsePgv,
+    SparseParams, SparsePgv, StreamError, StreamedPgv,
 };

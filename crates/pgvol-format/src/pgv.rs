@@ -57,7 +57,7 @@ pub fn decode_pgv(bytes: &[u8], path: &Path) -> Result<PgvFile, FormatError> {
         let dense = dense_coeffs(c.payload, path)?;
         SparseGrid::from_dense(c.header.grid.dims, &dense, Background::clamp(0.0))
     } else {
-        decode_payload(&c.header, c.payload, path)?
+        decode_payload(&c.header, c.index, c.payload, path)?
     };
     // Built directly rather than by `CoefficientVolume::from_sparse`, whose checks would cost
     // one more pass over every coefficient: the container check validated the basis and the

@@ -7,7 +7,7 @@ use pgvol_field::{Basis, CoefficientVolume, Grid};
 use pgvol_format::pgv::MAGIC;
 use pgvol_format::{
     decode_pgv, encode_pgv, encode_pgv_with, header_for, pgv_info, read_brick, read_pgv,
-    write_pgv_with, Compression, EncodeOptions, PgvFile, Precision, Predictor,
+    sparse_pgv, write_pgv_with, Compression, EncodeOptions, PgvFile, Precision, Predictor,
 };
 use proptest::prelude::*;
 
@@ -333,10 +333,29 @@ struct Parts {
     blobs: Vec<Vec<u8>>,
 }
 
+/// The header, the payload (version 1) or the index and the brick data (version 2) of a file.
+fn sections(bytes: &[u8]) -> (serde_json::Value, Vec<u8>, Vec<u8>) {
+    let version = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
+    if version == 1 {
+        let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let header = serde_json::from_slice(&bytes[16..16 + hlen]).unwrap();
+        let payload = bytes[16 + hlen + 12..bytes.len() - 4].to_vec();
+        return (header, payload, Vec::new());
+    }
+    let n = bytes.len();
+    let dlen = u64::from_le_bytes(bytes[n - 32..n - 24].try_into().unwrap()) as usize;
+    let ilen = u64::from_le_bytes(bytes[n - 24..n - 16].try_into().unwrap()) as usize;
+    let hlen = u32::from_le_bytes(bytes[n - 16..n - 12].try_into().unwrap()) as usize;
+    let header = serde_json::from_slice(&bytes[12 + dlen + ilen..12 + dlen + ilen + hlen]).unwrap();
+    (
+        header,
+        bytes[12 + dlen..12 + dlen + ilen].to_vec(),
+        bytes[12..12 + dlen].to_vec(),
+    )
+}
+
 fn split(bytes: &[u8]) -> Parts {
-    let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + hlen]).unwrap();
-    let payload = &bytes[16 + hlen + 12..bytes.len() - 4];
+    let (header, index, data) = sections(bytes);
     let sp = &header["sparse"];
     let nb: u64 = sp["bricks"]
         .as_array()
@@ -346,24 +365,28 @@ fn split(bytes: &[u8]) -> Parts {
         .product();
     let map = nb.div_ceil(8) as usize;
     let stored = sp["stored"].as_u64().unwrap() as usize;
-    let data = &payload[2 * map + 16 * stored + 4..];
+    let data = if data.is_empty() {
+        index[2 * map + 16 * stored + 4..].to_vec()
+    } else {
+        data
+    };
     let blobs = (0..stored)
         .map(|e| {
             let at = 2 * map + 16 * e;
-            let off = u64::from_le_bytes(payload[at..at + 8].try_into().unwrap()) as usize;
-            let len = u32::from_le_bytes(payload[at + 8..at + 12].try_into().unwrap()) as usize;
+            let off = u64::from_le_bytes(index[at..at + 8].try_into().unwrap()) as usize;
+            let len = u32::from_le_bytes(index[at + 8..at + 12].try_into().unwrap()) as usize;
             data[off..off + len].to_vec()
         })
         .collect();
     Parts {
         header,
-        maps: payload[..2 * map].to_vec(),
+        maps: index[..2 * map].to_vec(),
         blobs,
     }
 }
 
-/// Frames the parts again with correct checksums; `entry` may rewrite index entries.
-fn join(parts: &Parts, entry: impl Fn(usize, u64, u32) -> (u64, u32)) -> Vec<u8> {
+/// The brick maps and index of `parts` with their CRC; `entry` may rewrite index entries.
+fn index_of(parts: &Parts, entry: impl Fn(usize, u64, u32) -> (u64, u32)) -> Vec<u8> {
     let mut meta = parts.maps.clone();
     let mut off = 0u64;
     for (e, b) in parts.blobs.iter().enumerate() {
@@ -375,6 +398,31 @@ fn join(parts: &Parts, entry: impl Fn(usize, u64, u32) -> (u64, u32)) -> Vec<u8>
     }
     let icrc = crc32fast::hash(&meta);
     meta.extend_from_slice(&icrc.to_le_bytes());
+    meta
+}
+
+/// Frames the parts again in the version 2 layout with correct checksums; `entry` may rewrite
+/// index entries.
+fn join(parts: &Parts, entry: impl Fn(usize, u64, u32) -> (u64, u32)) -> Vec<u8> {
+    let index = index_of(parts, entry);
+    let data: Vec<u8> = parts.blobs.concat();
+    let header = serde_json::to_vec(&parts.header).unwrap();
+    let mut out = MAGIC.to_vec();
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&data);
+    out.extend_from_slice(&index);
+    out.extend_from_slice(&header);
+    out.extend_from_slice(&(data.len() as u64).to_le_bytes());
+    out.extend_from_slice(&(index.len() as u64).to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
+    out.extend_from_slice(MAGIC);
+    out
+}
+
+/// As [`join`], in the version 1 layout.
+fn join_v1(parts: &Parts, entry: impl Fn(usize, u64, u32) -> (u64, u32)) -> Vec<u8> {
+    let mut meta = index_of(parts, entry);
     for b in &parts.blobs {
         meta.extend_from_slice(b);
     }
@@ -400,24 +448,53 @@ fn msg(bytes: &[u8]) -> String {
 fn damaged_sparse_files_give_clear_errors() {
     let f = sphere_file(20, Basis::Bspline3);
     let (good, _) = encode_pgv_with(&f, &opts(None)).unwrap();
+    let good_v1 = sparse_pgv(&f, &opts(None)).unwrap().0.to_bytes_v1();
     let parts = split(&good);
-    // The test's own framing (JSON keys re-ordered) gives a valid file.
+    // The test's own framing (JSON keys re-ordered) gives a valid file, in either layout.
     assert!(decode_pgv(&join(&parts, |_, o, l| (o, l)), p()).is_ok());
+    assert!(decode_pgv(&join_v1(&parts, |_, o, l| (o, l)), p()).is_ok());
     assert!(decode_pgv(&good, p()).is_ok());
+    assert_eq!(
+        decode_pgv(&good_v1, p()).unwrap().volume.dense_coeffs(),
+        decode_pgv(&good, p()).unwrap().volume.dense_coeffs()
+    );
 
-    assert!(msg(&good[..good.len() / 2]).contains("truncated"));
-    let mut v = good.clone();
-    v[0] = b'X';
-    assert!(msg(&v).contains("magic"));
-    let mut v = good.clone();
+    for file in [&good, &good_v1] {
+        assert!(msg(&file[..file.len() / 2]).contains("truncated"));
+        assert!(msg(&file[..file.len() - 1]).contains("truncated"));
+        let mut v = file.clone();
+        v[0] = b'X';
+        assert!(msg(&v).contains("magic"));
+        let mut v = file.clone();
+        v[8] = 3;
+        assert!(msg(&v).contains("version 3"));
+    }
+    // A version 1 file read as version 2 has no trailer.
+    let mut v = good_v1.clone();
     v[8] = 2;
     assert!(msg(&v).contains("version 2"));
+    // Version 2 trailer sizes that do not add up, and a damaged header.
+    let n = good.len();
+    for at in [n - 32, n - 24, n - 16] {
+        let mut v = good.clone();
+        v[at] ^= 1;
+        let e = msg(&v);
+        assert!(e.contains("add up"), "{e}");
+    }
+    let mut v = good.clone();
+    v[n - 40] ^= 1;
+    assert!(msg(&v).contains("header checksum"));
+    // Version 2 holds only the sparse encoding.
+    let mut h = split(&good);
+    h.header["encoding"] = serde_json::json!("dense-f32");
+    assert!(msg(&join(&h, |_, o, l| (o, l))).contains("version 2 file holds"));
 
-    // Whole-payload CRC catches a flipped data byte; the brick CRC catches it when the
-    // payload CRC is made to agree, and so does read_brick, which skips the payload CRC.
+    // Version 1: the whole-payload CRC catches a flipped data byte; the brick CRC catches it
+    // when the payload CRC is made to agree, and so does read_brick, which skips the payload
+    // CRC.
     let mut bad = split(&good);
     bad.blobs[0][3] ^= 0x20;
-    let framed = join(&bad, |_, o, l| (o, l));
+    let framed = join_v1(&bad, |_, o, l| (o, l));
     let hlen = u32::from_le_bytes(framed[12..16].try_into().unwrap()) as usize;
     let mut v = framed.clone();
     // Restore the old brick CRC in the index (the one for the undamaged blob), fix the rest.
@@ -437,14 +514,30 @@ fn damaged_sparse_files_give_clear_errors() {
         e.contains("brick") && e.contains("checksum mismatch"),
         "{e}"
     );
-
-    // Index CRC.
+    let mut v = good_v1.clone();
+    v[n / 2] ^= 1;
+    assert!(msg(&v).contains("checksum mismatch"));
+    // Version 2 has no payload CRC: the brick's own finds the flipped byte.
     let mut v = good.clone();
+    v[12 + 3] ^= 0x20;
+    let e = msg(&v);
+    assert!(
+        e.contains("brick") && e.contains("checksum mismatch"),
+        "{e}"
+    );
+
+    // Index CRC, in either layout.
+    let mut v = good_v1.clone();
     let at = 16 + hlen + 12 + map + 20;
     v[at] ^= 1;
     let n = v.len();
     let pcrc = crc32fast::hash(&v[16 + hlen + 12..n - 4]);
     v[n - 4..].copy_from_slice(&pcrc.to_le_bytes());
+    let e = msg(&v);
+    assert!(e.contains("index checksum"), "{e}");
+    let data: usize = parts.blobs.iter().map(Vec::len).sum();
+    let mut v = good.clone();
+    v[12 + data + map + 20] ^= 1;
     let e = msg(&v);
     assert!(e.contains("index checksum"), "{e}");
 
@@ -472,8 +565,10 @@ fn damaged_sparse_files_give_clear_errors() {
     assert!(msg(&join(&h, |_, o, l| (o, l))).contains("bricks"));
     let mut h = split(&good);
     h.header["sparse"]["stored"] = serde_json::json!(1);
-    let e = msg(&join(&h, |_, o, l| (o, l)));
+    let e = msg(&join_v1(&h, |_, o, l| (o, l)));
     assert!(e.contains("index checksum"), "{e}");
+    let e = msg(&join(&h, |_, o, l| (o, l)));
+    assert!(e.contains("the file gives them"), "{e}");
     let mut h = split(&good);
     h.header["sparse"]["stored"] = serde_json::json!(1_000_000);
     let e = msg(&join(&h, |_, o, l| (o, l)));
@@ -692,7 +787,8 @@ proptest! {
     }
 }
 
-/// The fuzzing seed corpus (`fuzz/corpus/decode_pgv`) holds valid tiny files of each encoding;
+/// The fuzzing seed corpus (`fuzz/corpus/decode_pgv`) holds valid tiny files of each encoding
+/// (the sparse ones in both layouts);
 /// `PGVOL_WRITE_CORPUS=1` rewrites it.
 #[test]
 fn fuzz_seed_corpus_decodes() {
@@ -736,6 +832,8 @@ fn fuzz_seed_corpus_decodes() {
                 ..EncodeOptions::default()
             };
             std::fs::write(dir.join(name), encode_pgv_with(&f, &o).unwrap().0).unwrap();
+            let v1 = sparse_pgv(&f, &o).unwrap().0.to_bytes_v1();
+            std::fs::write(dir.join(name.replace(".pgv", "-v1.pgv")), v1).unwrap();
         }
     }
     let mut seen = 0;
@@ -746,5 +844,5 @@ fn fuzz_seed_corpus_decodes() {
         decode_pgv(&bytes, &path).unwrap();
         seen += 1;
     }
-    assert!(seen >= 5);
+    assert!(seen >= 9);
 }

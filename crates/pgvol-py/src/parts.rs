@@ -239,6 +239,65 @@ pub(crate) fn assemble_encode(
     Ok(Field::from_file(encoded.file))
 }
 
+/// Writes the file of an encode to `path` from its parts (an iterable of `EncodedPart` in plan
+/// order), each taken as it comes: `("written", grid)`, or, with nothing written,
+/// `("winding", grid)` when a part asks for the winding number or `("whole", grid)` when the
+/// automatic precision needs the parts assembled in memory. An exception raised by the
+/// iterable stops the write and is raised again.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, parts, path, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn write_encode_parts(
+    py: Python<'_>,
+    vertices: &Bound<'_, PyAny>,
+    faces: &Bound<'_, PyAny>,
+    parts: &Bound<'_, PyAny>,
+    path: PathBuf,
+    res: Option<usize>,
+    voxel: Option<f32>,
+    band: f32,
+    basis: &str,
+    sign: &str,
+) -> PyResult<(&'static str, crate::field::Grid)> {
+    let options = encode_options(py, res, voxel, band, basis, sign)?;
+    let mesh = mesh(py, vertices, faces)?;
+    let grid = quiet(py, || options.grid.grid_for(&mesh))?;
+    let source = parts.try_iter()?.unbind();
+    // A Python exception from the iterable, kept to be raised again once the write stops.
+    let raised: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
+    let outcome = quiet(py, || {
+        let mut next = std::iter::from_fn(|| {
+            Python::attach(|py| {
+                let item = source.bind(py).clone().next()?;
+                let part = item.and_then(|obj| {
+                    let part = obj.cast::<EncodedPart>().map_err(PyErr::from)?.get();
+                    Ok(parts::EncodedPart {
+                        bricks: part.bricks.bind(py).as_bytes().to_vec(),
+                        contradictions: part.contradictions,
+                        may_fall_back: part.may_fall_back,
+                        exact_nodes: part.exact_nodes,
+                    })
+                });
+                Some(part.map_err(|e| {
+                    let message = e.to_string();
+                    *raised.lock().expect("not poisoned") = Some(e);
+                    pgvol::Error::parameter(format!("the parts stopped: {message}"))
+                }))
+            })
+        });
+        parts::write_encode_parts(&path, &mesh, &options, &mut next)
+    });
+    if let Some(e) = raised.lock().expect("not poisoned").take() {
+        return Err(e);
+    }
+    let name = match outcome? {
+        parts::PartsWritten::Written(_) => "written",
+        parts::PartsWritten::NeedsWinding => "winding",
+        parts::PartsWritten::NeedsWholeVolume => "whole",
+    };
+    Ok((name, crate::field::Grid { grid }))
+}
+
 /// The z cells of each part of contouring `field`.
 #[pyfunction]
 pub(crate) fn plan_decode(
@@ -436,6 +495,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_encode, m)?)?;
     m.add_function(wrap_pyfunction!(needs_winding, m)?)?;
     m.add_function(wrap_pyfunction!(assemble_encode, m)?)?;
+    m.add_function(wrap_pyfunction!(write_encode_parts, m)?)?;
     m.add_function(wrap_pyfunction!(plan_decode, m)?)?;
     m.add_function(wrap_pyfunction!(decode_part_bricks, m)?)?;
     m.add_function(wrap_pyfunction!(decode_part, m)?)?;

@@ -95,6 +95,44 @@ def test_encode_in_tasks_gives_the_single_process_file(client, mesh_path, name):
         assert distributed.encode(mesh, res=RES).to_bytes() == want
 
 
+def test_a_file_written_as_parts_arrive_is_the_single_process_file(client, mesh_path, tmp_path):
+    mesh = pgvol.read_mesh(mesh_path("stanford-bunny"))
+    want = pgvol.Field.from_mesh(*mesh, res=RES).to_bytes()
+    out = tmp_path / "bunny.pgv"
+    for parts, where in [(8, client), (2, None)]:
+        out.write_bytes(b"before")
+        grid = distributed.encode_file(mesh, out, res=RES, client=where, parts=parts)
+        assert out.read_bytes() == want, parts
+        assert grid == pgvol.Field.from_bytes(want).grid
+    # A mesh that fails in the parts leaves the file as it was.
+    out.write_bytes(b"before")
+    with pytest.raises(pgvol.ParameterError, match="pseudo-Gaussian"):
+        distributed.encode_file(mesh, out, res=RES, basis="pg")
+    assert out.read_bytes() == b"before"
+
+
+def test_an_exception_in_the_parts_stops_the_write(mesh_path, tmp_path):
+    from pgvol import _pgvol
+
+    vertices, faces = pgvol.read_mesh(mesh_path("spot"))
+    job = _pgvol.EncodeJob(vertices, faces, res=80)
+    plan = _pgvol.plan_encode(vertices, faces, 2, res=80)
+
+    def parts():
+        yield job.encode_part(*plan[0][:4])
+        raise KeyError("lost the second part")
+
+    out = tmp_path / "spot.pgv"
+    out.write_bytes(b"before")
+    with pytest.raises(KeyError, match="lost the second part"):
+        _pgvol.write_encode_parts(vertices, faces, parts(), out, res=80)
+    assert out.read_bytes() == b"before"
+    outcome, grid = _pgvol.write_encode_parts(
+        vertices, faces, (job.encode_part(*p[:4]) for p in plan), out, res=80)
+    assert outcome == "written"
+    assert out.read_bytes() == pgvol.Field.from_mesh(vertices, faces, res=80).to_bytes()
+
+
 def test_a_part_plan_really_splits(mesh_path):
     mesh = pgvol.read_mesh(mesh_path("spot"))
     plan = distributed.plan_encode(mesh, parts=8, res=RES)

@@ -179,14 +179,24 @@ pub(crate) fn encoded_file(
     fit: &FitReport,
     band: Option<f32>,
 ) -> PgvFile {
-    let spacing = volume.grid.spacing;
-    let mut header = fitted_header(&volume, fit, Some(mesh));
+    let header = encoded_header(mesh, &volume, fit, band);
+    PgvFile { header, volume }
+}
+
+/// The header of [`encoded_file`].
+pub(crate) fn encoded_header(
+    mesh: &Mesh,
+    volume: &CoefficientVolume,
+    fit: &FitReport,
+    band: Option<f32>,
+) -> pgvol_format::PgvHeader {
+    let mut header = fitted_header(volume, fit, Some(mesh));
     if let Some(band) = band {
         header
             .metadata
-            .insert(BAND_KEY.into(), format!("{}", band * spacing));
+            .insert(BAND_KEY.into(), format!("{}", band * volume.grid.spacing));
     }
-    PgvFile { header, volume }
+    header
 }
 
 /// A fitted volume, its report and the band of exact node distances it was fitted to.
@@ -324,15 +334,25 @@ fn encoded_pgv<'a>(
     if storage.dense {
         return Ok((EncodedPgv::Dense(file), None));
     }
+    let options = sparse_options(&file.header, storage);
+    let (encoded, report) = pgvol_format::sparse_pgv(file, &options).writing()?;
+    Ok((EncodedPgv::Sparse(Box::new(encoded)), Some(report)))
+}
+
+/// The sparse storage options of a file of `header`: its recorded band, less one spacing,
+/// decides the stored bricks.
+pub(crate) fn sparse_options(
+    header: &pgvol_format::PgvHeader,
+    storage: &StorageOptions,
+) -> pgvol_format::EncodeOptions {
     let mut options = pgvol_format::EncodeOptions {
         precision: storage.precision,
         ..Default::default()
     };
-    if let Some(band) = crate::band::recorded_band(file) {
-        options.band = band / file.volume.grid.spacing - 1.0;
+    if let Some(band) = crate::band::header_band(header) {
+        options.band = band / header.grid.spacing - 1.0;
     }
-    let (encoded, report) = pgvol_format::sparse_pgv(file, &options).writing()?;
-    Ok((EncodedPgv::Sparse(Box::new(encoded)), Some(report)))
+    options
 }
 
 /// Writes `file` to `path` atomically; see [`pgv_bytes`].

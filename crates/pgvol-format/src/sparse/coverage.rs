@@ -3,6 +3,8 @@
 //! the grid's brick tables without reading a node, so that the band search can skip uniform
 //! background and unstored file bricks get their side without a pass over their nodes.
 
+use std::ops::Range;
+
 use pgvol_core::{SparseGrid, BRICK_EDGE};
 use rayon::prelude::*;
 
@@ -19,23 +21,35 @@ pub(crate) const MORE_INSIDE: u8 = 8;
 /// More of its nodes lie in unstored outside grid bricks than in unstored inside ones.
 pub(crate) const MORE_OUTSIDE: u8 = 16;
 
-/// Per file brick, a set of the flags above.
+/// Per file brick of a range of layers along z, a set of the flags above.
 pub(crate) struct Coverage {
+    /// Index of the first file brick covered.
+    first: usize,
     flags: Vec<u8>,
 }
 
 impl Coverage {
+    /// Every file brick.
     pub(crate) fn new(coeffs: &SparseGrid, bricks: &Bricks) -> Coverage {
-        let flags = (0..bricks.total())
+        Coverage::layers(coeffs, bricks, 0..bricks.count[2])
+    }
+
+    /// The file bricks of the layers `layers` along z (clipped to the grid), reading only the
+    /// grid's brick tables there, so a writer holding a window of layers can ask for them.
+    pub(crate) fn layers(coeffs: &SparseGrid, bricks: &Bricks, layers: Range<usize>) -> Coverage {
+        let per_layer = bricks.count[0] * bricks.count[1];
+        let end = layers.end.min(bricks.count[2]);
+        let first = layers.start.min(end) * per_layer;
+        let flags = (first..end * per_layer)
             .into_par_iter()
             .map(|b| file_brick_flags(coeffs, bricks, b))
             .collect();
-        Coverage { flags }
+        Coverage { first, flags }
     }
 
     #[inline]
     pub(crate) fn flags(&self, b: usize) -> u8 {
-        self.flags[b]
+        self.flags[b - self.first]
     }
 }
 

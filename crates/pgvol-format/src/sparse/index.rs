@@ -28,9 +28,12 @@ pub(crate) fn bit(map: &[u8], b: usize) -> bool {
     map[b / 8] >> (b % 8) & 1 == 1
 }
 
-/// Checks the sparse parameters against the grid and the payload, and reads the index.
+/// Checks the sparse parameters against the grid and the payload, and reads the index: from
+/// the start of `payload` (version 1), or from `index` with `payload` the brick data alone
+/// (version 2, which writes the index after the data).
 pub(crate) fn layout<'a>(
     header: &PgvHeader,
+    index: Option<&'a [u8]>,
     payload: &'a [u8],
     path: &Path,
 ) -> Result<Layout<'a>, FormatError> {
@@ -88,25 +91,46 @@ pub(crate) fn layout<'a>(
     }
     let map = nb.div_ceil(8);
     let meta = (2 * map as u64) + (sp.stored as u64) * ENTRY as u64;
-    if meta + 4 > payload.len() as u64 {
-        return Err(err(
-            path,
-            format!(
-                "truncated payload: the brick maps and index need {} bytes, the payload has {}",
-                meta + 4,
-                payload.len()
-            ),
-        ));
-    }
+    let (index, data) = match index {
+        None => {
+            if meta + 4 > payload.len() as u64 {
+                return Err(err(
+                    path,
+                    format!(
+                        "truncated payload: the brick maps and index need {} bytes, the payload \
+                         has {}",
+                        meta + 4,
+                        payload.len()
+                    ),
+                ));
+            }
+            payload.split_at(meta as usize + 4)
+        }
+        Some(index) => {
+            if meta + 4 != index.len() as u64 {
+                return Err(err(
+                    path,
+                    format!(
+                        "the brick maps and index of {} stored bricks take {} bytes, the file \
+                         gives them {}",
+                        sp.stored,
+                        meta + 4,
+                        index.len()
+                    ),
+                ));
+            }
+            (index, payload)
+        }
+    };
     let meta = meta as usize;
-    let icrc = u32::from_le_bytes(payload[meta..meta + 4].try_into().expect("4 bytes"));
-    if !crc_ok(icrc, crc32fast::hash(&payload[..meta])) {
+    let icrc = u32::from_le_bytes(index[meta..meta + 4].try_into().expect("4 bytes"));
+    if !crc_ok(icrc, crc32fast::hash(&index[..meta])) {
         return Err(err(
             path,
             "brick index checksum mismatch: the file is corrupt",
         ));
     }
-    let (stored, inside) = (&payload[..map], &payload[map..2 * map]);
+    let (stored, inside) = (&index[..map], &index[map..2 * map]);
     let set: usize = stored.iter().map(|b| b.count_ones() as usize).sum();
     let stray = (nb..map * 8).any(|b| bit(stored, b) || bit(inside, b));
     if set != sp.stored || stray {
@@ -118,10 +142,9 @@ pub(crate) fn layout<'a>(
             ),
         ));
     }
-    let data = &payload[meta + 4..];
     let mut entries = Vec::with_capacity(sp.stored);
     let mut next = 0u64;
-    for e in payload[2 * map..meta].chunks_exact(ENTRY) {
+    for e in index[2 * map..meta].chunks_exact(ENTRY) {
         let offset = u64::from_le_bytes(e[0..8].try_into().expect("8 bytes"));
         let len = u32::from_le_bytes(e[8..12].try_into().expect("4 bytes"));
         let crc = u32::from_le_bytes(e[12..16].try_into().expect("4 bytes"));
@@ -159,20 +182,65 @@ pub(crate) fn layout<'a>(
     })
 }
 
-/// The brick maps (`stored`, and `inside` for the others, as the payload holds them), the index
-/// of `blobs` (the stored bricks in brick order) and its CRC: the payload before the brick data.
-pub(crate) fn brick_index(stored: &[u8], inside: &[u8], blobs: &[Vec<u8>]) -> Vec<u8> {
-    let mut meta = Vec::with_capacity(stored.len() + inside.len() + ENTRY * blobs.len() + 4);
-    meta.extend_from_slice(stored);
-    meta.extend_from_slice(inside);
-    let mut offset = 0u64;
-    for blob in blobs {
-        meta.extend_from_slice(&offset.to_le_bytes());
-        meta.extend_from_slice(&(blob.len() as u32).to_le_bytes());
-        meta.extend_from_slice(&crc32fast::hash(blob).to_le_bytes());
-        offset += blob.len() as u64;
+/// The brick maps and the index of a payload, built as the stored bricks' blobs are written
+/// in brick order: the same bytes whether the blobs come all at once or a slab at a time.
+pub(crate) struct IndexBuilder {
+    /// Bit per file brick: stored.
+    pub(crate) stored: Vec<u8>,
+    /// Bit per file brick: unstored and inside.
+    pub(crate) inside: Vec<u8>,
+    entries: Vec<u8>,
+    offset: u64,
+}
+
+impl IndexBuilder {
+    /// Maps of `total` file bricks, none stored yet.
+    pub(crate) fn new(total: usize) -> IndexBuilder {
+        IndexBuilder {
+            stored: vec![0; total.div_ceil(8)],
+            inside: vec![0; total.div_ceil(8)],
+            entries: Vec::new(),
+            offset: 0,
+        }
     }
-    let icrc = crc32fast::hash(&meta);
-    meta.extend_from_slice(&icrc.to_le_bytes());
-    meta
+
+    /// Records the next stored brick's blob (blobs come in brick order).
+    pub(crate) fn push(&mut self, blob: &[u8]) {
+        self.entries.extend_from_slice(&self.offset.to_le_bytes());
+        self.entries
+            .extend_from_slice(&(blob.len() as u32).to_le_bytes());
+        self.entries
+            .extend_from_slice(&crc32fast::hash(blob).to_le_bytes());
+        self.offset += blob.len() as u64;
+    }
+
+    /// Bytes of brick data recorded so far.
+    pub(crate) fn data_bytes(&self) -> u64 {
+        self.offset
+    }
+
+    /// The maps, the entries and their CRC, as the payload holds them.
+    pub(crate) fn finish(self) -> Vec<u8> {
+        let mut meta = self.stored;
+        meta.extend_from_slice(&self.inside);
+        meta.extend_from_slice(&self.entries);
+        let icrc = crc32fast::hash(&meta);
+        meta.extend_from_slice(&icrc.to_le_bytes());
+        meta
+    }
+}
+
+/// The brick maps (`stored`, and `inside` for the others, as the payload holds them), the index
+/// of `blobs` (the stored bricks in brick order) and its CRC.
+pub(crate) fn brick_index(stored: &[u8], inside: &[u8], blobs: &[Vec<u8>]) -> Vec<u8> {
+    let mut index = IndexBuilder {
+        stored: stored.to_vec(),
+        inside: inside.to_vec(),
+        entries: Vec::with_capacity(ENTRY * blobs.len()),
+        offset: 0,
+    };
+    for blob in blobs {
+        index.push(blob);
+    }
+    index.finish()
 }

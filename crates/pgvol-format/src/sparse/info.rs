@@ -26,7 +26,7 @@ pub struct PgvInfo {
 /// Header, brick counts, precision and bytes per part, from the header and index alone.
 pub fn pgv_info(bytes: &[u8], path: &Path) -> Result<PgvInfo, FormatError> {
     let c = parse_container(bytes, path, false)?;
-    let framing = bytes.len() - c.payload.len();
+    let framing = bytes.len() - c.payload.len() - c.index.map_or(0, <[u8]>::len);
     if c.header.encoding != ENCODING_SPARSE {
         return Ok(PgvInfo {
             header: c.header,
@@ -38,7 +38,7 @@ pub fn pgv_info(bytes: &[u8], path: &Path) -> Result<PgvInfo, FormatError> {
             bytes_payload: c.payload.len(),
         });
     }
-    let l = layout(&c.header, c.payload, path)?;
+    let l = layout(&c.header, c.index, c.payload, path)?;
     Ok(PgvInfo {
         bricks_total: Some(l.bricks.total()),
         bricks_stored: Some(l.sp.stored),

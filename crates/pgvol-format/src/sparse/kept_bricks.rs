@@ -41,44 +41,69 @@ pub(crate) fn background(
     stored: &[u8],
     band: f32,
 ) -> Background {
-    let coeffs = &volume.coeffs;
-    let bg = coeffs.background();
-    let symmetric = bg.outside.abs() == bg.inside.abs();
-    let total = bricks.total();
-    let (inside, largest): (Vec<u8>, Vec<f32>) = (0..stored.len())
-        .into_par_iter()
-        .map_init(Vec::new, |values, byte| {
-            let mut bits = 0u8;
-            let mut largest = 0.0f32;
-            for b in 8 * byte..(8 * byte + 8).min(total) {
-                if stored[byte] >> (b % 8) & 1 == 1 {
-                    continue;
-                }
-                let flags = coverage.flags(b);
-                let (inside, big) = if flags & STORED != 0
-                    || !symmetric && flags & OUTSIDE != 0 && flags & INSIDE != 0
-                {
-                    mean_sign(volume, bricks, b, values)
-                } else {
-                    background_side(bg.outside, bg.inside, flags)
-                };
-                bits |= (inside as u8) << (b % 8);
-                largest = largest.max(big);
-            }
-            (bits, largest)
-        })
-        .unzip();
-    let clamp = if !coeffs.is_full() && symmetric && bg.outside != 0.0 {
-        bg.outside.abs()
-    } else {
-        let clamp = largest.into_iter().fold(0.0f32, f32::max);
-        if clamp == 0.0 {
-            band.max(1.0) * volume.grid.spacing
-        } else {
-            clamp
-        }
-    };
+    let mut inside = vec![0u8; stored.len()];
+    let largest = sides_of_layers(
+        volume,
+        bricks,
+        coverage,
+        stored,
+        0..bricks.count[2],
+        &mut inside,
+    );
+    let clamp = clamp_of(volume, volume.coeffs.is_full(), largest, band);
     Background { inside, clamp }
+}
+
+/// The sides of the unstored file bricks of the layers `layers` along z, set in `inside` (bit
+/// per file brick, as the payload stores it); returns the largest magnitude of their
+/// coefficients. Reads the coverage and the coefficients of those layers only.
+pub(crate) fn sides_of_layers(
+    volume: &CoefficientVolume,
+    bricks: &Bricks,
+    coverage: &Coverage,
+    stored: &[u8],
+    layers: std::ops::Range<usize>,
+    inside: &mut [u8],
+) -> f32 {
+    let bg = volume.coeffs.background();
+    let symmetric = bg.outside.abs() == bg.inside.abs();
+    let per_layer = bricks.count[0] * bricks.count[1];
+    let sides: Vec<(usize, bool, f32)> = (layers.start * per_layer..layers.end * per_layer)
+        .into_par_iter()
+        .filter(|&b| stored[b / 8] >> (b % 8) & 1 == 0)
+        .map_init(Vec::new, |values, b| {
+            let flags = coverage.flags(b);
+            let (inside, big) = if flags & STORED != 0
+                || !symmetric && flags & OUTSIDE != 0 && flags & INSIDE != 0
+            {
+                mean_sign(volume, bricks, b, values)
+            } else {
+                background_side(bg.outside, bg.inside, flags)
+            };
+            (b, inside, big)
+        })
+        .collect();
+    let mut largest = 0.0f32;
+    for (b, side, big) in sides {
+        inside[b / 8] |= (side as u8) << (b % 8);
+        largest = largest.max(big);
+    }
+    largest
+}
+
+/// The clamp of a file of `volume` (see [`background`]) whose unstored bricks' largest
+/// coefficient magnitude is `largest`; `full` tells whether every grid brick of the whole
+/// volume is stored.
+pub(crate) fn clamp_of(volume: &CoefficientVolume, full: bool, largest: f32, band: f32) -> f32 {
+    let bg = volume.coeffs.background();
+    let symmetric = bg.outside.abs() == bg.inside.abs();
+    if !full && symmetric && bg.outside != 0.0 {
+        bg.outside.abs()
+    } else if largest == 0.0 {
+        band.max(1.0) * volume.grid.spacing
+    } else {
+        largest
+    }
 }
 
 /// Whether the mean of unstored file brick `b`'s coefficients is negative, and their largest

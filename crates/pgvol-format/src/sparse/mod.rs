@@ -44,6 +44,7 @@ mod read_profile;
 mod reencode;
 mod slab_read;
 mod stored_band;
+mod streamed;
 #[cfg(test)]
 mod test_volumes;
 mod writer;
@@ -56,4 +57,5 @@ pub use options::{EncodeOptions, EncodeReport};
 pub use precision_choice::{basis_weight_bound, AUTO_TOLERANCE};
 pub use read_brick::{brick_grid, read_brick, Brick};
 pub use slab_read::{SlabBricks, SlabReader};
+pub use streamed::{StreamError, StreamedPgv};
 pub use writer::{encode_pgv_with, sparse_pgv, write_pgv_with, SparsePgv};

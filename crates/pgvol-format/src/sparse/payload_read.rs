@@ -26,10 +26,11 @@ use crate::header::PgvHeader;
 /// Files whose brick edge is not a multiple of the grid's go through a dense array.
 pub(crate) fn decode_payload(
     header: &PgvHeader,
+    index: Option<&[u8]>,
     payload: &[u8],
     path: &Path,
 ) -> Result<SparseGrid, FormatError> {
-    let l = layout(header, payload, path)?;
+    let l = layout(header, index, payload, path)?;
     let dims = l.bricks.dims;
     let background = Background::clamp(l.sp.clamp);
     if l.bricks.edge % BRICK_EDGE != 0 {

@@ -38,7 +38,7 @@ pub fn read_brick(bytes: &[u8], path: &Path, coords: [usize; 3]) -> Result<Brick
             ),
         ));
     }
-    let l = layout(&c.header, c.payload, path)?;
+    let l = layout(&c.header, c.index, c.payload, path)?;
     if (0..3).any(|a| coords[a] >= l.bricks.count[a]) {
         return Err(err(
             path,

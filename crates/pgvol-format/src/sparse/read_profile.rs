@@ -57,7 +57,7 @@ pub fn profile_sparse_read(
             format!("the stages are those of the {ENCODING_SPARSE} encoding"),
         ));
     }
-    let l = layout(&c.header, c.payload, path)?;
+    let l = layout(&c.header, c.index, c.payload, path)?;
     times.parse = t.elapsed();
 
     let t = Instant::now();
@@ -210,16 +210,15 @@ mod tests {
     fn stage_by_stage_read_names_the_first_damaged_brick() {
         let f = two_spheres([41, 33, 50]);
         let good = encoded(&f, 8, Precision::Q16, Predictor::DeltaX, Compression::Zstd);
-        let hlen = u32::from_le_bytes(good[12..16].try_into().unwrap()) as usize;
-        let payload = 28 + hlen;
-        // Two bytes of brick data near the end, then the payload CRC made to agree.
+        // Two bytes of brick data near its end (version 2: the data ends where the trailer's
+        // first field says, 12 bytes in).
+        let n = good.len();
+        let dlen = u64::from_le_bytes(good[n - 32..n - 24].try_into().unwrap()) as usize;
+        let end = 12 + dlen;
         let mut bad = good.clone();
-        let end = bad.len() - 4;
         for at in [end - 9, end - 400] {
             bad[at] ^= 0x5a;
         }
-        let crc = crc32fast::hash(&bad[payload..end]);
-        bad[end..].copy_from_slice(&crc.to_le_bytes());
         let want = decode_pgv(&bad, p()).unwrap_err().to_string();
         assert!(want.contains("checksum mismatch"), "{want}");
         let got = profile_sparse_read(&bad, p()).unwrap_err().to_string();

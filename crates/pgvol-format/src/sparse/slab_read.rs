@@ -8,7 +8,7 @@ use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, BRICK_EDGE};
 use rayon::prelude::*;
 
-use super::brick_read::BrickReader;
+use super::brick_read::{check_all_bricks, BrickReader};
 use super::index::{bit, layout, Layout};
 use super::payload_read::{cut_into_grid_bricks, grid_bricks_of};
 use crate::container::parse_container;
@@ -43,7 +43,10 @@ impl<'a> SlabReader<'a> {
         if c.header.encoding != ENCODING_SPARSE {
             return Ok(None);
         }
-        let layout = layout(&c.header, c.payload, path)?;
+        let layout = layout(&c.header, c.index, c.payload, path)?;
+        if c.index.is_some() {
+            check_all_bricks(&layout, path)?;
+        }
         if layout.bricks.edge % BRICK_EDGE != 0 {
             return Ok(None);
         }
@@ -224,7 +227,7 @@ mod tests {
     fn damaged_files_are_refused_on_opening() {
         let mut bytes = file_bytes();
         let n = bytes.len();
-        bytes[n - 20] ^= 1;
+        bytes[n / 2] ^= 1;
         let e = SlabReader::open(&bytes, Path::new("d.pgv")).err().unwrap();
         assert!(e.to_string().contains("checksum"), "{e}");
     }

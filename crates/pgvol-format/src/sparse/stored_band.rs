@@ -9,6 +9,8 @@
 //! neighbourhood is not one background value far from zero, then the needed nodes of the file
 //! bricks within reach of those.
 
+use std::ops::Range;
+
 use pgvol_core::{SparseGrid, BRICK_EDGE, BRICK_NODES};
 use pgvol_field::{mirror, Basis, CoefficientVolume};
 use rayon::prelude::*;
@@ -49,10 +51,54 @@ pub(crate) fn stored_band(
     coverage: &Coverage,
     band: f32,
 ) -> Vec<KeptBrick> {
+    stored_band_layers(volume, bricks, coverage, band, 0..bricks.count[2])
+}
+
+/// What deciding the stored bricks of a range of file brick layers (along z) reads.
+pub(crate) struct LayerReach {
+    /// The file brick layers whose nodes near zero can make a brick of the range needed.
+    pub(crate) near: Range<usize>,
+    /// The file brick layers whose [`Coverage`] the decision reads.
+    pub(crate) coverage: Range<usize>,
+    /// The node layers whose coefficients it reads.
+    pub(crate) nodes: Range<usize>,
+}
+
+/// [`LayerReach`] of the file brick layers `layers` for `basis`.
+pub(crate) fn layer_reach(bricks: &Bricks, basis: Basis, layers: Range<usize>) -> LayerReach {
+    let (e, nz) = (bricks.edge, bricks.dims[2]);
+    let (d, reach) = (dilation(basis), value_reach(basis));
+    // Layers of file bricks overlapping the nodes from `lo` to `hi`.
+    let overlapping = |lo: usize, hi: usize| lo / e..hi.min(nz).div_ceil(e);
+    let near = overlapping((layers.start * e).saturating_sub(d), layers.end * e + d);
+    // A candidate's far-background test reads the coverage of the bricks within `reach` nodes.
+    let coverage = overlapping((near.start * e).saturating_sub(reach), near.end * e + reach);
+    // Coverage reads the grid's tables over its bricks; node values read `reach` nodes around
+    // them, and one more for the rounding of a pg node's position.
+    let nodes =
+        (coverage.start * e).saturating_sub(reach + 1)..(coverage.end * e + reach + 1).min(nz);
+    LayerReach {
+        near,
+        coverage,
+        nodes,
+    }
+}
+
+/// [`stored_band`] for the file brick layers `layers` along z: reads only what
+/// [`layer_reach`] names, so a writer holding a window of the volume gets the same bricks.
+pub(crate) fn stored_band_layers(
+    volume: &CoefficientVolume,
+    bricks: &Bricks,
+    coverage: &Coverage,
+    band: f32,
+    layers: Range<usize>,
+) -> Vec<KeptBrick> {
     let limit = band * volume.grid.spacing;
     let far = FarBackground::new(volume, limit);
     let reach = value_reach(volume.basis);
-    let candidates: Vec<usize> = (0..bricks.total())
+    let per_layer = bricks.count[0] * bricks.count[1];
+    let near = layer_reach(bricks, volume.basis, layers.clone()).near;
+    let candidates: Vec<usize> = (near.start * per_layer..near.end * per_layer)
         .into_par_iter()
         .filter(|&b| !far.covers(coverage, bricks, b, reach))
         .collect();
@@ -64,10 +110,15 @@ pub(crate) fn stored_band(
         .flatten()
         .collect();
     let d = dilation(volume.basis);
+    let wanted = layers.start * per_layer..layers.end * per_layer;
     let mut reached: Vec<usize> = Vec::new();
     for &(b, _) in &near_zero {
         let (lo, n) = bricks.extent(b);
-        for_each_brick_in(bricks, grow(bricks, lo, n, d), |f| reached.push(f));
+        for_each_brick_in(bricks, grow(bricks, lo, n, d), |f| {
+            if wanted.contains(&f) {
+                reached.push(f)
+            }
+        });
     }
     reached.sort_unstable();
     reached.dedup();

@@ -13,7 +13,9 @@ use super::options::{EncodeOptions, EncodeReport};
 use super::precision_choice::{basis_weight_bound, encode_smallest, fixed_scale};
 use super::reencode::decoded_layout;
 use super::stored_band::stored_band;
-use crate::container::{framing_bytes, write_container};
+use crate::container::{
+    streamed_framing_bytes, write_container, write_streamed_end, write_streamed_start,
+};
 use crate::error::{err, FormatError};
 use crate::header::{PgvFile, PgvHeader};
 use crate::sparse_params::{Precision, SparseParams, BRICK_RANGE, ENCODING_SPARSE};
@@ -27,29 +29,40 @@ pub struct SparsePgv {
 }
 
 impl SparsePgv {
-    /// The payload's pieces in file order.
-    fn parts(&self) -> Vec<&[u8]> {
-        std::iter::once(&self.index[..])
-            .chain(self.blobs.iter().map(|b| &b[..]))
-            .collect()
-    }
-
-    /// Writes the file to `w`.
+    /// Writes the file to `w` in the version 2 layout (brick data, then the index and the
+    /// header), byte for byte what [`StreamedPgv`](super::StreamedPgv) writes of the same
+    /// volume.
     pub fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-        write_container(w, &self.header, &self.parts())
+        write_streamed_start(w)?;
+        for blob in &self.blobs {
+            w.write_all(blob)?;
+        }
+        let data_len = self.blobs.iter().map(|b| b.len() as u64).sum();
+        write_streamed_end(w, data_len, &self.index, &self.header)
     }
 
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
-        container_parts(&self.header, &self.parts())
+        let mut out = Vec::with_capacity(self.len_hint());
+        self.write_to(&mut out)
+            .expect("writing to memory does not fail");
+        out
     }
-}
 
-/// The container of `header` around the payload `parts`, in memory.
-fn container_parts(header: &PgvHeader, parts: &[&[u8]]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(parts.iter().map(|p| p.len()).sum::<usize>() + 1024);
-    write_container(&mut out, header, parts).expect("writing to memory does not fail");
-    out
+    /// The same file in the version 1 layout (header and index before the bricks), which every
+    /// reader keeps reading: for tools and tests that need a file of that version.
+    pub fn to_bytes_v1(&self) -> Vec<u8> {
+        let parts: Vec<&[u8]> = std::iter::once(&self.index[..])
+            .chain(self.blobs.iter().map(|b| &b[..]))
+            .collect();
+        let mut out = Vec::with_capacity(self.len_hint());
+        write_container(&mut out, &self.header, &parts).expect("writing to memory does not fail");
+        out
+    }
+
+    fn len_hint(&self) -> usize {
+        self.index.len() + self.blobs.iter().map(Vec::len).sum::<usize>() + 1024
+    }
 }
 
 /// Encodes `file` in the `sparse-bricks` encoding.
@@ -133,7 +146,7 @@ pub fn sparse_pgv(
     let report = EncodeReport {
         bricks_total: bricks.total(),
         bricks_stored: sp.stored,
-        bytes_header: framing_bytes(header_len),
+        bytes_header: streamed_framing_bytes(header_len),
         bytes_index: index.len(),
         bytes_payload: blobs.iter().map(Vec::len).sum(),
         precision: sp.precision,

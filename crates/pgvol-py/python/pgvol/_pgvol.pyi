@@ -5,6 +5,7 @@ from typing import (
     Any,
     Callable,
     Dict,
+    Iterable,
     List,
     Literal,
     Optional,
@@ -52,6 +53,7 @@ __all__ = [
     "plan_encode",
     "needs_winding",
     "assemble_encode",
+    "write_encode_parts",
     "plan_decode",
     "decode_part_bricks",
     "decode_part",
@@ -982,6 +984,18 @@ def assemble_encode(
     basis: str = "bspline3",
     sign: str = "auto",
 ) -> Field: ...
+def write_encode_parts(
+    vertices: _Points,
+    faces: Any,
+    parts: Iterable[EncodedPart],
+    path: _PathLike,
+    *,
+    res: Optional[int] = None,
+    voxel: Optional[float] = None,
+    band: float = 4.0,
+    basis: str = "bspline3",
+    sign: str = "auto",
+) -> Tuple[Literal["written", "winding", "whole"], Grid]: ...
 def plan_decode(field: Field, parts: int) -> List[Tuple[int, int]]: ...
 def decode_part_bricks(field: Field, start: int, end: int) -> bytes: ...
 def decode_part(

@@ -7,7 +7,7 @@ process, so a machine without a cluster runs the same code path.
     >>> from dask.distributed import Client, LocalCluster
     >>> from pgvol import distributed
     >>> client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
-    >>> field = distributed.encode("part.stl", res=1024, client=client, output="part.pgv")
+    >>> grid = distributed.encode_file("part.stl", "part.pgv", res=1024, client=client)
     >>> vertices, faces = distributed.decode("part.pgv", client=client)
     >>> layers = distributed.slice("part.pgv", 0.2, client=client)
 
@@ -15,7 +15,8 @@ process, so a machine without a cluster runs the same code path.
   the first task of a job builds the mesh's distance queries and keeps them for the job's
   other tasks. Each task samples and fits one box of fitting groups (8^3 bricks of 8^3 nodes)
   and returns its coefficient bricks; this process assembles the file, bit for bit the file
-  of ``Field.from_mesh``.
+  of ``Field.from_mesh``. ``encode_file`` writes that file as the parts arrive, holding a
+  window of them rather than the whole field.
 - ``decode`` sends each task the coefficient bricks around its slab of cells; the tasks'
   triangles are the single-process triangles, welded here at the seams.
 - ``slice`` sends each task the bricks around its range of layers.
@@ -33,14 +34,15 @@ import threading
 import uuid
 from collections import OrderedDict
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
 from . import _pgvol
-from ._pgvol import EncodeJob, Field, Layer
+from ._pgvol import EncodeJob, Field, Grid, Layer
 
-__all__ = ["encode", "decode", "slice", "plan_encode", "worker_count", "EncodeJob"]
+__all__ = ["encode", "encode_file", "decode", "slice", "plan_encode", "worker_count",
+           "EncodeJob"]
 
 # Retries of a failed task before the job fails: a worker lost with its tasks does not count
 # (the scheduler reruns them), only an exception raised by the task.
@@ -137,39 +139,111 @@ def plan_encode(mesh: Any, *, parts: int = 1, res: int | None = None,
     return [{"y": (y0, y1), "z": (z0, z1), "bytes": b} for y0, y1, z0, z1, b in plan]
 
 
+class _EncodeRun:
+    """What every run of one encode's parts shares: the mesh (shipped once to every worker),
+    the options and the plan."""
+
+    def __init__(self, mesh: Any, options: dict, client: Any, parts: int | None,
+                 retries: int) -> None:
+        self.vertices, self.faces = _mesh_arrays(mesh)
+        self.options = options
+        self.client = client
+        self.retries = retries
+        self.plan = _pgvol.plan_encode(self.vertices, self.faces, _parts(parts, client),
+                                       **options)
+        self.key = _job_key(self.vertices, self.faces, options)
+        self.shipped: Any = (self.vertices, self.faces)
+        if client is not None:
+            # Once to every worker, not once per task.
+            [self.shipped] = client.scatter([self.shipped], broadcast=True, hash=False)
+
+    def _calls(self, winding: bool) -> tuple[list[tuple], list[str]]:
+        boxes = [p[:4] for p in self.plan]
+        calls = [(self.key, self.shipped, self.options, box, winding) for box in boxes]
+        names = [f"pgvol-encode-{self.key}-{'-'.join(map(str, box))}-{int(winding)}"
+                 for box in boxes]
+        return calls, names
+
+    def run(self, winding: bool) -> list[_pgvol.EncodedPart]:
+        """Every part's result at once."""
+        calls, names = self._calls(winding)
+        return _run(self.client, _encode_part, calls, names, self.retries)
+
+    def in_order(self, winding: bool) -> Iterator[_pgvol.EncodedPart]:
+        """The parts' results in plan order, each fetched when the writer asks for it and
+        dropped here once handed over; the parts not fetched are cancelled when the writer
+        stops early."""
+        calls, names = self._calls(winding)
+        if self.client is None:
+            for call in calls:
+                yield _encode_part(*call)
+            return
+        futures: list[Any] = [
+            self.client.submit(_encode_part, *call, key=name, pure=False,
+                               retries=self.retries)
+            for call, name in zip(calls, names)
+        ]
+        try:
+            for i in range(len(futures)):
+                result = futures[i].result()
+                futures[i] = None
+                yield result
+        finally:
+            left = [f for f in futures if f is not None]
+            if left:
+                self.client.cancel(left)
+
+
 def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, band: float = 4.0,
            basis: str = "bspline3", sign: str = "auto", client: Any = None,
            parts: int | None = None, output: str | os.PathLike | None = None,
            retries: int = RETRIES) -> Field:
     """Encodes a mesh (a path, a (vertices, faces) pair or a trimesh) in parts: the same field,
     bit for bit, as ``Field.from_mesh`` with the interp fit. ``parts`` defaults to four per
-    worker thread (one without a client); ``output`` saves the field as a ``.pgv``."""
-    vertices, faces = _mesh_arrays(mesh)
+    worker thread (one without a client); ``output`` saves the field as a ``.pgv``. The field
+    is assembled here whole; ``encode_file`` writes the file holding a window of it."""
     options: dict[str, Any] = {
         "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
     }
-    plan = _pgvol.plan_encode(vertices, faces, _parts(parts, client), **options)
-    key = _job_key(vertices, faces, options)
-    shipped: Any = (vertices, faces)
-    if client is not None:
-        # Once to every worker, not once per task.
-        [shipped] = client.scatter([shipped], broadcast=True, hash=False)
-
-    def run(winding: bool) -> list[_pgvol.EncodedPart]:
-        boxes = [p[:4] for p in plan]
-        calls = [(key, shipped, options, box, winding) for box in boxes]
-        names = [f"pgvol-encode-{key}-{'-'.join(map(str, box))}-{int(winding)}"
-                 for box in boxes]
-        return _run(client, _encode_part, calls, names, retries)
-
-    results = run(False)
+    job = _EncodeRun(mesh, options, client, parts, retries)
+    results = job.run(False)
     if _pgvol.needs_winding([r.contradictions for r in results],
                             [r.may_fall_back for r in results]):
-        results = run(True)
-    field = _pgvol.assemble_encode(vertices, faces, [r.bricks for r in results], **options)
+        results = job.run(True)
+    field = _pgvol.assemble_encode(job.vertices, job.faces, [r.bricks for r in results],
+                                   **options)
     if output is not None:
         field.save(output)
     return field
+
+
+def encode_file(mesh: Any, output: str | os.PathLike, *, res: int | None = None,
+                voxel: float | None = None, band: float = 4.0, basis: str = "bspline3",
+                sign: str = "auto", client: Any = None, parts: int | None = None,
+                retries: int = RETRIES) -> Grid:
+    """Encodes a mesh in parts straight to the ``.pgv`` file ``output``, bit for bit the file
+    ``encode`` saves, written as the parts arrive in plan order: this process holds a window
+    of slabs of coefficients, not the whole field. Returns the field's grid.
+
+    When a part finds sign contradictions under the automatic sign's pseudonormal, the parts
+    are encoded again with the winding number, as ``encode`` does; when the automatic
+    precision cannot be chosen a slab at a time (coefficients beyond the fixed precision's
+    range, never seen on distance fields), the file is written by ``encode``, holding the
+    whole field. ``output`` is replaced atomically and left as it was on failure."""
+    options: dict[str, Any] = {
+        "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
+    }
+    job = _EncodeRun(mesh, options, client, parts, retries)
+    for winding in (False, True):
+        outcome, grid = _pgvol.write_encode_parts(job.vertices, job.faces,
+                                                  job.in_order(winding), output, **options)
+        if outcome == "written":
+            return grid
+        if outcome == "whole":
+            encode((job.vertices, job.faces), client=client, parts=parts, output=output,
+                   retries=retries, **options)
+            return grid
+    raise RuntimeError("the parts encoded with the winding number still ask for it")
 
 
 def _field(source: Any) -> Field:
@@ -313,10 +387,10 @@ def main(argv: list[str] | None = None) -> int:
         report: dict[str, Any] = {"command": args.command, "input": args.input,
                                   "output": args.output, "workers": worker_count(client)}
         if args.command == "encode":
-            field = encode(args.input, res=args.res, voxel=args.voxel, band=args.band,
-                           basis=args.basis, sign=args.sign, client=client, parts=args.parts,
-                           output=args.output)
-            report["grid"] = list(field.grid.dims)
+            grid = encode_file(args.input, args.output, res=args.res, voxel=args.voxel,
+                               band=args.band, basis=args.basis, sign=args.sign, client=client,
+                               parts=args.parts)
+            report["grid"] = list(grid.dims)
         elif args.command == "decode":
             vertices, faces = decode(args.input, client=client, parts=args.parts, iso=args.iso,
                                      min_component=args.min_component)

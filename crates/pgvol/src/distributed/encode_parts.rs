@@ -5,11 +5,12 @@
 use std::ops::Range;
 
 use pgvol_core::{Grid, Mesh, SparseGrid, BRICK_EDGE};
-use pgvol_field::{Basis, CoefficientVolume, FitMethod, SPARSE_GROUP};
+use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport, SPARSE_GROUP};
 use pgvol_sdf::{MeshSdf, SignMode};
 
 use super::slab::Slab;
 use super::split::split;
+use super::tiling::Tiling;
 use crate::encode::{encoded_file, EncodeOptions, Encoded};
 use crate::error::{Error, ErrorKind, Result};
 use crate::timings::Timings;
@@ -42,7 +43,7 @@ fn group_counts(grid: &Grid) -> [usize; 3] {
 
 /// Refuses what cannot be encoded in parts: fits other than `Interp` and pseudo-Gaussians
 /// solve one global system.
-fn check_parts_options(options: &EncodeOptions) -> Result<()> {
+pub(crate) fn check_parts_options(options: &EncodeOptions) -> Result<()> {
     options.validate()?;
     if options.fit != FitMethod::Interp {
         return Err(Error::parameter(
@@ -321,6 +322,36 @@ fn exact_in(values: &SparseGrid, owned: &[Range<usize>; 3], band: f32, grid: &Gr
         .sum()
 }
 
+/// A part's slab checked against the encode's grid and basis.
+pub(crate) fn check_slab(slab: &Slab, grid: &Grid, options: &EncodeOptions) -> Result<()> {
+    if slab.grid != *grid || slab.basis != options.basis {
+        return Err(Error::parameter(
+            "a part was encoded on another grid or basis than the options give",
+        ));
+    }
+    Ok(())
+}
+
+/// The fit report of an encode assembled from parts: the one `interp_sparse` gives from no
+/// samples, which depends only on the basis.
+pub(crate) fn assembled_fit(
+    grid: &Grid,
+    options: &EncodeOptions,
+    background: pgvol_core::Background,
+) -> Result<FitReport> {
+    let empty = SparseGrid::new(grid.dims, background);
+    let (_, fit) = pgvol_field::interp_sparse_groups(
+        *grid,
+        options.basis,
+        &empty,
+        0..0,
+        0..0,
+        pgvol_core::progress::QUIET,
+    )
+    .map_err(|e| Error::new(ErrorKind::Internal, format!("{e}")))?;
+    Ok(fit)
+}
+
 /// Whether the parts' results ask for the encode to be redone with the winding number, as the
 /// single-process encode falls back when the whole sampled grid contradicts itself.
 pub fn needs_winding(parts: &[EncodedPart]) -> bool {
@@ -337,54 +368,18 @@ pub fn assemble_encode(mesh: &Mesh, options: &EncodeOptions, parts: &[&[u8]]) ->
     let grid = options.grid.grid_for(mesh)?;
     let counts = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
     let mut coeffs: Option<SparseGrid> = None;
-    // The boxes must tile the grid in plan order: each starts where the previous left off
-    // along y, or at y = 0 of the next slab where the previous reached the end of y.
-    let (mut next_y, mut next_z, mut slab_end) = (counts[1], 0, 0);
+    let mut tiling = Tiling::new(counts);
     for bytes in parts {
         let slab = Slab::from_bytes(bytes)?;
-        if slab.grid != grid || slab.basis != options.basis {
-            return Err(Error::parameter(
-                "a part was encoded on another grid or basis than the options give",
-            ));
-        }
-        let [bx, by, bz] = slab.bricks.clone();
-        if next_y == counts[1] {
-            (next_y, next_z) = (0, slab_end);
-        }
-        let fits = bx == (0..counts[0])
-            && by.start == next_y
-            && bz.start == next_z
-            && (next_y == 0 || bz.end == slab_end);
-        if !fits {
-            return Err(Error::parameter(format!(
-                "the parts do not tile the grid: a part covers bricks y {by:?}, z {bz:?} where \
-                 y from {next_y}, z from {next_z} was expected"
-            )));
-        }
-        (next_y, slab_end) = (by.end, bz.end);
+        check_slab(&slab, &grid, options)?;
+        tiling.accept(&slab.bricks)?;
         let values = coeffs.get_or_insert_with(|| SparseGrid::new(grid.dims, slab.background));
         slab.apply(values);
     }
-    let done = next_y == counts[1] && slab_end == counts[2];
-    let Some(mut coeffs) = coeffs.filter(|_| done) else {
-        return Err(Error::parameter(format!(
-            "the parts do not tile the grid: they end at bricks y {next_y}, z {slab_end} of {}, \
-             {}",
-            counts[1], counts[2]
-        )));
-    };
+    tiling.finish()?;
+    let mut coeffs = coeffs.ok_or_else(|| Error::parameter("no parts to assemble"))?;
     coeffs.compact_tiles();
-    // The report interp_sparse gives, from no samples: it depends only on the basis.
-    let empty = SparseGrid::new(grid.dims, coeffs.background());
-    let (_, fit) = pgvol_field::interp_sparse_groups(
-        grid,
-        options.basis,
-        &empty,
-        0..0,
-        0..0,
-        pgvol_core::progress::QUIET,
-    )
-    .map_err(|e| Error::new(ErrorKind::Internal, format!("{e}")))?;
+    let fit = assembled_fit(&grid, options, coeffs.background())?;
     let volume = CoefficientVolume::from_sparse(grid, options.basis, coeffs).map_err(|e| {
         Error::new(
             ErrorKind::Internal,

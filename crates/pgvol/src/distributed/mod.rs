@@ -7,7 +7,8 @@
 //!   [`EncodeJob`] (built once per process) samples and fits one slab
 //!   ([`EncodeJob::encode_part`]), reading the distances of the two bricks around it that the
 //!   local fit's halo needs; [`assemble_encode`] builds the file from the slabs' coefficient
-//!   bricks, bit for bit the file of [`encode`](crate::encode()).
+//!   bricks, bit for bit the file of [`encode`](crate::encode()), and [`write_encode_parts`]
+//!   writes that file as the parts arrive, holding a window of slabs.
 //! - decode: [`plan_decode`] cuts the cells into slabs along z; [`decode_part_bricks`] gives
 //!   the coefficient bricks around one, [`decode_part`] its triangles, and [`weld_parts`]
 //!   merges the seams.
@@ -21,6 +22,8 @@ mod decode_parts;
 mod encode_parts;
 mod slab;
 mod split;
+mod stream_parts;
+mod tiling;
 
 pub use decode_parts::{
     decode_part, decode_part_bricks, plan_decode, plan_slice, slice_part, slice_part_bricks,
@@ -32,3 +35,4 @@ pub use encode_parts::{
 };
 pub use slab::Slab;
 pub use split::split;
+pub use stream_parts::{write_encode_parts, write_encode_parts_to, PartsWritten};
