@@ -257,36 +257,75 @@ fn parse_v1<'a>(mut r: Reader<'a>, path: &Path) -> Result<Container<'a>, FormatE
 /// A version 2 file, read from its trailer back.
 fn parse_v2<'a>(bytes: &'a [u8], path: &Path) -> Result<Container<'a>, FormatError> {
     let start = MAGIC.len() + 4;
-    if bytes.len() < start + TRAILER || &bytes[bytes.len() - MAGIC.len()..] != MAGIC {
+    let len = bytes.len() as u64;
+    let trailer = &bytes[bytes.len().saturating_sub(TRAILER)..];
+    let sizes = v2_sizes(len, trailer, path)?;
+    let (dlen, ilen) = (sizes.dlen as usize, sizes.ilen as usize);
+    let header_at = start + dlen + ilen;
+    let header = v2_header(&bytes[header_at..header_at + sizes.hlen], sizes.hcrc, path)?;
+    Ok(Container {
+        header,
+        payload: &bytes[start..start + dlen],
+        index: Some(&bytes[start + dlen..header_at]),
+        payload_crc: None,
+    })
+}
+
+/// The section sizes a version 2 file's trailer gives.
+pub(crate) struct V2Sizes {
+    pub(crate) dlen: u64,
+    pub(crate) ilen: u64,
+    pub(crate) hlen: usize,
+    pub(crate) hcrc: u32,
+}
+
+/// The sizes in `trailer`, the last [`TRAILER`] bytes of a version 2 file of `len` bytes (fewer
+/// when the file is shorter), checked to add up to the file.
+pub(crate) fn v2_sizes(len: u64, trailer: &[u8], path: &Path) -> Result<V2Sizes, FormatError> {
+    let start = (MAGIC.len() + 4) as u64;
+    if len < start + TRAILER as u64 || trailer.len() != TRAILER || &trailer[TRAILER - 8..] != MAGIC
+    {
         return Err(err(
             path,
             "truncated file: a version 2 .pgv ends with its index, header and the magic number \
              again, and this one does not (an interrupted copy or write?)",
         ));
     }
-    let t = &bytes[bytes.len() - TRAILER..];
+    let t = trailer;
     let dlen = u64::from_le_bytes(t[0..8].try_into().expect("8 bytes"));
     let ilen = u64::from_le_bytes(t[8..16].try_into().expect("8 bytes"));
     let hlen = u32::from_le_bytes(t[16..20].try_into().expect("4 bytes")) as usize;
     let hcrc = u32::from_le_bytes(t[20..24].try_into().expect("4 bytes"));
     check_header_len(hlen, path)?;
-    let sized = (start as u64)
+    let sized = start
         .checked_add(dlen)
         .and_then(|n| n.checked_add(ilen))
         .and_then(|n| n.checked_add((hlen + TRAILER) as u64));
-    if sized != Some(bytes.len() as u64) {
+    if sized != Some(len) {
         return Err(err(
             path,
             format!(
                 "the trailer gives {dlen} bytes of bricks, {ilen} of index and {hlen} of header, \
-                 which do not add up to the file's {} bytes",
-                bytes.len()
+                 which do not add up to the file's {len} bytes"
             ),
         ));
     }
-    let (dlen, ilen) = (dlen as usize, ilen as usize);
-    let header_at = start + dlen + ilen;
-    let (header, _) = checked_header(&bytes[header_at..header_at + hlen], hcrc, path)?;
+    Ok(V2Sizes {
+        dlen,
+        ilen,
+        hlen,
+        hcrc,
+    })
+}
+
+/// A version 2 file's header, checked against its CRC and holding the one encoding the
+/// version allows.
+pub(crate) fn v2_header(
+    header_bytes: &[u8],
+    hcrc: u32,
+    path: &Path,
+) -> Result<PgvHeader, FormatError> {
+    let (header, _) = checked_header(header_bytes, hcrc, path)?;
     if header.encoding != ENCODING_SPARSE {
         return Err(err(
             path,
@@ -296,12 +335,7 @@ fn parse_v2<'a>(bytes: &'a [u8], path: &Path) -> Result<Container<'a>, FormatErr
             ),
         ));
     }
-    Ok(Container {
-        header,
-        payload: &bytes[start..start + dlen],
-        index: Some(&bytes[start + dlen..header_at]),
-        payload_crc: None,
-    })
+    Ok(header)
 }
 
 fn check_header_len(hlen: usize, path: &Path) -> Result<(), FormatError> {

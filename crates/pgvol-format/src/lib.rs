@@ -28,6 +28,6 @@ pub use perturbation::{
 pub use pgv::{decode_pgv, encode_pgv, read_pgv, write_pgv};
 pub use sparse::{
     encode_pgv_with, pgv_info, read_brick, sparse_pgv, write_pgv_with, Brick, Compression,
-    EncodeOptions, EncodeReport, PgvInfo, Precision, Predictor, SlabBricks, SlabReader,
+    EncodeOptions, EncodeReport, PgvInfo, Precision, Predictor, SlabBricks, SlabReader, SlabSource,
     SparseParams, SparsePgv, StreamError, StreamedPgv,
 };

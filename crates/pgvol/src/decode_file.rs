@@ -7,7 +7,7 @@ use std::path::Path;
 use pgvol_contour::{CoefficientWindows, Method, RunPart, RunsError};
 use pgvol_core::{Grid, Mesh, SparseGrid, BRICK_EDGE};
 use pgvol_field::CoefficientVolume;
-use pgvol_format::SlabReader;
+use pgvol_format::{SlabReader, SlabSource};
 
 use crate::band::header_band;
 use crate::decode::{finish_mesh, target_grid_of, DecodeOptions};
@@ -19,8 +19,9 @@ use crate::progress::{self, Progress};
 /// Contours the `options.iso` level set of the `.pgv` file at `path` (or of an OpenVDB `.vdb`
 /// level set, fitted first as [`crate::io::encode_vdb`] does), as [`crate::decode_shape`]
 /// of the file's shape does. Marching cubes of a sparse file reads the file one window of brick
-/// slabs at a time and contours it run by run along z, so memory is the file's bytes, the mesh
-/// and one window; other methods and encodings read the whole volume first.
+/// slabs at a time and contours it run by run along z, so memory is the mesh and one window
+/// (and the file's bytes for a version 1 file, which is read whole); other methods and
+/// encodings read the whole volume first.
 pub fn decode_file(
     path: impl AsRef<Path>,
     options: &DecodeOptions,
@@ -39,9 +40,9 @@ pub fn decode_file(
             .to_mesh(options, progress)
             .map_err(at);
     }
-    let bytes = pgvol_core::read_input(path).reading()?;
+    let source = SlabSource::open(path).reading()?;
     let reader = match options.method {
-        Method::MarchingCubes => SlabReader::open(&bytes, path).reading()?,
+        Method::MarchingCubes => SlabReader::from_source(&source, path).reading()?,
         _ => None,
     };
     let streamed = reader.filter(|r| {
@@ -50,7 +51,7 @@ pub fn decode_file(
         header.basis.is_separable() && (options.iso == 0.0 || header_band(header).is_some())
     });
     let Some(reader) = streamed else {
-        let shape = Field::from_file(read_pgv_bytes(&bytes, path)?);
+        let shape = Field::from_file(whole_file(&source, path)?);
         return shape.to_mesh(options, progress).map_err(at);
     };
     decode_slabs(&reader, options, progress).map_err(at)
@@ -166,5 +167,14 @@ impl CoefficientWindows for FileWindows<'_, '_> {
         }
         self.held.end = self.held.end.max(wanted.end);
         Ok(Cow::Borrowed(&self.volume))
+    }
+}
+
+/// The file `source` was opened from, decoded whole (read again when `source` left its bricks
+/// on disk).
+pub(crate) fn whole_file(source: &SlabSource, path: &Path) -> Result<pgvol_format::PgvFile> {
+    match source.bytes() {
+        Some(bytes) => read_pgv_bytes(bytes, path),
+        None => read_pgv_bytes(&pgvol_core::read_input(path).reading()?, path),
     }
 }

@@ -3,7 +3,9 @@
 use std::path::Path;
 
 use glam::Vec3;
-use pgvol_format::SlabReader;
+use pgvol_format::{SlabReader, SlabSource};
+
+use crate::decode_file::whole_file;
 use pgvol_slice::{
     brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
     LayerFrame, SliceOptions as StageOptions,
@@ -11,7 +13,6 @@ use pgvol_slice::{
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::field_value::Field;
-use crate::pgv_io::read_pgv_bytes;
 use crate::progress::{self, Progress};
 
 /// How to slice a shape.
@@ -67,25 +68,26 @@ pub struct Sliced {
 
 /// The layers of the `.pgv` file at `path`, as [`slice`] of the file's shape gives them. A
 /// sparse file is decoded one slab of bricks at a time, only the slabs within reach of the
-/// layers being sliced held, so memory is the file's bytes and a window of the volume.
+/// layers being sliced held, so memory is a window of the volume (and the file's bytes for a
+/// version 1 file, which is read whole).
 pub fn slice_file(
     path: impl AsRef<Path>,
     settings: &SliceOptions,
     progress: &dyn Progress,
 ) -> Result<Sliced> {
     let path = path.as_ref();
-    let bytes = pgvol_core::read_input(path).reading()?;
+    let source = SlabSource::open(path).reading()?;
     let at = |e: Error| match e.path() {
         Some(_) => e,
         None => e.at(path),
     };
-    let Some(reader) = SlabReader::open(&bytes, path).reading()? else {
-        let shape = Field::from_file(read_pgv_bytes(&bytes, path)?);
+    let Some(reader) = SlabReader::from_source(&source, path).reading()? else {
+        let shape = Field::from_file(whole_file(&source, path)?);
         return shape.slice(settings, progress).map_err(at);
     };
     let header = reader.header().clone();
     if !header.basis.is_separable() {
-        let shape = Field::from_file(read_pgv_bytes(&bytes, path)?);
+        let shape = Field::from_file(whole_file(&source, path)?);
         return shape.slice(settings, progress).map_err(at);
     }
     let grid = header.grid;

@@ -1,6 +1,7 @@
 //! Reading one stored brick: its blob checked against its CRC, decompressed into a buffer sized
 //! from the brick, and decoded; and the value of an unstored brick.
 
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::path::Path;
 
@@ -40,7 +41,7 @@ impl BrickReader {
         let BrickReader { raw, scratch } = self;
         // Nothing in here runs other rayon tasks, so the borrow cannot be taken twice.
         DCTX.with_borrow_mut(|dctx| {
-            let raw = inflate(l, b, blob, dctx, raw, path)?;
+            let raw = inflate(l, b, &blob, dctx, raw, path)?;
             let (_, n) = l.bricks.extent(b);
             decode_values(raw, n, &l.sp, scratch, out).map_err(|_| non_finite(l, b, path))
         })
@@ -64,11 +65,16 @@ pub(crate) fn checked_blob<'a>(
     b: usize,
     e: usize,
     path: &Path,
-) -> Result<&'a [u8], FormatError> {
+) -> Result<Cow<'a, [u8]>, FormatError> {
     let (offset, len, crc) = l.entries[e];
     // The layout check put every entry inside the data.
-    let blob = &l.data[offset as usize..offset as usize + len as usize];
-    if !crc_ok(crc, crc32fast::hash(blob)) {
+    let blob = l.data.read(offset, len).map_err(|e| {
+        err(
+            path,
+            format!("cannot read brick {:?}: {e}", l.bricks.coords(b)),
+        )
+    })?;
+    if !crc_ok(crc, crc32fast::hash(&blob)) {
         return Err(err(
             path,
             format!(

@@ -1,6 +1,7 @@
 //! The brick maps and the index at the start of a `sparse-bricks` payload: written by the
 //! encoder, parsed and checked against the header and the payload by every reader.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use super::bricks::Bricks;
@@ -20,8 +21,65 @@ pub(crate) struct Layout<'a> {
     pub(crate) inside: &'a [u8],
     /// (offset, length, crc) per stored brick, in brick order.
     pub(crate) entries: Vec<(u64, u32, u32)>,
-    pub(crate) data: &'a [u8],
+    pub(crate) data: BrickData<'a>,
     pub(crate) index_bytes: usize,
+}
+
+/// Where the brick data is: in memory, or in a file read a blob at a time.
+#[derive(Clone, Copy)]
+pub(crate) enum BrickData<'a> {
+    Bytes(&'a [u8]),
+    File {
+        file: &'a std::fs::File,
+        /// The data's first byte in the file.
+        start: u64,
+        len: u64,
+    },
+}
+
+impl<'a> BrickData<'a> {
+    pub(crate) fn len(&self) -> u64 {
+        match self {
+            BrickData::Bytes(b) => b.len() as u64,
+            BrickData::File { len, .. } => *len,
+        }
+    }
+
+    /// The `len` bytes from `offset` (within the data, which the layout check guarantees).
+    pub(crate) fn read(&self, offset: u64, len: u32) -> std::io::Result<Cow<'a, [u8]>> {
+        match self {
+            BrickData::Bytes(b) => Ok(Cow::Borrowed(
+                &b[offset as usize..offset as usize + len as usize],
+            )),
+            BrickData::File { file, start, .. } => {
+                let mut blob = vec![0u8; len as usize];
+                read_exact_at(file, &mut blob, start + offset)?;
+                Ok(Cow::Owned(blob))
+            }
+        }
+    }
+}
+
+/// Fills `buf` from the file's bytes at `at`, without moving a shared cursor, so threads may
+/// read bricks of one file at once.
+fn read_exact_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileExt::read_exact_at(file, buf, at)
+    }
+    #[cfg(windows)]
+    {
+        let mut done = 0;
+        while done < buf.len() {
+            let n =
+                std::os::windows::fs::FileExt::seek_read(file, &mut buf[done..], at + done as u64)?;
+            if n == 0 {
+                return Err(std::io::ErrorKind::UnexpectedEof.into());
+            }
+            done += n;
+        }
+        Ok(())
+    }
 }
 
 pub(crate) fn bit(map: &[u8], b: usize) -> bool {
@@ -35,6 +93,26 @@ pub(crate) fn layout<'a>(
     header: &PgvHeader,
     index: Option<&'a [u8]>,
     payload: &'a [u8],
+    path: &Path,
+) -> Result<Layout<'a>, FormatError> {
+    layout_of(header, index, BrickData::Bytes(payload), path)
+}
+
+/// [`layout`] of a version 2 file whose brick data stays in the file: `index` is read, the
+/// blobs are read as they are asked for.
+pub(crate) fn layout_in_file<'a>(
+    header: &PgvHeader,
+    index: &'a [u8],
+    data: BrickData<'a>,
+    path: &Path,
+) -> Result<Layout<'a>, FormatError> {
+    layout_of(header, Some(index), data, path)
+}
+
+fn layout_of<'a>(
+    header: &PgvHeader,
+    index: Option<&'a [u8]>,
+    payload: BrickData<'a>,
     path: &Path,
 ) -> Result<Layout<'a>, FormatError> {
     let Some(sp) = header.sparse.clone() else {
@@ -93,6 +171,9 @@ pub(crate) fn layout<'a>(
     let meta = (2 * map as u64) + (sp.stored as u64) * ENTRY as u64;
     let (index, data) = match index {
         None => {
+            let BrickData::Bytes(payload) = payload else {
+                return Err(err(path, "a version 1 payload is read from memory"));
+            };
             if meta + 4 > payload.len() as u64 {
                 return Err(err(
                     path,
@@ -104,7 +185,8 @@ pub(crate) fn layout<'a>(
                     ),
                 ));
             }
-            payload.split_at(meta as usize + 4)
+            let (index, data) = payload.split_at(meta as usize + 4);
+            (index, BrickData::Bytes(data))
         }
         Some(index) => {
             if meta + 4 != index.len() as u64 {
@@ -148,7 +230,7 @@ pub(crate) fn layout<'a>(
         let offset = u64::from_le_bytes(e[0..8].try_into().expect("8 bytes"));
         let len = u32::from_le_bytes(e[8..12].try_into().expect("4 bytes"));
         let crc = u32::from_le_bytes(e[12..16].try_into().expect("4 bytes"));
-        if offset != next || offset + len as u64 > data.len() as u64 {
+        if offset != next || offset + len as u64 > data.len() {
             return Err(err(
                 path,
                 format!(
@@ -162,7 +244,7 @@ pub(crate) fn layout<'a>(
         next = offset + len as u64;
         entries.push((offset, len, crc));
     }
-    if next != data.len() as u64 {
+    if next != data.len() {
         return Err(err(
             path,
             format!(

@@ -45,7 +45,7 @@ pub fn pgv_info(bytes: &[u8], path: &Path) -> Result<PgvInfo, FormatError> {
         precision: l.sp.precision,
         bytes_header: framing,
         bytes_index: l.index_bytes,
-        bytes_payload: l.data.len(),
+        bytes_payload: l.data.len() as usize,
         header: c.header,
     })
 }

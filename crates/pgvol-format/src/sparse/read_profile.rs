@@ -85,8 +85,8 @@ pub fn profile_sparse_read(
 
     let t = Instant::now();
     let (mut dctx, mut buf) = (None, Vec::new());
-    for (&(b, blob), span) in blobs.iter().zip(&raw_spans) {
-        let raw = inflate(&l, b, blob, &mut dctx, &mut buf, path)?;
+    for ((b, blob), span) in blobs.iter().zip(&raw_spans) {
+        let raw = inflate(&l, *b, blob, &mut dctx, &mut buf, path)?;
         raws[span.clone()].copy_from_slice(raw);
     }
     times.decompress = t.elapsed();

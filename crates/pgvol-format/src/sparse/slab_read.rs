@@ -2,6 +2,7 @@
 //! coordinate along an axis), so a caller walking along the axis holds a window of the volume
 //! instead of all of it. Each slab is cut into the sparse grid's bricks as the whole read does.
 
+use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use pgvol_core::sparse::BrickValues;
@@ -9,9 +10,10 @@ use pgvol_core::{Background, BRICK_EDGE};
 use rayon::prelude::*;
 
 use super::brick_read::{check_all_bricks, BrickReader};
-use super::index::{bit, layout, Layout};
+use super::index::{bit, layout, layout_in_file, BrickData, Layout};
 use super::payload_read::{cut_into_grid_bricks, grid_bricks_of};
-use crate::container::parse_container;
+use crate::container::{parse_container, v2_header, v2_sizes, MAGIC, TRAILER, VERSION_STREAMED};
+use crate::error::err;
 use crate::error::FormatError;
 use crate::header::PgvHeader;
 use crate::sparse_params::ENCODING_SPARSE;
@@ -34,6 +36,79 @@ pub struct SlabBricks {
     pub inside: Vec<[usize; 3]>,
 }
 
+/// What a [`SlabReader`] reads from: a whole file in memory, or a version 2 file's index and
+/// header with its bricks left in the file, read a slab at a time, so a reader walking the
+/// slabs holds the index and a window of bricks, not the file.
+pub enum SlabSource {
+    Bytes(Vec<u8>),
+    File {
+        file: std::fs::File,
+        header: Box<PgvHeader>,
+        /// The brick maps, index and its CRC.
+        index: Vec<u8>,
+        /// Bytes of brick data, from byte 12 of the file.
+        data_len: u64,
+    },
+}
+
+impl SlabSource {
+    /// Opens the file at `path`: a version 2 file keeps its bricks on disk, any other file (and
+    /// anything that is not a regular file) is read whole.
+    pub fn open(path: &Path) -> Result<SlabSource, FormatError> {
+        let whole = || {
+            pgvol_core::read_input(path)
+                .map(SlabSource::Bytes)
+                .map_err(|e| err(path, e.problem))
+        };
+        let Ok(mut file) = std::fs::File::open(path) else {
+            return whole();
+        };
+        let len = match file.metadata() {
+            Ok(m) if m.is_file() => m.len(),
+            _ => return whole(),
+        };
+        let mut head = [0u8; 12];
+        let streamed = len >= (head.len() + TRAILER) as u64
+            && file.read_exact(&mut head).is_ok()
+            && &head[..8] == MAGIC
+            && head[8..] == VERSION_STREAMED.to_le_bytes();
+        if !streamed {
+            return whole();
+        }
+        let read = |file: &mut std::fs::File, at: u64, n: u64| -> Result<Vec<u8>, FormatError> {
+            let mut buf = vec![0u8; n as usize];
+            file.seek(SeekFrom::Start(at))
+                .and_then(|_| file.read_exact(&mut buf))
+                .map_err(|e| err(path, format!("cannot read file: {e}")))?;
+            Ok(buf)
+        };
+        let trailer = read(&mut file, len - TRAILER as u64, TRAILER as u64)?;
+        let sizes = v2_sizes(len, &trailer, path)?;
+        let start = head.len() as u64;
+        let mut rest = read(
+            &mut file,
+            start + sizes.dlen,
+            sizes.ilen + sizes.hlen as u64,
+        )?;
+        let header = v2_header(&rest[sizes.ilen as usize..], sizes.hcrc, path)?;
+        rest.truncate(sizes.ilen as usize);
+        Ok(SlabSource::File {
+            file,
+            header: Box::new(header),
+            index: rest,
+            data_len: sizes.dlen,
+        })
+    }
+
+    /// The whole file's bytes, when it was read whole.
+    pub fn bytes(&self) -> Option<&[u8]> {
+        match self {
+            SlabSource::Bytes(b) => Some(b),
+            SlabSource::File { .. } => None,
+        }
+    }
+}
+
 impl<'a> SlabReader<'a> {
     /// Checks the container (both CRCs) and the brick index of `bytes`. `Ok(None)` for a valid
     /// file that is not read by slabs: another encoding, or file bricks that are not whole
@@ -47,8 +122,34 @@ impl<'a> SlabReader<'a> {
         if c.index.is_some() {
             check_all_bricks(&layout, path)?;
         }
-        if layout.bricks.edge % BRICK_EDGE != 0 {
-            return Ok(None);
+        Ok(Self::with_layout(c.header, layout, path))
+    }
+
+    /// A reader of `source`: as [`open`](SlabReader::open) for bytes; for a version 2 file left
+    /// on disk, the header and index are checked now and each brick's CRC as it is read.
+    pub fn from_source(source: &'a SlabSource, path: &Path) -> Result<Option<Self>, FormatError> {
+        match source {
+            SlabSource::Bytes(bytes) => SlabReader::open(bytes, path),
+            SlabSource::File {
+                file,
+                header,
+                index,
+                data_len,
+            } => {
+                let data = BrickData::File {
+                    file,
+                    start: 12,
+                    len: *data_len,
+                };
+                let layout = layout_in_file(header, index, data, path)?;
+                Ok(Self::with_layout((**header).clone(), layout, path))
+            }
+        }
+    }
+
+    fn with_layout(header: PgvHeader, layout: Layout<'a>, path: &Path) -> Option<Self> {
+        if !layout.bricks.edge.is_multiple_of(BRICK_EDGE) {
+            return None;
         }
         let [cx, cy, cz] = layout.bricks.count;
         let mut row_entries = Vec::with_capacity(cy * cz);
@@ -59,12 +160,12 @@ impl<'a> SlabReader<'a> {
                 .filter(|&b| bit(layout.stored, b))
                 .count();
         }
-        Ok(Some(SlabReader {
-            header: c.header,
+        Some(SlabReader {
+            header,
             layout,
             path: path.to_path_buf(),
             row_entries,
-        }))
+        })
     }
 
     pub fn header(&self) -> &PgvHeader {
@@ -172,13 +273,19 @@ mod tests {
     }
 
     fn slabs_hold_the_whole_read_bricks(bytes: &[u8]) {
+        let reader = SlabReader::open(bytes, Path::new("s.pgv"))
+            .unwrap()
+            .unwrap();
+        slabs_hold_the_bricks_of(&reader, bytes);
+    }
+
+    fn slabs_hold_the_bricks_of(reader: &SlabReader, bytes: &[u8]) {
         let path = Path::new("s.pgv");
         let whole = decode_pgv(bytes, path).unwrap().volume.coeffs;
         let whole_inside = whole
             .all_bricks()
             .filter(|&m| whole.brick(m).is_none() && whole.is_inside(m))
             .count();
-        let reader = SlabReader::open(bytes, path).unwrap().unwrap();
         for axis in 0..3 {
             let (mut stored, mut inside) = (0, 0);
             for s in 0..reader.brick_counts()[axis] {
@@ -221,6 +328,78 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_version_2_file_is_read_from_disk_a_brick_at_a_time() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.pgv");
+        for brick in [8, 16] {
+            let bytes = file_bytes_with(brick);
+            std::fs::write(&path, &bytes).unwrap();
+            let source = SlabSource::open(&path).unwrap();
+            assert!(
+                source.bytes().is_none(),
+                "a version 2 file is not read whole"
+            );
+            let reader = SlabReader::from_source(&source, &path).unwrap().unwrap();
+            assert_eq!(
+                reader.header(),
+                &parse_container(&bytes, &path, true).unwrap().header
+            );
+            slabs_hold_the_bricks_of(&reader, &bytes);
+        }
+        // Version 1 is read whole, and reads the same.
+        let volume = sparse(Basis::Bspline3, Background::clamp(0.5), 7);
+        let file = PgvFile {
+            header: header_for(&volume, "interp", None),
+            volume,
+        };
+        let v1 = crate::sparse::sparse_pgv(&file, &EncodeOptions::default())
+            .unwrap()
+            .0
+            .to_bytes_v1();
+        std::fs::write(&path, &v1).unwrap();
+        let source = SlabSource::open(&path).unwrap();
+        assert_eq!(source.bytes(), Some(&v1[..]));
+        slabs_hold_the_bricks_of(
+            &SlabReader::from_source(&source, &path).unwrap().unwrap(),
+            &v1,
+        );
+    }
+
+    #[test]
+    fn damage_in_a_file_on_disk_is_found_where_it_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.pgv");
+        let good = file_bytes();
+        // Cut short: the trailer is missing.
+        std::fs::write(&path, &good[..good.len() - 5]).unwrap();
+        let e = SlabSource::open(&path).err().unwrap().to_string();
+        assert!(e.contains("truncated") && e.contains("d.pgv"), "{e}");
+        // A damaged index.
+        let n = good.len();
+        let dlen = u64::from_le_bytes(good[n - 32..n - 24].try_into().unwrap()) as usize;
+        let mut bad = good.clone();
+        bad[12 + dlen + 3] ^= 1;
+        std::fs::write(&path, &bad).unwrap();
+        let source = SlabSource::open(&path).unwrap();
+        let e = SlabReader::from_source(&source, &path)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("index checksum"), "{e}");
+        // A damaged brick: found by the slab that holds it.
+        let mut bad = good.clone();
+        bad[12 + 1] ^= 1;
+        std::fs::write(&path, &bad).unwrap();
+        let source = SlabSource::open(&path).unwrap();
+        let reader = SlabReader::from_source(&source, &path).unwrap().unwrap();
+        let errors: Vec<String> = (0..reader.brick_counts()[2])
+            .filter_map(|s| reader.slab(2, s).err().map(|e| e.to_string()))
+            .collect();
+        assert_eq!(errors.len(), 1, "{errors:?}");
+        assert!(errors[0].contains("checksum mismatch"), "{}", errors[0]);
     }
 
     #[test]
