@@ -460,6 +460,32 @@ pub(crate) fn slice_part(
         .collect())
 }
 
+/// The parts' layers of slicing `field` (concatenated in plan order) with the corners of the
+/// field's sharp section put back, as `Field.slice` gives them.
+#[pyfunction]
+#[pyo3(signature = (field, layers, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sharpen_layers(
+    py: Python<'_>,
+    field: &Field,
+    layers: Vec<PyRef<'_, Layer>>,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Vec<Layer>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let mut out = layers
+        .iter()
+        .map(|l| l.to_layer(py))
+        .collect::<PyResult<Vec<_>>>()?;
+    drop(layers);
+    let shape = field.shape();
+    quiet(py, || parts::sharpen_layers(shape, &settings, &mut out))?;
+    Ok(out.into_iter().map(|l| Layer::from_layer(py, l)).collect())
+}
+
 /// Writes layers to an SVG, Common Layer Interface (`binary` for its binary form) or JSON
 /// file by extension, atomically; `units_mm` is millimetres per model unit (CLI headers).
 #[pyfunction]
@@ -503,6 +529,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_slice, m)?)?;
     m.add_function(wrap_pyfunction!(slice_part_bricks, m)?)?;
     m.add_function(wrap_pyfunction!(slice_part, m)?)?;
+    m.add_function(wrap_pyfunction!(sharpen_layers, m)?)?;
     m.add_function(wrap_pyfunction!(write_layers, m)?)?;
     Ok(())
 }

@@ -167,6 +167,30 @@ def test_slice_in_tasks_gives_the_single_process_layers(client, mesh_path, tmp_p
             assert all(np.array_equal(x, y) for x, y in zip(a.loops, b.loops))
 
 
+def test_slice_in_tasks_keeps_the_corners_of_a_sharp_file(client, run_cli, tmp_path):
+    box = trimesh.creation.box(extents=[1.0, 1.0, 1.2])
+    box.apply_transform(trimesh.transformations.rotation_matrix(0.5, [0, 0, 1]))
+    box.export(tmp_path / "box.obj")
+    path = tmp_path / "box.pgv"
+    run_cli("encode", tmp_path / "box.obj", "-o", path, "--res", 64, "--sharp", "auto", "-q")
+    field = pgvol.Field.load(path)
+    h = field.grid.spacing
+    want = field.slice(h)
+    got = distributed.slice(path, h, client=client, parts=3)
+    assert len(got) == len(want)
+    for a, b in zip(got, want):
+        assert a.height == b.height and a.holes == b.holes
+        assert all(np.array_equal(x, y) for x, y in zip(a.loops, b.loops))
+    # The corners come from the file's section: the parts' own layers are the smooth field's.
+    from pgvol import _pgvol
+
+    smooth = [layer for s, e in _pgvol.plan_slice(field, 3, h)
+              for layer in _pgvol.slice_part(_pgvol.slice_part_bricks(field, s, e, h),
+                                             field.bounds, s, e, h)]
+    assert any(len(x) != len(y) or not np.array_equal(x, y)
+               for a, b in zip(smooth, want) for x, y in zip(a.loops, b.loops))
+
+
 def test_a_worker_killed_mid_run_changes_nothing(mesh_path):
     mesh = pgvol.read_mesh(mesh_path("stanford-bunny"))
     want = pgvol.Field.from_mesh(*mesh, res=RES).to_bytes()

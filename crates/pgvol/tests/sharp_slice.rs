@@ -5,10 +5,8 @@
 use glam::{Mat3, Vec3};
 use pgvol::{EncodeOptions, Field, GridSpec, SignMode, Silent, SliceOptions};
 
-/// The farthest, over the layers and over the prism's four vertical edges,
-/// of the distance from the edge's point in the layer to the nearest contour point, in
-/// spacings; with the file's sharp section or without it.
-fn corner_error(with_section: bool) -> f32 {
+/// A turned prism's file with its sharp section, and the turn.
+fn prism_field() -> (Field, Mat3) {
     let turn = Mat3::from_rotation_z(0.5);
     let mut prism =
         pgvol::mesh::shapes::cuboid(Vec3::new(-0.5, -0.5, -0.6), Vec3::new(0.5, 0.5, 0.6));
@@ -26,11 +24,20 @@ fn corner_error(with_section: bool) -> f32 {
     };
     let report = pgvol::sharp::attach(&mut file, &prism, SignMode::Auto, &sharp, &Silent).unwrap();
     assert!(report.stored_cells > 0, "{report:?}");
+    (Field::from_file(file), turn)
+}
+
+/// The farthest, over the layers and over the prism's four vertical edges,
+/// of the distance from the edge's point in the layer to the nearest contour point, in
+/// spacings; with the file's sharp section or without it.
+fn corner_error(with_section: bool) -> f32 {
+    let (mut field, turn) = prism_field();
     if !with_section {
+        let mut file = field.file().clone();
         file.header.sharp = None;
+        field = Field::from_file(file);
     }
-    let spacing = file.volume.grid.spacing;
-    let field = Field::from_file(file);
+    let spacing = field.volume().grid.spacing;
     let sliced = field.slice(&SliceOptions::new(spacing), &Silent).unwrap();
     let corners: Vec<Vec3> = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]
         .iter()
@@ -69,4 +76,22 @@ fn a_prisms_layers_keep_their_corners_with_the_sharp_section() {
         smooth > 2.0 * sharp,
         "corners {smooth} spacings off without it, {sharp} with it"
     );
+}
+
+#[test]
+fn slicing_in_parts_puts_the_same_corners_back() {
+    use pgvol::distributed::{plan_slice, sharpen_layers, slice_part, slice_part_bricks};
+    let (field, _) = prism_field();
+    let settings = SliceOptions::new(field.volume().grid.spacing);
+    let whole = field.slice(&settings, &Silent).unwrap().layers;
+    for parts in [1, 3] {
+        let mut got = Vec::new();
+        for range in plan_slice(&field, &settings, parts).unwrap() {
+            let bricks = slice_part_bricks(&field, &settings, range.clone()).unwrap();
+            got.extend(slice_part(&bricks, field.bounds(), &settings, range).unwrap());
+        }
+        assert!(got != whole, "the parts' layers are the smooth field's");
+        sharpen_layers(&field, &settings, &mut got).unwrap();
+        assert_eq!(got, whole, "{parts} parts");
+    }
 }

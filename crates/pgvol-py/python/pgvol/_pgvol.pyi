@@ -61,6 +61,7 @@ __all__ = [
     "plan_slice",
     "slice_part_bricks",
     "slice_part",
+    "sharpen_layers",
     "write_layers",
 ]
 
@@ -1030,6 +1031,16 @@ def slice_part(
     bounds: Tuple[_Vec3, _Vec3],
     start: int,
     end: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> List[Layer]: ...
+def sharpen_layers(
+    field: Field,
+    layers: List[Layer],
     layer_height: float,
     *,
     axis: str = "z",

@@ -298,7 +298,9 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
     ])
     calls = [(b, field.bounds, layers, layer_height, settings) for b, layers in zip(bricks, plan)]
     names = [f"pgvol-slice-{key}-{s}-{e}" for s, e in plan]
-    return [layer for part in _run(client, _slice_part, calls, names, retries) for layer in part]
+    layers = [layer for part in _run(client, _slice_part, calls, names, retries) for layer in part]
+    # A file's sharp section puts corners back, here where the layers are whole.
+    return _pgvol.sharpen_layers(field, layers, layer_height, **settings)
 
 
 _EXAMPLES = """examples:

@@ -181,3 +181,10 @@ pub fn slice_part(
         pgvol_core::progress::QUIET,
     )?)
 }
+
+/// Puts back into `layers`, the parts' layers of slicing `field` by `settings` concatenated in
+/// plan order, the corners the field's sharp section marks, as [`Field::slice`] does after
+/// slicing; the layers of a field without the section are left as they are.
+pub fn sharpen_layers(field: &Field, settings: &SliceSettings, layers: &mut [Layer]) -> Result<()> {
+    crate::sharp::sharpen_sliced(layers, &field.file.header, settings.axis)
+}

@@ -13,7 +13,8 @@
 //!   the coefficient bricks around one, [`decode_part`] its triangles, and [`weld_parts`]
 //!   merges the seams.
 //! - slice: [`plan_slice`] cuts the layers into ranges; [`slice_part_bricks`] and
-//!   [`slice_part`] compute one range.
+//!   [`slice_part`] compute one range, and [`sharpen_layers`] puts the corners of a file's
+//!   sharp section back into the concatenated ranges.
 //!
 //! Bricks travel as [`Slab`] bytes: the grid, basis, sides of absent bricks as runs, and the
 //! stored bricks, compressed with zstd.
@@ -26,8 +27,8 @@ mod stream_parts;
 mod tiling;
 
 pub use decode_parts::{
-    decode_part, decode_part_bricks, plan_decode, plan_slice, slice_part, slice_part_bricks,
-    weld_parts, PART_HALO_BRICKS,
+    decode_part, decode_part_bricks, plan_decode, plan_slice, sharpen_layers, slice_part,
+    slice_part_bricks, weld_parts, PART_HALO_BRICKS,
 };
 pub use encode_parts::{
     assemble_encode, needs_winding, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob,
