@@ -160,6 +160,15 @@ pub(crate) struct Container<'a> {
 }
 
 impl Container<'_> {
+    /// The file's format version.
+    pub(crate) fn version(&self) -> u32 {
+        if self.index.is_some() {
+            VERSION_STREAMED
+        } else {
+            VERSION
+        }
+    }
+
     /// Hashes a version 1 payload and compares it with its stored CRC.
     pub(crate) fn check_payload(&self, path: &Path) -> Result<(), FormatError> {
         let Some(stored) = self.payload_crc else {

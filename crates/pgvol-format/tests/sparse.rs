@@ -454,6 +454,12 @@ fn damaged_sparse_files_give_clear_errors() {
     assert!(decode_pgv(&join(&parts, |_, o, l| (o, l)), p()).is_ok());
     assert!(decode_pgv(&join_v1(&parts, |_, o, l| (o, l)), p()).is_ok());
     assert!(decode_pgv(&good, p()).is_ok());
+    assert_eq!(pgv_info(&good, p()).unwrap().version, 2);
+    assert_eq!(pgv_info(&good_v1, p()).unwrap().version, 1);
+    assert_eq!(
+        pgv_info(&good, p()).unwrap().header,
+        pgv_info(&good_v1, p()).unwrap().header
+    );
     assert_eq!(
         decode_pgv(&good_v1, p()).unwrap().volume.dense_coeffs(),
         decode_pgv(&good, p()).unwrap().volume.dense_coeffs()

@@ -422,6 +422,8 @@ pub fn decode(a: DecodeArgs) -> Result<()> {
 struct Info<'a> {
     file: &'a std::path::Path,
     bytes: u64,
+    /// The `.pgv` format version.
+    version: u32,
     header: &'a pgvol::PgvHeader,
     coefficients: usize,
     coefficient_range: [f32; 2],
@@ -447,6 +449,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
     let info = Info {
         file: &a.input,
         bytes,
+        version: parts.version,
         header: &file.header,
         coefficients: count,
         coefficient_range: range,
@@ -463,7 +466,12 @@ pub fn info(a: InfoArgs) -> Result<()> {
     }
     let h = &file.header;
     let g = h.grid;
-    outln!("file          {} ({} bytes)", a.input.display(), bytes);
+    outln!(
+        "file          {} ({} bytes, format version {})",
+        a.input.display(),
+        bytes,
+        parts.version
+    );
     outln!("basis         {} (fit: {})", h.basis, h.fit);
     outln!(
         "grid          {} x {} x {}, spacing {}, origin ({}, {}, {})",

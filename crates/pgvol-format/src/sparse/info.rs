@@ -12,6 +12,8 @@ use crate::sparse_params::{Precision, ENCODING_SPARSE};
 #[derive(Clone, Debug, PartialEq)]
 pub struct PgvInfo {
     pub header: PgvHeader,
+    /// The format version: 1 (header first) or 2 (index and header last, `sparse-bricks`).
+    pub version: u32,
     /// `None` for `dense-f32`.
     pub bricks_total: Option<usize>,
     pub bricks_stored: Option<usize>,
@@ -29,6 +31,7 @@ pub fn pgv_info(bytes: &[u8], path: &Path) -> Result<PgvInfo, FormatError> {
     let framing = bytes.len() - c.payload.len() - c.index.map_or(0, <[u8]>::len);
     if c.header.encoding != ENCODING_SPARSE {
         return Ok(PgvInfo {
+            version: c.version(),
             header: c.header,
             bricks_total: None,
             bricks_stored: None,
@@ -40,6 +43,7 @@ pub fn pgv_info(bytes: &[u8], path: &Path) -> Result<PgvInfo, FormatError> {
     }
     let l = layout(&c.header, c.index, c.payload, path)?;
     Ok(PgvInfo {
+        version: c.version(),
         bricks_total: Some(l.bricks.total()),
         bricks_stored: Some(l.sp.stored),
         precision: l.sp.precision,
