@@ -65,3 +65,20 @@ pub struct EncodeReport {
     /// Magnitude given to unstored bricks.
     pub clamp: f32,
 }
+
+impl EncodeOptions {
+    /// An error naming the first option a writer cannot use.
+    pub(crate) fn check(&self) -> Result<(), String> {
+        if !crate::sparse_params::BRICK_RANGE.contains(&self.brick) {
+            return Err(format!(
+                "brick edge {} is outside {:?}",
+                self.brick,
+                crate::sparse_params::BRICK_RANGE
+            ));
+        }
+        if !(self.band.is_finite() && self.band >= 0.0) {
+            return Err(format!("band {} must be finite and >= 0", self.band));
+        }
+        Ok(())
+    }
+}

@@ -22,7 +22,7 @@ use super::stored_band::{layer_reach, stored_band_layers};
 use crate::container::{streamed_framing_bytes, write_streamed_end, write_streamed_start};
 use crate::error::{err, FormatError};
 use crate::header::PgvHeader;
-use crate::sparse_params::{Precision, SparseParams, BRICK_RANGE, ENCODING_SPARSE};
+use crate::sparse_params::{Precision, SparseParams, ENCODING_SPARSE};
 
 /// Why a streamed write stopped.
 #[derive(Debug)]
@@ -77,15 +77,7 @@ impl<'w> StreamedPgv<'w> {
         opts: &EncodeOptions,
     ) -> Result<StreamedPgv<'w>, StreamError> {
         let fail = |m: String| StreamError::Invalid(err(Path::new("<encode>"), m));
-        if !BRICK_RANGE.contains(&opts.brick) {
-            return Err(fail(format!(
-                "brick edge {} is outside {:?}",
-                opts.brick, BRICK_RANGE
-            )));
-        }
-        if !(opts.band.is_finite() && opts.band >= 0.0) {
-            return Err(fail(format!("band {} must be finite and >= 0", opts.band)));
-        }
+        opts.check().map_err(fail)?;
         let grid = header.grid;
         let weight = basis_weight_bound(header.basis);
         let scale = fixed_scale(opts, grid.spacing, weight).map_err(fail)?;

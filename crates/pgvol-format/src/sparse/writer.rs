@@ -18,7 +18,7 @@ use crate::container::{
 };
 use crate::error::{err, FormatError};
 use crate::header::{PgvFile, PgvHeader};
-use crate::sparse_params::{Precision, SparseParams, BRICK_RANGE, ENCODING_SPARSE};
+use crate::sparse_params::{Precision, SparseParams, ENCODING_SPARSE};
 
 /// A file in the `sparse-bricks` encoding, held as its header, its index and its bricks'
 /// blobs: written out without being copied into one buffer first.
@@ -82,15 +82,7 @@ pub fn sparse_pgv(
     let fail = |m: String| err(Path::new("<encode>"), m);
     let volume = &file.volume;
     let g = volume.grid;
-    if !BRICK_RANGE.contains(&opts.brick) {
-        return Err(fail(format!(
-            "brick edge {} is outside {:?}",
-            opts.brick, BRICK_RANGE
-        )));
-    }
-    if !(opts.band.is_finite() && opts.band >= 0.0) {
-        return Err(fail(format!("band {} must be finite and >= 0", opts.band)));
-    }
+    opts.check().map_err(fail)?;
     pgvol_field::volume::check_sparse(&volume.grid, volume.basis, &volume.coeffs)
         .map_err(|e| fail(format!("invalid volume: {e}")))?;
     // Steps in units of field error: a coefficient error δ moves the field by at most W·δ.
