@@ -8,6 +8,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
+use crate::chunks::write_records;
 use crate::{Mesh, MeshError};
 
 pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
@@ -212,22 +213,30 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, normals: &[Vec3]) -> io::Res
         mesh.positions.len(),
         mesh.triangles.len()
     )?;
-    if mesh.offset == DVec3::ZERO {
-        for p in &mesh.positions {
-            writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+    // Text formatting is most of the cost: lines are formatted in parallel chunks.
+    let far = mesh.offset != DVec3::ZERO;
+    write_records(w, mesh.positions.len(), |range, out| {
+        for i in range {
+            // Writing to a Vec cannot fail.
+            let _ = if far {
+                let p = mesh.world(i);
+                writeln!(out, "v {} {} {}", p.x, p.y, p.z)
+            } else {
+                let p = mesh.positions[i];
+                writeln!(out, "v {} {} {}", p.x, p.y, p.z)
+            };
         }
-    } else {
-        for i in 0..mesh.positions.len() {
-            let p = mesh.world(i);
-            writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+    })?;
+    write_records(w, normals.len(), |range, out| {
+        for n in &normals[range] {
+            let _ = writeln!(out, "vn {} {} {}", n.x, n.y, n.z);
         }
-    }
-    for n in normals {
-        writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
-    }
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| u64::from(i) + 1);
-        writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-    }
+    })?;
+    write_records(w, mesh.triangles.len(), |range, out| {
+        for t in &mesh.triangles[range] {
+            let [a, b, c] = t.map(|i| u64::from(i) + 1);
+            let _ = writeln!(out, "f {a}//{a} {b}//{b} {c}//{c}");
+        }
+    })?;
     Ok(())
 }

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
+use crate::chunks::write_records;
 use crate::{Mesh, MeshError};
 
 #[derive(Clone, Copy, Debug)]
@@ -533,30 +534,29 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh, normals: &[Vec3]) -> io::Res
         mesh.positions.len(),
         mesh.triangles.len()
     )?;
-    let mut record = Vec::with_capacity(36);
-    for (i, (p, n)) in mesh.positions.iter().zip(normals).enumerate() {
-        record.clear();
-        if far {
-            for c in mesh.world(i).to_array() {
-                record.extend_from_slice(&c.to_le_bytes());
+    write_records(w, mesh.positions.len(), |range, out| {
+        for i in range {
+            if far {
+                for c in mesh.world(i).to_array() {
+                    out.extend_from_slice(&c.to_le_bytes());
+                }
+            } else {
+                for c in mesh.positions[i].to_array() {
+                    out.extend_from_slice(&c.to_le_bytes());
+                }
             }
-        } else {
-            for c in p.to_array() {
-                record.extend_from_slice(&c.to_le_bytes());
+            for c in normals[i].to_array() {
+                out.extend_from_slice(&c.to_le_bytes());
             }
         }
-        for c in n.to_array() {
-            record.extend_from_slice(&c.to_le_bytes());
+    })?;
+    write_records(w, mesh.triangles.len(), |range, out| {
+        for t in &mesh.triangles[range] {
+            out.push(3);
+            for i in t {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
         }
-        w.write_all(&record)?;
-    }
-    let mut face = [0u8; 13];
-    face[0] = 3;
-    for t in &mesh.triangles {
-        for (k, i) in t.iter().enumerate() {
-            face[1 + 4 * k..5 + 4 * k].copy_from_slice(&i.to_le_bytes());
-        }
-        w.write_all(&face)?;
-    }
+    })?;
     Ok(())
 }

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
+use crate::chunks::write_records;
 use crate::{face_normal, Mesh, MeshError};
 
 const HEADER: usize = 80;
@@ -179,18 +180,19 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
     header[..label.len()].copy_from_slice(label);
     w.write_all(&header)?;
     w.write_all(&count.to_le_bytes())?;
-    let mut facet = [0u8; FACET];
-    for t in 0..mesh.triangles.len() {
-        let tri = mesh.triangle(t);
-        // Degenerate facets get the zero normal, which STL readers take as "compute it".
-        let n = face_normal(tri);
-        for (k, v) in [n, tri[0], tri[1], tri[2]].iter().enumerate() {
-            for (i, c) in v.to_array().iter().enumerate() {
-                let s = 12 * k + 4 * i;
-                facet[s..s + 4].copy_from_slice(&c.to_le_bytes());
+    write_records(w, mesh.triangles.len(), |range, out| {
+        for t in range {
+            let tri = mesh.triangle(t);
+            // Degenerate facets get the zero normal, which STL readers take as "compute it".
+            let n = face_normal(tri);
+            for v in [n, tri[0], tri[1], tri[2]] {
+                for c in v.to_array() {
+                    out.extend_from_slice(&c.to_le_bytes());
+                }
             }
+            // The attribute byte count.
+            out.extend_from_slice(&[0, 0]);
         }
-        w.write_all(&facet)?;
-    }
+    })?;
     Ok(())
 }
