@@ -228,8 +228,10 @@ pub(crate) fn fit_volume(
             band = Some(options.band);
             let sampled = sample_sparse(&sdf, &grid, options.band, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
+            // Handed over, so the fit drops the samples behind it.
+            let samples = sampled.values;
             progress::stage(progress, "fit", |update| {
-                pgvol_field::fit::interp_sparse(grid, options.basis, &sampled.values, update)
+                pgvol_field::fit::interp_sparse_owned(grid, options.basis, samples, update)
             })?
         }
         FitMethod::Wls => {

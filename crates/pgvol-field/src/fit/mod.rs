@@ -44,6 +44,7 @@ use crate::basis::Basis;
 use crate::prefilter::{prefilter_volume_with, CUBIC_POLE, QUADRATIC_POLE};
 use crate::volume::{check_inputs, CoefficientVolume, FieldError};
 use node_sdf::NodeSdf;
+use sparse_interp::{prefilter_and_check, Checked, SampleStore};
 
 /// Fits a coefficient volume on `grid` to the signed distance `sdf`.
 /// The fraction done goes to `report` (sampling the distance at the nodes takes
@@ -119,37 +120,54 @@ pub fn interp_sparse(
     samples: &SparseGrid,
     report: Report,
 ) -> Result<(CoefficientVolume, FitReport), FieldError> {
+    interp_sparse_from(grid, basis, SampleStore::Borrowed(samples), report)
+}
+
+/// [`interp_sparse`] taking the samples, whose bricks it drops a layer at a time once the
+/// filter and the sign check have passed them, so memory holds the coefficients and a few brick
+/// layers of samples rather than both whole. The same volume and report.
+pub fn interp_sparse_owned(
+    grid: Grid,
+    basis: Basis,
+    samples: SparseGrid,
+    report: Report,
+) -> Result<(CoefficientVolume, FitReport), FieldError> {
+    interp_sparse_from(grid, basis, SampleStore::Owned(samples), report)
+}
+
+fn interp_sparse_from(
+    grid: Grid,
+    basis: Basis,
+    samples: SampleStore,
+    report: Report,
+) -> Result<(CoefficientVolume, FitReport), FieldError> {
     let start = Instant::now();
-    crate::volume::check_sparse(&grid, basis, samples)?;
-    // The sign check visits each stored brick once; the filter, several times over its halo.
-    let span = Span::whole(report);
-    let (filter, check) = (span.part(0.0, 0.8), span.part(0.8, 1.0));
-    let (coeffs, mut fit_report) = match basis {
-        Basis::Trilinear => (samples.clone(), report::report("none", None)),
+    crate::volume::check_sparse(&grid, basis, samples.grid())?;
+    let span = Some(Span::whole(report));
+    let ((coeffs, checked), mut fit_report) = match basis {
+        // The coefficients are the samples: no sign can change.
+        Basis::Trilinear => (
+            (samples.into_grid(), Checked::default()),
+            report::report("none", None),
+        ),
         Basis::Bspline2 => (
-            sparse_interp::prefilter_sparse(samples, QUADRATIC_POLE, Some(filter)),
+            prefilter_and_check(samples, basis, QUADRATIC_POLE, grid.spacing, span),
             report::report("prefilter", None),
         ),
         Basis::Bspline3 => (
-            sparse_interp::prefilter_sparse(samples, CUBIC_POLE, Some(filter)),
+            prefilter_and_check(samples, basis, CUBIC_POLE, grid.spacing, span),
             report::report("prefilter", None),
         ),
         Basis::Pg { .. } => {
-            return interp_samples(grid, basis, &samples.to_dense(), &FitOptions::default());
+            let dense = samples.grid().to_dense();
+            return interp_samples(grid, basis, &dense, &FitOptions::default());
         }
     };
     fit_report.method = FitMethod::Interp.name().to_string();
-    fit_report.stages.warm_start = start.elapsed().as_secs_f64();
+    fit_report.spurious_sign_changes = checked.changes;
+    fit_report.stages.check = checked.seconds;
+    fit_report.stages.warm_start = start.elapsed().as_secs_f64() - checked.seconds;
     let volume = CoefficientVolume::from_sparse(grid, basis, coeffs)?;
-    let t = Instant::now();
-    fit_report.spurious_sign_changes = sparse_interp::sparse_sign_changes(
-        basis,
-        &volume.coeffs,
-        samples,
-        grid.spacing,
-        Some(check),
-    );
-    fit_report.stages.check = t.elapsed().as_secs_f64();
     fit_report.seconds = start.elapsed().as_secs_f64();
     Ok((volume, fit_report))
 }

@@ -38,6 +38,46 @@ pub(crate) fn halo(z: f64) -> usize {
     (HALO_TOLERANCE.ln() / z.abs().ln()).ceil() as usize
 }
 
+/// The samples a layered prefilter reads: borrowed and kept whole, or owned and released a
+/// layer at a time once no later group or check reads them.
+pub(crate) enum SampleStore<'a> {
+    Borrowed(&'a SparseGrid),
+    Owned(SparseGrid),
+}
+
+impl SampleStore<'_> {
+    pub(crate) fn grid(&self) -> &SparseGrid {
+        match self {
+            SampleStore::Borrowed(g) => g,
+            SampleStore::Owned(g) => g,
+        }
+    }
+
+    /// The samples as a grid of their own (a copy of borrowed ones).
+    pub(crate) fn into_grid(self) -> SparseGrid {
+        match self {
+            SampleStore::Borrowed(g) => g.clone(),
+            SampleStore::Owned(g) => g,
+        }
+    }
+
+    /// Drops the owned bricks below brick layer `z`.
+    fn release_below(&mut self, z: usize) {
+        if let SampleStore::Owned(g) = self {
+            g.retain(|b, _| b[2] >= z);
+        }
+    }
+}
+
+/// What the sign check of [`prefilter_and_check`] found, and the time it took.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Checked {
+    /// Nodes of the coefficient bricks farther than a spacing from the surface where the
+    /// field's sign differs from the samples' (see [`sign_changes_in`]).
+    pub changes: usize,
+    pub seconds: f64,
+}
+
 /// The coefficients interpolating `samples` for the recursive filter of pole `z`, stored for
 /// the stored sample bricks and every brick touching one (26-neighbourhood): the field at a
 /// node reads the coefficients one node around it, and between nodes two, so the field over
@@ -50,13 +90,23 @@ pub(crate) fn halo(z: f64) -> usize {
 /// grid's own borders keep the global filter's mirror boundary, and interior window edges
 /// mirror too, which only moves coefficients by `|z|^H` once inside the kept bricks. Groups run
 /// in parallel, each alone, and are inserted in a fixed order, so the result does not depend
-/// on the thread count. Unstored bricks keep the samples' sides: the samples are cloned and
-/// emptied first, at a cost in their stored bricks and tiles and none per absent brick, and
-/// before the new bricks exist, so the peak memory is that of the samples and the result.
-/// Groups are counted through `span`; after a stop request the groups not yet begun are left
-/// out, and the incomplete result is for the caller to discard.
-pub(crate) fn prefilter_sparse(samples: &SparseGrid, z: f64, span: Option<Span>) -> SparseGrid {
-    prefilter_sparse_with(samples, z, halo(z), GROUP, DROP_TOLERANCE, span)
+/// on the thread count. Unstored bricks keep the samples' sides ([`SparseGrid::sides_only`]).
+///
+/// The groups go a layer along z at a time. Once a layer is filtered its coefficients are
+/// final, the bricks a brick below it are checked for sign changes ([`sign_changes_in`]; the
+/// count is a sum, so the same in any order), and owned samples below the next layer's halo
+/// are dropped: memory then holds the coefficients and a few brick layers of samples, not both
+/// whole. Groups are counted through `span`; after a stop request the groups not yet begun are
+/// left out, and the incomplete result is for the caller to discard.
+pub(crate) fn prefilter_and_check(
+    samples: SampleStore,
+    basis: Basis,
+    z: f64,
+    spacing: f32,
+    span: Option<Span>,
+) -> (SparseGrid, Checked) {
+    let check = Some((basis, spacing));
+    prefilter_layers(samples, z, halo(z), GROUP, DROP_TOLERANCE, check, span)
 }
 
 /// A computed neighbour brick whose coefficients all lie within this fraction of the clamp of
@@ -64,11 +114,11 @@ pub(crate) fn prefilter_sparse(samples: &SparseGrid, z: f64, span: Option<Span>)
 /// below the file's quantisation step (h/512 at a clamp of 4 h is 5·10⁻⁴ of the clamp).
 const DROP_TOLERANCE: f32 = 1e-5;
 
-/// Bricks per edge of the groups [`prefilter_sparse`] filters together; a group's coefficients
+/// Bricks per edge of the groups [`prefilter_and_check`] filters together; a group's coefficients
 /// follow from the samples within its bricks' box plus the halo.
 pub const SPARSE_GROUP: usize = GROUP;
 
-/// The coefficient bricks [`prefilter_sparse`] computes for the groups whose y and z indices
+/// The coefficient bricks [`prefilter_and_check`] computes for the groups whose y and z indices
 /// (in groups) lie in `gy` and `gz`, in the order it stores them. `samples` must hold every
 /// brick within [`layer_reach`] grid bricks of those groups as the whole grid's samples do;
 /// then the bricks are bit for bit the ones of the whole grid, since each group is filtered
@@ -108,7 +158,9 @@ pub fn layer_reach(z: f64) -> usize {
     halo(z).div_ceil(BRICK_EDGE).max(1)
 }
 
-/// [`prefilter_sparse`] with a given halo, group edge and drop tolerance.
+/// The coefficients of [`prefilter_and_check`] alone, with a given halo, group edge and drop
+/// tolerance.
+#[cfg(test)]
 fn prefilter_sparse_with(
     samples: &SparseGrid,
     z: f64,
@@ -117,50 +169,123 @@ fn prefilter_sparse_with(
     drop: f32,
     span: Option<Span>,
 ) -> SparseGrid {
-    let bricks = output_bricks(samples, group);
+    let samples = SampleStore::Borrowed(samples);
+    prefilter_layers(samples, z, h, group, drop, None, span).0
+}
+
+/// The layered prefilter of [`prefilter_and_check`], with a given halo, group edge and drop
+/// tolerance; the sign changes counted when `check` gives the basis and the grid spacing.
+fn prefilter_layers(
+    mut samples: SampleStore,
+    z: f64,
+    h: usize,
+    group: usize,
+    drop: f32,
+    check: Option<(Basis, f32)>,
+    span: Option<Span>,
+) -> (SparseGrid, Checked) {
+    let bricks = output_bricks(samples.grid(), group);
     let group_of = |b: &[usize; 3]| b.map(|c| c / group);
     let groups: Vec<&[[usize; 3]]> = bricks.chunk_by(|a, b| group_of(a) == group_of(b)).collect();
     let counter = span.map(|s| s.counter(groups.len()));
-    let mut out = samples.clone();
-    out.retain(|_, _| false);
-    let computed: Vec<Vec<([usize; 3], Box<BrickValues>)>> = groups
-        .par_iter()
-        .map_init(Scratch::default, |scratch, group| {
-            if progress::stopped(counter.as_ref()) {
-                return Vec::new();
+    let mut out = samples.grid().sides_only();
+    // Sample brick layers below a group layer that its windows read.
+    let reach = h.div_ceil(BRICK_EDGE).max(1);
+    // Coefficient bricks filtered and not yet checked.
+    let mut unchecked: Vec<[usize; 3]> = Vec::new();
+    let mut checked = Checked::default();
+    let mut first = 0;
+    while first < groups.len() {
+        let layer = groups[first][0][2] / group;
+        let len = groups[first..]
+            .iter()
+            .take_while(|g| g[0][2] / group == layer)
+            .count();
+        let grid = samples.grid();
+        let computed: Vec<Vec<([usize; 3], Box<BrickValues>)>> = groups[first..first + len]
+            .par_iter()
+            .map_init(Scratch::default, |scratch, g| {
+                if progress::stopped(counter.as_ref()) {
+                    return Vec::new();
+                }
+                let bricks = filter_group(grid, z, h, g, drop, scratch);
+                progress::tick(counter.as_ref());
+                bricks
+            })
+            .collect();
+        for (b, values) in computed.into_iter().flatten() {
+            if check.is_some() {
+                unchecked.push(b);
             }
-            let bricks = filter_group(samples, z, h, group, drop, scratch);
-            progress::tick(counter.as_ref());
-            bricks
-        })
-        .collect();
-    for (b, values) in computed.into_iter().flatten() {
-        out.insert(b, values);
+            out.insert(b, values);
+        }
+        first += len;
+        // Every coefficient brick below the next layer's first brick layer is final.
+        let done = groups
+            .get(first)
+            .map_or(usize::MAX, |g| g[0][2] / group * group);
+        if let Some((basis, spacing)) = check {
+            // A check reads the coefficients one node around its brick.
+            let ready: Vec<[usize; 3]>;
+            (ready, unchecked) = unchecked.into_iter().partition(|b| b[2] + 1 < done);
+            let t = std::time::Instant::now();
+            checked.changes += sign_changes_in(basis, &out, samples.grid(), spacing, &ready);
+            checked.seconds += t.elapsed().as_secs_f64();
+        }
+        // Later windows start `reach` brick layers below `done`; later checks read their own
+        // sample brick, at least a layer below it.
+        samples.release_below(done.saturating_sub(reach));
     }
-    out
+    (out, checked)
 }
 
 /// The stored bricks and their neighbours, sorted by group of `group`³ bricks (z, y, x) and
-/// then by brick, once each.
+/// then by brick, once each. Marked in a bitmap of the brick grid (one bit per brick) and read
+/// back in that order: a list of every stored brick's 27 neighbours, sorted and deduplicated,
+/// gives the same bricks but holds 27 entries per stored brick (1.3 GB at 2048³).
 fn output_bricks(samples: &SparseGrid, group: usize) -> Vec<[usize; 3]> {
     let counts = samples.brick_counts();
-    let mut out = Vec::with_capacity(samples.stored_count() * 4);
+    let groups = counts.map(|c| c.div_ceil(group));
+    let bit = |b: [usize; 3]| b[0] + counts[0] * (b[1] + counts[1] * b[2]);
+    let group_of = |b: [usize; 3]| {
+        let g = b.map(|c| c / group);
+        g[0] + groups[0] * (g[1] + groups[1] * g[2])
+    };
+    let mut marked = vec![0u64; (counts.iter().product::<usize>()).div_ceil(64)];
+    let mut group_marked = vec![false; groups.iter().product()];
     for (b, _) in samples.stored() {
         let range = |a: usize| b[a].saturating_sub(1)..=(b[a] + 1).min(counts[a] - 1);
         for k in range(2) {
             for j in range(1) {
                 for i in range(0) {
-                    out.push([i, j, k]);
+                    let n = bit([i, j, k]);
+                    marked[n / 64] |= 1 << (n % 64);
+                    group_marked[group_of([i, j, k])] = true;
                 }
             }
         }
     }
-    let key = |b: &[usize; 3]| {
-        let g = b.map(|c| c / group);
-        (g[2], g[1], g[0], b[2], b[1], b[0])
-    };
-    out.sort_unstable_by_key(key);
-    out.dedup();
+    let mut out = Vec::new();
+    for gz in 0..groups[2] {
+        for gy in 0..groups[1] {
+            for gx in 0..groups[0] {
+                if !group_marked[gx + groups[0] * (gy + groups[1] * gz)] {
+                    continue;
+                }
+                let span = |g: usize, a: usize| g * group..((g + 1) * group).min(counts[a]);
+                for k in span(gz, 2) {
+                    for j in span(gy, 1) {
+                        for i in span(gx, 0) {
+                            let n = bit([i, j, k]);
+                            if marked[n / 64] >> (n % 64) & 1 == 1 {
+                                out.push([i, j, k]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
     out
 }
 
@@ -287,30 +412,24 @@ fn filter_group(
         .collect()
 }
 
-/// Nodes of the stored coefficient bricks farther than `spacing` from the surface where the
-/// field's sign differs from the samples'. Elsewhere every coefficient a node reads is within
-/// ≈ 1e-5 of the background of its side, so the field there has the samples' sign. Bricks are
-/// counted through `span`, and those not begun by a stop request are not checked.
-pub(crate) fn sparse_sign_changes(
+/// Nodes of the coefficient bricks `bricks` (stored in `coeffs`, with every brick beside them
+/// final) farther than `spacing` from the surface where the field's sign differs from the
+/// samples'. Elsewhere every coefficient a node reads is within ≈ 1e-5 of the background of its
+/// side, so the field there has the samples' sign.
+fn sign_changes_in(
     basis: Basis,
     coeffs: &SparseGrid,
     samples: &SparseGrid,
     spacing: f32,
-    span: Option<Span>,
+    bricks: &[[usize; 3]],
 ) -> usize {
     let Some((side, centre)) = taps(basis) else {
         return 0;
     };
     let dims = coeffs.dims();
-    let stored: Vec<[usize; 3]> = coeffs.stored().map(|(b, _)| b).collect();
-    let counter = span.map(|s| s.counter(stored.len()));
-    stored
+    bricks
         .par_iter()
         .map(|&b| {
-            if progress::stopped(counter.as_ref()) {
-                return 0;
-            }
-            progress::tick(counter.as_ref());
             let (lo, n) = coeffs.brick_extent(b);
             // The brick and one node around it, mirrored at the grid's borders.
             let w_lo = lo.map(|c| c.saturating_sub(1));
@@ -464,6 +583,83 @@ mod tests {
             dropped.stored_count(),
             kept.stored_count()
         );
+    }
+
+    /// The layered filter gives the same coefficients and sign count whether it drops the
+    /// samples behind it or not, and the count is the check of every brick at the end. The
+    /// samples are a sphere's distances with noise, filtered without a halo, so signs do change
+    /// (61 to 1,510 nodes here).
+    #[test]
+    fn layers_that_drop_their_samples_give_the_whole_grid_result() {
+        let (grid, mut samples) = banded_sphere(72, 4.0);
+        let h = grid.spacing;
+        for (b, values) in samples.stored_mut() {
+            for (i, v) in values.iter_mut().enumerate() {
+                let t = (b[0] * 7 + b[1] * 13 + b[2] * 29 + i) as f32;
+                *v += 3.0 * h * (t * 12.9898).sin();
+            }
+        }
+        for group in [2, 3, 8] {
+            let check = Some((Basis::Bspline3, h));
+            let borrowed = SampleStore::Borrowed(&samples);
+            let (want, counted) =
+                prefilter_layers(borrowed, CUBIC_POLE, 0, group, 0.0, check, None);
+            let all: Vec<[usize; 3]> = want.stored().map(|(b, _)| b).collect();
+            let whole = sign_changes_in(Basis::Bspline3, &want, &samples, h, &all);
+            assert!(whole > 0, "the noise changes no sign");
+            assert_eq!(counted.changes, whole, "group {group}");
+            let owned = SampleStore::Owned(samples.clone());
+            let (got, dropping) = prefilter_layers(owned, CUBIC_POLE, 0, group, 0.0, check, None);
+            assert_eq!(dropping.changes, whole, "group {group}");
+            assert_eq!(got.stored_count(), want.stored_count());
+            for ((a, x), (b, y)) in got.stored().zip(want.stored()) {
+                assert_eq!(a, b);
+                assert!(x
+                    .iter()
+                    .zip(y.iter())
+                    .all(|(p, q)| p.to_bits() == q.to_bits()));
+            }
+        }
+    }
+
+    /// The bricks of [`output_bricks`] the plain way: every stored brick's neighbours listed,
+    /// sorted by group and brick, deduplicated.
+    fn output_bricks_by_sorting(samples: &SparseGrid, group: usize) -> Vec<[usize; 3]> {
+        let counts = samples.brick_counts();
+        let mut out = Vec::new();
+        for (b, _) in samples.stored() {
+            let range = |a: usize| b[a].saturating_sub(1)..=(b[a] + 1).min(counts[a] - 1);
+            for k in range(2) {
+                for j in range(1) {
+                    for i in range(0) {
+                        out.push([i, j, k]);
+                    }
+                }
+            }
+        }
+        out.sort_unstable_by_key(|b| {
+            let g = b.map(|c| c / group);
+            (g[2], g[1], g[0], b[2], b[1], b[0])
+        });
+        out.dedup();
+        out
+    }
+
+    #[test]
+    fn output_bricks_are_the_sorted_neighbours_of_the_stored_ones() {
+        // Brick counts that groups divide and do not, bands that fill the grid's corners and not.
+        for (n, band) in [(40, 4.0), (57, 2.0), (100, 4.0), (64, 30.0)] {
+            let (_, samples) = banded_sphere(n, band);
+            assert!(samples.stored_count() > 0);
+            for group in [1, 2, 3, 4, 8] {
+                let want = output_bricks_by_sorting(&samples, group);
+                assert_eq!(
+                    output_bricks(&samples, group),
+                    want,
+                    "{n}, band {band}, {group}"
+                );
+            }
+        }
     }
 
     /// Window nodes gathered and x-filtered per coefficient computed, for the bricks of the
