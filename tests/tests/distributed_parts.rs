@@ -2,15 +2,14 @@
 //! meshes: the same file bytes, the same triangles and the same layers whatever the split.
 
 use pgvol::distributed::{
-    assemble_encode, decode_part, decode_part_bricks, needs_winding, part_encode_bytes,
-    plan_decode, plan_encode, plan_encode_bytes, plan_slice, slice_part, slice_part_bricks,
-    weld_parts, write_encode_parts, write_encode_parts_to, EncodeJob, EncodedPart, PartsWritten,
+    assemble_encode, decode_part, decode_part_bricks, part_encode_bytes, plan_decode, plan_encode,
+    plan_encode_bytes, plan_slice, slice_part, slice_part_bricks, weld_parts, write_encode_parts,
+    write_encode_parts_to, EncodeJob, EncodedPart, PartsWritten,
 };
 use pgvol::{Basis, DecodeOptions, EncodeOptions, GridSpec, Mesh, Silent, StorageOptions};
 use pgvol_tests::load_shared;
 
-/// The parts of `mesh` encoded in `parts` parts, with the winding fallback as the assembly
-/// decides it.
+/// The parts of `mesh` encoded in `parts` parts.
 fn encoded_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> Vec<EncodedPart> {
     let plan = plan_encode(mesh, options, parts).unwrap();
     if parts == 8 {
@@ -22,22 +21,10 @@ fn encoded_parts(mesh: &Mesh, options: &EncodeOptions, parts: usize) -> Vec<Enco
         );
     }
     let job = EncodeJob::new(mesh, options).unwrap();
-    let run = |winding| -> Vec<_> {
-        plan.parts
-            .iter()
-            .map(|p| job.encode_part(p, winding).unwrap())
-            .collect()
-    };
-    let results = run(false);
-    if needs_winding(&results) {
-        // Streaming the first run's parts stops at the contradiction and writes nothing.
-        let mut out = Vec::new();
-        let mut first = results.into_iter().map(Ok);
-        let got = write_encode_parts_to(&mut out, mesh, options, &mut first).unwrap();
-        assert_eq!(got, PartsWritten::NeedsWinding);
-        return run(true);
-    }
-    results
+    plan.parts
+        .iter()
+        .map(|p| job.encode_part(p).unwrap())
+        .collect()
 }
 
 /// The file of `mesh` assembled in memory from `parts` parts.
@@ -117,13 +104,11 @@ fn streamed_parts_that_stop_leave_the_file_as_it_was() {
     let path = dir.path().join("spot.pgv");
     std::fs::write(&path, b"the file before").unwrap();
     let mut parts = encoded_parts(&mesh, &options, 2);
-    // A part reporting contradictions under the pseudonormal asks for the winding number.
-    let mut contradicted = parts.clone();
-    contradicted[1].contradictions = 3;
-    contradicted[1].may_fall_back = true;
-    let mut results = contradicted.into_iter().map(Ok);
-    let got = write_encode_parts(&path, &mesh, &options, &mut results).unwrap();
-    assert_eq!(got, PartsWritten::NeedsWinding);
+    // A part that failed (a lost worker, say) stops the writing after the first part.
+    let failed = pgvol::Error::parameter("the second part failed");
+    let mut results = [Ok(parts[0].clone()), Err(failed)].into_iter();
+    let err = write_encode_parts(&path, &mesh, &options, &mut results).unwrap_err();
+    assert!(err.to_string().contains("the second part failed"), "{err}");
     assert_eq!(std::fs::read(&path).unwrap(), b"the file before");
     // Parts out of order are refused, naming the file.
     parts.swap(0, 1);
@@ -156,7 +141,7 @@ fn a_part_that_is_not_its_own_differs() {
     let plan = plan_encode(&mesh, &options, 2).unwrap();
     assert_eq!(plan.parts.len(), 2);
     let job = EncodeJob::new(&mesh, &options).unwrap();
-    let second = job.encode_part(&plan.parts[1], false).unwrap();
+    let second = job.encode_part(&plan.parts[1]).unwrap();
     let err = assemble_encode(&mesh, &options, &[&second.bricks]).unwrap_err();
     assert!(err.to_string().contains("do not tile"), "{err}");
 }

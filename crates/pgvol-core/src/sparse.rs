@@ -8,6 +8,8 @@
 //! nodes: 1 MB at 4000³). An absent brick's value is the background: one inside bit per absent
 //! tile, and one per brick in the tiles that exist.
 
+use rayon::prelude::*;
+
 /// Nodes per brick edge.
 pub const BRICK_EDGE: usize = 8;
 const BRICK_SHIFT: u32 = BRICK_EDGE.trailing_zeros();
@@ -447,6 +449,54 @@ impl SparseGrid {
             .map(|(c, v)| (c.map(|x| x as usize), &**v))
     }
 
+    /// [`SparseGrid::stored`] as a parallel iterator, in the same order where it is collected.
+    pub fn stored_par(&self) -> impl IndexedParallelIterator<Item = ([usize; 3], &BrickValues)> {
+        self.coords
+            .par_iter()
+            .zip(&self.bricks)
+            .map(|(c, v)| (c.map(|x| x as usize), &**v))
+    }
+
+    /// Whether some absent brick is inside, and whether some is outside: the values, at most
+    /// two, that absent bricks take. Found tile by tile, so a grid of mostly absent bricks
+    /// costs its tiles, not its bricks.
+    pub fn absent_sides(&self) -> (bool, bool) {
+        let (mut inside, mut outside) = (false, false);
+        let [tx, ty, _] = self.tile_counts;
+        for (ti, &slot) in self.tile_slots.iter().enumerate() {
+            if inside && outside {
+                break;
+            }
+            if slot == ABSENT {
+                // Every tile holds at least one brick of the grid.
+                if bit(&self.tile_inside, ti) {
+                    inside = true;
+                } else {
+                    outside = true;
+                }
+                continue;
+            }
+            let tile = &self.tiles[slot as usize];
+            let first = [ti % tx, ti / tx % ty, ti / (tx * ty)].map(|t| t * TILE_EDGE);
+            let span = |a: usize| 0..TILE_EDGE.min(self.brick_counts[a] - first[a]);
+            for k in span(2) {
+                for j in span(1) {
+                    for i in span(0) {
+                        let at = Self::in_tile([i, j, k]);
+                        if tile.slots[at] == ABSENT {
+                            if bit(&tile.inside, at) {
+                                inside = true;
+                            } else {
+                                outside = true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        (inside, outside)
+    }
+
     /// Stored bricks, to change in place.
     pub fn stored_mut(&mut self) -> impl ExactSizeIterator<Item = ([usize; 3], &mut BrickValues)> {
         self.coords
@@ -490,23 +540,27 @@ impl SparseGrid {
 
     /// The smallest and largest node value.
     pub fn value_range(&self) -> [f32; 2] {
-        let mut range = [f32::INFINITY, f32::NEG_INFINITY];
-        let mut widen = |v: f32| {
-            range[0] = range[0].min(v);
-            range[1] = range[1].max(v);
-        };
-        for (b, v) in self.stored() {
-            let (_, n) = self.brick_extent(b);
-            for k in 0..n[2] {
-                for j in 0..n[1] {
-                    let s = BRICK_EDGE * (j + BRICK_EDGE * k);
-                    v[s..s + n[0]].iter().for_each(|&x| widen(x));
+        let empty = [f32::INFINITY, f32::NEG_INFINITY];
+        let widen = |r: [f32; 2], v: f32| [r[0].min(v), r[1].max(v)];
+        // A least and a greatest value do not depend on the order they are taken in.
+        let mut range = self
+            .stored_par()
+            .map(|(b, v)| {
+                let (_, n) = self.brick_extent(b);
+                let mut range = empty;
+                for k in 0..n[2] {
+                    for j in 0..n[1] {
+                        let s = BRICK_EDGE * (j + BRICK_EDGE * k);
+                        range = v[s..s + n[0]].iter().fold(range, |r, &x| widen(r, x));
+                    }
                 }
-            }
-        }
-        if !self.is_full() {
-            for b in self.all_bricks().filter(|&b| !self.is_stored(b)) {
-                widen(self.background_of(b));
+                range
+            })
+            .reduce(|| empty, |a, b| [a[0].min(b[0]), a[1].max(b[1])]);
+        let (inside, outside) = self.absent_sides();
+        for (absent, side) in [(inside, true), (outside, false)] {
+            if absent {
+                range = widen(range, self.background.value(side));
             }
         }
         range
@@ -627,6 +681,45 @@ mod tests {
             ] {
                 assert_eq!(g.get(n), v[n[0] + nx * (n[1] + ny * n[2])]);
             }
+        }
+    }
+
+    /// The sides of the absent bricks and the value range, brick by brick.
+    fn by_bricks(g: &SparseGrid) -> ((bool, bool), [f32; 2]) {
+        let absent: Vec<bool> = g
+            .all_bricks()
+            .filter(|&b| !g.is_stored(b))
+            .map(|b| g.is_inside(b))
+            .collect();
+        let values = g.to_dense();
+        let lo = values.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let sides = (absent.contains(&true), absent.contains(&false));
+        (sides, [lo, hi])
+    }
+
+    #[test]
+    fn absent_sides_and_range_are_those_of_every_brick() {
+        // Brick counts that tiles divide and do not; sides from whole tiles and single bricks.
+        for dims in [[130, 70, 9], [64, 64, 64], [9, 200, 17]] {
+            let mut g = SparseGrid::new(dims, Background::clamp(2.0));
+            let counts = g.brick_counts();
+            let last = counts.map(|c| c - 1);
+            assert_eq!(by_bricks(&g).0, (false, true));
+            assert_eq!((g.absent_sides(), g.value_range()), by_bricks(&g));
+            g.set_inside(last, true);
+            assert_eq!((g.absent_sides(), g.value_range()), by_bricks(&g));
+            g.insert(last, Box::new([0.5; BRICK_NODES]));
+            assert_eq!((g.absent_sides(), g.value_range()), by_bricks(&g));
+            // Every brick stored but one, inside: only the inside remains.
+            for b in g.all_bricks().collect::<Vec<_>>() {
+                if b != [0, 0, 0] {
+                    g.insert(b, Box::new([b[0] as f32 - 1.5; BRICK_NODES]));
+                }
+            }
+            g.set_inside([0, 0, 0], true);
+            assert_eq!(by_bricks(&g).0, (true, false));
+            assert_eq!((g.absent_sides(), g.value_range()), by_bricks(&g));
         }
     }
 

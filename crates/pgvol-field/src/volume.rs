@@ -71,20 +71,24 @@ pub fn check_sparse(grid: &Grid, basis: Basis, values: &SparseGrid) -> Result<()
     if !(bg.inside.is_finite() && bg.outside.is_finite()) {
         return Err(FieldError::NonFinite { index: 0 });
     }
-    for (b, brick) in values.stored() {
+    // The first bad brick in storage order, as a loop over them would find it.
+    let bad = values.stored_par().find_map_first(|(b, brick)| {
         let (lo, n) = values.brick_extent(b);
         for k in 0..n[2] {
             for j in 0..n[1] {
                 for i in 0..n[0] {
                     if !brick[brick_offset([i, j, k])].is_finite() {
-                        let index = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
-                        return Err(FieldError::NonFinite { index });
+                        return Some(grid.index(lo[0] + i, lo[1] + j, lo[2] + k));
                     }
                 }
             }
         }
+        None
+    });
+    match bad {
+        Some(index) => Err(FieldError::NonFinite { index }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 impl CoefficientVolume {

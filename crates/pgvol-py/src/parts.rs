@@ -84,16 +84,12 @@ pub(crate) fn plan_encode(
     })
 }
 
-/// One part of an encode in parts: its coefficient bricks and what its sign check found.
+/// One part of an encode in parts: its coefficient bricks and the nodes it sampled exactly.
 /// Pickles, so that it can travel from a worker process to the client.
 #[pyclass(frozen, get_all, module = "pgvol._pgvol")]
 pub(crate) struct EncodedPart {
     /// The coefficient bricks and sides of the part's box, as slab bytes.
     bricks: Py<PyBytes>,
-    /// Pairs of neighbouring nodes whose signs contradict their distances.
-    contradictions: usize,
-    /// Whether the samples were signed by the pseudonormal an automatic sign chose.
-    may_fall_back: bool,
     /// Nodes of the part's stored sample bricks within the band.
     exact_nodes: usize,
 }
@@ -101,40 +97,24 @@ pub(crate) struct EncodedPart {
 #[pymethods]
 impl EncodedPart {
     #[new]
-    fn new(
-        bricks: Py<PyBytes>,
-        contradictions: usize,
-        may_fall_back: bool,
-        exact_nodes: usize,
-    ) -> Self {
+    fn new(bricks: Py<PyBytes>, exact_nodes: usize) -> Self {
         EncodedPart {
             bricks,
-            contradictions,
-            may_fall_back,
             exact_nodes,
         }
     }
 
-    /// Rebuilt from its four fields when unpickled.
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> (Bound<'py, PyAny>, (Py<PyBytes>, usize, bool, usize)) {
+    /// Rebuilt from its two fields when unpickled.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> (Bound<'py, PyAny>, (Py<PyBytes>, usize)) {
         let me = slf.get();
-        let fields = (
-            me.bricks.clone_ref(slf.py()),
-            me.contradictions,
-            me.may_fall_back,
-            me.exact_nodes,
-        );
+        let fields = (me.bricks.clone_ref(slf.py()), me.exact_nodes);
         (slf.get_type().into_any(), fields)
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
         format!(
-            "EncodedPart(bricks=<{} bytes>, contradictions={}, may_fall_back={}, exact_nodes={})",
+            "EncodedPart(bricks=<{} bytes>, exact_nodes={})",
             self.bricks.bind(py).as_bytes().len(),
-            self.contradictions,
-            if self.may_fall_back { "True" } else { "False" },
             self.exact_nodes
         )
     }
@@ -167,7 +147,6 @@ impl EncodeJob {
     }
 
     /// Samples and fits the fitting groups `y0..y1` along y and `z0..z1` along z.
-    #[pyo3(signature = (y0, y1, z0, z1, *, winding=false))]
     fn encode_part(
         &self,
         py: Python<'_>,
@@ -175,17 +154,14 @@ impl EncodeJob {
         y1: usize,
         z0: usize,
         z1: usize,
-        winding: bool,
     ) -> PyResult<EncodedPart> {
         let part = parts::GroupBox {
             gy: y0..y1,
             gz: z0..z1,
         };
-        let part = quiet(py, || self.job.encode_part(&part, winding))?;
+        let part = quiet(py, || self.job.encode_part(&part))?;
         Ok(EncodedPart {
             bricks: PyBytes::new(py, &part.bricks).unbind(),
-            contradictions: part.contradictions,
-            may_fall_back: part.may_fall_back,
             exact_nodes: part.exact_nodes,
         })
     }
@@ -197,23 +173,6 @@ impl EncodeJob {
             gz: z0..z1,
         })
     }
-}
-
-/// Whether parts with these contradiction counts and pseudonormal flags must be encoded again
-/// with the winding number.
-#[pyfunction]
-pub(crate) fn needs_winding(contradictions: Vec<usize>, may_fall_back: Vec<bool>) -> bool {
-    let results: Vec<parts::EncodedPart> = contradictions
-        .into_iter()
-        .zip(may_fall_back)
-        .map(|(contradictions, may_fall_back)| parts::EncodedPart {
-            bricks: Vec::new(),
-            contradictions,
-            may_fall_back,
-            exact_nodes: 0,
-        })
-        .collect();
-    parts::needs_winding(&results)
 }
 
 /// The field of a mesh from its parts' bricks, in plan order.
@@ -241,8 +200,7 @@ pub(crate) fn assemble_encode(
 
 /// Writes the file of an encode to `path` from its parts (an iterable of `EncodedPart` in plan
 /// order), each taken as it comes: `("written", grid)`, or, with nothing written,
-/// `("winding", grid)` when a part asks for the winding number or `("whole", grid)` when the
-/// automatic precision needs the parts assembled in memory. An exception raised by the
+/// `("whole", grid)` when the automatic precision needs the parts assembled in memory. An exception raised by the
 /// iterable stops the write and is raised again.
 #[pyfunction]
 #[pyo3(signature = (vertices, faces, parts, path, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
@@ -273,8 +231,6 @@ pub(crate) fn write_encode_parts(
                     let part = obj.cast::<EncodedPart>().map_err(PyErr::from)?.get();
                     Ok(parts::EncodedPart {
                         bricks: part.bricks.bind(py).as_bytes().to_vec(),
-                        contradictions: part.contradictions,
-                        may_fall_back: part.may_fall_back,
                         exact_nodes: part.exact_nodes,
                     })
                 });
@@ -292,7 +248,6 @@ pub(crate) fn write_encode_parts(
     }
     let name = match outcome? {
         parts::PartsWritten::Written(_) => "written",
-        parts::PartsWritten::NeedsWinding => "winding",
         parts::PartsWritten::NeedsWholeVolume => "whole",
     };
     Ok((name, crate::field::Grid { grid }))
@@ -519,7 +474,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<EncodeJob>()?;
     m.add_class::<EncodedPart>()?;
     m.add_function(wrap_pyfunction!(plan_encode, m)?)?;
-    m.add_function(wrap_pyfunction!(needs_winding, m)?)?;
     m.add_function(wrap_pyfunction!(assemble_encode, m)?)?;
     m.add_function(wrap_pyfunction!(write_encode_parts, m)?)?;
     m.add_function(wrap_pyfunction!(plan_decode, m)?)?;

@@ -282,8 +282,4 @@ def test_an_encoded_part_pickles_whole():
     back = pickle.loads(pickle.dumps(part))
     assert isinstance(back, _pgvol.EncodedPart)
     assert len(part.bricks) > 0 and back.bricks == part.bricks
-    assert (back.contradictions, back.may_fall_back, back.exact_nodes) == (
-        part.contradictions,
-        part.may_fall_back,
-        part.exact_nodes,
-    )
+    assert back.exact_nodes == part.exact_nodes > 0

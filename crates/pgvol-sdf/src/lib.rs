@@ -7,6 +7,7 @@
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
 mod bvh;
+#[cfg(test)]
 mod consistency;
 mod lanes;
 mod leaf_bounds;
@@ -19,7 +20,6 @@ mod wide;
 pub mod winding;
 
 pub use bvh::{Bvh, Closest, SegmentHit};
-pub use consistency::sparse_sign_contradictions_in;
 pub use grid::{Grid, GridError};
 pub use pgvol_core::grid;
 pub use sdf::{MeshSdf, SdfError, SignMode};

@@ -2,7 +2,6 @@
 
 use glam::Vec3;
 use pgvol_mesh::Mesh;
-use std::sync::atomic::{AtomicU8, Ordering};
 
 use crate::{
     bvh::Bvh, bvh::Closest, pseudonormal::Pseudonormals, rims::Rims, winding::WindingTree,
@@ -11,9 +10,10 @@ use crate::{
 /// How inside and outside are told apart.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SignMode {
-    /// Pseudonormal when the mesh is closed, manifold and consistently oriented, else winding;
-    /// a sampled grid whose pseudonormal signs prove wrong (a closed mesh that folds over or
-    /// crosses itself) is sampled again with the winding number.
+    /// The winding number, on faces the caller has oriented outward (the facade does). On a
+    /// closed mesh it is a whole number, carried along the grid's rows without evaluating it,
+    /// so it costs no more than the pseudonormal, and it stays right where a closed mesh
+    /// folds over or crosses itself.
     #[default]
     Auto,
     /// Generalized winding number > 1/2: robust to holes, flips and self-intersections.
@@ -56,12 +56,8 @@ pub struct MeshSdf {
     bvh: Bvh,
     winding: WindingTree,
     pseudonormals: Option<Pseudonormals>,
-    /// The mode in force (never `Auto`: that is resolved on construction). Atomic because a
-    /// pseudonormal sign chosen by `Auto` gives way to the winding number once a sampled grid
-    /// proves the mesh does not bound a solid (see `consistency.rs`).
-    mode: AtomicU8,
-    /// Whether `Auto` chose the pseudonormal, so it may fall back.
-    auto_chose_pseudonormal: bool,
+    /// The mode in force (never `Auto`: that is resolved on construction).
+    mode: SignMode,
     /// Edges where the triangles' orientations do not cancel (open boundaries, edges used twice
     /// the same way, ...): the winding number varies fast near them.
     rims: Rims,
@@ -98,16 +94,8 @@ impl MeshSdf {
         }
         let bvh = Bvh::build(mesh);
         let winding = WindingTree::new(&bvh);
-        let requested = mode;
         let mode = match mode {
-            SignMode::Auto => {
-                let s = mesh.stats();
-                if s.watertight && s.winding_consistent && s.non_manifold_edges == 0 {
-                    SignMode::Pseudonormal
-                } else {
-                    SignMode::Winding
-                }
-            }
+            SignMode::Auto => SignMode::Winding,
             m => m,
         };
         let pseudonormals =
@@ -121,8 +109,7 @@ impl MeshSdf {
             bvh,
             winding,
             pseudonormals,
-            mode: AtomicU8::new(mode as u8),
-            auto_chose_pseudonormal: requested == SignMode::Auto && mode == SignMode::Pseudonormal,
+            mode,
             rims,
             avx2: crate::wide::avx2_available(),
             oriented: true,
@@ -143,21 +130,7 @@ impl MeshSdf {
 
     /// The sign mode in force (`Auto` resolved).
     pub fn sign_mode(&self) -> SignMode {
-        match self.mode.load(Ordering::Relaxed) {
-            m if m == SignMode::Pseudonormal as u8 => SignMode::Pseudonormal,
-            m if m == SignMode::Parity as u8 => SignMode::Parity,
-            _ => SignMode::Winding,
-        }
-    }
-
-    /// Switches a pseudonormal sign chosen by `Auto` to the winding number; returns whether it
-    /// did. The mesh is closed, so it has no rims and nothing else changes.
-    pub fn fall_back_to_winding(&self) -> bool {
-        if self.auto_chose_pseudonormal && self.sign_mode() == SignMode::Pseudonormal {
-            self.mode.store(SignMode::Winding as u8, Ordering::Relaxed);
-            return true;
-        }
-        false
+        self.mode
     }
 
     /// Whether grid scans run their AVX2 build.

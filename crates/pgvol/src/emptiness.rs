@@ -57,10 +57,12 @@ impl Sides {
             };
         }
         // The nodes of an absent brick away from its faces see only its background.
-        let mut sides = coeffs
-            .all_bricks()
-            .filter(|&b| !coeffs.is_stored(b))
-            .map(|b| Sides::of(coeffs.background_of(b)))
+        let (inside, outside) = coeffs.absent_sides();
+        let background = coeffs.background();
+        let mut sides = [(inside, true), (outside, false)]
+            .into_iter()
+            .filter(|&(absent, _)| absent)
+            .map(|(_, side)| Sides::of(background.value(side)))
             .fold(Sides::default(), Sides::join);
         if sides == Sides::BOTH {
             return sides;

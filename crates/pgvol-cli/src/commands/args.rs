@@ -98,7 +98,7 @@ pub enum MethodArg {
 /// How inside and outside are told apart.
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
 pub enum SignArg {
-    /// Pseudonormal for closed, consistently oriented meshes; winding number otherwise.
+    /// Winding number on faces first turned outward: exact on closed meshes at no extra cost, robust on open ones.
     #[default]
     Auto,
     /// Generalized winding number > 1/2: survives holes, flipped faces, self-intersections.

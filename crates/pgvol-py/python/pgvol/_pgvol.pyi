@@ -51,7 +51,6 @@ __all__ = [
     "EncodeJob",
     "EncodedPart",
     "plan_encode",
-    "needs_winding",
     "assemble_encode",
     "write_encode_parts",
     "plan_decode",
@@ -924,20 +923,12 @@ def memory_limit() -> Optional[int]:
 
 @final
 class EncodedPart:
-    """One part of an encode in parts: its coefficient bricks and what its sign check found."""
+    """One part of an encode in parts: its coefficient bricks and the nodes it sampled exactly."""
 
-    def __new__(
-        cls, bricks: bytes, contradictions: int, may_fall_back: bool, exact_nodes: int
-    ) -> "EncodedPart": ...
+    def __new__(cls, bricks: bytes, exact_nodes: int) -> "EncodedPart": ...
     @property
     def bricks(self) -> bytes:
         """The coefficient bricks and sides of the part's box, as slab bytes."""
-    @property
-    def contradictions(self) -> int:
-        """Pairs of neighbouring nodes whose signs contradict their distances."""
-    @property
-    def may_fall_back(self) -> bool:
-        """Whether the samples were signed by the pseudonormal an automatic sign chose."""
     @property
     def exact_nodes(self) -> int:
         """Nodes of the part's stored sample bricks within the band."""
@@ -957,9 +948,7 @@ class EncodeJob:
         basis: str = "bspline3",
         sign: str = "auto",
     ) -> "EncodeJob": ...
-    def encode_part(
-        self, y0: int, y1: int, z0: int, z1: int, *, winding: bool = False
-    ) -> EncodedPart: ...
+    def encode_part(self, y0: int, y1: int, z0: int, z1: int) -> EncodedPart: ...
     def part_bytes(self, y0: int, y1: int, z0: int, z1: int) -> int: ...
 
 def plan_encode(
@@ -973,7 +962,6 @@ def plan_encode(
     basis: str = "bspline3",
     sign: str = "auto",
 ) -> List[Tuple[int, int, int, int, int]]: ...
-def needs_winding(contradictions: List[int], may_fall_back: List[bool]) -> bool: ...
 def assemble_encode(
     vertices: _Points,
     faces: Any,
@@ -996,7 +984,7 @@ def write_encode_parts(
     band: float = 4.0,
     basis: str = "bspline3",
     sign: str = "auto",
-) -> Tuple[Literal["written", "winding", "whole"], Grid]: ...
+) -> Tuple[Literal["written", "whole"], Grid]: ...
 def plan_decode(field: Field, parts: int) -> List[Tuple[int, int]]: ...
 def decode_part_bricks(field: Field, start: int, end: int) -> bytes: ...
 def decode_part(

@@ -110,11 +110,10 @@ def _job(key: str, mesh: tuple[np.ndarray, np.ndarray], options: dict) -> Encode
         return job
 
 
-def _encode_part(job_key: str, mesh, options: dict, part: tuple,
-                 winding: bool) -> _pgvol.EncodedPart:
+def _encode_part(job_key: str, mesh, options: dict, part: tuple) -> _pgvol.EncodedPart:
     """Task: the coefficient bricks of one box of fitting groups."""
     y0, y1, z0, z1 = part
-    return _job(job_key, mesh, options).encode_part(y0, y1, z0, z1, winding=winding)
+    return _job(job_key, mesh, options).encode_part(y0, y1, z0, z1)
 
 
 def _run(client: Any, function, calls: list[tuple], names: list[str], retries: int) -> list:
@@ -157,23 +156,22 @@ class _EncodeRun:
             # Once to every worker, not once per task.
             [self.shipped] = client.scatter([self.shipped], broadcast=True, hash=False)
 
-    def _calls(self, winding: bool) -> tuple[list[tuple], list[str]]:
+    def _calls(self) -> tuple[list[tuple], list[str]]:
         boxes = [p[:4] for p in self.plan]
-        calls = [(self.key, self.shipped, self.options, box, winding) for box in boxes]
-        names = [f"pgvol-encode-{self.key}-{'-'.join(map(str, box))}-{int(winding)}"
-                 for box in boxes]
+        calls = [(self.key, self.shipped, self.options, box) for box in boxes]
+        names = [f"pgvol-encode-{self.key}-{'-'.join(map(str, box))}" for box in boxes]
         return calls, names
 
-    def run(self, winding: bool) -> list[_pgvol.EncodedPart]:
+    def run(self) -> list[_pgvol.EncodedPart]:
         """Every part's result at once."""
-        calls, names = self._calls(winding)
+        calls, names = self._calls()
         return _run(self.client, _encode_part, calls, names, self.retries)
 
-    def in_order(self, winding: bool) -> Iterator[_pgvol.EncodedPart]:
+    def in_order(self) -> Iterator[_pgvol.EncodedPart]:
         """The parts' results in plan order, each fetched when the writer asks for it and
         dropped here once handed over; the parts not fetched are cancelled when the writer
         stops early."""
-        calls, names = self._calls(winding)
+        calls, names = self._calls()
         if self.client is None:
             for call in calls:
                 yield _encode_part(*call)
@@ -206,10 +204,7 @@ def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, ban
         "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
     }
     job = _EncodeRun(mesh, options, client, parts, retries)
-    results = job.run(False)
-    if _pgvol.needs_winding([r.contradictions for r in results],
-                            [r.may_fall_back for r in results]):
-        results = job.run(True)
+    results = job.run()
     field = _pgvol.assemble_encode(job.vertices, job.faces, [r.bricks for r in results],
                                    **options)
     if output is not None:
@@ -225,25 +220,19 @@ def encode_file(mesh: Any, output: str | os.PathLike, *, res: int | None = None,
     ``encode`` saves, written as the parts arrive in plan order: this process holds a window
     of slabs of coefficients, not the whole field. Returns the field's grid.
 
-    When a part finds sign contradictions under the automatic sign's pseudonormal, the parts
-    are encoded again with the winding number, as ``encode`` does; when the automatic
-    precision cannot be chosen a slab at a time (coefficients beyond the fixed precision's
+    When the automatic precision cannot be chosen a slab at a time (coefficients beyond the fixed precision's
     range, never seen on distance fields), the file is written by ``encode``, holding the
     whole field. ``output`` is replaced atomically and left as it was on failure."""
     options: dict[str, Any] = {
         "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
     }
     job = _EncodeRun(mesh, options, client, parts, retries)
-    for winding in (False, True):
-        outcome, grid = _pgvol.write_encode_parts(job.vertices, job.faces,
-                                                  job.in_order(winding), output, **options)
-        if outcome == "written":
-            return grid
-        if outcome == "whole":
-            encode((job.vertices, job.faces), client=client, parts=parts, output=output,
-                   retries=retries, **options)
-            return grid
-    raise RuntimeError("the parts encoded with the winding number still ask for it")
+    outcome, grid = _pgvol.write_encode_parts(job.vertices, job.faces, job.in_order(), output,
+                                              **options)
+    if outcome == "whole":
+        encode((job.vertices, job.faces), client=client, parts=parts, output=output,
+               retries=retries, **options)
+    return grid
 
 
 def _field(source: Any) -> Field:

@@ -25,8 +25,7 @@ use near::BrickBox;
 pub use near::{BRICK, REGION_TILE};
 use row::{Plan, RowValues};
 
-use crate::consistency::{sign_contradictions, sparse_sign_contradictions};
-use crate::{grid::Grid, sdf::MeshSdf, SignMode};
+use crate::{grid::Grid, sdf::MeshSdf};
 
 /// Nodes per brick edge on a dense grid. Once the node scans became eight lanes wide with
 /// oriented leaf bounds, the per-brick work (the centre query, collecting and sorting the
@@ -171,48 +170,17 @@ impl MeshSdf {
         self.sample(grid, Extent::Dense, progress).values
     }
 
-    /// Signed distance on `grid`, exact where `extent` asks. `progress` gets the fraction done.
-    /// When `Auto` chose the pseudonormal and the grid contradicts itself (see
-    /// `sign_contradictions`), the mesh does not bound a solid: the sign falls back to the
-    /// winding number for good and the grid is sampled again.
-    pub fn sample(&self, grid: &Grid, extent: Extent, progress: &dyn Interrupt) -> Sampled {
-        self.with_sign_fallback(
-            || self.sample_once(grid, extent, progress),
-            |s| sign_contradictions(grid, &s.values),
-        )
-    }
-
-    /// `sample()`, and once more after falling back to the winding number when the pseudonormal
-    /// sign gave `contradictions`.
-    fn with_sign_fallback<T>(
-        &self,
-        sample: impl Fn() -> T,
-        contradictions: impl Fn(&T) -> usize,
-    ) -> T {
-        let sampled = sample();
-        if self.sign_mode() == SignMode::Pseudonormal
-            && contradictions(&sampled) > 0
-            && self.fall_back_to_winding()
-        {
-            return sample();
-        }
-        sampled
-    }
-
     /// Signed distance on `grid` within `width` spacings of the surface, as a sparse grid: the
     /// bricks holding a node within the band are stored, every other brick is the clamp of its
-    /// side. Working memory is the stored bricks plus one row of bricks per thread. Falls back
-    /// to the winding number as [`MeshSdf::sample`] does.
+    /// side. Working memory is the stored bricks plus one row of bricks per thread.
     pub fn sample_sparse(
         &self,
         grid: &Grid,
         width: f32,
         progress: &dyn Interrupt,
     ) -> SparseSampled {
-        self.with_sign_fallback(
-            || self.sample_sparse_once(grid, width, progress),
-            |s| sparse_sign_contradictions(grid, &s.values),
-        )
+        let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
+        self.sample_sparse_rows(grid, width, 0..by, 0..bz, progress)
     }
 
     /// The band's plan over the bricks of `flags` (whole region tiles): bricks near triangles
@@ -233,22 +201,11 @@ impl MeshSdf {
         }
     }
 
-    fn sample_sparse_once(
-        &self,
-        grid: &Grid,
-        width: f32,
-        progress: &dyn Interrupt,
-    ) -> SparseSampled {
-        let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
-        self.sample_sparse_rows(grid, width, 0..by, 0..bz, progress)
-    }
-
     /// [`MeshSdf::sample_sparse`] restricted to the rows of grid bricks along x whose y and z
     /// brick indices lie in `ys` and `zs`, without the sign fallback: every brick it holds,
     /// stored or absent, is the one the whole grid's sampling gives, since each row of grid
     /// bricks is sampled alone from the mesh and the grid. Bricks of other rows are left
-    /// absent and outside. The count of sign contradictions among its bricks is
-    /// [`sparse_sign_contradictions_in`](crate::consistency::sparse_sign_contradictions_in).
+    /// absent and outside.
     /// The band's plan covers only these rows widened to whole [`REGION_TILE`] tiles, so its
     /// memory and time follow the rows, not the grid.
     pub fn sample_sparse_rows(
@@ -318,7 +275,8 @@ impl MeshSdf {
         }
     }
 
-    fn sample_once(&self, grid: &Grid, extent: Extent, progress: &dyn Interrupt) -> Sampled {
+    /// Signed distance on `grid`, exact where `extent` asks. `progress` gets the fraction done.
+    pub fn sample(&self, grid: &Grid, extent: Extent, progress: &dyn Interrupt) -> Sampled {
         let [nx, ny, _] = grid.dims;
         let plan = match extent {
             Extent::Band(w) => {
@@ -380,7 +338,8 @@ impl MeshSdf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::SdfError;
+    use crate::consistency::{sign_contradictions, sparse_sign_contradictions};
+    use crate::{SdfError, SignMode};
     use glam::Vec3;
     use pgvol_mesh::shapes::octasphere as sphere;
 
@@ -499,8 +458,8 @@ mod tests {
         }
     }
 
-    /// Two overlapping closed cubes: closed and consistently oriented, so `Auto` starts with the
-    /// pseudonormal, but they cross each other and do not bound one solid.
+    /// Two overlapping closed cubes: closed and consistently oriented, but they cross each other
+    /// and do not bound one solid.
     fn overlapping_cubes() -> pgvol_mesh::Mesh {
         let mut a = pgvol_mesh::shapes::cuboid(Vec3::ZERO, Vec3::ONE);
         let b = pgvol_mesh::shapes::cuboid(Vec3::new(0.6, 0.2, 0.2), Vec3::new(1.6, 0.8, 0.8));
@@ -512,30 +471,28 @@ mod tests {
     }
 
     #[test]
-    fn auto_falls_back_to_the_winding_number_when_pseudonormal_signs_contradict() {
+    fn auto_takes_the_winding_number_where_pseudonormal_signs_contradict() {
         let mesh = overlapping_cubes();
         let grid = Grid::cube_res(Vec3::splat(-0.3), Vec3::splat(1.9), 32).unwrap();
         let pseudo = MeshSdf::new(&mesh, SignMode::Pseudonormal).unwrap();
         let wrong = pseudo.sample(&grid, Extent::Dense, &|_| {});
         assert!(sign_contradictions(&grid, &wrong.values) > 0);
-        assert_eq!(
-            pseudo.sign_mode(),
-            SignMode::Pseudonormal,
-            "asked for, so kept"
-        );
 
         let winding = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
+        let auto = MeshSdf::new(&mesh, SignMode::Auto).unwrap();
+        assert_eq!(auto.sign_mode(), SignMode::Winding);
+        // Closed: the winding number is whole and carried, never evaluated.
+        assert!(auto.winding_is_whole());
         for extent in [Extent::Dense, Extent::Band(3.0)] {
-            let auto = MeshSdf::new(&mesh, SignMode::Auto).unwrap();
-            assert_eq!(auto.sign_mode(), SignMode::Pseudonormal);
             let got = auto.sample(&grid, extent, &|_| {});
-            assert_eq!(auto.sign_mode(), SignMode::Winding);
             assert_eq!(got.values, winding.sample(&grid, extent, &|_| {}).values);
             assert_eq!(sign_contradictions(&grid, &got.values), 0);
         }
+        let sparse = auto.sample_sparse(&grid, 3.0, &|_| {});
+        assert_eq!(sparse_sign_contradictions(&grid, &sparse.values), 0);
         // Inside the first cube, nearer the second one's face: inside the union.
         let p = Vec3::new(0.45, 0.5, 0.5);
-        assert!(winding.signed_distance(p) < 0.0);
+        assert!(auto.signed_distance(p) < 0.0);
         assert!(
             pseudo.signed_distance(p) > 0.0,
             "the pseudonormal sign is wrong here"
@@ -636,7 +593,7 @@ mod tests {
         let w = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
         let p = MeshSdf::new(&mesh, SignMode::Pseudonormal).unwrap();
         let a = MeshSdf::new(&mesh, SignMode::Auto).unwrap();
-        assert_eq!(a.sign_mode(), SignMode::Pseudonormal);
+        assert_eq!(a.sign_mode(), SignMode::Winding);
         let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::ONE, 33).unwrap();
         let vw = w.sample_grid(&grid, &|_| {});
         let vp = p.sample_grid(&grid, &|_| {});

@@ -6,7 +6,7 @@ use std::ops::Range;
 
 use pgvol_core::{Grid, Mesh, SparseGrid, BRICK_EDGE};
 use pgvol_field::{Basis, CoefficientVolume, FitMethod, FitReport, SPARSE_GROUP};
-use pgvol_sdf::{MeshSdf, SignMode};
+use pgvol_sdf::MeshSdf;
 
 use super::slab::Slab;
 use super::split::split;
@@ -208,12 +208,6 @@ fn sampled_rows(grid: &Grid, options: &EncodeOptions, part: &GroupBox) -> [Range
 pub struct EncodedPart {
     /// The coefficient bricks and sides of the part's box, as [`Slab`] bytes.
     pub bricks: Vec<u8>,
-    /// Pairs of neighbouring nodes in the part whose signs contradict their distances; with
-    /// an automatic sign that chose the pseudonormal, any contradiction in any part means the
-    /// whole encode must be redone with the winding number.
-    pub contradictions: usize,
-    /// Whether the samples were signed by the pseudonormal chosen by `Auto`.
-    pub may_fall_back: bool,
     /// Nodes of the part's stored sample bricks within the band.
     pub exact_nodes: usize,
 }
@@ -253,10 +247,8 @@ impl EncodeJob {
 
     /// Samples and fits the groups of `part`: the distances of their grid bricks and of the
     /// bricks around them the fit reads, then their coefficient bricks, bit for bit those of
-    /// [`encode`](crate::encode()) on the whole grid. `winding` signs by the winding number
-    /// where `Auto` had chosen the pseudonormal (after a part found contradictions); once set
-    /// in a process it stays set for this job. Calling it again gives the same bytes.
-    pub fn encode_part(&self, part: &GroupBox, winding: bool) -> Result<EncodedPart> {
+    /// [`encode`](crate::encode()) on the whole grid. Calling it again gives the same bytes.
+    pub fn encode_part(&self, part: &GroupBox) -> Result<EncodedPart> {
         let [_, ny, nz] = group_counts(&self.grid);
         let inside = |r: &Range<usize>, n: usize| r.start < r.end && r.end <= n;
         if !(inside(&part.gy, ny) && inside(&part.gz, nz)) {
@@ -265,16 +257,11 @@ impl EncodeJob {
                 part.gy, part.gz
             )));
         }
-        if winding {
-            self.sdf.fall_back_to_winding();
-        }
         crate::memory::check_memory(
             &format!("encoding groups y {:?}, z {:?}", part.gy, part.gz),
             self.part_bytes(part),
             "use more parts",
         )?;
-        let may_fall_back =
-            self.options.sign == SignMode::Auto && self.sdf.sign_mode() == SignMode::Pseudonormal;
         let counts = self.grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
         let owned = |r: &Range<usize>, a: usize| {
             r.start * SPARSE_GROUP..(r.end * SPARSE_GROUP).min(counts[a])
@@ -284,12 +271,6 @@ impl EncodeJob {
         let sampled = self
             .sdf
             .sample_sparse_rows(&self.grid, self.options.band, ys, zs, &|_| {});
-        let contradictions = pgvol_sdf::sparse_sign_contradictions_in(
-            &self.grid,
-            &sampled.values,
-            oy.clone(),
-            oz.clone(),
-        );
         let (bricks, _) = pgvol_field::interp_sparse_groups(
             self.grid,
             self.options.basis,
@@ -305,8 +286,6 @@ impl EncodeJob {
         slab.stored = bricks;
         Ok(EncodedPart {
             bricks: slab.to_bytes(),
-            contradictions,
-            may_fall_back,
             exact_nodes,
         })
     }
@@ -350,13 +329,6 @@ pub(crate) fn assembled_fit(
     )
     .map_err(|e| Error::new(ErrorKind::Internal, format!("{e}")))?;
     Ok(fit)
-}
-
-/// Whether the parts' results ask for the encode to be redone with the winding number, as the
-/// single-process encode falls back when the whole sampled grid contradicts itself.
-pub fn needs_winding(parts: &[EncodedPart]) -> bool {
-    parts.iter().any(|p| p.may_fall_back)
-        && parts.iter().map(|p| p.contradictions).sum::<usize>() > 0
 }
 
 /// The encoded file of `mesh` by `options` from its parts' coefficient bricks, given in the

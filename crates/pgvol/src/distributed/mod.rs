@@ -31,8 +31,8 @@ pub use decode_parts::{
     slice_part_bricks, weld_parts, PART_HALO_BRICKS,
 };
 pub use encode_parts::{
-    assemble_encode, needs_winding, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob,
-    EncodePlan, EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
+    assemble_encode, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob, EncodePlan,
+    EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
 };
 pub use slab::Slab;
 pub use split::split;

@@ -22,12 +22,6 @@ use crate::error::{Error, ErrorKind, FileResult, Result};
 pub enum PartsWritten {
     /// The file is written; what it stores.
     Written(EncodeReport),
-    /// A part found sign contradictions under the automatic sign's pseudonormal: nothing was
-    /// written; encode the parts again with the winding number (as [`needs_winding`] says
-    /// after the fact) and write those.
-    ///
-    /// [`needs_winding`]: super::needs_winding
-    NeedsWinding,
     /// The automatic precision cannot be chosen a slab at a time (a coefficient lies beyond the
     /// `fixed` precision's tolerance): nothing was written; assemble the parts in memory with
     /// [`assemble_encode`](super::assemble_encode) and write that.
@@ -36,7 +30,7 @@ pub enum PartsWritten {
 
 /// Writes the file of the encode of `mesh` by `options` to `path` atomically from `parts`, the
 /// plan's parts in plan order, each taken as it comes and dropped once applied. See
-/// [`PartsWritten`] for the two cases that leave nothing written.
+/// [`PartsWritten`] for the case that leaves nothing written.
 pub fn write_encode_parts(
     path: impl AsRef<Path>,
     mesh: &Mesh,
@@ -66,8 +60,8 @@ pub fn write_encode_parts(
     }
 }
 
-/// [`write_encode_parts`] to any writer; after `NeedsWinding` or `NeedsWholeVolume` what was
-/// written is not a file.
+/// [`write_encode_parts`] to any writer; after `NeedsWholeVolume` what was written is not a
+/// file.
 pub fn write_encode_parts_to(
     w: &mut dyn Write,
     mesh: &Mesh,
@@ -83,14 +77,9 @@ pub fn write_encode_parts_to(
     let mut writer: Option<StreamedPgv> = None;
     // The output, until the first part gives the header that starts the file.
     let mut out = Some(w);
-    let (mut stored, mut pseudonormal, mut contradictions) = (0usize, false, 0usize);
+    let mut stored = 0usize;
     for part in parts {
         let part = part?;
-        pseudonormal |= part.may_fall_back;
-        contradictions += part.contradictions;
-        if pseudonormal && contradictions > 0 {
-            return Ok(PartsWritten::NeedsWinding);
-        }
         let slab = Slab::from_bytes(&part.bricks)?;
         drop(part);
         check_slab(&slab, &grid, options)?;
