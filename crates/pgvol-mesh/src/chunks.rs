@@ -11,7 +11,7 @@ use rayon::prelude::*;
 /// Records per chunk: large enough that a chunk's bookkeeping is nothing beside its encoding.
 const CHUNK: usize = 1 << 14;
 /// Chunks encoded together before they are handed to the writer: a few MB of bytes in flight.
-const BATCH: usize = 64;
+const BATCH: usize = 16;
 
 /// Writes records `0..count` to `w`: `encode(range, bytes)` appends the records of `range` to
 /// `bytes`. Batches of chunks are encoded on the thread pool while the caller's thread writes
