@@ -55,6 +55,13 @@ def install_note(package: str) -> str:
 # ---------------------------------------------------------------------------
 
 
+def reported_seconds(report: dict, wall: float) -> float:
+    """The distance stage's seconds of a `pgvol sdf --json` report (its `seconds` holds the
+    stages and their total), or the wall time when it has none."""
+    seconds = report.get("seconds", wall)
+    return float(seconds["sdf"] if isinstance(seconds, dict) else seconds)
+
+
 def method_pgvol(mesh_path: Path, mesh, grid: common.Grid, work: Path):
     exe = common.pgvol_bin()
     if not exe.is_file():
@@ -63,7 +70,7 @@ def method_pgvol(mesh_path: Path, mesh, grid: common.Grid, work: Path):
     report, wall = common.run_json([exe, "sdf", mesh_path, "-o", out, "--res", grid.n, "--dense", "--json"])
     values = common.read_grid_x_fastest(out, grid.n)
     out.unlink(missing_ok=True)
-    seconds = float(report.get("seconds", wall))
+    seconds = reported_seconds(report, wall)
     return seconds, values, f"reported {seconds:.3f} s, wall {wall:.3f} s"
 
 
@@ -76,7 +83,7 @@ def method_pgvol_band(mesh_path: Path, mesh, grid: common.Grid, work: Path):
     report, wall = common.run_json([exe, "sdf", mesh_path, "-o", out, "--res", grid.n, "--band", VDB_HALF_WIDTH, "--json"])
     values = common.read_grid_x_fastest(out, grid.n)
     out.unlink(missing_ok=True)
-    seconds = float(report.get("seconds", wall))
+    seconds = reported_seconds(report, wall)
     return seconds, values, f"band +-3 voxels ({report.get('exact_nodes')} exact), {report.get('sign')} sign"
 
 
