@@ -1,8 +1,6 @@
 //! Checks every mesh must pass before it leaves a reader or enters a writer, so downstream code
 //! (distance fields, grids) never meets NaN, absurd magnitudes or dangling indices.
 
-use rayon::prelude::*;
-
 use crate::Mesh;
 
 /// Coordinates at or beyond this magnitude are rejected. The point–triangle distance multiplies
@@ -86,7 +84,7 @@ pub fn f32_rounding_loss(mesh: &Mesh) -> Option<(f64, f64)> {
     if mesh.offset == glam::DVec3::ZERO {
         return None;
     }
-    let (lo, hi) = face_bounds(mesh)?;
+    let (lo, hi) = mesh.bounds()?;
     let size = f64::from((hi - lo).max_element());
     let far = (mesh.offset.abs() + lo.abs().max(hi.abs()).as_dvec3()).max_element();
     // Half the spacing of f32 values at `far`.
@@ -98,20 +96,7 @@ pub fn f32_rounding_loss(mesh: &Mesh) -> Option<(f64, f64)> {
 /// The largest bounding-box extent of the faces' vertices when it is below [`MIN_EXTENT`]
 /// (`None` also for a mesh without faces). The faces must name existing vertices.
 pub fn too_small(mesh: &Mesh) -> Option<f32> {
-    let (lo, hi) = face_bounds(mesh)?;
+    let (lo, hi) = mesh.bounds()?;
     let extent = (hi - lo).max_element();
     (extent < MIN_EXTENT).then_some(extent)
-}
-
-/// [`Mesh::bounds`] (the box of the vertices the faces name) over chunks of faces in
-/// parallel: a minimum and a maximum do not depend on the order they are taken in.
-fn face_bounds(mesh: &Mesh) -> Option<(glam::Vec3, glam::Vec3)> {
-    mesh.triangles
-        .par_chunks(1 << 16)
-        .filter_map(|faces| {
-            let mut corners = faces.iter().flatten().map(|&i| mesh.positions[i as usize]);
-            let first = corners.next()?;
-            Some(corners.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
-        })
-        .reduce_with(|a, b| (a.0.min(b.0), a.1.max(b.1)))
 }

@@ -8,6 +8,7 @@ mod orient;
 pub mod stats;
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use crate::frame;
 
@@ -81,15 +82,16 @@ impl Mesh {
     }
 
     /// Axis-aligned bounds of the vertices referenced by triangles, `None` when there are none.
+    /// Taken over chunks of faces in parallel: a least and a greatest value do not depend on
+    /// the order they are taken in.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let mut it = self.triangles.iter().flatten();
-        let first = self.positions[*it.next()? as usize];
-        let (mut lo, mut hi) = (first, first);
-        for &i in it {
-            let p = self.positions[i as usize];
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-        Some((lo, hi))
+        self.triangles
+            .par_chunks(1 << 16)
+            .filter_map(|faces| {
+                let mut corners = faces.iter().flatten().map(|&i| self.positions[i as usize]);
+                let first = corners.next()?;
+                Some(corners.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
+            })
+            .reduce_with(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
 }
