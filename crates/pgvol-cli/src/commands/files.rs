@@ -72,7 +72,8 @@ pub struct EncodeArgs {
     pub sharp: SharpArg,
     /// Crease angle in degrees: edges of the mesh whose faces turn by more (and still do a grid
     /// spacing away, along at least 4 spacings) are creases, and the cells around them get
-    /// stored vertices.
+    /// stored vertices. Creases turning by less than 50° count only where the surface beside
+    /// them stays flat for 8 spacings, which the facets of a coarse curved mesh do not.
     #[arg(long, value_name = "DEG", default_value_t = pgvol::sharp::DEFAULT_SHARP_ANGLE, value_parser = parse_angle)]
     pub sharp_angle: f32,
     /// Print the solver's iterations and residual.

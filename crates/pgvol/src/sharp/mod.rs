@@ -26,11 +26,23 @@ use pgvol_contour::Method;
 use rayon::prelude::*;
 
 pub(crate) use place::stored_vertex;
-use select::{feature_cells, sharp_edges, stored_cells, within_ring};
+use select::{feature_cells, sharp_edges, stored_cells, within_ring, FlatSides};
 
-/// Default angle (degrees) between the normals of two triangles around a vertex of the exact
-/// contour above which the vertex is on a crease or corner.
-pub const DEFAULT_SHARP_ANGLE: f32 = 50.0;
+/// Default angle (degrees) between the normals of two triangles of the mesh above which their
+/// edge may be a crease.
+pub const DEFAULT_SHARP_ANGLE: f32 = 30.0;
+
+/// Creases turning by less than this (degrees) are kept only where the surface beside them is
+/// flat (`SHARP_FLAT_REACH`, `SHARP_FLAT_TURN`), which the facets of a coarse curved mesh are
+/// not.
+pub const SHARP_FLAT_BELOW: f32 = 50.0;
+
+/// How far from such a crease (cells) the surface is compared with the surface a cell away.
+pub const SHARP_FLAT_REACH: f32 = 8.0;
+
+/// The largest turn (degrees) of the surface between one cell and `SHARP_FLAT_REACH` cells away
+/// from a crease that still counts as flat.
+pub const SHARP_FLAT_TURN: f32 = 3.0;
 
 /// Creases shorter than this many cells store nothing.
 pub const SHARP_MIN_LENGTH: f32 = 4.0;
@@ -103,7 +115,8 @@ pub fn attach(
     }
     let bvh = pgvol_sdf::Bvh::build(mesh);
     let triangle = |p| bvh.closest(p, f32::INFINITY).map(|c| c.triangle);
-    let features = feature_cells(mesh, &sharp, &grid, SHARP_MIN_LENGTH, &triangle);
+    let flat = FlatSides::new(SHARP_FLAT_BELOW, SHARP_FLAT_REACH, SHARP_FLAT_TURN);
+    let features = feature_cells(mesh, &sharp, &grid, SHARP_MIN_LENGTH, &flat, &triangle);
     let feature_cells = features.len();
     if features.is_empty() {
         return Ok(SharpReport::default());
@@ -256,7 +269,8 @@ mod tests {
         let bvh = pgvol_sdf::Bvh::build(&cube);
         let triangle = |p| bvh.closest(p, f32::INFINITY).map(|c| c.triangle);
         let edges = sharp_edges(&cube, angle);
-        let features = feature_cells(&cube, &edges, &grid, SHARP_MIN_LENGTH, &triangle);
+        let flat = FlatSides::new(SHARP_FLAT_BELOW, SHARP_FLAT_REACH, SHARP_FLAT_TURN);
+        let features = feature_cells(&cube, &edges, &grid, SHARP_MIN_LENGTH, &flat, &triangle);
         let near = within_ring(&features, &grid, SHARP_RING);
         let dc = Method::DualContouring;
         let exact = ExactDistance::new(&cube, sign)

@@ -68,14 +68,23 @@ pub(crate) fn feature_cells(
     sharp: &SharpEdges,
     grid: &Grid,
     min_length: f32,
+    flat: &FlatSides,
     closest: &ClosestTriangle,
 ) -> Vec<u64> {
-    let (normals, cos) = (&sharp.normals, sharp.cos);
+    let normals = &sharp.normals;
     let sharp: Vec<(u32, u32)> = sharp
         .edges
         .iter()
         .filter(|&&(a, b, s, t)| {
-            crease_at_grid_scale(mesh, normals, (a, b), (s, t), grid.spacing, cos, closest)
+            let test = CreaseTest {
+                mesh,
+                normals,
+                h: grid.spacing,
+                cos: sharp.cos,
+                flat,
+                closest,
+            };
+            test.holds((a, b), (s, t))
         })
         .map(|&(a, b, _, _)| (a, b))
         .collect();
@@ -101,37 +110,80 @@ pub(crate) fn feature_cells(
 /// The triangle of the mesh closest to a point.
 pub(crate) type ClosestTriangle<'a> = dyn Fn(Vec3) -> Option<u32> + Sync + 'a;
 
-/// Whether the surface one cell away on either side of the sharp edge `(a, b)` between
-/// triangles `(s, t)` still turns by more than the crease angle (`|cos| < cos`): a scan's noise
-/// makes sharp edges between tiny triangles whose neighbourhoods, a cell away, are parallel.
-fn crease_at_grid_scale(
-    mesh: &Mesh,
-    normals: &[Vec3],
-    (a, b): (u32, u32),
-    (s, t): (u32, u32),
-    h: f32,
-    cos: f32,
-    closest: &ClosestTriangle,
-) -> bool {
-    let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-    let middle = 0.5 * (p + q);
-    let along = (q - p).normalize_or_zero();
-    let away = |tri: u32| -> Option<Vec3> {
-        let n = normals[tri as usize];
-        let third = mesh.triangles[tri as usize]
-            .iter()
-            .map(|&v| mesh.positions[v as usize])
-            .find(|&x| x != p && x != q)?;
-        let mut d = n.cross(along);
-        if d.dot(third - middle) < 0.0 {
-            d = -d;
+/// What tells a crease that turns by less than `below` from the facets of a coarse curved
+/// surface: the surface on either side stays flat, within `turn`, from one cell to `reach`
+/// cells away from it. A curved surface's facets are flat too, but their neighbours a few
+/// cells on turn again; the faces beside a part's creases do not.
+pub(crate) struct FlatSides {
+    /// Cosine of the crease angle below which the sides must be flat.
+    pub cos_below: f32,
+    /// Cells away from the edge where the surface is compared with its value one cell away.
+    pub reach: f32,
+    /// Cosine of the largest turn allowed between the two.
+    pub cos_turn: f32,
+}
+
+impl FlatSides {
+    /// From angles in degrees.
+    pub(crate) fn new(below: f32, reach: f32, turn: f32) -> Self {
+        FlatSides {
+            cos_below: below.to_radians().cos(),
+            reach,
+            cos_turn: turn.to_radians().cos(),
         }
-        let far = closest(middle + d * h)?;
-        Some(normals[far as usize])
-    };
-    match (away(s), away(t)) {
-        (Some(m), Some(n)) => m.dot(n).abs() < cos,
-        _ => true,
+    }
+}
+
+/// What deciding whether one sharp edge is a crease at the grid's scale needs.
+struct CreaseTest<'a> {
+    mesh: &'a Mesh,
+    normals: &'a [Vec3],
+    /// The grid spacing.
+    h: f32,
+    /// Cosine of the crease angle.
+    cos: f32,
+    flat: &'a FlatSides,
+    closest: &'a ClosestTriangle<'a>,
+}
+
+impl CreaseTest<'_> {
+    /// Whether the surface one cell away on either side of the sharp edge `(a, b)` between
+    /// triangles `(s, t)` still turns by more than the crease angle (`|cos| < cos`), a scan's
+    /// noise making sharp edges between tiny triangles whose neighbourhoods, a cell away, are
+    /// parallel; and, for an edge turning by less than [`FlatSides`]' angle, whether both sides
+    /// are flat.
+    fn holds(&self, (a, b): (u32, u32), (s, t): (u32, u32)) -> bool {
+        let mesh = self.mesh;
+        let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        let middle = 0.5 * (p + q);
+        let along = (q - p).normalize_or_zero();
+        // The normals of the surface one cell and `reach` cells away on triangle `tri`'s side.
+        let away = |tri: u32| -> Option<[Vec3; 2]> {
+            let n = self.normals[tri as usize];
+            let third = mesh.triangles[tri as usize]
+                .iter()
+                .map(|&v| mesh.positions[v as usize])
+                .find(|&x| x != p && x != q)?;
+            let mut d = n.cross(along);
+            if d.dot(third - middle) < 0.0 {
+                d = -d;
+            }
+            let near = (self.closest)(middle + d * self.h)?;
+            let far = (self.closest)(middle + d * (self.flat.reach * self.h))?;
+            Some([near, far].map(|f| self.normals[f as usize]))
+        };
+        let (Some([m, m_far]), Some([n, n_far])) = (away(s), away(t)) else {
+            return true;
+        };
+        let turn = m.dot(n).abs();
+        if turn >= self.cos {
+            return false;
+        }
+        let own = self.normals[s as usize].dot(self.normals[t as usize]).abs();
+        let steep = turn < self.flat.cos_below && own < self.flat.cos_below;
+        // Signed: a side whose far normal faces the other way (another sheet, or inconsistent
+        // winding) is not flat.
+        steep || (m.dot(m_far) > self.flat.cos_turn && n.dot(n_far) > self.flat.cos_turn)
     }
 }
 
@@ -262,7 +314,8 @@ mod tests {
             vec![[0, 1, 2], [1, 0, 3]],
         );
         let none = |_| None;
-        let cells = feature_cells(&edge, &sharp_edges(&edge, angle), &grid, 2.0, &none);
+        let rule = FlatSides::new(50.0, 8.0, 3.0);
+        let cells = feature_cells(&edge, &sharp_edges(&edge, angle), &grid, 2.0, &rule, &none);
         assert_eq!(cells.len(), 5, "{cells:?}");
         assert!(cells.contains(&key_of(&grid, [8, 8, 8])));
         let flat = Mesh::new(
@@ -270,6 +323,59 @@ mod tests {
             vec![[0, 1, 2], [0, 2, 3]],
         );
         assert!(sharp_edges(&flat, angle).edges.is_empty());
-        assert!(feature_cells(&edge, &sharp_edges(&edge, angle), &grid, 5.0, &none).is_empty());
+        let short = feature_cells(&edge, &sharp_edges(&edge, angle), &grid, 5.0, &rule, &none);
+        assert!(short.is_empty());
+    }
+
+    /// A 40° crease between two wide flat faces is one; the 40° edges of a nine-sided prism,
+    /// whose facets are narrower than the reach, are not.
+    #[test]
+    fn a_shallow_crease_needs_flat_sides() {
+        let grid = Grid {
+            origin: Vec3::splat(-2.0),
+            spacing: 0.25,
+            dims: [17, 17, 17],
+            offset: Default::default(),
+        };
+        let angle = 30f32.to_radians();
+        let flat = FlatSides::new(50.0, 8.0, 3.0);
+        let features = |mesh: &Mesh| {
+            let bvh = pgvol_sdf::Bvh::build(mesh);
+            let closest = |p| bvh.closest(p, f32::INFINITY).map(|c| c.triangle);
+            feature_cells(mesh, &sharp_edges(mesh, angle), &grid, 2.0, &flat, &closest)
+        };
+        let up = 3.0 * Vec3::new(0.0, 40f32.to_radians().cos(), 40f32.to_radians().sin());
+        let roof = Mesh::new(
+            vec![
+                Vec3::new(-1.5, 0.0, 0.0),
+                Vec3::new(1.5, 0.0, 0.0),
+                Vec3::new(1.5, -3.0, 0.0),
+                Vec3::new(-1.5, -3.0, 0.0),
+                Vec3::new(1.5, 0.0, 0.0) + up,
+                Vec3::new(-1.5, 0.0, 0.0) + up,
+            ],
+            vec![[0, 2, 1], [0, 3, 2], [0, 1, 4], [0, 4, 5]],
+        );
+        assert_eq!(sharp_edges(&roof, angle).edges.len(), 1);
+        assert!(features(&roof).len() >= 12, "{:?}", features(&roof));
+
+        let sides = 9;
+        let ring = |z: f32| {
+            (0..sides).map(move |k| {
+                let a = std::f32::consts::TAU * k as f32 / sides as f32;
+                Vec3::new(a.cos(), a.sin(), z)
+            })
+        };
+        let positions: Vec<Vec3> = ring(-1.5).chain(ring(1.5)).collect();
+        let triangles = (0..sides as u32)
+            .flat_map(|k| {
+                let next = (k + 1) % sides as u32;
+                let s = sides as u32;
+                [[k, next, next + s], [k, next + s, k + s]]
+            })
+            .collect();
+        let prism = Mesh::new(positions, triangles);
+        assert_eq!(sharp_edges(&prism, angle).edges.len(), sides);
+        assert!(features(&prism).is_empty(), "{:?}", features(&prism));
     }
 }
