@@ -56,6 +56,9 @@ pub fn contour_volume(
 /// [`contour_volume`], with dual contouring taking the vertices of the cells `stored` gives
 /// (called with each singly crossed cell's lowest corner in `grid`'s local coordinates; the
 /// other methods ignore it). The guarantees of [`contour_volume`] hold whatever it gives.
+/// With `stored`, the other cells' vertices take no feature offset
+/// ([`DualContourOptions::feature_offset`]): the stored cells are where the creases are, and
+/// elsewhere the offset would bend curved surfaces into false creases.
 pub fn contour_volume_placing(
     volume: &CoefficientVolume,
     grid: &Grid,
@@ -64,7 +67,18 @@ pub fn contour_volume_placing(
     report: Report,
     stored: Option<&StoredVertices>,
 ) -> pgvol_core::Mesh {
-    contour_volume_with(volume, grid, iso, method, report, stored, false)
+    let options = dual_options(stored.is_some());
+    contour_volume_with(volume, grid, iso, (method, &options), report, stored, false)
+}
+
+/// Dual contouring's options for a volume whose creases are (`true`) or are not given by
+/// stored vertices.
+fn dual_options(creases_stored: bool) -> DualContourOptions {
+    let mut options = DualContourOptions::default();
+    if creases_stored {
+        options.feature_offset = 0.0;
+    }
+    options
 }
 
 /// Dual contouring of `volume` on `grid` for callers that keep only the vertices of the cells
@@ -72,13 +86,15 @@ pub fn contour_volume_placing(
 /// evaluated outside `grid` to place vertices (the padding's cells keep their planes' point; a
 /// border cell's offset planes reaching outside fall back to its crossings'). On a small grid
 /// through a solid, where the padding closes whole faces, those cells are most of the work.
+/// The vertices are those of [`contour_volume_placing`] with stored vertices, in the cells it
+/// does not store: what an encoder compares with the exact ones to choose the cells to store.
 pub fn dual_contour_interior(
     volume: &CoefficientVolume,
     grid: &Grid,
     iso: f32,
     report: Report,
 ) -> pgvol_core::Mesh {
-    let method = Method::DualContouring;
+    let method = (Method::DualContouring, &dual_options(true));
     contour_volume_with(volume, grid, iso, method, report, None, true)
 }
 
@@ -88,7 +104,7 @@ fn contour_volume_with(
     volume: &CoefficientVolume,
     grid: &Grid,
     iso: f32,
-    method: Method,
+    (method, options): (Method, &DualContourOptions),
     report: Report,
     stored: Option<&StoredVertices>,
     interior_only: bool,
@@ -117,7 +133,7 @@ fn contour_volume_with(
         iso,
         (method, interior),
         rest,
-        stored,
+        (options, stored),
     );
     in_frame_of(grid, mesh)
 }
@@ -142,7 +158,7 @@ pub(crate) fn contour_samples(
         iso,
         (method, None),
         None,
-        None,
+        (&DualContourOptions::default(), None),
     )
 }
 
@@ -317,7 +333,15 @@ pub fn contour_sampled(
     let nodes = DenseNodes::new(values, grid.dims);
     in_frame_of(
         grid,
-        contour_nodes(volume, grid, &nodes, iso, (method, None), None, None),
+        contour_nodes(
+            volume,
+            grid,
+            &nodes,
+            iso,
+            (method, None),
+            None,
+            (&DualContourOptions::default(), None),
+        ),
     )
 }
 
@@ -331,7 +355,7 @@ fn contour_nodes(
     iso: f32,
     (method, interior): (Method, Option<(Vec3, Vec3)>),
     span: Option<Span>,
-    stored: Option<&StoredVertices>,
+    (options, stored): (&DualContourOptions, Option<&StoredVertices>),
 ) -> pgvol_core::Mesh {
     let Some(samples) = Samples::checked(nodes, grid.origin, grid.spacing, iso) else {
         return pgvol_core::Mesh::default();
@@ -341,7 +365,6 @@ fn contour_nodes(
     match method {
         Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
         Method::DualContouring => {
-            let options = DualContourOptions::default();
             // On the volume's own grid, crossing and normal come from one read of the edge's
             // coefficients; elsewhere as for marching cubes, then a general evaluation.
             let place = |a, va, b, vb, axis| {
@@ -357,8 +380,8 @@ fn contour_nodes(
                 _ => volume.value_gradient(p),
             };
             match interior {
-                Some(_) => dual_contour_with(&samples, &inside_only, &options, &place, stored),
-                None => dual_contour_with(&samples, volume, &options, &place, stored),
+                Some(_) => dual_contour_with(&samples, &inside_only, options, &place, stored),
+                None => dual_contour_with(&samples, volume, options, &place, stored),
             }
         }
         Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
@@ -408,7 +431,8 @@ mod tests {
     }
 
     /// On a sub-grid cutting through the shape, the cells a cell or more inside the sub-grid get
-    /// the vertices [`contour_volume`] gives them, and the padding's own cells differ.
+    /// the vertices [`contour_volume_placing`] gives the cells it stores none for, and the
+    /// padding's own cells differ.
     #[test]
     fn interior_dual_contouring_keeps_the_inside_cells_vertices() {
         let v = two_balls(Basis::Bspline3);
@@ -420,7 +444,9 @@ mod tests {
             offset: Default::default(),
         };
         let quiet = pgvol_core::progress::QUIET;
-        let full = contour_volume(&v, &sub, 0.0, Method::DualContouring, quiet);
+        let none = |_corner: Vec3| None;
+        let dc = Method::DualContouring;
+        let full = contour_volume_placing(&v, &sub, 0.0, dc, quiet, Some(&none));
         let interior = dual_contour_interior(&v, &sub, 0.0, quiet);
         // The same cells (quads next to the padding may split the other way).
         assert_eq!(full.positions.len(), interior.positions.len());
@@ -484,12 +510,17 @@ mod tests {
             let f = f - f.floor();
             assert!(f.cmpgt(Vec3::splat(0.99)).all(), "{f}");
         }
+        // With no vertex given, the same cells get a vertex as without stored vertices, but
+        // none takes the feature offset: on a sphere its vertices lie nearer the surface.
         let none = |_corner: Vec3| None;
         let plain = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&none));
-        assert_eq!(
-            plain,
-            contour_volume(&volume, &volume.grid, 0.0, method, quiet)
-        );
+        let offset = contour_volume(&volume, &volume.grid, 0.0, method, quiet);
+        assert_eq!(plain.positions.len(), offset.positions.len());
+        let off_sphere = |m: &pgvol_core::Mesh| {
+            let total: f32 = m.positions.iter().map(|p| (p.length() - 0.6).abs()).sum();
+            total / m.positions.len() as f32 / h
+        };
+        assert!(off_sphere(&plain) < off_sphere(&offset));
     }
 
     #[test]
