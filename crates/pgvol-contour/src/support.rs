@@ -40,17 +40,24 @@ pub(crate) fn coefficient_ranges(g: &Grid, lo: Vec3, hi: Vec3) -> [[usize; 2]; 3
     })
 }
 
-/// The kind of every coefficient brick in the brick layers `layers` along z (x fastest), one
+/// The kind of every coefficient brick in the box of bricks `span` (per axis), x fastest, one
 /// byte each.
-fn brick_kinds(coeffs: &SparseGrid, layers: Range<usize>) -> Vec<u8> {
-    let [bx, by, _] = coeffs.brick_counts();
-    let mut kinds = vec![0u8; bx * by * layers.len()];
+fn brick_kinds(coeffs: &SparseGrid, span: [Range<usize>; 3]) -> Vec<u8> {
+    let [sx, sy, _] = span.clone().map(|r| r.len());
+    let mut kinds = vec![0u8; sx * sy * span[2].len()];
+    if sx * sy == 0 {
+        return kinds;
+    }
     kinds
-        .par_chunks_mut(bx * by)
+        .par_chunks_mut(sx * sy)
         .enumerate()
         .for_each(|(k, layer)| {
             for (at, kind) in layer.iter_mut().enumerate() {
-                let b = [at % bx, at / bx, layers.start + k];
+                let b = [
+                    span[0].start + at % sx,
+                    span[1].start + at / sx,
+                    span[2].start + k,
+                ];
                 *kind = if coeffs.is_stored(b) {
                     STORED
                 } else if coeffs.is_inside(b) {
@@ -65,26 +72,25 @@ fn brick_kinds(coeffs: &SparseGrid, layers: Range<usize>) -> Vec<u8> {
 
 /// For boxes that are products of per-axis coefficient node ranges (`ranges[a][s]`, first and
 /// last node), the OR of the kinds of the coefficient bricks each reaches (x fastest). Only
-/// the brick layers the boxes reach along z are read, so a run of sampling layers costs its
-/// own share of the grid.
+/// the bricks the boxes reach are read, so a small sampling grid on a large volume costs its
+/// own share of the volume.
 pub(crate) fn support_kinds(coeffs: &SparseGrid, ranges: [&[[usize; 2]]; 3]) -> Vec<u8> {
     let mut bricks = ranges.map(|r| -> Vec<Range<usize>> {
         r.iter()
             .map(|&[first, last]| first / BRICK_EDGE..last / BRICK_EDGE + 1)
             .collect()
     });
-    let lo = bricks[2].iter().map(|r| r.start).min().unwrap_or(0);
-    let hi = bricks[2].iter().map(|r| r.end).max().unwrap_or(lo);
-    for r in &mut bricks[2] {
-        *r = r.start - lo..r.end - lo;
-    }
-    let kinds = brick_kinds(coeffs, lo..hi);
-    let [bx, by, _] = coeffs.brick_counts();
-    or_over_boxes(
-        &kinds,
-        [bx, by, hi - lo],
-        [&bricks[0], &bricks[1], &bricks[2]],
-    )
+    let span = bricks.each_mut().map(|axis| {
+        let lo = axis.iter().map(|r| r.start).min().unwrap_or(0);
+        let hi = axis.iter().map(|r| r.end).max().unwrap_or(lo);
+        for r in axis.iter_mut() {
+            *r = r.start - lo..r.end - lo;
+        }
+        lo..hi
+    });
+    let dims = span.clone().map(|r| r.len());
+    let kinds = brick_kinds(coeffs, span);
+    or_over_boxes(&kinds, dims, [&bricks[0], &bricks[1], &bricks[2]])
 }
 
 /// The one-sided bound (see [`one_side`]) of a box whose supporting bricks are all absent, of

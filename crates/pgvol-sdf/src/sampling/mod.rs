@@ -188,7 +188,7 @@ impl MeshSdf {
     fn band_plan<'g>(&self, grid: &'g Grid, width: f32, flags: BrickBox) -> Plan<'g> {
         let bricks = grid.dims.map(|n| n.div_ceil(BRICK));
         let clamp = width.max(0.0) * grid.spacing;
-        let near = self.bricks_near_triangles(grid, bricks, clamp, &flags);
+        let near = self.bricks_near_triangles(grid, clamp, &flags);
         let regions = self.region_signs(grid, &near, &flags);
         Plan {
             grid,

@@ -78,14 +78,10 @@ impl MeshSdf {
     /// that can hold band nodes (the way OpenVDB finds its narrow band). A brick's cell runs up
     /// to the next brick, so no triangle meets the cells of the others, nor a segment between
     /// two neighbouring ones. Each brick's flag depends on the triangles alone, so any box gets
-    /// the whole grid's flags; triangles whose inflated bounds miss the box cost one test.
-    pub(super) fn bricks_near_triangles(
-        &self,
-        grid: &Grid,
-        bricks: [usize; 3],
-        reach: f32,
-        area: &BrickBox,
-    ) -> Bits {
+    /// the whole grid's flags; only the triangles of the tree's leaves near the box are tested,
+    /// so a small box of a large mesh (a sharp-feature box, a distributed part) costs its own
+    /// share of the triangles.
+    pub(super) fn bricks_near_triangles(&self, grid: &Grid, reach: f32, area: &BrickBox) -> Bits {
         // A little more than `reach`, so rounding in the cell arithmetic cannot miss a cell.
         let reach = reach + 0.01 * grid.spacing;
         let mut near = Bits::new(area.len());
@@ -93,27 +89,46 @@ impl MeshSdf {
             return near;
         }
         let span = grid.spacing * BRICK as f32;
-        let cell = |x: f32, axis: usize| -> usize {
-            ((x - grid.origin[axis]) / span)
-                .floor()
-                .clamp(0.0, (bricks[axis] - 1) as f32) as usize
-        };
-        let hi_of = |a: usize| area.lo[a] + area.size[a] - 1;
-        for t in &self.bvh().tris {
+        // The brick whose cell holds coordinate `x` along `axis`, unclamped: a brick's cell
+        // runs up to the next brick, so a triangle whose inflated bounds end before brick 0 or
+        // start past the last brick's cell is beyond `reach` of every node.
+        let cell = |x: f32, axis: usize| -> i64 { ((x - grid.origin[axis]) / span).floor() as i64 };
+        let hi_of = |a: usize| (area.lo[a] + area.size[a] - 1) as i64;
+        let mut mark = |t: &[Vec3A; 3]| {
             let lo = t[0].min(t[1]).min(t[2]) - Vec3A::splat(reach);
             let hi = t[0].max(t[1]).max(t[2]) + Vec3A::splat(reach);
-            // Brick b spans nodes b·BRICK ..= b·BRICK + BRICK − 1, i.e. up to the next brick.
-            let (j0, j1) = (cell(lo.y, 1).max(area.lo[1]), cell(hi.y, 1).min(hi_of(1)));
-            let (k0, k1) = (cell(lo.z, 2).max(area.lo[2]), cell(hi.z, 2).min(hi_of(2)));
-            if j0 > j1 || k0 > k1 {
-                continue;
+            let range = |a: usize| {
+                (
+                    cell(lo[a], a).max(area.lo[a] as i64),
+                    cell(hi[a], a).min(hi_of(a)),
+                )
+            };
+            let [(i0, i1), (j0, j1), (k0, k1)] = [0, 1, 2].map(range);
+            if i0 > i1 || j0 > j1 || k0 > k1 {
+                return;
             }
-            let (i0, i1) = (cell(lo.x, 0), cell(hi.x, 0));
-            for k in k0..=k1 {
-                for j in j0..=j1 {
+            let [i0, i1] = [i0, i1].map(|i| i as usize);
+            for k in k0 as usize..=k1 as usize {
+                for j in j0 as usize..=j1 as usize {
                     near.set_range(area.index([i0, j, k])..=area.index([i1, j, k]));
                 }
             }
+        };
+        // Only the leaves near the box can mark it: the box grown by a brick on each side (for
+        // rounding at cell borders), and the reach along a diagonal.
+        let bvh = self.bvh();
+        let corner =
+            |b: [usize; 3]| Vec3A::from(grid.origin) + Vec3A::from(b.map(|x| x as f32)) * span;
+        let lo = corner(area.lo) - Vec3A::splat(span);
+        let hi = corner([0, 1, 2].map(|a| area.lo[a] + area.size[a])) + Vec3A::splat(span);
+        let mut leaves = Vec::new();
+        bvh.leaves_near_box(lo, hi, 3.0 * reach * reach, &mut leaves);
+        for &(_, id) in &leaves {
+            let node = &bvh.nodes[id as usize];
+            let first = node.first as usize;
+            bvh.tris[first..first + node.count as usize]
+                .iter()
+                .for_each(&mut mark);
         }
         near
     }
