@@ -294,14 +294,19 @@ pub(crate) fn within_ring(keys: &[u64], grid: &Grid, ring: u64) -> Vec<u64> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_cube_edge_is_a_feature_and_a_flat_square_is_not() {
-        let grid = Grid {
+    /// 17³ nodes a quarter apart about the origin.
+    fn test_grid() -> Grid {
+        Grid {
             origin: Vec3::splat(-2.0),
             spacing: 0.25,
             dims: [17, 17, 17],
             offset: Default::default(),
-        };
+        }
+    }
+
+    #[test]
+    fn a_cube_edge_is_a_feature_and_a_flat_square_is_not() {
+        let grid = test_grid();
         let angle = 30f32.to_radians();
         // Two faces of a cube meeting along the x axis from 0 to 1, and a flat square.
         let edge = Mesh::new(
@@ -331,12 +336,7 @@ mod tests {
     /// whose facets are narrower than the reach, are not.
     #[test]
     fn a_shallow_crease_needs_flat_sides() {
-        let grid = Grid {
-            origin: Vec3::splat(-2.0),
-            spacing: 0.25,
-            dims: [17, 17, 17],
-            offset: Default::default(),
-        };
+        let grid = test_grid();
         let angle = 30f32.to_radians();
         let flat = FlatSides::new(50.0, 8.0, 3.0);
         let features = |mesh: &Mesh| {
