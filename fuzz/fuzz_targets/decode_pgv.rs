@@ -1,5 +1,5 @@
 #![no_main]
-//! Any bytes: decoding, info, single-brick and slab reads return errors, never panic; and
+//! Any bytes: decoding, info, single-brick and (compact) slab reads return errors, never panic; and
 //! whatever decodes, info, single-brick and slab reads agree with and re-encodes to the same file. The seed
 //! files are checked to decode first, so a decoder that refuses everything fails at once.
 
@@ -56,6 +56,24 @@ fn check_agreement(data: &[u8], path: &Path, file: &PgvFile) {
                         file.volume.coeffs.brick(*m).is_none() && file.volume.coeffs.is_inside(*m)
                     );
                 }
+                // The compact slab holds the same coefficients, words mapped to their values.
+                let compact = reader.compact_slab(axis, s).expect("a compact slab too");
+                assert_eq!(compact.inside, slab.inside);
+                let words = reader.word_values();
+                for (m, brick) in &compact.stored {
+                    let values: Vec<f32> = match brick {
+                        pgvol_format::CompactBrick::Words(w) => {
+                            let table = words.as_ref().expect("words come with their values");
+                            w.iter().map(|&w| table[w as u16 as usize]).collect()
+                        }
+                        pgvol_format::CompactBrick::Values(v) => v.to_vec(),
+                    };
+                    let want = file.volume.coeffs.brick(*m).expect("a stored brick");
+                    assert!(values
+                        .iter()
+                        .zip(want.iter())
+                        .all(|(a, b)| a.to_bits() == b.to_bits()));
+                }
             }
         }
     }
@@ -83,6 +101,7 @@ fuzz_target!(|data: &[u8]| {
     if let Ok(Some(reader)) = pgvol_format::SlabReader::open(data, path) {
         for axis in 0..3 {
             let _ = reader.slab(axis, 0);
+            let _ = reader.compact_slab(axis, 0);
         }
     }
 });

@@ -27,7 +27,7 @@ pub use perturbation::{
 };
 pub use pgv::{decode_pgv, encode_pgv, read_pgv, write_pgv};
 pub use sparse::{
-    encode_pgv_with, pgv_info, read_brick, sparse_pgv, write_pgv_with, Brick, Compression,
-    EncodeOptions, EncodeReport, PgvInfo, Precision, Predictor, SlabBricks, SlabReader, SlabSource,
-    SparseParams, SparsePgv, StreamError, StreamedPgv,
+    encode_pgv_with, pgv_info, read_brick, sparse_pgv, write_pgv_with, Brick, CompactBrick,
+    CompactSlab, Compression, EncodeOptions, EncodeReport, PgvInfo, Precision, Predictor,
+    SlabBricks, SlabReader, SlabSource, SparseParams, SparsePgv, StreamError, StreamedPgv,
 };

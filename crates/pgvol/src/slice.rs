@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use pgvol_format::{SlabReader, SlabSource};
+use pgvol_format::{CompactBrick, SlabReader, SlabSource};
 
 use crate::decode_file::whole_file;
 use pgvol_slice::{
@@ -102,6 +102,7 @@ pub fn slice_file(
     let source = FileBricks {
         reader: &reader,
         grid_counts: brick_counts(grid.dims),
+        word_values: reader.word_values(),
     };
     let mut layers = Vec::with_capacity(total);
     progress::check(progress)?;
@@ -129,11 +130,15 @@ pub fn slice_file(
     })
 }
 
-/// A sparse `.pgv` file's bricks, decoded slab by slab.
+/// A sparse `.pgv` file's bricks, decoded slab by slab, kept as the file's 16-bit words where
+/// it can (half the memory of the values: a layer lying in a large flat face holds two brick
+/// layers of it).
 struct FileBricks<'r, 'b> {
     reader: &'r SlabReader<'b>,
     /// The sparse grid's bricks per axis.
     grid_counts: [usize; 3],
+    /// The value of each word ([`SlabReader::word_values`]).
+    word_values: Option<Vec<f32>>,
 }
 
 impl BrickSource for FileBricks<'_, '_> {
@@ -144,7 +149,7 @@ impl BrickSource for FileBricks<'_, '_> {
     }
 
     fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>> {
-        let decoded = self.reader.slab(axis, slab).reading()?;
+        let decoded = self.reader.compact_slab(axis, slab).reading()?;
         let per = self.slab_bricks();
         let [p, q] = plane_axes(axis);
         let first = slab * per;
@@ -156,9 +161,20 @@ impl BrickSource for FileBricks<'_, '_> {
             let (n, k) = at(m);
             layers[n].set_inside(k);
         }
-        for (m, values) in decoded.stored {
+        for (m, brick) in decoded.stored {
             let (n, k) = at(m);
-            layers[n].insert(k, BrickRef::Owned(values), axis);
+            let brick = match (brick, &self.word_values) {
+                (CompactBrick::Values(values), _) => BrickRef::Owned(values),
+                (CompactBrick::Words(words), Some(table)) => BrickRef::Words(words, table),
+                // `compact_slab` gives words only where the table exists.
+                (CompactBrick::Words(_), None) => {
+                    return Err(Error::new(
+                        ErrorKind::Internal,
+                        "a slab came as words without their values",
+                    ))
+                }
+            };
+            layers[n].insert(k, brick, axis);
         }
         Ok(layers.into_iter().map(BrickLayer::finish).collect())
     }

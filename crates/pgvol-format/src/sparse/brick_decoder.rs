@@ -106,7 +106,28 @@ fn fixed_delta_x(
     words: &mut Vec<u32>,
     out: &mut [f32],
 ) -> Result<(), NonFinite> {
-    let count = out.len();
+    let largest = fixed_delta_x_words(body, n, words);
+    let fast = scale.fast();
+    if fast.all_exact(largest) {
+        for (o, &w) in out.iter_mut().zip(words.iter()) {
+            *o = fast.exact_value(w);
+        }
+    } else {
+        for (o, &w) in out.iter_mut().zip(words.iter()) {
+            *o = fast.value(w);
+        }
+    }
+    if out.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(NonFinite)
+    }
+}
+
+/// The words of the default `fixed` encoding (`n` nodes, x fastest) into `words`; returns the
+/// largest magnitude among them.
+fn fixed_delta_x_words(body: &[u8], n: [usize; 3], words: &mut Vec<u32>) -> u32 {
+    let count = n[0] * n[1] * n[2];
     let (p0, rest) = body.split_at(count);
     let (p1, rest) = rest.split_at(count);
     let (p2, p3) = rest.split_at(count);
@@ -142,21 +163,37 @@ fn fixed_delta_x(
             at = end;
         }
     }
-    let fast = scale.fast();
-    if fast.all_exact(largest) {
-        for (o, &w) in out.iter_mut().zip(words.iter()) {
-            *o = fast.exact_value(w);
-        }
-    } else {
-        for (o, &w) in out.iter_mut().zip(words.iter()) {
-            *o = fast.value(w);
-        }
+    largest
+}
+
+/// Decodes `raw` as [`decode_values`] does, but into the `fixed` precision's words as 16-bit
+/// integers (the value of a word `w` being `FixedScale::value(w as i32 as u32)`), for readers
+/// that hold many bricks at once: half the memory of the values. `false` (and `out` unspecified)
+/// where the file is not in the default `fixed` encoding or a word needs more than 16 bits;
+/// [`decode_values`] serves those.
+pub(crate) fn decode_words16(
+    raw: &[u8],
+    n: [usize; 3],
+    sp: &SparseParams,
+    scratch: &mut WordScratch,
+    out: &mut [i16],
+) -> bool {
+    debug_assert_eq!(raw.len(), raw_len(n, sp));
+    debug_assert_eq!(out.len(), n[0] * n[1] * n[2]);
+    let (_, body) = raw.split_at(params_len(sp.precision));
+    let default_fixed =
+        (sp.precision, sp.predictor, sp.shuffle) == (Precision::Fixed, Predictor::DeltaX, true);
+    if !default_fixed || sp.fixed.is_none() {
+        return false;
     }
-    if out.iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        Err(NonFinite)
+    let largest = fixed_delta_x_words(body, n, &mut scratch.words);
+    if largest > i16::MAX as u32 {
+        return false;
     }
+    for (o, &w) in out.iter_mut().zip(scratch.words.iter()) {
+        *o = w as i32 as i16;
+    }
+    true
 }
 
 /// The zig-zag coded residual words, `w` bytes each, little-endian; with `shuffle` the bytes

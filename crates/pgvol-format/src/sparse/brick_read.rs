@@ -8,7 +8,7 @@ use std::path::Path;
 use rayon::prelude::*;
 use zstd::bulk::Decompressor;
 
-use super::brick_decoder::{decode_values, raw_len, WordScratch};
+use super::brick_decoder::{decode_values, decode_words16, raw_len, WordScratch};
 use super::index::{bit, Layout};
 use crate::container::crc_ok;
 use crate::error::{err, FormatError};
@@ -44,6 +44,27 @@ impl BrickReader {
             let raw = inflate(l, b, &blob, dctx, raw, path)?;
             let (_, n) = l.bricks.extent(b);
             decode_values(raw, n, &l.sp, scratch, out).map_err(|_| non_finite(l, b, path))
+        })
+    }
+}
+
+impl BrickReader {
+    /// Verifies and decodes stored brick `b` (index entry `e`) into its 16-bit words
+    /// (`brick_decoder::decode_words16`); `Ok(false)` where the brick's words do not fit.
+    pub(crate) fn decode_words16(
+        &mut self,
+        l: &Layout,
+        b: usize,
+        e: usize,
+        path: &Path,
+        out: &mut [i16],
+    ) -> Result<bool, FormatError> {
+        let blob = checked_blob(l, b, e, path)?;
+        let BrickReader { raw, scratch } = self;
+        DCTX.with_borrow_mut(|dctx| {
+            let raw = inflate(l, b, &blob, dctx, raw, path)?;
+            let (_, n) = l.bricks.extent(b);
+            Ok(decode_words16(raw, n, &l.sp, scratch, out))
         })
     }
 }

@@ -56,6 +56,6 @@ pub use info::{pgv_info, PgvInfo};
 pub use options::{EncodeOptions, EncodeReport};
 pub use precision_choice::{basis_weight_bound, AUTO_TOLERANCE};
 pub use read_brick::{brick_grid, read_brick, Brick};
-pub use slab_read::{SlabBricks, SlabReader, SlabSource};
+pub use slab_read::{CompactBrick, CompactSlab, SlabBricks, SlabReader, SlabSource};
 pub use streamed::{StreamError, StreamedPgv};
 pub use writer::{encode_pgv_with, sparse_pgv, write_pgv_with, SparsePgv};

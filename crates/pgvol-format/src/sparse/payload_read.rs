@@ -98,9 +98,20 @@ pub(crate) fn cut_into_grid_bricks(
     n: [usize; 3],
     values: &[f32],
 ) -> Vec<GridBrick> {
+    cut_into_grid_bricks_of(l, b, n, values, l.sp.clamp)
+}
+
+/// [`cut_into_grid_bricks`] of any per-node data, nodes past the grid holding `fill`.
+pub(crate) fn cut_into_grid_bricks_of<T: Copy>(
+    l: &Layout,
+    b: usize,
+    n: [usize; 3],
+    values: &[T],
+    fill: T,
+) -> Vec<([usize; 3], Box<[T; BRICK_NODES]>)> {
     grid_bricks_of(l, b)
         .map(|(m, rel)| {
-            let mut out = Box::new([l.sp.clamp; BRICK_NODES]);
+            let mut out = Box::new([fill; BRICK_NODES]);
             let len = [0, 1, 2].map(|a| BRICK_EDGE.min(n[a] - rel[a]));
             for k in 0..len[2] {
                 for j in 0..len[1] {

@@ -6,12 +6,12 @@ use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use pgvol_core::sparse::BrickValues;
-use pgvol_core::{Background, BRICK_EDGE};
+use pgvol_core::{Background, BRICK_EDGE, BRICK_NODES};
 use rayon::prelude::*;
 
 use super::brick_read::{check_all_bricks, BrickReader};
 use super::index::{bit, layout, layout_in_file, BrickData, Layout};
-use super::payload_read::{cut_into_grid_bricks, grid_bricks_of};
+use super::payload_read::{cut_into_grid_bricks, cut_into_grid_bricks_of, grid_bricks_of};
 use crate::container::{parse_container, v2_header, v2_sizes, MAGIC, TRAILER, VERSION_STREAMED};
 use crate::error::err;
 use crate::error::FormatError;
@@ -32,6 +32,22 @@ pub struct SlabReader<'a> {
 pub struct SlabBricks {
     /// Stored bricks with their coordinates, in file brick order.
     pub stored: Vec<([usize; 3], Box<BrickValues>)>,
+    /// Coordinates of the absent bricks that are inside.
+    pub inside: Vec<[usize; 3]>,
+}
+
+/// A grid brick's coefficients from [`SlabReader::compact_slab`].
+pub enum CompactBrick {
+    /// The `fixed` precision's words, mapped to values by [`SlabReader::word_values`].
+    Words(Box<[i16; BRICK_NODES]>),
+    Values(Box<BrickValues>),
+}
+
+/// The sparse grid's bricks within one slab of file bricks, as [`CompactBrick`]s.
+#[derive(Default)]
+pub struct CompactSlab {
+    /// Stored bricks with their coordinates, in file brick order.
+    pub stored: Vec<([usize; 3], CompactBrick)>,
     /// Coordinates of the absent bricks that are inside.
     pub inside: Vec<[usize; 3]>,
 }
@@ -200,14 +216,83 @@ impl<'a> SlabReader<'a> {
     /// The bricks of the file bricks whose coordinate along `axis` is `slab`; stored ones are
     /// decoded in parallel. Nothing for a slab past the grid.
     pub fn slab(&self, axis: usize, slab: usize) -> Result<SlabBricks, FormatError> {
+        let (stored, inside) = self.slab_with(axis, slab, |reader, values, b| {
+            let l = &self.layout;
+            let (_, n) = l.bricks.extent(b);
+            values.resize(n[0] * n[1] * n[2], 0.0);
+            reader.decode(l, b, self.entry(b), &self.path, values)?;
+            Ok(cut_into_grid_bricks(l, b, n, values))
+        })?;
+        Ok(SlabBricks { stored, inside })
+    }
+
+    /// [`SlabReader::slab`], each brick kept as the file's 16-bit words where the file is in
+    /// the default `fixed` encoding, [`SlabReader::word_values`] maps every word and the file
+    /// brick's words fit (and, for a brick reaching past the grid, the clamp is a word); as
+    /// values otherwise. Half the memory for a reader holding many bricks, the same
+    /// coefficients.
+    pub fn compact_slab(&self, axis: usize, slab: usize) -> Result<CompactSlab, FormatError> {
+        let table = self.word_values();
+        let clamp = self.layout.sp.clamp;
+        let clamp_word = table.as_ref().and_then(|t| {
+            let at = t.iter().position(|v| v.to_bits() == clamp.to_bits())?;
+            Some(at as u16 as i16)
+        });
+        let (stored, inside) = self.slab_with(axis, slab, |reader, values, b| {
+            let l = &self.layout;
+            let (_, n) = l.bricks.extent(b);
+            let whole = n.iter().all(|c| c.is_multiple_of(BRICK_EDGE));
+            let fill = if whole { Some(0) } else { clamp_word };
+            if let (Some(_), Some(fill)) = (&table, fill) {
+                let mut words = vec![0i16; n[0] * n[1] * n[2]];
+                if reader.decode_words16(l, b, self.entry(b), &self.path, &mut words)? {
+                    let bricks = cut_into_grid_bricks_of(l, b, n, &words, fill);
+                    return Ok(bricks
+                        .into_iter()
+                        .map(|(at, w)| (at, CompactBrick::Words(w)))
+                        .collect());
+                }
+            }
+            values.resize(n[0] * n[1] * n[2], 0.0);
+            reader.decode(l, b, self.entry(b), &self.path, values)?;
+            let bricks = cut_into_grid_bricks(l, b, n, values);
+            Ok(bricks
+                .into_iter()
+                .map(|(at, v)| (at, CompactBrick::Values(v)))
+                .collect())
+        })?;
+        Ok(CompactSlab { stored, inside })
+    }
+
+    /// The value of every 16-bit word of [`SlabReader::compact_slab`], indexed by the word as
+    /// `u16`; `None` where the file is not in the `fixed` precision or some word's value is not
+    /// finite (bricks then come as values).
+    pub fn word_values(&self) -> Option<Vec<f32>> {
+        let scale = self.layout.sp.fixed?;
+        let table: Vec<f32> = (0..=u16::MAX)
+            .map(|w| scale.value(w as i16 as i32 as u32))
+            .collect();
+        table.iter().all(|v| v.is_finite()).then_some(table)
+    }
+
+    /// The stored bricks (by `decode`, given a reader, a buffer and a file brick) and the
+    /// inside absent bricks of slab `slab` along `axis`.
+    #[allow(clippy::type_complexity)]
+    fn slab_with<T: Send>(
+        &self,
+        axis: usize,
+        slab: usize,
+        decode: impl Fn(&mut BrickReader, &mut Vec<f32>, usize) -> Result<Vec<([usize; 3], T)>, FormatError>
+            + Sync,
+    ) -> Result<(Vec<([usize; 3], T)>, Vec<[usize; 3]>), FormatError> {
         let l = &self.layout;
         let count = l.bricks.count;
         if axis > 2 || slab >= count[axis] {
-            return Ok(SlabBricks::default());
+            return Ok((Vec::new(), Vec::new()));
         }
         let [p, q] = [(axis + 1) % 3, (axis + 2) % 3];
         let mut stored = Vec::new();
-        let mut out = SlabBricks::default();
+        let mut inside = Vec::new();
         for jq in 0..count[q] {
             for jp in 0..count[p] {
                 let mut c = [0; 3];
@@ -216,7 +301,7 @@ impl<'a> SlabReader<'a> {
                 if bit(l.stored, b) {
                     stored.push(b);
                 } else if bit(l.inside, b) {
-                    out.inside.extend(grid_bricks_of(l, b).map(|(m, _)| m));
+                    inside.extend(grid_bricks_of(l, b).map(|(m, _)| m));
                 }
             }
         }
@@ -224,18 +309,14 @@ impl<'a> SlabReader<'a> {
             .par_iter()
             .map_init(
                 || (BrickReader::default(), Vec::new()),
-                |(reader, values), &b| {
-                    let (_, n) = l.bricks.extent(b);
-                    values.resize(n[0] * n[1] * n[2], 0.0);
-                    reader.decode(l, b, self.entry(b), &self.path, values)?;
-                    Ok(cut_into_grid_bricks(l, b, n, values))
-                },
+                |(reader, values), &b| decode(reader, values, b),
             )
             .collect();
+        let mut out = Vec::new();
         for pieces in decoded {
-            out.stored.extend(pieces?);
+            out.extend(pieces?);
         }
-        Ok(out)
+        Ok((out, inside))
     }
 }
 
@@ -246,6 +327,7 @@ mod tests {
     use crate::pgv::decode_pgv;
     use crate::sparse::test_volumes::sparse;
     use crate::sparse::{encode_pgv_with, EncodeOptions};
+    use crate::sparse_params::Precision;
     use pgvol_field::Basis;
 
     fn file_bytes_with(brick: usize) -> Vec<u8> {
@@ -263,6 +345,67 @@ mod tests {
 
     fn file_bytes() -> Vec<u8> {
         file_bytes_with(16)
+    }
+
+    fn file_bytes_in(precision: Precision, brick: usize) -> Vec<u8> {
+        let volume = sparse(Basis::Bspline3, Background::clamp(0.5), 7);
+        let file = PgvFile {
+            header: header_for(&volume, "interp", None),
+            volume,
+        };
+        let options = EncodeOptions {
+            brick,
+            precision: Some(precision),
+            ..Default::default()
+        };
+        encode_pgv_with(&file, &options).unwrap().0
+    }
+
+    /// Compact slabs hold the slabs' coefficients bit for bit, as words where the file is
+    /// `fixed` (bricks cut at the grid's far faces included), as values otherwise.
+    #[test]
+    fn compact_slabs_hold_the_same_coefficients() {
+        for (precision, brick) in [
+            (Precision::Fixed, 8),
+            (Precision::Fixed, 16),
+            (Precision::F32, 16),
+        ] {
+            let bytes = file_bytes_in(precision, brick);
+            let reader = SlabReader::open(&bytes, Path::new("s.pgv"))
+                .unwrap()
+                .unwrap();
+            let table = reader.word_values();
+            assert_eq!(table.is_some(), precision == Precision::Fixed);
+            let mut words = 0;
+            for axis in 0..3 {
+                for s in 0..reader.brick_counts()[axis] {
+                    let plain = reader.slab(axis, s).unwrap();
+                    let compact = reader.compact_slab(axis, s).unwrap();
+                    assert_eq!(plain.inside, compact.inside);
+                    assert_eq!(plain.stored.len(), compact.stored.len());
+                    for ((m, values), (n, brick)) in plain.stored.iter().zip(&compact.stored) {
+                        assert_eq!(m, n);
+                        let got: Vec<u32> = match brick {
+                            CompactBrick::Words(w) => {
+                                words += 1;
+                                let table = table.as_ref().expect("words come with their values");
+                                w.iter()
+                                    .map(|&w| table[w as u16 as usize].to_bits())
+                                    .collect()
+                            }
+                            CompactBrick::Values(v) => v.iter().map(|v| v.to_bits()).collect(),
+                        };
+                        let want: Vec<u32> = values.iter().map(|v| v.to_bits()).collect();
+                        assert_eq!(got, want, "brick {m:?}");
+                    }
+                }
+            }
+            assert_eq!(
+                words > 0,
+                precision == Precision::Fixed,
+                "{precision:?} {brick}"
+            );
+        }
     }
 
     #[test]
@@ -324,6 +467,7 @@ mod tests {
                 for axis in 0..3 {
                     for s in 0..reader.brick_counts()[axis] + 1 {
                         reader.slab(axis, s).unwrap();
+                        reader.compact_slab(axis, s).unwrap();
                     }
                 }
             }

@@ -1,26 +1,89 @@
 //! The coefficient bricks a layer reads, one brick layer at a time, and where they come from.
 
-use std::ops::Deref;
-
 use pgvol_core::sparse::BrickValues;
-use pgvol_core::{SparseGrid, BRICK_EDGE};
+use pgvol_core::{SparseGrid, BRICK_EDGE, BRICK_NODES};
 
 use crate::SliceError;
 
-/// A brick's values, borrowed from a grid held in memory or decoded from a file.
+/// A brick's values, borrowed from a grid held in memory or decoded from a file, or a file's
+/// 16-bit words with the value of each (indexed by the word as `u16`): half the memory of the
+/// values, for the same coefficients.
 pub enum BrickRef<'a> {
     Borrowed(&'a BrickValues),
     Owned(Box<BrickValues>),
+    Words(Box<[i16; BRICK_NODES]>, &'a [f32]),
 }
 
-impl Deref for BrickRef<'_> {
-    type Target = BrickValues;
-
-    fn deref(&self) -> &BrickValues {
+impl BrickRef<'_> {
+    /// Adds `weight` times values `start..start + out.len()` (x fastest) to `out`.
+    #[inline]
+    pub(crate) fn add_run(&self, start: usize, weight: f32, out: &mut [f32]) {
+        let end = start + out.len();
         match self {
-            BrickRef::Borrowed(b) => b,
-            BrickRef::Owned(b) => b,
+            BrickRef::Borrowed(values) => add_values(&values[start..end], weight, out),
+            BrickRef::Owned(values) => add_values(&values[start..end], weight, out),
+            BrickRef::Words(words, table) => {
+                for (o, &w) in out.iter_mut().zip(&words[start..end]) {
+                    *o += weight * table[w as u16 as usize];
+                }
+            }
         }
+    }
+
+    /// Adds `weight` times values `start`, `start + stride`, ... (x fastest) to `out`.
+    #[inline]
+    pub(crate) fn add_strided(&self, start: usize, stride: usize, weight: f32, out: &mut [f32]) {
+        let at = |k: usize| start + k * stride;
+        match self {
+            BrickRef::Borrowed(values) => add_each(out, weight, |k| values[at(k)]),
+            BrickRef::Owned(values) => add_each(out, weight, |k| values[at(k)]),
+            BrickRef::Words(words, table) => {
+                add_each(out, weight, |k| table[words[at(k)] as u16 as usize])
+            }
+        }
+    }
+
+    /// Per node layer along grid axis `axis`: the least and greatest value.
+    fn layer_ranges(&self, axis: usize) -> [[f32; 2]; BRICK_EDGE] {
+        match self {
+            BrickRef::Borrowed(values) => ranges_of(axis, |i| values[i]),
+            BrickRef::Owned(values) => ranges_of(axis, |i| values[i]),
+            BrickRef::Words(words, table) => ranges_of(axis, |i| table[words[i] as u16 as usize]),
+        }
+    }
+}
+
+#[inline]
+fn add_each(out: &mut [f32], weight: f32, value: impl Fn(usize) -> f32) {
+    for (k, o) in out.iter_mut().enumerate() {
+        *o += weight * value(k);
+    }
+}
+
+/// [`BrickRef::layer_ranges`] of the values `value(i)`, x fastest.
+fn ranges_of(axis: usize, value: impl Fn(usize) -> f32) -> [[f32; 2]; BRICK_EDGE] {
+    let mut ranges = [[f32::INFINITY, f32::NEG_INFINITY]; BRICK_EDGE];
+    for row in 0..BRICK_NODES / BRICK_EDGE {
+        // Row `row` runs along x at y = row % E, z = row / E.
+        let at = [0, row % BRICK_EDGE, row / BRICK_EDGE];
+        for x in 0..BRICK_EDGE {
+            let v = value(row * BRICK_EDGE + x);
+            let r = &mut ranges[if axis == 0 { x } else { at[axis] }];
+            if v < r[0] {
+                r[0] = v;
+            }
+            if v > r[1] {
+                r[1] = v;
+            }
+        }
+    }
+    ranges
+}
+
+#[inline]
+fn add_values(values: &[f32], weight: f32, out: &mut [f32]) {
+    for (o, x) in out.iter_mut().zip(values) {
+        *o += weight * x;
     }
 }
 
@@ -85,21 +148,7 @@ impl<'a> BrickLayer<'a> {
             self.occupied.push(at as u32);
         }
         self.states[at] = self.bricks.len() as u32;
-        let mut ranges = [[f32::INFINITY, f32::NEG_INFINITY]; BRICK_EDGE];
-        let rows = values.chunks_exact(BRICK_EDGE);
-        for (row, xs) in rows.enumerate() {
-            // Row `row` runs along x at y = row % E, z = row / E.
-            let at = [0, row % BRICK_EDGE, row / BRICK_EDGE];
-            for (x, &v) in xs.iter().enumerate() {
-                let r = &mut ranges[if axis == 0 { x } else { at[axis] }];
-                if v < r[0] {
-                    r[0] = v;
-                }
-                if v > r[1] {
-                    r[1] = v;
-                }
-            }
-        }
+        let ranges = values.layer_ranges(axis);
         self.ranges.push(ranges);
         self.bricks.push(values);
     }

@@ -364,13 +364,9 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
                 let values = &l.bricks[s as usize];
                 let start = jc * self.stride[1] + off;
                 if self.stride[0] == 1 {
-                    for (o, x) in row.iter_mut().zip(&values[start..start + len[0]]) {
-                        *o += w * x;
-                    }
+                    values.add_run(start, w, row);
                 } else {
-                    for (jb, o) in row.iter_mut().enumerate() {
-                        *o += w * values[start + jb * self.stride[0]];
-                    }
+                    values.add_strided(start, self.stride[0], w, row);
                 }
             }
         }
