@@ -8,7 +8,7 @@ use pgvol_format::{CompactBrick, SlabReader, SlabSource};
 use crate::decode_file::whole_file;
 use pgvol_slice::{
     brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
-    LayerFrame, SliceOptions as StageOptions,
+    LayerFrame, SliceOptions as StageOptions, WordValues,
 };
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
@@ -102,7 +102,9 @@ pub fn slice_file(
     let source = FileBricks {
         reader: &reader,
         grid_counts: brick_counts(grid.dims),
-        word_values: reader.word_values(),
+        word_values: reader
+            .word_values()
+            .and_then(|t| t.into_boxed_slice().try_into().ok()),
     };
     let mut layers = Vec::with_capacity(total);
     progress::check(progress)?;
@@ -138,7 +140,7 @@ struct FileBricks<'r, 'b> {
     /// The sparse grid's bricks per axis.
     grid_counts: [usize; 3],
     /// The value of each word ([`SlabReader::word_values`]).
-    word_values: Option<Vec<f32>>,
+    word_values: Option<Box<WordValues>>,
 }
 
 impl BrickSource for FileBricks<'_, '_> {

@@ -11,7 +11,7 @@ use crate::SliceError;
 pub enum BrickRef<'a> {
     Borrowed(&'a BrickValues),
     Owned(Box<BrickValues>),
-    Words(Box<[i16; BRICK_NODES]>, &'a [f32]),
+    Words(Box<[i16; BRICK_NODES]>, &'a WordValues),
 }
 
 impl BrickRef<'_> {
@@ -86,6 +86,9 @@ fn add_values(values: &[f32], weight: f32, out: &mut [f32]) {
         *o += weight * x;
     }
 }
+
+/// The value of each 16-bit word of [`BrickRef::Words`], indexed by the word as `u16`.
+pub type WordValues = [f32; 1 << 16];
 
 /// A brick layer's entry for an absent brick outside.
 pub const OUTSIDE: u32 = u32::MAX;

@@ -26,7 +26,9 @@ use collapsed::{tap_layers, CollapsedPlane};
 use plane::{LayerField, Plane};
 use window::Window;
 
-pub use bricks::{brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, INSIDE, OUTSIDE};
+pub use bricks::{
+    brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, WordValues, INSIDE, OUTSIDE,
+};
 pub use plane::{LayerCost, MAX_LAYER_NODES};
 
 /// Most layers one call produces: far beyond any printer, small enough to refuse typos.
