@@ -331,23 +331,16 @@ mod tests {
     use pgvol_field::Basis;
 
     fn file_bytes_with(brick: usize) -> Vec<u8> {
-        let volume = sparse(Basis::Bspline3, Background::clamp(0.5), 7);
-        let file = PgvFile {
-            header: header_for(&volume, "interp", None),
-            volume,
-        };
-        let options = EncodeOptions {
-            brick,
-            ..Default::default()
-        };
-        encode_pgv_with(&file, &options).unwrap().0
+        file_bytes_in(None, brick)
     }
 
     fn file_bytes() -> Vec<u8> {
         file_bytes_with(16)
     }
 
-    fn file_bytes_in(precision: Precision, brick: usize) -> Vec<u8> {
+    /// The test volume in `precision` (the encoder's choice for `None`) and file bricks of
+    /// `brick` nodes.
+    fn file_bytes_in(precision: Option<Precision>, brick: usize) -> Vec<u8> {
         let volume = sparse(Basis::Bspline3, Background::clamp(0.5), 7);
         let file = PgvFile {
             header: header_for(&volume, "interp", None),
@@ -355,7 +348,7 @@ mod tests {
         };
         let options = EncodeOptions {
             brick,
-            precision: Some(precision),
+            precision,
             ..Default::default()
         };
         encode_pgv_with(&file, &options).unwrap().0
@@ -370,7 +363,7 @@ mod tests {
             (Precision::Fixed, 16),
             (Precision::F32, 16),
         ] {
-            let bytes = file_bytes_in(precision, brick);
+            let bytes = file_bytes_in(Some(precision), brick);
             let reader = SlabReader::open(&bytes, Path::new("s.pgv"))
                 .unwrap()
                 .unwrap();
