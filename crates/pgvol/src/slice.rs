@@ -102,9 +102,7 @@ pub fn slice_file(
     let source = FileBricks {
         reader: &reader,
         grid_counts: brick_counts(grid.dims),
-        word_values: reader
-            .word_values()
-            .and_then(|t| t.into_boxed_slice().try_into().ok()),
+        word_values: reader.word_values(),
     };
     let mut layers = Vec::with_capacity(total);
     progress::check(progress)?;
@@ -140,7 +138,7 @@ struct FileBricks<'r, 'b> {
     /// The sparse grid's bricks per axis.
     grid_counts: [usize; 3],
     /// The value of each word ([`SlabReader::word_values`]).
-    word_values: Option<Box<WordValues>>,
+    word_values: Option<&'r WordValues>,
 }
 
 impl BrickSource for FileBricks<'_, '_> {

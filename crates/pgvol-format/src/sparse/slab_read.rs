@@ -4,6 +4,7 @@
 
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, BRICK_EDGE, BRICK_NODES};
@@ -16,7 +17,7 @@ use crate::container::{parse_container, v2_header, v2_sizes, MAGIC, TRAILER, VER
 use crate::error::err;
 use crate::error::FormatError;
 use crate::header::PgvHeader;
-use crate::sparse_params::ENCODING_SPARSE;
+use crate::sparse_params::{Precision, ENCODING_SPARSE};
 
 /// A checked `sparse-bricks` file, read slab by slab.
 pub struct SlabReader<'a> {
@@ -25,6 +26,14 @@ pub struct SlabReader<'a> {
     path: PathBuf,
     /// Per row of file bricks along x: the index entry of its first stored brick.
     row_entries: Vec<usize>,
+    /// The words of [`SlabReader::compact_slab`], worked out at its first call.
+    words: OnceLock<Option<WordTable>>,
+}
+
+/// The value of every 16-bit word of a `fixed` file, and the word of the clamp, if one.
+struct WordTable {
+    values: Box<[f32; 1 << 16]>,
+    clamp: Option<i16>,
 }
 
 /// The sparse grid's bricks within one slab of file bricks.
@@ -181,6 +190,7 @@ impl<'a> SlabReader<'a> {
             layout,
             path: path.to_path_buf(),
             row_entries,
+            words: OnceLock::new(),
         })
     }
 
@@ -232,18 +242,14 @@ impl<'a> SlabReader<'a> {
     /// values otherwise. Half the memory for a reader holding many bricks, the same
     /// coefficients.
     pub fn compact_slab(&self, axis: usize, slab: usize) -> Result<CompactSlab, FormatError> {
-        let table = self.word_values();
-        let clamp = self.layout.sp.clamp;
-        let clamp_word = table.as_ref().and_then(|t| {
-            let at = t.iter().position(|v| v.to_bits() == clamp.to_bits())?;
-            Some(at as u16 as i16)
-        });
+        let words = self.words();
         let (stored, inside) = self.slab_with(axis, slab, |reader, values, b| {
             let l = &self.layout;
             let (_, n) = l.bricks.extent(b);
+            // Only grid bricks reaching past the file brick need the clamp's word as filling.
             let whole = n.iter().all(|c| c.is_multiple_of(BRICK_EDGE));
-            let fill = if whole { Some(0) } else { clamp_word };
-            if let (Some(_), Some(fill)) = (&table, fill) {
+            let fill = words.and_then(|t| if whole { Some(0) } else { t.clamp });
+            if let Some(fill) = fill {
                 let mut words = vec![0i16; n[0] * n[1] * n[2]];
                 if reader.decode_words16(l, b, self.entry(b), &self.path, &mut words)? {
                     let bricks = cut_into_grid_bricks_of(l, b, n, &words, fill);
@@ -267,12 +273,28 @@ impl<'a> SlabReader<'a> {
     /// The value of every 16-bit word of [`SlabReader::compact_slab`], indexed by the word as
     /// `u16`; `None` where the file is not in the `fixed` precision or some word's value is not
     /// finite (bricks then come as values).
-    pub fn word_values(&self) -> Option<Vec<f32>> {
-        let scale = self.layout.sp.fixed?;
-        let table: Vec<f32> = (0..=u16::MAX)
-            .map(|w| scale.value(w as i16 as i32 as u32))
-            .collect();
-        table.iter().all(|v| v.is_finite()).then_some(table)
+    pub fn word_values(&self) -> Option<&[f32; 1 << 16]> {
+        self.words().map(|t| &*t.values)
+    }
+
+    fn words(&self) -> Option<&WordTable> {
+        let words = self.words.get_or_init(|| {
+            let sp = &self.layout.sp;
+            let scale = sp.fixed.filter(|_| sp.precision == Precision::Fixed)?;
+            let values: Vec<f32> = (0..=u16::MAX)
+                .map(|w| scale.value(w as i16 as i32 as u32))
+                .collect();
+            if !values.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            let clamp = values
+                .iter()
+                .position(|v| v.to_bits() == sp.clamp.to_bits())
+                .map(|at| at as u16 as i16);
+            let values = values.into_boxed_slice().try_into().ok()?;
+            Some(WordTable { values, clamp })
+        });
+        words.as_ref()
     }
 
     /// The stored bricks (by `decode`, given a reader, a buffer and a file brick) and the
@@ -327,7 +349,6 @@ mod tests {
     use crate::pgv::decode_pgv;
     use crate::sparse::test_volumes::sparse;
     use crate::sparse::{encode_pgv_with, EncodeOptions};
-    use crate::sparse_params::Precision;
     use pgvol_field::Basis;
 
     fn file_bytes_with(brick: usize) -> Vec<u8> {
