@@ -59,12 +59,12 @@ fn check_agreement(data: &[u8], path: &Path, file: &PgvFile) {
                 // The compact slab holds the same coefficients, words mapped to their values.
                 let compact = reader.compact_slab(axis, s).expect("a compact slab too");
                 assert_eq!(compact.inside, slab.inside);
-                let words = reader.word_values();
+                let words = reader.word_scale();
                 for (m, brick) in &compact.stored {
                     let values: Vec<f32> = match brick {
                         pgvol_format::CompactBrick::Words(w) => {
-                            let table = words.as_ref().expect("words come with their values");
-                            w.iter().map(|&w| table[w as u16 as usize]).collect()
+                            let scale = words.expect("words come with their values");
+                            w.iter().map(|&w| scale.value(w as i32)).collect()
                         }
                         pgvol_format::CompactBrick::Values(v) => v.to_vec(),
                     };

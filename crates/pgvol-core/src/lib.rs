@@ -14,6 +14,7 @@ pub mod input;
 pub mod mesh;
 pub mod progress;
 pub mod sparse;
+pub mod word_scale;
 
 pub use atomic::write_atomic;
 pub use file_error::FileError;
@@ -22,3 +23,4 @@ pub use input::read_input;
 pub use mesh::stats::MeshStats;
 pub use mesh::Mesh;
 pub use sparse::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
+pub use word_scale::WordScale;

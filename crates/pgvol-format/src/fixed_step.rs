@@ -2,6 +2,7 @@
 //! up to a knee and a coarser one beyond (the surface depends on the small coefficients near
 //! it; the far ones only need the band's accuracy); and the encoder's defaults for it.
 
+use pgvol_core::WordScale;
 use serde::{Deserialize, Serialize};
 
 /// Default fine step of `fixed`, in grid spacings (`docs/format.md`, "How the encoder chooses").
@@ -26,10 +27,7 @@ pub struct FixedScale {
 /// is exact in f32, so only larger words take the 64-bit path.
 pub(crate) struct FastScale {
     scale: FixedScale,
-    /// Words of smaller magnitude have `n < 2²⁴`.
-    exact: u32,
-    knee: f32,
-    ratio_less_one: f32,
+    words: WordScale,
 }
 
 impl FastScale {
@@ -45,15 +43,13 @@ impl FastScale {
     /// Whether words of magnitude up to `largest` all take the f32 path.
     #[inline]
     pub(crate) fn all_exact(&self, largest: u32) -> bool {
-        largest < self.exact
+        self.words.exact_up_to(largest)
     }
 
     /// The value of a word whose magnitude passes [`FastScale::all_exact`]; branch-free.
     #[inline]
     pub(crate) fn exact_value(&self, w: u32) -> f32 {
-        let a = (w as i32).unsigned_abs() as f32;
-        let v = (a + (a - self.knee).max(0.0) * self.ratio_less_one) * self.scale.step;
-        f32::from_bits(v.to_bits() | (w & 0x8000_0000))
+        self.words.value(w as i32)
     }
 }
 
@@ -87,10 +83,13 @@ impl FixedScale {
     pub(crate) fn fast(&self) -> FastScale {
         FastScale {
             scale: *self,
-            exact: (1u32 << 24) / self.ratio.max(1),
-            knee: self.knee as f32,
-            ratio_less_one: self.ratio.saturating_sub(1) as f32,
+            words: self.words(),
         }
+    }
+
+    /// The f32 computation of [`FixedScale::value`], exact for the words it says.
+    pub fn words(&self) -> WordScale {
+        WordScale::new(self.step, self.knee, self.ratio)
     }
 
     /// The word nearest to `v` on this scale, or `None` if there is none (beyond 31 bits, or a
@@ -200,6 +199,14 @@ mod tests {
                     scale.value(w).to_bits(),
                     "{scale:?} {w}"
                 );
+            }
+            // Every 16-bit word the f32 scale calls exact, as slicing maps them.
+            let words = scale.words();
+            for w in i16::MIN..=i16::MAX {
+                let w = w as i32;
+                if words.exact_up_to(w.unsigned_abs()) {
+                    assert_eq!(words.value(w).to_bits(), scale.value(w as u32).to_bits());
+                }
             }
         }
     }

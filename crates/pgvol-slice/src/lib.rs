@@ -32,7 +32,7 @@ pub use simplify::simplify_loops;
 pub use slice::{
     brick_counts, layer_heights, plane_axes, slice, slice_bricks, slice_volume, slice_volume_range,
     volume_bounds, Axis, BrickLayer, BrickRef, BrickSource, Layer, LayerCost, Loop, SliceOptions,
-    WordValues, INSIDE, MAX_LAYERS, MAX_LAYER_NODES, OUTSIDE,
+    INSIDE, MAX_LAYERS, MAX_LAYER_NODES, OUTSIDE,
 };
 pub use svg_read::read_svg;
 pub use write::{read_slice_json, write_slice_json, write_slice_json_in, write_svg, write_svg_in};

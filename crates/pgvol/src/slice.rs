@@ -3,12 +3,13 @@
 use std::path::Path;
 
 use glam::Vec3;
+use pgvol_core::WordScale;
 use pgvol_format::{CompactBrick, SlabReader, SlabSource};
 
 use crate::decode_file::whole_file;
 use pgvol_slice::{
     brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
-    LayerFrame, SliceOptions as StageOptions, WordValues,
+    LayerFrame, SliceOptions as StageOptions,
 };
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
@@ -102,7 +103,7 @@ pub fn slice_file(
     let source = FileBricks {
         reader: &reader,
         grid_counts: brick_counts(grid.dims),
-        word_values: reader.word_values(),
+        word_scale: reader.word_scale(),
     };
     let mut layers = Vec::with_capacity(total);
     progress::check(progress)?;
@@ -137,8 +138,8 @@ struct FileBricks<'r, 'b> {
     reader: &'r SlabReader<'b>,
     /// The sparse grid's bricks per axis.
     grid_counts: [usize; 3],
-    /// The value of each word ([`SlabReader::word_values`]).
-    word_values: Option<&'r WordValues>,
+    /// How words map to values ([`SlabReader::word_scale`]).
+    word_scale: Option<WordScale>,
 }
 
 impl BrickSource for FileBricks<'_, '_> {
@@ -163,10 +164,10 @@ impl BrickSource for FileBricks<'_, '_> {
         }
         for (m, brick) in decoded.stored {
             let (n, k) = at(m);
-            let brick = match (brick, &self.word_values) {
+            let brick = match (brick, self.word_scale) {
                 (CompactBrick::Values(values), _) => BrickRef::Owned(values),
-                (CompactBrick::Words(words), Some(table)) => BrickRef::Words(words, table),
-                // `compact_slab` gives words only where the table exists.
+                (CompactBrick::Words(words), Some(scale)) => BrickRef::Words(words, scale),
+                // `compact_slab` gives words only where the scale exists.
                 (CompactBrick::Words(_), None) => {
                     return Err(Error::new(
                         ErrorKind::Internal,

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use pgvol_core::sparse::BrickValues;
-use pgvol_core::{Background, BRICK_EDGE, BRICK_NODES};
+use pgvol_core::{Background, WordScale, BRICK_EDGE, BRICK_NODES};
 use rayon::prelude::*;
 
 use super::brick_read::{check_all_bricks, BrickReader};
@@ -30,9 +30,9 @@ pub struct SlabReader<'a> {
     words: OnceLock<Option<WordTable>>,
 }
 
-/// The value of every 16-bit word of a `fixed` file, and the word of the clamp, if one.
+/// How a `fixed` file's 16-bit words map to values, and the word of the clamp, if one.
 struct WordTable {
-    values: Box<[f32; 1 << 16]>,
+    scale: WordScale,
     clamp: Option<i16>,
 }
 
@@ -47,7 +47,7 @@ pub struct SlabBricks {
 
 /// A grid brick's coefficients from [`SlabReader::compact_slab`].
 pub enum CompactBrick {
-    /// The `fixed` precision's words, mapped to values by [`SlabReader::word_values`].
+    /// The `fixed` precision's words, mapped to values by [`SlabReader::word_scale`].
     Words(Box<[i16; BRICK_NODES]>),
     Values(Box<BrickValues>),
 }
@@ -270,29 +270,26 @@ impl<'a> SlabReader<'a> {
         Ok(CompactSlab { stored, inside })
     }
 
-    /// The value of every 16-bit word of [`SlabReader::compact_slab`], indexed by the word as
-    /// `u16`; `None` where the file is not in the `fixed` precision or some word's value is not
-    /// finite (bricks then come as values).
-    pub fn word_values(&self) -> Option<&[f32; 1 << 16]> {
-        self.words().map(|t| &*t.values)
+    /// How the 16-bit words of [`SlabReader::compact_slab`] map to values, exactly for every
+    /// such word; `None` where the file is not in the `fixed` precision or some 16-bit word's
+    /// value is not finite or not exact in f32 (bricks then come as values).
+    pub fn word_scale(&self) -> Option<WordScale> {
+        self.words().map(|t| t.scale)
     }
 
     fn words(&self) -> Option<&WordTable> {
         let words = self.words.get_or_init(|| {
             let sp = &self.layout.sp;
-            let scale = sp.fixed.filter(|_| sp.precision == Precision::Fixed)?;
-            let values: Vec<f32> = (0..=u16::MAX)
-                .map(|w| scale.value(w as i16 as i32 as u32))
-                .collect();
-            if !values.iter().all(|v| v.is_finite()) {
+            let fixed = sp.fixed.filter(|_| sp.precision == Precision::Fixed)?;
+            let scale = fixed.words();
+            // Values grow with the magnitude, so the largest word bounds them all.
+            let largest = i16::MIN as i32;
+            if !(scale.exact_up_to(largest.unsigned_abs()) && scale.value(largest).is_finite()) {
                 return None;
             }
-            let clamp = values
-                .iter()
-                .position(|v| v.to_bits() == sp.clamp.to_bits())
-                .map(|at| at as u16 as i16);
-            let values = values.into_boxed_slice().try_into().ok()?;
-            Some(WordTable { values, clamp })
+            let clamp = (i16::MIN..=i16::MAX)
+                .find(|&w| scale.value(w as i32).to_bits() == sp.clamp.to_bits());
+            Some(WordTable { scale, clamp })
         });
         words.as_ref()
     }
@@ -388,8 +385,8 @@ mod tests {
             let reader = SlabReader::open(&bytes, Path::new("s.pgv"))
                 .unwrap()
                 .unwrap();
-            let table = reader.word_values();
-            assert_eq!(table.is_some(), precision == Precision::Fixed);
+            let scale = reader.word_scale();
+            assert_eq!(scale.is_some(), precision == Precision::Fixed);
             let mut words = 0;
             for axis in 0..3 {
                 for s in 0..reader.brick_counts()[axis] {
@@ -402,10 +399,8 @@ mod tests {
                         let got: Vec<u32> = match brick {
                             CompactBrick::Words(w) => {
                                 words += 1;
-                                let table = table.as_ref().expect("words come with their values");
-                                w.iter()
-                                    .map(|&w| table[w as u16 as usize].to_bits())
-                                    .collect()
+                                let scale = scale.expect("words come with their values");
+                                w.iter().map(|&w| scale.value(w as i32).to_bits()).collect()
                             }
                             CompactBrick::Values(v) => v.iter().map(|v| v.to_bits()).collect(),
                         };

@@ -1,17 +1,17 @@
 //! The coefficient bricks a layer reads, one brick layer at a time, and where they come from.
 
 use pgvol_core::sparse::BrickValues;
-use pgvol_core::{SparseGrid, BRICK_EDGE, BRICK_NODES};
+use pgvol_core::{SparseGrid, WordScale, BRICK_EDGE, BRICK_NODES};
 
 use crate::SliceError;
 
 /// A brick's values, borrowed from a grid held in memory or decoded from a file, or a file's
-/// 16-bit words with the value of each (indexed by the word as `u16`): half the memory of the
-/// values, for the same coefficients.
+/// 16-bit words with the scale that maps them to values (exactly, for every such word): half
+/// the memory of the values, for the same coefficients.
 pub enum BrickRef<'a> {
     Borrowed(&'a BrickValues),
     Owned(Box<BrickValues>),
-    Words(Box<[i16; BRICK_NODES]>, &'a WordValues),
+    Words(Box<[i16; BRICK_NODES]>, WordScale),
 }
 
 impl BrickRef<'_> {
@@ -22,11 +22,7 @@ impl BrickRef<'_> {
         match self {
             BrickRef::Borrowed(values) => add_values(&values[start..end], weight, out),
             BrickRef::Owned(values) => add_values(&values[start..end], weight, out),
-            BrickRef::Words(words, table) => {
-                for (o, &w) in out.iter_mut().zip(&words[start..end]) {
-                    *o += weight * table[w as u16 as usize];
-                }
-            }
+            BrickRef::Words(words, scale) => scale.add_words(&words[start..end], weight, out),
         }
     }
 
@@ -37,8 +33,8 @@ impl BrickRef<'_> {
         match self {
             BrickRef::Borrowed(values) => add_each(out, weight, |k| values[at(k)]),
             BrickRef::Owned(values) => add_each(out, weight, |k| values[at(k)]),
-            BrickRef::Words(words, table) => {
-                add_each(out, weight, |k| table[words[at(k)] as u16 as usize])
+            BrickRef::Words(words, scale) => {
+                add_each(out, weight, |k| scale.value(words[at(k)] as i32))
             }
         }
     }
@@ -48,7 +44,7 @@ impl BrickRef<'_> {
         match self {
             BrickRef::Borrowed(values) => ranges_of(axis, |i| values[i]),
             BrickRef::Owned(values) => ranges_of(axis, |i| values[i]),
-            BrickRef::Words(words, table) => ranges_of(axis, |i| table[words[i] as u16 as usize]),
+            BrickRef::Words(words, scale) => ranges_of(axis, |i| scale.value(words[i] as i32)),
         }
     }
 }
@@ -86,9 +82,6 @@ fn add_values(values: &[f32], weight: f32, out: &mut [f32]) {
         *o += weight * x;
     }
 }
-
-/// The value of each 16-bit word of [`BrickRef::Words`], indexed by the word as `u16`.
-pub type WordValues = [f32; 1 << 16];
 
 /// A brick layer's entry for an absent brick outside.
 pub const OUTSIDE: u32 = u32::MAX;

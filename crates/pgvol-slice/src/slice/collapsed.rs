@@ -14,7 +14,8 @@ use pgvol_field::kernel::{axis_window, AxisWindow, Profile};
 use pgvol_field::{mirror, Grid};
 
 use super::bricks::{brick_counts, plane_axes, BrickLayer, INSIDE};
-use super::plane::LayerField;
+use super::cubic::{shift_cubic, CubicPieces};
+use super::plane::{edge_root, LayerField};
 
 const E: usize = BRICK_EDGE;
 /// Coefficients per edge of the squares whose value ranges bound the field finely.
@@ -110,34 +111,22 @@ fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
     out
 }
 
-/// A field along a segment as one or two cubics in the fraction of the way, the second from
-/// `split` on.
-struct CubicPieces {
-    split: f32,
-    first: [f32; 4],
-    second: [f32; 4],
-}
-
-impl CubicPieces {
-    #[inline]
-    fn at(&self, t: f32) -> f32 {
-        let p = if t < self.split {
-            &self.first
-        } else {
-            &self.second
-        };
-        ((p[3] * t + p[2]) * t + p[1]) * t + p[0]
-    }
-}
-
-/// The cubic `p(x)` (coefficients by power) as a cubic in `t` for `x = x0 + s·t`.
-fn shift_cubic(p: [f32; 4], x0: f32, s: f32) -> [f32; 4] {
-    // Taylor coefficients of p at x0, each scaled by the matching power of s.
-    let d0 = ((p[3] * x0 + p[2]) * x0 + p[1]) * x0 + p[0];
-    let d1 = (3.0 * p[3] * x0 + 2.0 * p[2]) * x0 + p[1];
-    let d2 = 3.0 * p[3] * x0 + p[2];
-    let d3 = p[3];
-    [d0, d1 * s, d2 * s * s, d3 * s * s * s]
+/// A sampled block's coefficients, gathered, and summed across each node row: the field along
+/// an edge between two of the block's nodes is a few of these sums (a row's, or a column's
+/// summed on demand) in cubic pieces.
+pub(crate) struct BlockLines {
+    /// First coefficient index and count along u, then along v.
+    u0: i64,
+    nu: usize,
+    v0: i64,
+    /// The coefficients `[u0, u0 + nu) × [v0, …)`, u fastest.
+    local: Vec<f32>,
+    /// Per node row j, the coefficients summed along v with the row's weights: `nu` each.
+    rows: Vec<f32>,
+    /// Per node column i: its window along u and distance beyond the box.
+    columns: Vec<(AxisWindow, f32)>,
+    /// Per node row j: its distance beyond the box along v.
+    beyond_v: Vec<f32>,
 }
 
 /// [`axis_window`] at `u ≥ 0`, the cubic profile's weights computed here by the same
@@ -569,6 +558,8 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
 }
 
 impl LayerField for CollapsedPlane<'_, '_> {
+    type Block = Option<BlockLines>;
+
     fn value(&self, u: f32, v: f32) -> f32 {
         let (wu, du) = self.window(0, u);
         let (wv, dv) = self.window(1, v);
@@ -587,7 +578,7 @@ impl LayerField for CollapsedPlane<'_, '_> {
     /// Each node sums its column taps first, then its row taps, as a plane collapsed row by row
     /// would. The coefficients the nodes read are gathered once when they are few next to the
     /// nodes' 16 reads each.
-    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) {
+    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) -> Option<BlockLines> {
         let wus: Vec<(AxisWindow, f32)> = us.iter().map(|&u| self.window(0, u)).collect();
         let wvs: Vec<(AxisWindow, f32)> = vs.iter().map(|&v| self.window(1, v)).collect();
         let span = |ws: &[(AxisWindow, f32)]| {
@@ -606,11 +597,15 @@ impl LayerField for CollapsedPlane<'_, '_> {
             local.resize(nu * nv, 0.0);
             self.gather(u0, nu, v0, &mut local);
         }
-        let mut line = vec![0.0f32; nu];
+        let mut rows = vec![0.0f32; if gather { nu * vs.len() } else { 0 }];
         for (j, (wv, dv)) in wvs.iter().enumerate() {
+            let line = if gather {
+                &mut rows[nu * j..nu * (j + 1)]
+            } else {
+                &mut [][..]
+            };
             if gather {
                 // The row's coefficients summed along v, for every u the nodes read.
-                line.fill(0.0);
                 for t in 0..wv.len {
                     let row = (wv.first + t as i64 - v0) as usize * nu;
                     let w = wv.w[t][0];
@@ -639,6 +634,55 @@ impl LayerField for CollapsedPlane<'_, '_> {
                 out[i + us.len() * j] = value + outside;
             }
         }
+        gather.then(|| BlockLines {
+            u0,
+            nu,
+            v0,
+            local,
+            rows,
+            beyond_v: wvs.iter().map(|w| w.1).collect(),
+            columns: wus,
+        })
+    }
+
+    /// From the block's row sums (along u) or its coefficients summed across the node's column
+    /// on demand (along v), in the order [`LayerField::along`] sums them, so the zero is the
+    /// same float.
+    fn edge_zero(
+        &self,
+        block: &Option<BlockLines>,
+        node: [usize; 2],
+        p: [f32; 2],
+        step: [f32; 2],
+        ends: [f32; 2],
+    ) -> f32 {
+        let k = usize::from(step[0] == 0.0);
+        let x = [p[k], p[k] + step[k]];
+        if let Some(b) = block {
+            let pieces = if k == 0 {
+                let row = &b.rows[b.nu * node[1]..b.nu * (node[1] + 1)];
+                self.cubic_pieces(0, x, b.u0, b.nu, |r| row[r])
+                    .map(|c| (c, b.beyond_v[node[1]]))
+            } else {
+                let (w, beyond) = &b.columns[node[0]];
+                let off = (w.first - b.u0) as usize;
+                let nv = b.local.len() / b.nu;
+                self.cubic_pieces(1, x, b.v0, nv, |r| {
+                    let row = &b.local[b.nu * r + off..];
+                    let mut sum = 0.0f32;
+                    for (ws, c) in w.w.iter().zip(row).take(w.len) {
+                        sum += ws[0] * c;
+                    }
+                    sum
+                })
+                .map(|c| (c, *beyond))
+            };
+            if let Some((pieces, beyond)) = pieces {
+                let outside = Vec3::new(0.0, beyond, self.off_axis).length();
+                return edge_root(&|t| pieces.at(t) + outside, ends[0], ends[1]);
+            }
+        }
+        edge_root(&*self.along(p, step), ends[0], ends[1])
     }
 
     /// The coefficients the segment reads are gathered once; each point then sums them in

@@ -8,6 +8,7 @@
 
 mod bricks;
 mod collapsed;
+mod cubic;
 mod plane;
 mod window;
 
@@ -26,9 +27,7 @@ use collapsed::{tap_layers, CollapsedPlane};
 use plane::{LayerField, Plane};
 use window::Window;
 
-pub use bricks::{
-    brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, WordValues, INSIDE, OUTSIDE,
-};
+pub use bricks::{brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, INSIDE, OUTSIDE};
 pub use plane::{LayerCost, MAX_LAYER_NODES};
 
 /// Most layers one call produces: far beyond any printer, small enough to refuse typos.
@@ -343,6 +342,8 @@ struct PointField<'a> {
 }
 
 impl LayerField for PointField<'_> {
+    type Block = ();
+
     fn value(&self, u: f32, v: f32) -> f32 {
         (self.field)(self.axis.point(self.h, u, v))
     }
@@ -459,6 +460,36 @@ mod tests {
                                 assert!(
                                     (want - got).abs() < 1e-5,
                                     "{basis:?} {axis:?} h={h} ({u}, {v}): {got} vs {want}"
+                                );
+                            }
+                        }
+                    }
+                    // Edges between the nodes of a regular block: the zero found from what
+                    // sampling kept is the one found along the edge, bit for bit.
+                    let us = [0.03f32, 0.13, 0.23, 0.33];
+                    let vs = [0.11f32, 0.21, 0.31];
+                    let mut nodes = [0.0f32; 12];
+                    let block = plane.sample(&us, &vs, &mut nodes);
+                    assert!(block.is_some(), "{basis:?} {axis:?} h={h}: nothing kept");
+                    for (j, &v) in vs.iter().enumerate() {
+                        for (i, &u) in us.iter().enumerate() {
+                            for step in [[0.1f32, 0.0], [0.0, 0.1]] {
+                                let p = [u, v];
+                                let a = plane.value(u, v);
+                                let b = plane.value(u + step[0], v + step[1]);
+                                // Root finding needs ends of opposite signs; other edges are
+                                // given some, which search the same points of the edge.
+                                let [a, b] = if (a < 0.0) != (b < 0.0) {
+                                    [a, b]
+                                } else {
+                                    [-1.0, 1.0]
+                                };
+                                let kept = plane.edge_zero(&block, [i, j], p, step, [a, b]);
+                                let along = plane::edge_root(&*plane.along(p, step), a, b);
+                                assert_eq!(
+                                    kept.to_bits(),
+                                    along.to_bits(),
+                                    "{basis:?} {axis:?} h={h} ({u}, {v}) by {step:?}"
                                 );
                             }
                         }

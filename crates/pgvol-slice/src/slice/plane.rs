@@ -20,15 +20,34 @@ const EDGE_MARGIN: f32 = 1e-3;
 
 /// The field on one layer plane.
 pub(crate) trait LayerField {
+    /// What sampling a block of nodes keeps for [`LayerField::edge_zero`].
+    type Block: Default;
+
     fn value(&self, u: f32, v: f32) -> f32;
 
     /// Values at the nodes `(us[i], vs[j])` into `out[i + us.len() · j]`.
-    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) {
+    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) -> Self::Block {
         for (j, &v) in vs.iter().enumerate() {
             for (i, &u) in us.iter().enumerate() {
                 out[i + us.len() * j] = self.value(u, v);
             }
         }
+        Self::Block::default()
+    }
+
+    /// The zero of the field on the edge from `p` by `step` (one spacing along one axis), whose
+    /// ends take the values `ends`: [`edge_root`] of [`LayerField::along`]. `p` is node `node`
+    /// (indices into `us` and `vs`) of the block [`LayerField::sample`] kept `block` from, from
+    /// which a field may find the zero faster.
+    fn edge_zero(
+        &self,
+        _block: &Self::Block,
+        _node: [usize; 2],
+        p: [f32; 2],
+        step: [f32; 2],
+        ends: [f32; 2],
+    ) -> f32 {
+        edge_root(&*self.along(p, step), ends[0], ends[1])
     }
 
     /// `Some(inside)` when every point of the rectangle `u × v` is on one side (`value < 0`
@@ -65,9 +84,13 @@ pub(crate) struct Plane {
 }
 
 /// The values of one block's nodes.
-struct BlockNodes {
+struct BlockNodes<K> {
     /// First node of the block.
     first: [usize; 2],
+    /// First node sampled (the block's first not on the ring).
+    sampled: [usize; 2],
+    /// What sampling kept.
+    kept: K,
     /// Nodes per axis (cells + 1).
     len: [usize; 2],
     values: Vec<f32>,
@@ -76,7 +99,7 @@ struct BlockNodes {
     real: Vec<bool>,
 }
 
-impl BlockNodes {
+impl<K> BlockNodes<K> {
     fn at(&self, i: usize, j: usize) -> (f32, bool) {
         let k = i - self.first[0] + self.len[0] * (j - self.first[1]);
         (self.values[k], self.real[k])
@@ -233,7 +256,12 @@ impl Plane {
         (first, len)
     }
 
-    fn evaluate(&self, field: &impl LayerField, b: [usize; 2], cost: &mut LayerCost) -> BlockNodes {
+    fn evaluate<F: LayerField>(
+        &self,
+        field: &F,
+        b: [usize; 2],
+        cost: &mut LayerCost,
+    ) -> BlockNodes<F::Block> {
         let (first, len) = self.block_nodes(b);
         let h = self.spacing;
         let mut values = vec![h; len[0] * len[1]];
@@ -244,11 +272,12 @@ impl Plane {
             (first[0] + len[0]).min(self.n[0] - 1),
             (first[1] + len[1]).min(self.n[1] - 1),
         ];
+        let mut kept = F::Block::default();
         if lo[0] < hi[0] && lo[1] < hi[1] {
             let us: Vec<f32> = (lo[0]..hi[0]).map(|i| self.node(i, 0)[0]).collect();
             let vs: Vec<f32> = (lo[1]..hi[1]).map(|j| self.node(0, j)[1]).collect();
             let mut inner = vec![0.0f32; us.len() * vs.len()];
-            field.sample(&us, &vs, &mut inner);
+            kept = field.sample(&us, &vs, &mut inner);
             cost.nodes += inner.len() as u64;
             for j in lo[1]..hi[1] {
                 for i in lo[0]..hi[0] {
@@ -265,6 +294,8 @@ impl Plane {
         }
         BlockNodes {
             first,
+            sampled: lo,
+            kept,
             len,
             values,
             real,
@@ -272,14 +303,14 @@ impl Plane {
     }
 
     /// The closed loops of `f(u, v) < 0`, inside on the left, in a deterministic order.
-    pub(crate) fn contours(
+    pub(crate) fn contours<F: LayerField>(
         &self,
-        field: &impl LayerField,
+        field: &F,
         cost: &mut LayerCost,
     ) -> Vec<Vec<[f32; 2]>> {
         let [nu, nv] = self.n;
         let h = self.spacing;
-        let blocks: Vec<BlockNodes> = self
+        let blocks: Vec<BlockNodes<F::Block>> = self
             .active_blocks(field)
             .into_iter()
             .map(|b| self.evaluate(field, b, cost))
@@ -324,7 +355,8 @@ impl Plane {
                         let t = if ra && rb {
                             let pa = self.node(i, j);
                             let step = [h * (1 - dir) as f32, h * dir as f32];
-                            edge_root(&*field.along(pa, step), va, vb)
+                            let node = [i - b.sampled[0], j - b.sampled[1]];
+                            field.edge_zero(&b.kept, node, pa, step, [va, vb])
                         } else {
                             va / (va - vb)
                         };
@@ -412,7 +444,7 @@ const ROOT_STEP: f32 = 1e-5;
 /// The zero of `g` on [0, 1] given `g(0) = va`, `g(1) = vb` of opposite signs: regula falsi with
 /// the Illinois modification, which keeps the bracket and converges superlinearly. It stops once
 /// an estimate moves less than [`ROOT_STEP`] of the edge.
-fn edge_root(g: &dyn Fn(f32) -> f32, va: f32, vb: f32) -> f32 {
+pub(crate) fn edge_root(g: &dyn Fn(f32) -> f32, va: f32, vb: f32) -> f32 {
     let (mut t0, mut f0, mut t1, mut f1) = (0.0f32, va, 1.0f32, vb);
     let mut side = 0i8;
     let mut t = f0 / (f0 - f1);
