@@ -44,9 +44,36 @@ impl BrickRef<'_> {
         match self {
             BrickRef::Borrowed(values) => ranges_of(axis, |i| values[i]),
             BrickRef::Owned(values) => ranges_of(axis, |i| values[i]),
-            BrickRef::Words(words, scale) => ranges_of(axis, |i| scale.value(words[i] as i32)),
+            BrickRef::Words(words, scale) => {
+                // A word's value grows with the word, so the extreme words give the extremes.
+                word_ranges(axis, words).map(|r| r.map(|w| scale.value(w as i32)))
+            }
         }
     }
+}
+
+/// [`BrickRef::layer_ranges`] of 16-bit words: per node layer, the least and greatest word.
+fn word_ranges(axis: usize, words: &[i16; BRICK_NODES]) -> [[i16; 2]; BRICK_EDGE] {
+    let mut lo = [i16::MAX; BRICK_EDGE];
+    let mut hi = [i16::MIN; BRICK_EDGE];
+    for (row, run) in words.chunks_exact(BRICK_EDGE).enumerate() {
+        // Row `row` runs along x at y = row % E, z = row / E.
+        if axis == 0 {
+            for (x, &w) in run.iter().enumerate() {
+                lo[x] = lo[x].min(w);
+                hi[x] = hi[x].max(w);
+            }
+        } else {
+            let at = if axis == 1 {
+                row % BRICK_EDGE
+            } else {
+                row / BRICK_EDGE
+            };
+            lo[at] = run.iter().fold(lo[at], |a, &w| a.min(w));
+            hi[at] = run.iter().fold(hi[at], |a, &w| a.max(w));
+        }
+    }
+    std::array::from_fn(|n| [lo[n], hi[n]])
 }
 
 #[inline]
@@ -200,5 +227,28 @@ impl BrickSource for SparseGrid {
             }
         }
         Ok(vec![layer.finish()])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn word_bricks_range_as_their_values_do() {
+        let scale = WordScale::new(0.01, 300, 8);
+        // Words spread over both signs and both sides of the knee, in no order.
+        let words: Box<[i16; BRICK_NODES]> = Box::new(std::array::from_fn(|i| {
+            ((i as i64 * 7919 % 1201) - 600) as i16 * 27
+        }));
+        let values: Box<BrickValues> =
+            Box::new(std::array::from_fn(|i| scale.value(words[i] as i32)));
+        let as_words = BrickRef::Words(words, scale);
+        let as_values = BrickRef::Owned(values);
+        for axis in 0..3 {
+            let (got, want) = (as_words.layer_ranges(axis), as_values.layer_ranges(axis));
+            assert_eq!(got, want, "axis {axis}");
+            assert!(want.iter().all(|r| r[0] < 0.0 && r[1] > 0.0));
+        }
     }
 }

@@ -340,9 +340,20 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         });
         // Tap by tap over the whole brick, each value summed in the taps' order.
         // The brick test is outside the loops and rows along a contiguous first axis are
-        // sliced, so the inner loops vectorise.
+        // sliced, so the inner loops vectorise; a whole tile whose rows follow each other in
+        // the brick is one run.
+        let whole = len == [E, E] && self.stride == [1, E];
         for &(w, l, off) in &self.taps {
             let s = l.state(k);
+            if whole {
+                if s >= INSIDE {
+                    let x = w * self.background.value(s == INSIDE);
+                    out.values.iter_mut().for_each(|o| *o += x);
+                } else {
+                    l.bricks[s as usize].add_run(off, w, &mut out.values);
+                }
+                continue;
+            }
             for jc in 0..len[1] {
                 let row = &mut out.values[E * jc..E * jc + len[0]];
                 if s >= INSIDE {
@@ -364,12 +375,9 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             for jb in 0..len[0] {
                 let value = out.values[jb + E * jc];
                 let r = &mut ranges[jb / CELL + CELLS * (jc / CELL)];
-                if value < r[0] {
-                    r[0] = value;
-                }
-                if value > r[1] {
-                    r[1] = value;
-                }
+                // Branch-free: which values are the least and greatest is not predictable.
+                r[0] = r[0].min(value);
+                r[1] = r[1].max(value);
             }
         }
         for (cell, r) in out.cells.iter_mut().zip(ranges) {
