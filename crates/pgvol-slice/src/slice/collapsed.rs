@@ -114,7 +114,11 @@ fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
 /// A sampled block's coefficients, gathered, and summed across each node row: the field along
 /// an edge between two of the block's nodes is a few of these sums (a row's, or a column's
 /// summed on demand) in cubic pieces.
+#[derive(Default)]
 pub(crate) struct BlockLines {
+    /// Whether the coefficients were gathered (when they are few next to the nodes' reads);
+    /// the rest is meaningful only then.
+    pub(super) gathered: bool,
     /// First coefficient index and count along u, then along v.
     u0: i64,
     nu: usize,
@@ -125,8 +129,8 @@ pub(crate) struct BlockLines {
     rows: Vec<f32>,
     /// Per node column i: its window along u and distance beyond the box.
     columns: Vec<(AxisWindow, f32)>,
-    /// Per node row j: its distance beyond the box along v.
-    beyond_v: Vec<f32>,
+    /// Per node row j: its window along v and distance beyond the box.
+    row_windows: Vec<(AxisWindow, f32)>,
 }
 
 /// [`axis_window`] at `u ≥ 0`, the cubic profile's weights computed here by the same
@@ -566,7 +570,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
 }
 
 impl LayerField for CollapsedPlane<'_, '_> {
-    type Block = Option<BlockLines>;
+    type Block = BlockLines;
 
     fn value(&self, u: f32, v: f32) -> f32 {
         let (wu, du) = self.window(0, u);
@@ -586,9 +590,18 @@ impl LayerField for CollapsedPlane<'_, '_> {
     /// Each node sums its column taps first, then its row taps, as a plane collapsed row by row
     /// would. The coefficients the nodes read are gathered once when they are few next to the
     /// nodes' 16 reads each.
-    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) -> Option<BlockLines> {
-        let wus: Vec<(AxisWindow, f32)> = us.iter().map(|&u| self.window(0, u)).collect();
-        let wvs: Vec<(AxisWindow, f32)> = vs.iter().map(|&v| self.window(1, v)).collect();
+    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32], block: &mut BlockLines) {
+        let BlockLines {
+            columns: wus,
+            row_windows: wvs,
+            local,
+            rows,
+            ..
+        } = block;
+        wus.clear();
+        wus.extend(us.iter().map(|&u| self.window(0, u)));
+        wvs.clear();
+        wvs.extend(vs.iter().map(|&v| self.window(1, v)));
         let span = |ws: &[(AxisWindow, f32)]| {
             let lo = ws.iter().map(|w| w.0.first).min().unwrap_or(0);
             let hi = ws
@@ -598,14 +611,15 @@ impl LayerField for CollapsedPlane<'_, '_> {
                 .unwrap_or(0);
             (lo, (hi - lo).max(0) as usize)
         };
-        let ((u0, nu), (v0, nv)) = (span(&wus), span(&wvs));
+        let ((u0, nu), (v0, nv)) = (span(wus), span(wvs));
         let gather = nu * nv <= 4 * us.len() * vs.len();
-        let mut local = Vec::new();
+        local.clear();
+        rows.clear();
         if gather {
             local.resize(nu * nv, 0.0);
-            self.gather(u0, nu, v0, &mut local);
+            self.gather(u0, nu, v0, local);
+            rows.resize(nu * vs.len(), 0.0);
         }
-        let mut rows = vec![0.0f32; if gather { nu * vs.len() } else { 0 }];
         for (j, (wv, dv)) in wvs.iter().enumerate() {
             let line = if gather {
                 &mut rows[nu * j..nu * (j + 1)]
@@ -642,15 +656,7 @@ impl LayerField for CollapsedPlane<'_, '_> {
                 out[i + us.len() * j] = value + outside;
             }
         }
-        gather.then(|| BlockLines {
-            u0,
-            nu,
-            v0,
-            local,
-            rows,
-            beyond_v: wvs.iter().map(|w| w.1).collect(),
-            columns: wus,
-        })
+        (block.gathered, block.u0, block.nu, block.v0) = (gather, u0, nu, v0);
     }
 
     /// From the block's row sums (along u) or its coefficients summed across the node's column
@@ -658,7 +664,7 @@ impl LayerField for CollapsedPlane<'_, '_> {
     /// same float.
     fn edge_zero(
         &self,
-        block: &Option<BlockLines>,
+        b: &BlockLines,
         node: [usize; 2],
         p: [f32; 2],
         step: [f32; 2],
@@ -666,11 +672,11 @@ impl LayerField for CollapsedPlane<'_, '_> {
     ) -> f32 {
         let k = usize::from(step[0] == 0.0);
         let x = [p[k], p[k] + step[k]];
-        if let Some(b) = block {
+        if b.gathered {
             let pieces = if k == 0 {
                 let row = &b.rows[b.nu * node[1]..b.nu * (node[1] + 1)];
                 self.cubic_pieces(0, x, b.u0, b.nu, |r| row[r])
-                    .map(|c| (c, b.beyond_v[node[1]]))
+                    .map(|c| (c, b.row_windows[node[1]].1))
             } else {
                 let (w, beyond) = &b.columns[node[0]];
                 let off = (w.first - b.u0) as usize;

@@ -452,7 +452,7 @@ mod tests {
                     let us = [-2.0, -0.33, 0.0, 0.5, 1.9];
                     let vs = [-0.2, 0.0, 0.5, 0.71, 2.0];
                     let mut batch = [0.0f32; 25];
-                    plane.sample(&us, &vs, &mut batch);
+                    plane.sample(&us, &vs, &mut batch, &mut Default::default());
                     for (j, &v) in vs.iter().enumerate() {
                         for (i, &u) in us.iter().enumerate() {
                             let want = vol.value(axis.point(h, u, v));
@@ -469,8 +469,9 @@ mod tests {
                     let us = [0.03f32, 0.13, 0.23, 0.33];
                     let vs = [0.11f32, 0.21, 0.31];
                     let mut nodes = [0.0f32; 12];
-                    let block = plane.sample(&us, &vs, &mut nodes);
-                    assert!(block.is_some(), "{basis:?} {axis:?} h={h}: nothing kept");
+                    let mut block = Default::default();
+                    plane.sample(&us, &vs, &mut nodes, &mut block);
+                    assert!(block.gathered, "{basis:?} {axis:?} h={h}: nothing kept");
                     for (j, &v) in vs.iter().enumerate() {
                         for (i, &u) in us.iter().enumerate() {
                             for step in [[0.1f32, 0.0], [0.0, 0.1]] {

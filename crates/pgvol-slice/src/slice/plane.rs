@@ -20,19 +20,20 @@ const EDGE_MARGIN: f32 = 1e-3;
 
 /// The field on one layer plane.
 pub(crate) trait LayerField {
-    /// What sampling a block of nodes keeps for [`LayerField::edge_zero`].
+    /// What sampling a block of nodes keeps for [`LayerField::edge_zero`]; one is reused from
+    /// block to block.
     type Block: Default;
 
     fn value(&self, u: f32, v: f32) -> f32;
 
-    /// Values at the nodes `(us[i], vs[j])` into `out[i + us.len() · j]`.
-    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32]) -> Self::Block {
+    /// Values at the nodes `(us[i], vs[j])` into `out[i + us.len() · j]`, and into `block`
+    /// what finding zeros on the edges between them can use.
+    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32], _block: &mut Self::Block) {
         for (j, &v) in vs.iter().enumerate() {
             for (i, &u) in us.iter().enumerate() {
                 out[i + us.len() * j] = self.value(u, v);
             }
         }
-        Self::Block::default()
     }
 
     /// The zero of the field on the edge from `p` by `step` (one spacing along one axis), whose
@@ -83,7 +84,8 @@ pub(crate) struct Plane {
     n: [usize; 2],
 }
 
-/// The values of one block's nodes.
+/// The values of one block's nodes; its buffers are reused from block to block.
+#[derive(Default)]
 struct BlockNodes<K> {
     /// First node of the block.
     first: [usize; 2],
@@ -97,6 +99,10 @@ struct BlockNodes<K> {
     /// False on the ring and where the field is not finite, whose values are stand-ins (±h)
     /// and whose edges are cut by linear interpolation.
     real: Vec<bool>,
+    /// The sampled nodes' coordinates and values.
+    us: Vec<f32>,
+    vs: Vec<f32>,
+    sampled_values: Vec<f32>,
 }
 
 impl<K> BlockNodes<K> {
@@ -256,49 +262,49 @@ impl Plane {
         (first, len)
     }
 
+    /// Block `b`'s node values into `out`.
     fn evaluate<F: LayerField>(
         &self,
         field: &F,
         b: [usize; 2],
         cost: &mut LayerCost,
-    ) -> BlockNodes<F::Block> {
+        out: &mut BlockNodes<F::Block>,
+    ) {
         let (first, len) = self.block_nodes(b);
         let h = self.spacing;
-        let mut values = vec![h; len[0] * len[1]];
-        let mut real = vec![false; len[0] * len[1]];
+        out.values.clear();
+        out.values.resize(len[0] * len[1], h);
+        out.real.clear();
+        out.real.resize(len[0] * len[1], false);
         // The block's real nodes, sampled together.
         let lo = [first[0].max(1), first[1].max(1)];
         let hi = [
             (first[0] + len[0]).min(self.n[0] - 1),
             (first[1] + len[1]).min(self.n[1] - 1),
         ];
-        let mut kept = F::Block::default();
+        (out.first, out.len, out.sampled) = (first, len, lo);
         if lo[0] < hi[0] && lo[1] < hi[1] {
-            let us: Vec<f32> = (lo[0]..hi[0]).map(|i| self.node(i, 0)[0]).collect();
-            let vs: Vec<f32> = (lo[1]..hi[1]).map(|j| self.node(0, j)[1]).collect();
-            let mut inner = vec![0.0f32; us.len() * vs.len()];
-            kept = field.sample(&us, &vs, &mut inner);
-            cost.nodes += inner.len() as u64;
+            out.us.clear();
+            out.us.extend((lo[0]..hi[0]).map(|i| self.node(i, 0)[0]));
+            out.vs.clear();
+            out.vs.extend((lo[1]..hi[1]).map(|j| self.node(0, j)[1]));
+            let count = out.us.len() * out.vs.len();
+            out.sampled_values.resize(count, 0.0);
+            field.sample(&out.us, &out.vs, &mut out.sampled_values, &mut out.kept);
+            cost.nodes += count as u64;
+            let nu = out.us.len();
             for j in lo[1]..hi[1] {
                 for i in lo[0]..hi[0] {
-                    let x = inner[i - lo[0] + us.len() * (j - lo[1])];
+                    let x = out.sampled_values[i - lo[0] + nu * (j - lo[1])];
                     let k = i - first[0] + len[0] * (j - first[1]);
                     if x.is_finite() {
-                        values[k] = x;
-                        real[k] = true;
+                        out.values[k] = x;
+                        out.real[k] = true;
                     } else if x == f32::NEG_INFINITY {
-                        values[k] = -h;
+                        out.values[k] = -h;
                     }
                 }
             }
-        }
-        BlockNodes {
-            first,
-            sampled: lo,
-            kept,
-            len,
-            values,
-            real,
         }
     }
 
@@ -310,22 +316,23 @@ impl Plane {
     ) -> Vec<Vec<[f32; 2]>> {
         let [nu, nv] = self.n;
         let h = self.spacing;
-        let blocks: Vec<BlockNodes<F::Block>> = self
-            .active_blocks(field)
-            .into_iter()
-            .map(|b| self.evaluate(field, b, cost))
-            .collect();
-        cost.blocks += blocks.len() as u64;
+        let active = self.active_blocks(field);
+        cost.blocks += active.len() as u64;
         let edge_id = |i: usize, j: usize, dir: usize| 2 * (i + nu * j) + dir;
 
         // One vertex per crossed edge: edge id 2·node for +u, 2·node + 1 for +v. Each cell
         // places its lower and left edges (and the grid's last column and row their far ones),
         // so every edge of an evaluated cell is placed once.
         let mut crossings: Vec<(usize, [f32; 2])> = Vec::new();
-        // Cells whose corners are not all on one side, for the second pass. Only they hold
-        // crossed edges: a crossed edge's ends differ, and they are corners of its cell.
-        let mut mixed: Vec<(usize, usize, usize)> = Vec::new();
-        for (index, b) in blocks.iter().enumerate() {
+        // Cells whose corners are not all on one side, with their corners' values
+        // counter-clockwise from (i, j), for the second pass. Only they hold crossed edges: a
+        // crossed edge's ends differ, and they are corners of its cell.
+        let mut mixed: Vec<(usize, usize, [f32; 4])> = Vec::new();
+        // Each block's crossings are placed as soon as it is sampled, so one block's buffers
+        // serve them all.
+        let mut b = BlockNodes::default();
+        for block in active {
+            self.evaluate(field, block, cost, &mut b);
             let cells = [b.len[0] - 1, b.len[1] - 1];
             for cj in 0..cells[1] {
                 let row = &b.values[b.len[0] * cj..b.len[0] * (cj + 2)];
@@ -341,7 +348,7 @@ impl Plane {
                         continue;
                     }
                     let (i, j) = (b.first[0] + ci, b.first[1] + cj);
-                    mixed.push((index, i, j));
+                    mixed.push((i, j, [corners[0], corners[1], corners[3], corners[2]]));
                     let far_u = (i + 2 == nu).then_some((i + 1, j, 1));
                     let far_v = (j + 2 == nv).then_some((i, j + 1, 0));
                     let own = [Some((i, j, 0)), Some((i, j, 1)), far_u, far_v];
@@ -384,10 +391,7 @@ impl Plane {
         // orders of the two cells are opposite, so a crossing starts a segment in one cell and
         // ends one in the other.
         let mut next = vec![u32::MAX; crossings.len()];
-        for &(index, i, j) in &mixed {
-            let b = &blocks[index];
-            let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
-            let values = corners.map(|(i, j)| b.at(i, j).0);
+        for &(i, j, values) in &mixed {
             let ins = values.map(|x| x < 0.0);
             // Cell edges counter-clockwise: corner k to corner k + 1.
             let edges = [
