@@ -83,6 +83,8 @@ pub(crate) struct CollapsedPlane<'w, 's> {
     profile: Profile,
     /// Distance of the plane from the grid box along the axis.
     off_axis: f32,
+    /// The layer grid's node windows, where the slicing worked them out.
+    node_windows: Option<&'w NodeWindows>,
 }
 
 /// The union of two ascending lists, ascending and without repeats.
@@ -163,6 +165,40 @@ fn window_at(profile: Profile, u: f32, n: usize) -> AxisWindow {
     }
 }
 
+/// The window at `x` along an axis of `n` nodes from `origin`, `x` clamped into the grid box,
+/// with the distance beyond it.
+#[inline]
+fn clamped_window(
+    origin: f32,
+    spacing: f32,
+    n: usize,
+    profile: Profile,
+    x: f32,
+) -> (AxisWindow, f32) {
+    let top = origin + spacing * (n - 1) as f32;
+    let q = x.clamp(origin, top);
+    (window_at(profile, (q - origin) / spacing, n), x - q)
+}
+
+/// The windows of a layer grid's node coordinates along the two plane axes: the same for every
+/// layer of a slicing, so worked out once for them all.
+pub(crate) struct NodeWindows([Vec<(AxisWindow, f32)>; 2]);
+
+impl NodeWindows {
+    /// For planes across grid axis `axis`, at the node coordinates `nodes` along the plane's
+    /// two axes.
+    pub(crate) fn new(grid: &Grid, profile: Profile, axis: usize, nodes: [&[f32]; 2]) -> Self {
+        let axes = plane_axes(axis);
+        NodeWindows([0, 1].map(|k| {
+            let a = axes[k];
+            nodes[k]
+                .iter()
+                .map(|&x| clamped_window(grid.origin[a], grid.spacing, grid.dims[a], profile, x))
+                .collect()
+        }))
+    }
+}
+
 /// The node layers (mirrored into the grid) and weights of the plane at height `h` along
 /// `axis`, with the height clamped into the grid.
 pub(crate) fn taps(grid: &Grid, profile: Profile, axis: usize, h: f32) -> (AxisWindow, f32) {
@@ -184,7 +220,8 @@ pub(crate) fn tap_layers(grid: &Grid, profile: Profile, axis: usize, h: f32) -> 
 
 impl<'w, 's> CollapsedPlane<'w, 's> {
     /// The plane at height `h` along grid axis `axis`; `layer(n)` gives brick layer `n`, which
-    /// must hold every node layer of [`tap_layers`].
+    /// must hold every node layer of [`tap_layers`]. `node_windows`, where given, are those of
+    /// the layer grid's nodes, sampled by node index.
     pub(crate) fn new(
         grid: &Grid,
         background: Background,
@@ -192,6 +229,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         axis: usize,
         h: f32,
         layer: &dyn Fn(usize) -> &'w BrickLayer<'s>,
+        node_windows: Option<&'w NodeWindows>,
     ) -> Self {
         let [b, c] = plane_axes(axis);
         let (window, q) = taps(grid, profile, axis, h);
@@ -271,6 +309,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             spacing: grid.spacing,
             profile,
             off_axis: h - q,
+            node_windows,
         };
         plane.edges = plane.find_edges(&occupied);
         plane
@@ -542,13 +581,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
     /// The clamped grid coordinate along plane axis `k`, with the distance beyond the box.
     #[inline]
     fn window(&self, k: usize, x: f32) -> (AxisWindow, f32) {
-        let q = x.clamp(self.origin[k], self.top(k));
-        let w = window_at(
-            self.profile,
-            (q - self.origin[k]) / self.spacing,
-            self.dims[k],
-        );
-        (w, x - q)
+        clamped_window(self.origin[k], self.spacing, self.dims[k], self.profile, x)
     }
 
     /// The coefficient indices along plane axis `k` that points in `[x0, x1]` read, mirrored
@@ -590,7 +623,14 @@ impl LayerField for CollapsedPlane<'_, '_> {
     /// Each node sums its column taps first, then its row taps, as a plane collapsed row by row
     /// would. The coefficients the nodes read are gathered once when they are few next to the
     /// nodes' 16 reads each.
-    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32], block: &mut BlockLines) {
+    fn sample(
+        &self,
+        first: [usize; 2],
+        us: &[f32],
+        vs: &[f32],
+        out: &mut [f32],
+        block: &mut BlockLines,
+    ) {
         let BlockLines {
             columns: wus,
             row_windows: wvs,
@@ -599,9 +639,14 @@ impl LayerField for CollapsedPlane<'_, '_> {
             ..
         } = block;
         wus.clear();
-        wus.extend(us.iter().map(|&u| self.window(0, u)));
         wvs.clear();
-        wvs.extend(vs.iter().map(|&v| self.window(1, v)));
+        if let Some(NodeWindows([along_u, along_v])) = self.node_windows {
+            wus.extend_from_slice(&along_u[first[0]..first[0] + us.len()]);
+            wvs.extend_from_slice(&along_v[first[1]..first[1] + vs.len()]);
+        } else {
+            wus.extend(us.iter().map(|&u| self.window(0, u)));
+            wvs.extend(vs.iter().map(|&v| self.window(1, v)));
+        }
         let span = |ws: &[(AxisWindow, f32)]| {
             let lo = ws.iter().map(|w| w.0.first).min().unwrap_or(0);
             let hi = ws

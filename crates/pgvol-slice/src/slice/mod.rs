@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::SliceError;
 use crate::polygon::{perimeter, signed_area};
 use crate::simplify::simplify_loops;
-use collapsed::{tap_layers, CollapsedPlane};
+use collapsed::{tap_layers, CollapsedPlane, NodeWindows};
 use plane::{LayerField, Plane};
 use window::Window;
 
@@ -264,6 +264,8 @@ pub fn slice_bricks<S: BrickSource + ?Sized>(
     let axis = options.axis.indices()[0];
     let mut window = Window::new(source, axis);
     let mut total = LayerCost::default();
+    let [us, vs] = job.plane.node_coordinates();
+    let node_windows = NodeWindows::new(grid, profile, axis, [&us, &vs]);
     for run in job.heights.chunks(LAYER_RUN) {
         let wanted: Vec<usize> = run
             .iter()
@@ -275,8 +277,16 @@ pub fn slice_bricks<S: BrickSource + ?Sized>(
         let layers: Vec<(Layer, LayerCost)> = run
             .par_iter()
             .map(|&h| {
-                let plane =
-                    CollapsedPlane::new(grid, background, profile, axis, h, &|n| window.layer(n));
+                let layer = |n| window.layer(n);
+                let plane = CollapsedPlane::new(
+                    grid,
+                    background,
+                    profile,
+                    axis,
+                    h,
+                    &layer,
+                    Some(&node_windows),
+                );
                 job.layer(&plane, h)
             })
             .collect();
@@ -447,12 +457,34 @@ mod tests {
                         .collect();
                     window.hold(&taps).unwrap();
                     let background = vol.coeffs.background();
-                    let plane =
-                        CollapsedPlane::new(&grid, background, profile, a, h, &|n| window.layer(n));
+                    let layer = |n| window.layer(n);
+                    let plane = CollapsedPlane::new(&grid, background, profile, a, h, &layer, None);
                     let us = [-2.0, -0.33, 0.0, 0.5, 1.9];
                     let vs = [-0.2, 0.0, 0.5, 0.71, 2.0];
                     let mut batch = [0.0f32; 25];
-                    plane.sample(&us, &vs, &mut batch, &mut Default::default());
+                    plane.sample([0, 0], &us, &vs, &mut batch, &mut Default::default());
+                    // With the nodes' windows worked out beforehand (here for nodes 1..6,
+                    // sampled from node 2 on), the same values.
+                    let (grid_us, grid_vs) = (
+                        [-3.0f32, -2.0, -0.33, 0.0, 0.5, 1.9],
+                        [-9.0f32, -0.2, 0.0, 0.5, 0.71, 2.0],
+                    );
+                    let windows = NodeWindows::new(&grid, profile, a, [&grid_us, &grid_vs]);
+                    let known = CollapsedPlane::new(
+                        &grid,
+                        background,
+                        profile,
+                        a,
+                        h,
+                        &layer,
+                        Some(&windows),
+                    );
+                    let mut by_index = [0.0f32; 16];
+                    let (us4, vs4) = (&grid_us[2..], &grid_vs[2..]);
+                    known.sample([2, 2], us4, vs4, &mut by_index, &mut Default::default());
+                    let mut by_place = [0.0f32; 16];
+                    plane.sample([0, 0], us4, vs4, &mut by_place, &mut Default::default());
+                    assert_eq!(by_index.map(f32::to_bits), by_place.map(f32::to_bits));
                     for (j, &v) in vs.iter().enumerate() {
                         for (i, &u) in us.iter().enumerate() {
                             let want = vol.value(axis.point(h, u, v));
@@ -470,7 +502,7 @@ mod tests {
                     let vs = [0.11f32, 0.21, 0.31];
                     let mut nodes = [0.0f32; 12];
                     let mut block = Default::default();
-                    plane.sample(&us, &vs, &mut nodes, &mut block);
+                    plane.sample([0, 0], &us, &vs, &mut nodes, &mut block);
                     assert!(block.gathered, "{basis:?} {axis:?} h={h}: nothing kept");
                     for (j, &v) in vs.iter().enumerate() {
                         for (i, &u) in us.iter().enumerate() {

@@ -27,8 +27,16 @@ pub(crate) trait LayerField {
     fn value(&self, u: f32, v: f32) -> f32;
 
     /// Values at the nodes `(us[i], vs[j])` into `out[i + us.len() · j]`, and into `block`
-    /// what finding zeros on the edges between them can use.
-    fn sample(&self, us: &[f32], vs: &[f32], out: &mut [f32], _block: &mut Self::Block) {
+    /// what finding zeros on the edges between them can use. `us[0]` and `vs[0]` are node
+    /// `first` of the layer grid.
+    fn sample(
+        &self,
+        _first: [usize; 2],
+        us: &[f32],
+        vs: &[f32],
+        out: &mut [f32],
+        _block: &mut Self::Block,
+    ) {
         for (j, &v) in vs.iter().enumerate() {
             for (i, &u) in us.iter().enumerate() {
                 out[i + us.len() * j] = self.value(u, v);
@@ -143,6 +151,14 @@ impl Plane {
             spacing,
             n: [nu as usize, nv as usize],
         })
+    }
+
+    /// The coordinates of the nodes along each axis.
+    pub(crate) fn node_coordinates(&self) -> [Vec<f32>; 2] {
+        [
+            (0..self.n[0]).map(|i| self.node(i, 0)[0]).collect(),
+            (0..self.n[1]).map(|j| self.node(0, j)[1]).collect(),
+        ]
     }
 
     fn node(&self, i: usize, j: usize) -> [f32; 2] {
@@ -290,7 +306,7 @@ impl Plane {
             out.vs.extend((lo[1]..hi[1]).map(|j| self.node(0, j)[1]));
             let count = out.us.len() * out.vs.len();
             out.sampled_values.resize(count, 0.0);
-            field.sample(&out.us, &out.vs, &mut out.sampled_values, &mut out.kept);
+            field.sample(lo, &out.us, &out.vs, &mut out.sampled_values, &mut out.kept);
             cost.nodes += count as u64;
             let nu = out.us.len();
             for j in lo[1]..hi[1] {
