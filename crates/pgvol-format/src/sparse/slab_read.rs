@@ -237,7 +237,7 @@ impl<'a> SlabReader<'a> {
     }
 
     /// [`SlabReader::slab`], each brick kept as the file's 16-bit words where the file is in
-    /// the default `fixed` encoding, [`SlabReader::word_values`] maps every word and the file
+    /// the default `fixed` encoding, [`SlabReader::word_scale`] maps every word and the file
     /// brick's words fit (and, for a brick reaching past the grid, the clamp is a word); as
     /// values otherwise. Half the memory for a reader holding many bricks, the same
     /// coefficients.
