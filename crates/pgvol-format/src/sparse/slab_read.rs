@@ -372,6 +372,42 @@ mod tests {
         encode_pgv_with(&file, &options).unwrap().0
     }
 
+    /// A `fixed` scale whose 16-bit words the f32 computation does not give exactly (a coarse
+    /// step of 65,536 fine ones puts words past 256 beyond 2²⁴ steps) offers no words: compact
+    /// slabs hold the values.
+    #[test]
+    fn a_scale_inexact_for_some_words_gives_values() {
+        let volume = sparse(Basis::Bspline3, Background::clamp(0.5), 7);
+        let file = PgvFile {
+            header: header_for(&volume, "interp", None),
+            volume,
+        };
+        let options = EncodeOptions {
+            precision: Some(Precision::Fixed),
+            fixed_ratio: 1 << 16,
+            ..Default::default()
+        };
+        let bytes = encode_pgv_with(&file, &options).unwrap().0;
+        let reader = SlabReader::open(&bytes, Path::new("s.pgv"))
+            .unwrap()
+            .unwrap();
+        assert!(reader.word_scale().is_none());
+        let mut stored = 0;
+        for s in 0..reader.brick_counts()[2] {
+            let plain = reader.slab(2, s).unwrap();
+            let compact = reader.compact_slab(2, s).unwrap();
+            assert_eq!(plain.stored.len(), compact.stored.len());
+            for ((_, want), (_, got)) in plain.stored.iter().zip(&compact.stored) {
+                let CompactBrick::Values(got) = got else {
+                    panic!("words without a scale for them");
+                };
+                assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits));
+                stored += 1;
+            }
+        }
+        assert!(stored > 0);
+    }
+
     /// Compact slabs hold the slabs' coefficients bit for bit, as words where the file is
     /// `fixed` (bricks cut at the grid's far faces included), as values otherwise.
     #[test]
