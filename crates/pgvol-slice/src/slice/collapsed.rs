@@ -257,28 +257,36 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
                 value
             })
         };
-        // Slot 0, every plane brick whose columns are all absent and outside.
+        // Slot 0, every plane brick whose columns are all absent and outside. Plane bricks
+        // whose columns are all absent share one tile per combination of sides.
         let mut tiles = vec![Tile::Uniform(uniform(0))];
+        let mut uniform_slot: [Option<u32>; 16] = [None; 16];
+        uniform_slot[0] = Some(0);
         let mut slots = vec![0u32; counts[0] * counts[1]];
-        let mut occupied: Vec<u32> = Vec::new();
-        for (t, (_, l, _)) in taps.iter().enumerate() {
-            // Taps in one brick layer share its list.
-            if taps[..t].iter().any(|(_, m, _)| std::ptr::eq(*m, *l)) {
-                continue;
+        // The positions some tap's brick layer holds; taps in one brick layer share its list.
+        let first: &'w BrickLayer<'s> = taps[0].1;
+        let mut merged: Option<Vec<u32>> = None;
+        for (t, (_, l, _)) in taps.iter().enumerate().skip(1) {
+            if !taps[..t].iter().any(|(_, m, _)| std::ptr::eq(*m, *l)) {
+                let so_far = merged.as_deref().unwrap_or(first.occupied());
+                merged = Some(merge_sorted(so_far, l.occupied()));
             }
-            occupied = merge_sorted(&occupied, l.occupied());
         }
-        for &k in &occupied {
+        let occupied = merged.as_deref().unwrap_or(first.occupied());
+        for &k in occupied {
             let k = k as usize;
             let states = taps.iter().map(|(_, l, _)| l.state(k));
-            slots[k] = tiles.len() as u32;
             if states.clone().all(|s| s >= INSIDE) {
                 let key = states
                     .enumerate()
                     .fold(0, |key, (t, s)| key | usize::from(s == INSIDE) << t);
-                tiles.push(Tile::Uniform(uniform(key)));
+                slots[k] = *uniform_slot[key].get_or_insert_with(|| {
+                    tiles.push(Tile::Uniform(uniform(key)));
+                    tiles.len() as u32 - 1
+                });
                 continue;
             }
+            slots[k] = tiles.len() as u32;
             // A convex combination lies within its terms' range.
             let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
             for (t, (_, l, _)) in taps.iter().enumerate() {
@@ -311,7 +319,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             off_axis: h - q,
             node_windows,
         };
-        plane.edges = plane.find_edges(&occupied);
+        plane.edges = plane.find_edges(occupied);
         plane
     }
 
@@ -322,11 +330,6 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         let mut marked: Vec<usize> = Vec::new();
         for &k in occupied {
             let k = k as usize;
-            let s = self.sign(k);
-            if s == Sign::Mixed {
-                marked.push(k);
-                continue;
-            }
             let (tu, tv) = (k % cu, k / cu);
             let beside = [
                 (tu + 1 < cu).then(|| k + 1),
@@ -334,6 +337,19 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
                 (tu > 0).then(|| k - 1),
                 (tv > 0).then(|| k - cu),
             ];
+            // Amid plane bricks sharing its uniform tile (the inside of a part, mostly):
+            // nothing changes side.
+            let slot = self.slots[k];
+            if matches!(self.tiles[slot as usize], Tile::Uniform(_))
+                && beside.iter().flatten().all(|&n| self.slots[n] == slot)
+            {
+                continue;
+            }
+            let s = self.sign(k);
+            if s == Sign::Mixed {
+                marked.push(k);
+                continue;
+            }
             for n in beside.into_iter().flatten() {
                 if self.sign(n) != s {
                     marked.extend([k, n]);
