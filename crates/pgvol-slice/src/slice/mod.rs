@@ -496,34 +496,43 @@ mod tests {
                             }
                         }
                     }
-                    // Edges between the nodes of a regular block: the zero found from what
-                    // sampling kept is the one found along the edge, bit for bit.
-                    let us = [0.03f32, 0.13, 0.23, 0.33];
-                    let vs = [0.11f32, 0.21, 0.31];
-                    let mut nodes = [0.0f32; 12];
-                    let mut block = Default::default();
-                    plane.sample([0, 0], &us, &vs, &mut nodes, &mut block);
-                    assert!(block.gathered, "{basis:?} {axis:?} h={h}: nothing kept");
-                    for (j, &v) in vs.iter().enumerate() {
-                        for (i, &u) in us.iter().enumerate() {
-                            for step in [[0.1f32, 0.0], [0.0, 0.1]] {
-                                let p = [u, v];
-                                let a = plane.value(u, v);
-                                let b = plane.value(u + step[0], v + step[1]);
-                                // Root finding needs ends of opposite signs; other edges are
-                                // given some, which search the same points of the edge.
-                                let [a, b] = if (a < 0.0) != (b < 0.0) {
-                                    [a, b]
-                                } else {
-                                    [-1.0, 1.0]
-                                };
-                                let kept = plane.edge_zero(&block, [i, j], p, step, [a, b]);
-                                let along = plane::edge_root(&*plane.along(p, step), a, b);
-                                assert_eq!(
-                                    kept.to_bits(),
-                                    along.to_bits(),
-                                    "{basis:?} {axis:?} h={h} ({u}, {v}) by {step:?}"
-                                );
+                    // Edges between the nodes of regular blocks, one inside and one at the
+                    // box's low corner (whose windows read mirrored coefficients): the zero
+                    // found from what sampling kept is the one found along the edge, bit for
+                    // bit.
+                    let [ou, ov] = plane_axes(a).map(|k| grid.origin[k]);
+                    for (us, vs) in [
+                        ([0.03f32, 0.13, 0.23, 0.33], [0.11f32, 0.21, 0.31]),
+                        (
+                            [0.0, 0.1, 0.2, 0.3].map(|d| ou + d),
+                            [0.0, 0.1, 0.2].map(|d| ov + d),
+                        ),
+                    ] {
+                        let mut nodes = [0.0f32; 12];
+                        let mut block = Default::default();
+                        plane.sample([0, 0], &us, &vs, &mut nodes, &mut block);
+                        assert!(block.gathered, "{basis:?} {axis:?} h={h}: nothing kept");
+                        for (j, &v) in vs.iter().enumerate() {
+                            for (i, &u) in us.iter().enumerate() {
+                                for step in [[0.1f32, 0.0], [0.0, 0.1]] {
+                                    let p = [u, v];
+                                    let a = plane.value(u, v);
+                                    let b = plane.value(u + step[0], v + step[1]);
+                                    // Root finding needs ends of opposite signs; other edges
+                                    // are given some, which search the same points of the edge.
+                                    let [a, b] = if (a < 0.0) != (b < 0.0) {
+                                        [a, b]
+                                    } else {
+                                        [-1.0, 1.0]
+                                    };
+                                    let kept = plane.edge_zero(&block, [i, j], p, step, [a, b]);
+                                    let along = plane::edge_root(&*plane.along(p, step), a, b);
+                                    assert_eq!(
+                                        kept.to_bits(),
+                                        along.to_bits(),
+                                        "{basis:?} {axis:?} h={h} ({u}, {v}) by {step:?}"
+                                    );
+                                }
                             }
                         }
                     }
