@@ -264,8 +264,7 @@ pub fn slice_bricks<S: BrickSource + ?Sized>(
     let axis = options.axis.indices()[0];
     let mut window = Window::new(source, axis);
     let mut total = LayerCost::default();
-    let [us, vs] = job.plane.node_coordinates();
-    let node_windows = NodeWindows::new(grid, profile, axis, [&us, &vs]);
+    let node_windows = NodeWindows::new(grid, profile, axis, job.plane.node_coordinates());
     for run in job.heights.chunks(LAYER_RUN) {
         let wanted: Vec<usize> = run
             .iter()

@@ -90,6 +90,8 @@ pub(crate) struct Plane {
     origin: [f32; 2],
     spacing: f32,
     n: [usize; 2],
+    /// The nodes' coordinates along each axis ([`Plane::node`]'s), for sampling rows of them.
+    coordinates: [Vec<f32>; 2],
 }
 
 /// The values of one block's nodes; its buffers are reused from block to block.
@@ -107,9 +109,7 @@ struct BlockNodes<K> {
     /// False on the ring and where the field is not finite, whose values are stand-ins (±h)
     /// and whose edges are cut by linear interpolation.
     real: Vec<bool>,
-    /// The sampled nodes' coordinates and values.
-    us: Vec<f32>,
-    vs: Vec<f32>,
+    /// The sampled nodes' values.
     sampled_values: Vec<f32>,
 }
 
@@ -146,19 +146,22 @@ impl Plane {
                  use a coarser resolution"
             )));
         }
-        Ok(Plane {
+        let mut plane = Plane {
             origin: [ou, ov],
             spacing,
             n: [nu as usize, nv as usize],
-        })
+            coordinates: Default::default(),
+        };
+        plane.coordinates = [
+            (0..plane.n[0]).map(|i| plane.node(i, 0)[0]).collect(),
+            (0..plane.n[1]).map(|j| plane.node(0, j)[1]).collect(),
+        ];
+        Ok(plane)
     }
 
     /// The coordinates of the nodes along each axis.
-    pub(crate) fn node_coordinates(&self) -> [Vec<f32>; 2] {
-        [
-            (0..self.n[0]).map(|i| self.node(i, 0)[0]).collect(),
-            (0..self.n[1]).map(|j| self.node(0, j)[1]).collect(),
-        ]
+    pub(crate) fn node_coordinates(&self) -> [&[f32]; 2] {
+        [&self.coordinates[0], &self.coordinates[1]]
     }
 
     fn node(&self, i: usize, j: usize) -> [f32; 2] {
@@ -300,15 +303,13 @@ impl Plane {
         ];
         (out.first, out.len, out.sampled) = (first, len, lo);
         if lo[0] < hi[0] && lo[1] < hi[1] {
-            out.us.clear();
-            out.us.extend((lo[0]..hi[0]).map(|i| self.node(i, 0)[0]));
-            out.vs.clear();
-            out.vs.extend((lo[1]..hi[1]).map(|j| self.node(0, j)[1]));
-            let count = out.us.len() * out.vs.len();
+            let us = &self.coordinates[0][lo[0]..hi[0]];
+            let vs = &self.coordinates[1][lo[1]..hi[1]];
+            let count = us.len() * vs.len();
             out.sampled_values.resize(count, 0.0);
-            field.sample(lo, &out.us, &out.vs, &mut out.sampled_values, &mut out.kept);
+            field.sample(lo, us, vs, &mut out.sampled_values, &mut out.kept);
             cost.nodes += count as u64;
-            let nu = out.us.len();
+            let nu = us.len();
             for j in lo[1]..hi[1] {
                 for i in lo[0]..hi[0] {
                     let x = out.sampled_values[i - lo[0] + nu * (j - lo[1])];
