@@ -92,6 +92,41 @@ impl FixedScale {
         WordScale::new(self.step, self.knee, self.ratio)
     }
 
+    /// [`FixedScale::word`] of each of `values`, `None` if any has none. Quantising a file
+    /// asks this of every stored coefficient, so values within [`NEIGHBOURS_FROM`] steps take a
+    /// loop without branches or calls, which computes what `word` does there: the same
+    /// quotient and roundings, no neighbour to try, and a finite value for every word when the
+    /// step is below `f32::MAX / 2²⁴` (a word's value is at most 2²³ steps there). Any other
+    /// value sends the whole slice through `word`.
+    pub fn words_of(&self, values: &[f32]) -> Option<Vec<u32>> {
+        const FINITE_STEP: f32 = f32::MAX / (1u32 << 24) as f32;
+        if self.step < FINITE_STEP {
+            let (step, knee, ratio) = (self.step as f64, self.knee as f64, self.ratio as f64);
+            let mut words = vec![0u32; values.len()];
+            let mut outside = 0u32;
+            for (w, &v) in words.iter_mut().zip(values) {
+                let a = (v as f64 / step).abs();
+                let near = a < NEIGHBOURS_FROM;
+                outside |= u32::from(!near);
+                // Out-of-range lanes compute from 0 and are discarded below.
+                let a = if near { a } else { 0.0 };
+                let r = round_small(a);
+                let m = if r <= knee {
+                    r
+                } else {
+                    knee + round_small((a - knee) / ratio)
+                };
+                // `m` is a whole number below 2²³, so it is the low bits of `m + 2⁵²`.
+                let q = (m + WHOLE).to_bits() as u32;
+                *w = if v < 0.0 { q.wrapping_neg() } else { q };
+            }
+            if outside == 0 {
+                return Some(words);
+            }
+        }
+        values.iter().map(|&v| self.word(v)).collect()
+    }
+
     /// The word nearest to `v` on this scale, or `None` if there is none (beyond 31 bits, or a
     /// non-finite value either way). A value some word decodes to gets that word back, so
     /// quantising decoded values gives their words again (far beyond 2²³ fine steps, where the
@@ -122,6 +157,25 @@ impl FixedScale {
             }
         }
         Some(q as u32)
+    }
+}
+
+/// 2⁵²: adding it to a double below it rounds away the fraction, since its unit is 1.
+const WHOLE: f64 = (1u64 << 52) as f64;
+
+/// `x.round()` (halves away from zero) for `0 ≤ x < 2⁵¹`, in a form that vectorises (on the
+/// baseline x86-64 target `f64::round` is a library call, and casts to integers check their
+/// range). `t` is the integer part and `x − t` is exact (`x` and `t` are within a factor of two,
+/// or `t` is 0), so comparing it with ½ decides as rounding does. Other `x` give a value that
+/// is not used.
+#[inline]
+fn round_small(x: f64) -> f64 {
+    let nearest = (x + WHOLE) - WHOLE;
+    let t = if nearest > x { nearest - 1.0 } else { nearest };
+    if x - t >= 0.5 {
+        t + 1.0
+    } else {
+        t
     }
 }
 
@@ -173,6 +227,59 @@ mod tests {
             },
         ] {
             assert!(!bad.is_valid(), "{bad:?}");
+        }
+    }
+
+    /// The batch gives `word` of each value: words' own values and the halves between them on
+    /// both sides of the knee, random values, values past the fast range and non-finite ones
+    /// (which send the batch through `word`, `None` included).
+    #[test]
+    fn batch_words_are_single_words() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for (step, knee, ratio) in [(1.0f32 / 512.0, 512u32, 8u32), (0.37, 5, 3), (1e-3, 0, 1)] {
+            let scale = FixedScale { step, knee, ratio };
+            let mut values = Vec::new();
+            for w in (0..2000u32).chain(knee.saturating_sub(50)..knee + 50) {
+                let v = scale.value(w);
+                let half = step * if w >= knee { ratio as f32 } else { 1.0 } * 0.5;
+                for x in [v, v + half, v - half, v + half * 0.999, v + half * 1.001] {
+                    values.extend([x, -x]);
+                }
+            }
+            for _ in 0..20_000 {
+                let bits = next();
+                let x = (bits >> 40) as f32 / (1u64 << 24) as f32 * 4.0 * step * knee as f32;
+                values.push(if bits & 1 == 0 { x } else { -x });
+            }
+            let single: Vec<Option<u32>> = values.iter().map(|&v| scale.word(v)).collect();
+            let batch = scale.words_of(&values).expect("all in range");
+            for ((v, s), b) in values.iter().zip(&single).zip(&batch) {
+                assert_eq!(Some(*b), *s, "{scale:?} {v:e}");
+            }
+            let far = step * (1u32 << 23) as f32 * ratio as f32;
+            let mut beyond = values[..100].to_vec();
+            beyond.push(far);
+            let want: Option<Vec<u32>> = beyond.iter().map(|&v| scale.word(v)).collect();
+            assert_eq!(scale.words_of(&beyond), want);
+            assert!(want.is_some());
+            for bad in [f32::NAN, f32::INFINITY, -1e38] {
+                beyond.push(bad);
+                assert_eq!(scale.words_of(&beyond), None, "{bad}");
+                beyond.pop();
+            }
+            // A scale no reader accepts still gives `word`'s answers.
+            let invalid = FixedScale {
+                knee: u32::MAX,
+                ..scale
+            };
+            let want: Option<Vec<u32>> = values.iter().map(|&v| invalid.word(v)).collect();
+            assert_eq!(invalid.words_of(&values), want);
         }
     }
 

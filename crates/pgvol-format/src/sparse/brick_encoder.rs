@@ -7,19 +7,17 @@ use rayon::prelude::*;
 
 use super::bricks::Bricks;
 use super::free_words::settle_free_words;
-use super::predict::predict;
+use super::predict::{for_each_node, predict_at};
 use super::quantise::{dequantise, quantise};
 use super::stored_band::KeptBrick;
 use crate::sparse_params::{Compression, Precision, SparseParams};
 
+/// The zig-zag code of a residual of `bits` (16 or 32) bits read as two's complement: `2s`
+/// for `s ≥ 0`, `−2s − 1` below. Branch-free: the residual is sign-extended by shifts.
+#[inline]
 fn zigzag(r: u32, bits: u32) -> u32 {
-    let half = 1u64 << (bits - 1);
-    let s = if (r as u64) >= half {
-        r as i64 - (1i64 << bits)
-    } else {
-        r as i64
-    };
-    (if s >= 0 { 2 * s } else { -2 * s - 1 }) as u32
+    let s = ((r << (32 - bits)) as i32) >> (32 - bits);
+    ((s << 1) ^ (s >> 31)) as u32
 }
 
 /// Encodes one brick's values to its blob (before compression: q16 parameters, then residual
@@ -28,12 +26,11 @@ pub(crate) fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &Sparse
     let w = sp.precision.width();
     let bits = 8 * w as u32;
     let mask = if w == 4 { u32::MAX } else { 0xffff };
-    let residuals: Vec<u32> = (0..words.len())
-        .map(|at| {
-            let r = words[at].wrapping_sub(predict(words, n, at, sp.predictor, mask)) & mask;
-            zigzag(r, bits)
-        })
-        .collect();
+    let mut residuals = Vec::with_capacity(words.len());
+    for_each_node(n, |at, node| {
+        let p = predict_at(words, n, at, node, sp.predictor, mask);
+        residuals.push(zigzag(words[at].wrapping_sub(p) & mask, bits));
+    });
     let mut raw = params.to_vec();
     if sp.shuffle {
         for b in 0..w {
@@ -143,4 +140,32 @@ fn encode_brick(
         }
     };
     Ok(Some((blob, worst)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::zigzag;
+
+    /// Every 16-bit residual and 32-bit ones at the edges of their range give the code of the
+    /// signed value: 0, −1, 1, −2, … to 0, 1, 2, 3, ….
+    #[test]
+    fn zigzag_codes_the_signed_residual() {
+        let code = |s: i64| (if s >= 0 { 2 * s } else { -2 * s - 1 }) as u32;
+        for r in 0..=u16::MAX as u32 {
+            assert_eq!(zigzag(r, 16), code(r as u16 as i16 as i64), "{r}");
+        }
+        for s in [
+            0i64,
+            1,
+            -1,
+            2,
+            -2,
+            i32::MAX as i64,
+            i32::MIN as i64,
+            12345,
+            -54321,
+        ] {
+            assert_eq!(zigzag(s as i32 as u32, 32), code(s), "{s}");
+        }
+    }
 }

@@ -2,7 +2,7 @@
 //! (`fixed` only): moved towards their prediction, so that their residuals are zero.
 
 use super::options::EncodeOptions;
-use super::predict::predict;
+use super::predict::{for_each_node, predict_at};
 use crate::sparse_params::Predictor;
 
 /// How many coarse `fixed` words a coefficient the band does not need may move: the tolerance
@@ -25,9 +25,9 @@ pub(crate) fn settle_free_words(
     pred: Predictor,
     tolerance: i32,
 ) {
-    for at in 0..words.len() {
+    for_each_node(n, |at, node| {
         if free[at] {
-            let p = predict(words, n, at, pred, u32::MAX) as i32;
+            let p = predict_at(words, n, at, node, pred, u32::MAX) as i32;
             let q = words[at] as i32;
             let (lo, hi) = if q >= 0 {
                 (q.saturating_sub(tolerance).max(0), q)
@@ -36,7 +36,7 @@ pub(crate) fn settle_free_words(
             };
             words[at] = p.clamp(lo, hi) as u32;
         }
-    }
+    });
 }
 
 #[cfg(test)]

@@ -162,8 +162,7 @@ pub(crate) fn quantise(
     match p {
         Precision::Fixed => {
             let scale = fixed.filter(FixedScale::is_valid)?;
-            let words: Option<Vec<u32>> = values.iter().map(|&v| scale.word(v)).collect();
-            Some((Vec::new(), words?))
+            Some((Vec::new(), scale.words_of(values)?))
         }
         Precision::F32 => Some((
             Vec::new(),
