@@ -93,7 +93,7 @@ impl FixedScale {
     }
 
     /// [`FixedScale::word`] of each of `values`, `None` if any has none. Quantising a file
-    /// asks this of every stored coefficient, so values within [`NEIGHBOURS_FROM`] steps take a
+    /// asks this of every stored coefficient, so values within 2²² steps of zero take a
     /// loop without branches or calls, which computes what `word` does there: the same
     /// quotient and roundings, no neighbour to try, and a finite value for every word when the
     /// step is below `f32::MAX / 2²⁴` (a word's value is at most 2²³ steps there). Any other

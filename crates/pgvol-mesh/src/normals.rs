@@ -1,8 +1,8 @@
 //! Unit normals for writers, every one of length 1 (glTF validators reject others). Each face's
 //! contribution is computed in f64, so that tiny or huge triangles neither underflow nor
-//! overflow, then scaled by one factor for the whole mesh and added in f32: the sums are then
-//! the normals' own array, normalised in place, where f64 sums took three times the memory of
-//! the output at the end of a decode (its peak on large meshes).
+//! overflow, then scaled by one factor for the whole mesh and added in f32 in the normals' own
+//! array, which is normalised in place: beyond the output only a batch of faces is held, since
+//! writing a decoded mesh, where normals are made, sets a large decode's peak memory.
 
 use std::collections::HashMap;
 

@@ -13,8 +13,8 @@ pub(crate) fn predict(words: &[u32], n: [usize; 3], at: usize, pred: Predictor, 
 }
 
 /// Calls `visit` with each word's index and node `[i, j, k]` in coding order, for loops that
-/// would otherwise divide the index back into the node for every word (most of [`predict`]'s
-/// cost). Plain nested loops: an iterator of nested `flat_map`s cost more than the divisions.
+/// would otherwise divide the index back into the node for every word (most of the cost of a
+/// prediction). Plain nested loops, which compile to tighter code than nested `flat_map`s.
 #[inline]
 pub(crate) fn for_each_node(n: [usize; 3], mut visit: impl FnMut(usize, [usize; 3])) {
     let mut at = 0;
@@ -28,7 +28,7 @@ pub(crate) fn for_each_node(n: [usize; 3], mut visit: impl FnMut(usize, [usize; 
     }
 }
 
-/// [`predict`] of word `at`, whose node `node` the caller knows.
+/// The prediction of word `at`, whose node `node` the caller knows.
 #[inline]
 pub(crate) fn predict_at(
     words: &[u32],
