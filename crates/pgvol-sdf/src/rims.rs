@@ -9,7 +9,7 @@
 
 use glam::Vec3A;
 use pgvol_mesh::Mesh;
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 const FOUR_PI: f32 = 4.0 * std::f32::consts::PI;
 
@@ -47,19 +47,38 @@ pub struct Rims {
     nodes: Vec<RimNode>,
 }
 
+/// Each edge `(smaller vertex, larger vertex)` whose uses by the triangles do not cancel, with
+/// its net uses (+1 for a use from the smaller vertex to the larger), in edge order (the tree,
+/// and so every bound, follows it). The 3n uses are sorted in parallel and summed along runs
+/// of equal edges: a hash map of the edges, on one thread, was a tenth of a small encode's time
+/// on a 1.3 M-triangle mesh.
+fn net_uses(mesh: &Mesh) -> Vec<((u32, u32), i32)> {
+    let mut uses: Vec<(u64, i32)> = mesh
+        .triangles
+        .par_iter()
+        .flat_map_iter(|t| {
+            (0..3).map(move |c| {
+                let (a, b) = (t[c], t[(c + 1) % 3]);
+                let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
+                (key, if a < b { 1 } else { -1 })
+            })
+        })
+        .collect();
+    uses.par_sort_unstable_by_key(|u| u.0);
+    let mut net = Vec::new();
+    for run in uses.chunk_by(|x, y| x.0 == y.0) {
+        let n: i32 = run.iter().map(|u| u.1).sum();
+        if n != 0 {
+            let key = run[0].0;
+            net.push((((key >> 32) as u32, key as u32), n));
+        }
+    }
+    net
+}
+
 impl Rims {
     pub fn new(mesh: &Mesh) -> Rims {
-        let mut net: HashMap<(u32, u32), i32> = HashMap::new();
-        for t in &mesh.triangles {
-            for c in 0..3 {
-                let (a, b) = (t[c], t[(c + 1) % 3]);
-                *net.entry((a.min(b), a.max(b))).or_insert(0) += if a < b { 1 } else { -1 };
-            }
-        }
-        let mut keyed: Vec<((u32, u32), i32)> = net.into_iter().filter(|&(_, n)| n != 0).collect();
-        // HashMap order is random; the tree, and so every bound, must not be.
-        keyed.sort_unstable();
-        let mut edges: Vec<RimEdge> = keyed
+        let mut edges: Vec<RimEdge> = net_uses(mesh)
             .into_iter()
             .map(|((a, b), n)| {
                 let a = Vec3A::from(mesh.positions[a as usize]);
@@ -193,6 +212,37 @@ mod tests {
     use glam::Vec3;
     use pgvol_mesh::shapes::octasphere as sphere;
     use rand::{Rng, SeedableRng};
+
+    /// The net uses summed by a hash map and sorted afterwards, as the reference: random faces
+    /// over few vertices, so edges are used once, cancelled, or used twice the same way.
+    #[test]
+    fn net_uses_sum_as_a_map_does() {
+        use std::collections::HashMap;
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move |m: u32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % m as u64) as u32
+        };
+        for (vertices, faces) in [(4u32, 3), (8, 30), (40, 500)] {
+            let triangles: Vec<[u32; 3]> = (0..faces)
+                .map(|_| [next(vertices), next(vertices), next(vertices)])
+                .collect();
+            let mesh = Mesh::new(vec![Vec3::ZERO; vertices as usize], triangles);
+            let mut map: HashMap<(u32, u32), i32> = HashMap::new();
+            for t in &mesh.triangles {
+                for c in 0..3 {
+                    let (a, b) = (t[c], t[(c + 1) % 3]);
+                    *map.entry((a.min(b), a.max(b))).or_insert(0) += if a < b { 1 } else { -1 };
+                }
+            }
+            let mut want: Vec<_> = map.into_iter().filter(|&(_, n)| n != 0).collect();
+            want.sort_unstable();
+            assert!(!want.is_empty());
+            assert_eq!(net_uses(&mesh), want);
+        }
+    }
 
     #[test]
     fn closed_meshes_have_no_rims() {
