@@ -31,8 +31,8 @@ pub use layer_frame::{layer_coordinate_problem, LayerFrame, MAX_LAYER_COORDINATE
 pub use simplify::simplify_loops;
 pub use slice::{
     brick_counts, layer_heights, plane_axes, slice, slice_bricks, slice_volume, slice_volume_range,
-    volume_bounds, Axis, BrickLayer, BrickRef, BrickSource, Layer, LayerCost, Loop, SliceOptions,
-    INSIDE, MAX_LAYERS, MAX_LAYER_NODES, OUTSIDE,
+    volume_bounds, Axis, BrickLayer, BrickRef, BrickSource, Layer, LayerCost, LayerRanges, Loop,
+    SliceOptions, INSIDE, MAX_LAYERS, MAX_LAYER_NODES, OUTSIDE,
 };
 pub use svg_read::read_svg;
 pub use write::{read_slice_json, write_slice_json, write_slice_json_in, write_svg, write_svg_in};

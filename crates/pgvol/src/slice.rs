@@ -5,11 +5,12 @@ use std::path::Path;
 use glam::Vec3;
 use pgvol_core::WordScale;
 use pgvol_format::{CompactBrick, SlabReader, SlabSource};
+use rayon::prelude::*;
 
 use crate::decode_file::whole_file;
 use pgvol_slice::{
     brick_counts, plane_axes, Axis, BrickLayer, BrickRef, BrickSource, CliEncoding, Layer,
-    LayerFrame, SliceOptions as StageOptions,
+    LayerFrame, LayerRanges, SliceOptions as StageOptions,
 };
 
 use crate::error::{Error, ErrorKind, FileResult, Result};
@@ -162,8 +163,8 @@ impl BrickSource for FileBricks<'_, '_> {
             let (n, k) = at(m);
             layers[n].set_inside(k);
         }
+        let mut stored = Vec::with_capacity(decoded.stored.len());
         for (m, brick) in decoded.stored {
-            let (n, k) = at(m);
             let brick = match (brick, self.word_scale) {
                 (CompactBrick::Values(values), _) => BrickRef::Owned(values),
                 (CompactBrick::Words(words), Some(scale)) => BrickRef::Words(words, scale),
@@ -175,7 +176,16 @@ impl BrickSource for FileBricks<'_, '_> {
                     ))
                 }
             };
-            layers[n].insert(k, brick, axis);
+            stored.push((at(m), brick));
+        }
+        // Each brick's ranges read all its values: on the threads, not between the runs of
+        // layers that keep them busy.
+        let ranges: Vec<LayerRanges> = stored
+            .par_iter()
+            .map(|(_, brick)| brick.layer_ranges(axis))
+            .collect();
+        for (((n, k), brick), ranges) in stored.into_iter().zip(ranges) {
+            layers[n].insert_ranged(k, brick, ranges);
         }
         Ok(layers.into_iter().map(BrickLayer::finish).collect())
     }

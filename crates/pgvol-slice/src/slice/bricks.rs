@@ -40,7 +40,7 @@ impl BrickRef<'_> {
     }
 
     /// Per node layer along grid axis `axis`: the least and greatest value.
-    fn layer_ranges(&self, axis: usize) -> [[f32; 2]; BRICK_EDGE] {
+    pub fn layer_ranges(&self, axis: usize) -> LayerRanges {
         match self {
             BrickRef::Borrowed(values) => ranges_of(axis, |i| values[i]),
             BrickRef::Owned(values) => ranges_of(axis, |i| values[i]),
@@ -110,6 +110,9 @@ fn add_values(values: &[f32], weight: f32, out: &mut [f32]) {
     }
 }
 
+/// Per node layer of a brick along a layer's axis: its least and greatest value.
+pub type LayerRanges = [[f32; 2]; BRICK_EDGE];
+
 /// A brick layer's entry for an absent brick outside.
 pub const OUTSIDE: u32 = u32::MAX;
 /// A brick layer's entry for an absent brick inside.
@@ -125,7 +128,7 @@ pub struct BrickLayer<'a> {
     pub bricks: Vec<BrickRef<'a>>,
     /// Per brick in `bricks`, per node layer along the layer's axis: its least and greatest
     /// value.
-    pub ranges: Vec<[[f32; 2]; BRICK_EDGE]>,
+    pub ranges: Vec<LayerRanges>,
 }
 
 impl<'a> BrickLayer<'a> {
@@ -167,11 +170,17 @@ impl<'a> BrickLayer<'a> {
 
     /// Stores `values` at brick position `at` of a layer across grid axis `axis`.
     pub fn insert(&mut self, at: usize, values: BrickRef<'a>, axis: usize) {
+        let ranges = values.layer_ranges(axis);
+        self.insert_ranged(at, values, ranges);
+    }
+
+    /// [`BrickLayer::insert`] with the ranges [`BrickRef::layer_ranges`] gives, worked out
+    /// beforehand (by a caller that computes many at once, in parallel).
+    pub fn insert_ranged(&mut self, at: usize, values: BrickRef<'a>, ranges: LayerRanges) {
         if self.states[at] == OUTSIDE {
             self.occupied.push(at as u32);
         }
         self.states[at] = self.bricks.len() as u32;
-        let ranges = values.layer_ranges(axis);
         self.ranges.push(ranges);
         self.bricks.push(values);
     }

@@ -27,7 +27,9 @@ use collapsed::{tap_layers, CollapsedPlane, NodeWindows};
 use plane::{LayerField, Plane};
 use window::Window;
 
-pub use bricks::{brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, INSIDE, OUTSIDE};
+pub use bricks::{
+    brick_counts, plane_axes, BrickLayer, BrickRef, BrickSource, LayerRanges, INSIDE, OUTSIDE,
+};
 pub use plane::{LayerCost, MAX_LAYER_NODES};
 
 /// Most layers one call produces: far beyond any printer, small enough to refuse typos.
