@@ -8,6 +8,7 @@
 //! A small tree over the rims answers that bound for a box in logarithmic time.
 
 use glam::Vec3A;
+use pgvol_core::mesh::edge_key;
 use pgvol_mesh::Mesh;
 use rayon::prelude::*;
 
@@ -59,8 +60,7 @@ fn net_uses(mesh: &Mesh) -> Vec<((u32, u32), i32)> {
         .flat_map_iter(|t| {
             (0..3).map(move |c| {
                 let (a, b) = (t[c], t[(c + 1) % 3]);
-                let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
-                (key, if a < b { 1 } else { -1 })
+                (edge_key(a, b), if a < b { 1 } else { -1 })
             })
         })
         .collect();

@@ -12,6 +12,13 @@ use rayon::prelude::*;
 
 use crate::frame;
 
+/// The key of the undirected edge between vertices `a` and `b`: the smaller index in the high
+/// half, so sorted keys put each edge's uses together, in order of (smaller, larger) vertex.
+#[inline]
+pub fn edge_key(a: u32, b: u32) -> u64 {
+    ((a.min(b) as u64) << 32) | a.max(b) as u64
+}
+
 /// An indexed triangle mesh in the units of its source file.
 ///
 /// Triangles are counter-clockwise seen from outside (right-hand rule gives the outward normal).

@@ -97,7 +97,7 @@ impl Mesh {
             .map(|at| {
                 let tri = self.triangles[at / 3];
                 let (a, b) = (tri[at % 3], tri[(at % 3 + 1) % 3]);
-                (((a.min(b) as u64) << 32) | a.max(b) as u64, at)
+                (super::edge_key(a, b), at)
             })
             .collect();
         ends.par_sort_unstable();
