@@ -9,7 +9,7 @@ use super::bricks::Bricks;
 use super::free_words::settle_free_words;
 use super::predict::{for_each_node, predict_at};
 use super::quantise::{dequantise, quantise};
-use super::stored_band::KeptBrick;
+use super::stored_band::{node_flags, KeptBrick};
 use crate::sparse_params::{Compression, Precision, SparseParams};
 
 /// The zig-zag code of a residual of `bits` (16 or 32) bits read as two's complement: `2s`
@@ -107,7 +107,7 @@ fn encode_brick(
     let Some((params, mut words)) = quantise(&values, sp.precision, sp.fixed) else {
         return Ok(None);
     };
-    let loose: Vec<bool> = kept.needed.iter().map(|&x| !x).collect();
+    let loose: Vec<bool> = node_flags(&kept.needed, n[0]).map(|x| !x).collect();
     if sp.precision == Precision::Fixed && s.tolerance_steps > 0 {
         settle_free_words(&mut words, &loose, n, sp.predictor, s.tolerance_steps);
     }

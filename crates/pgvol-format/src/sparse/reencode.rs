@@ -15,7 +15,7 @@ use pgvol_field::CoefficientVolume;
 use super::bricks::Bricks;
 use super::coverage::{Coverage, STORED};
 use super::options::EncodeOptions;
-use super::stored_band::KeptBrick;
+use super::stored_band::{every_node, KeptBrick};
 use crate::header::PgvHeader;
 use crate::sparse_params::{Precision, ENCODING_SPARSE};
 
@@ -59,7 +59,7 @@ pub(crate) fn decoded_layout(
             let (_, n) = bricks.extent(b);
             KeptBrick {
                 index: b,
-                needed: vec![true; n[0] * n[1] * n[2]].into_boxed_slice(),
+                needed: every_node(n[0], n[1] * n[2]),
             }
         })
         .collect();

@@ -18,10 +18,27 @@ use rayon::prelude::*;
 use super::bricks::Bricks;
 use super::coverage::{Coverage, INSIDE, OUTSIDE, STORED};
 
-/// A file brick to store, with the nodes the band needs (x fastest within the brick).
+/// A file brick to store, with the nodes the band needs.
 pub(crate) struct KeptBrick {
     pub(crate) index: usize,
-    pub(crate) needed: Box<[bool]>,
+    pub(crate) needed: NodeRows,
+}
+
+/// Per row along x of a file brick's nodes (y fastest, then z): a bit per node, node `i` in
+/// bit `i`. File bricks are at most 32 nodes wide (`BRICK_RANGE`). A bit rather than a byte
+/// per node: the capped bunny's stored bricks at 2048³ held 280 MB of flags, at the peak of
+/// its encoding.
+pub(crate) type NodeRows = Box<[u32]>;
+
+/// Rows of `width` nodes as a flag per node, x fastest.
+pub(crate) fn node_flags(rows: &[u32], width: usize) -> impl Iterator<Item = bool> + '_ {
+    rows.iter()
+        .flat_map(move |&row| (0..width).map(move |i| row >> i & 1 == 1))
+}
+
+/// Rows of `width` nodes with every bit set.
+pub(crate) fn every_node(width: usize, rows: usize) -> NodeRows {
+    vec![low_bits(width) as u32; rows].into_boxed_slice()
 }
 
 /// Nodes a coefficient reaches, in grid spacings (per axis; Euclidean for pg, bounded by the
@@ -102,7 +119,7 @@ pub(crate) fn stored_band_layers(
         .into_par_iter()
         .filter(|&b| !far.covers(coverage, bricks, b, reach))
         .collect();
-    let near_zero: Vec<(usize, Box<[bool]>)> = candidates
+    let near_zero: Vec<(usize, NodeRows)> = candidates
         .par_iter()
         .map_init(Vec::new, |scratch, &b| {
             near_zero_nodes(volume, bricks, b, limit, scratch).map(|m| (b, m))
@@ -223,15 +240,15 @@ fn for_each_brick_in(bricks: &Bricks, (lo, n): ([usize; 3], [usize; 3]), mut f: 
     }
 }
 
-/// Per node of file brick `b` (x fastest): whether the field there is within `limit` of zero;
-/// `None` when no node is.
+/// Per node of file brick `b` (as [`NodeRows`]): whether the field there is within `limit` of
+/// zero; `None` when no node is.
 fn near_zero_nodes(
     volume: &CoefficientVolume,
     bricks: &Bricks,
     b: usize,
     limit: f32,
     scratch: &mut Vec<f32>,
-) -> Option<Box<[bool]>> {
+) -> Option<NodeRows> {
     let (lo, n) = bricks.extent(b);
     let len = n[0] * n[1] * n[2];
     // The B-spline kernels as `pgvol_field::fit::node_values` applies them: the same bits.
@@ -264,7 +281,15 @@ fn near_zero_nodes(
     };
     // Most bricks have no node near zero: decide that in one vectorised pass first.
     let closest = values.iter().fold(f32::INFINITY, |m, v| m.min(v.abs()));
-    (closest <= limit).then(|| values.iter().map(|v| v.abs() <= limit).collect())
+    (closest <= limit).then(|| {
+        values
+            .chunks_exact(n[0])
+            .map(|row| {
+                let near = row.iter().enumerate();
+                near.fold(0u32, |bits, (i, v)| bits | u32::from(v.abs() <= limit) << i)
+            })
+            .collect()
+    })
 }
 
 /// The field at the box of `n` nodes from `lo` (x fastest), a whole number of the sparse
@@ -346,17 +371,17 @@ fn blurred(
     z
 }
 
-/// Per node of file brick `b` (x fastest): whether a node near zero (`near_zero`, sorted by
-/// file brick) lies within `d` nodes per axis; `None` when none does. The window around the
+/// Per node of file brick `b` (as [`NodeRows`]): whether a node near zero (`near_zero`, sorted
+/// by file brick) lies within `d` nodes per axis; `None` when none does. The window around the
 /// brick is held as one bit mask per row along x, so the box dilation is shifts and ORs of
 /// rows (a byte per node and a pass per node and axis took most of a 2048³ file's writing).
 fn needed_nodes(
     bricks: &Bricks,
-    near_zero: &[(usize, Box<[bool]>)],
+    near_zero: &[(usize, NodeRows)],
     b: usize,
     d: usize,
     (rows, spare): &mut (Vec<u64>, Vec<u64>),
-) -> Option<Box<[bool]>> {
+) -> Option<NodeRows> {
     let (lo, n) = bricks.extent(b);
     let (wlo, wn) = grow(bricks, lo, n, d);
     debug_assert!(wn[0] <= 64, "a window row fits in 64 bits");
@@ -372,28 +397,28 @@ fn needed_nodes(
         // The part of file brick `f` inside the window.
         let from = [0, 1, 2].map(|a| flo[a].max(wlo[a]));
         let to = [0, 1, 2].map(|a| (flo[a] + fnn[a]).min(wlo[a] + wn[a]));
+        // Its rows' bits from `from[0]` to `to[0]`, moved to the window's x.
+        let part = low_bits(to[0] - from[0]);
+        let (skip, place) = (from[0] - flo[0], from[0] - wlo[0]);
         for k in from[2]..to[2] {
             for j in from[1]..to[1] {
-                let src = fnn[0] * (j - flo[1] + fnn[1] * (k - flo[2]));
-                let row = &mut rows[row_at(j - wlo[1], k - wlo[2])];
-                for i in from[0]..to[0] {
-                    *row |= u64::from(near[src + i - flo[0]]) << (i - wlo[0]);
-                }
+                let src = j - flo[1] + fnn[1] * (k - flo[2]);
+                rows[row_at(j - wlo[1], k - wlo[2])] |=
+                    (u64::from(near[src]) >> skip & part) << place;
             }
         }
     });
     dilate_rows(rows, spare, wn, d);
     let off = [0, 1, 2].map(|a| lo[a] - wlo[a]);
-    let mut needed = Vec::with_capacity(n[0] * n[1] * n[2]);
-    let mut any = 0u64;
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            let row = rows[row_at(j + off[1], k + off[2])] >> off[0];
-            any |= row & low_bits(n[0]);
-            needed.extend((0..n[0]).map(|i| row >> i & 1 == 1));
-        }
+    let brick_rows = (0..n[2])
+        .flat_map(|k| (0..n[1]).map(move |j| (j, k)))
+        .map(|(j, k)| rows[row_at(j + off[1], k + off[2])] >> off[0] & low_bits(n[0]));
+    // Most bricks reached need no node: known from the row masks, before a flag per node.
+    if brick_rows.clone().all(|row| row == 0) {
+        return None;
     }
-    (any != 0).then(|| needed.into_boxed_slice())
+    // A brick is at most 32 nodes wide, so its rows fit.
+    Some(brick_rows.map(|row| row as u32).collect())
 }
 
 /// The lowest `n` bits set.
@@ -503,7 +528,8 @@ mod tests {
             if nodes.contains(&true) {
                 let k = next.next().unwrap_or_else(|| panic!("{what} missing"));
                 assert_eq!(k.index, b, "{what}");
-                assert_eq!(&*k.needed, &nodes[..], "{what}");
+                let needed: Vec<bool> = node_flags(&k.needed, n[0]).collect();
+                assert_eq!(needed, nodes, "{what}");
             } else {
                 assert!(next.peek().is_none_or(|k| k.index != b), "{what} kept");
             }
