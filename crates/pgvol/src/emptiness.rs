@@ -47,16 +47,9 @@ impl Sides {
     /// The sides of `volume`'s field at the nodes of its grid, stopping once both are found.
     pub fn of_volume(volume: &CoefficientVolume) -> Sides {
         let coeffs = &volume.coeffs;
-        // Every basis function is non-negative, so coefficients of one sign give a field of
-        // that sign: the common empty results need no evaluation.
-        let [lo, hi] = coeffs.value_range();
-        if lo >= 0.0 || hi <= 0.0 {
-            return Sides {
-                inside: lo < 0.0,
-                outside: hi > 0.0,
-            };
-        }
-        // The nodes of an absent brick away from its faces see only its background.
+        // The nodes of an absent brick away from its faces see only its background. Absent
+        // bricks on both sides (a closed part's inside and outside) settle it from the grid's
+        // tables, before any pass over the coefficients.
         let (inside, outside) = coeffs.absent_sides();
         let background = coeffs.background();
         let mut sides = [(inside, true), (outside, false)]
@@ -66,6 +59,15 @@ impl Sides {
             .fold(Sides::default(), Sides::join);
         if sides == Sides::BOTH {
             return sides;
+        }
+        // Every basis function is non-negative, so coefficients of one sign give a field of
+        // that sign: the common empty results need no evaluation.
+        let [lo, hi] = coeffs.value_range();
+        if lo >= 0.0 || hi <= 0.0 {
+            return Sides {
+                inside: lo < 0.0,
+                outside: hi > 0.0,
+            };
         }
         let stored: Vec<[usize; 3]> = coeffs.stored().map(|(b, _)| b).collect();
         let found = stored
@@ -215,7 +217,7 @@ pub(crate) const MESH_WITHOUT_OUTSIDE: &str =
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pgvol_core::{Background, Grid, SparseGrid};
+    use pgvol_core::{Background, Grid, SparseGrid, BRICK_EDGE};
     use pgvol_field::Basis;
 
     fn volume(values: impl Fn([usize; 3]) -> f32) -> CoefficientVolume {
@@ -254,5 +256,38 @@ mod tests {
         let e = require_surface(Sides::of_volume(&inside), &why).unwrap_err();
         assert!(e.message().contains("no surface") && e.message().ends_with(": B"));
         require_surface(Sides::BOTH, &why).unwrap();
+    }
+
+    #[test]
+    fn absent_bricks_count_with_their_background() {
+        // 3³ bricks, the middle one stored with `stored`'s values, the others absent on the
+        // side `inside` says.
+        let sparse = |stored: &dyn Fn(usize) -> f32, inside: &dyn Fn([usize; 3]) -> bool| {
+            let grid = Grid::cube_res(glam::Vec3::ZERO, glam::Vec3::ONE, 3 * BRICK_EDGE).unwrap();
+            let mut coeffs = SparseGrid::new(grid.dims, Background::clamp(1.0));
+            for b in coeffs.all_bricks().collect::<Vec<_>>() {
+                if b == [1, 1, 1] {
+                    coeffs.insert(b, Box::new(std::array::from_fn(stored)));
+                } else {
+                    coeffs.set_inside(b, inside(b));
+                }
+            }
+            CoefficientVolume::from_sparse(grid, Basis::Bspline3, coeffs).unwrap()
+        };
+        let sides = |v: &CoefficientVolume| {
+            let s = Sides::of_volume(v);
+            (s.inside, s.outside)
+        };
+        // Absent bricks on both sides, whatever is stored.
+        let halves = sparse(&|_| 0.5, &|b| b[2] == 0);
+        assert_eq!(sides(&halves), (true, true));
+        // Outside everywhere but a stored brick, which holds a node inside or none.
+        let apart = sparse(&|_| 0.5, &|_| false);
+        assert_eq!(sides(&apart), (false, true));
+        let dip = sparse(&|i| if i == 300 { -10.0 } else { 0.5 }, &|_| false);
+        assert_eq!(sides(&dip), (true, true));
+        // Inside everywhere, the stored brick too.
+        let within = sparse(&|_| -0.5, &|_| true);
+        assert_eq!(sides(&within), (true, false));
     }
 }
