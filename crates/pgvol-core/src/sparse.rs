@@ -304,7 +304,8 @@ impl SparseGrid {
     /// Copies the box of `n` nodes from node `lo` into `out` (x fastest), a row segment per
     /// brick crossed. The box must lie in the grid.
     pub fn gather(&self, lo: [usize; 3], n: [usize; 3], out: &mut [f32]) {
-        debug_assert!(out.len() >= n[0] * n[1] * n[2]);
+        let total = n[0] * n[1] * n[2];
+        debug_assert!(out.len() >= total);
         let mut at = 0;
         for k in lo[2]..lo[2] + n[2] {
             for j in lo[1]..lo[1] + n[1] {
@@ -313,13 +314,23 @@ impl SparseGrid {
                 while i < end {
                     let run = (BRICK_EDGE - (i & BRICK_MASK)).min(end - i);
                     let b = brick_of([i, j, k]);
-                    let dst = &mut out[at..at + run];
                     match self.brick(b) {
                         Some(v) => {
                             let s = brick_offset([i, j, k]);
-                            dst.copy_from_slice(&v[s..s + run]);
+                            if s + BRICK_EDGE <= BRICK_NODES && at + BRICK_EDGE <= total {
+                                // A copy of a brick edge's length wherever both sides have
+                                // room, not a call per segment (small boxes, such as an edge's
+                                // stencil, are mostly short segments). What it writes past the
+                                // segment belongs to later segments of the box, which write it
+                                // again.
+                                let row: &[f32; BRICK_EDGE] =
+                                    v[s..s + BRICK_EDGE].try_into().expect("a brick edge");
+                                out[at..at + BRICK_EDGE].copy_from_slice(row);
+                            } else {
+                                out[at..at + run].copy_from_slice(&v[s..s + run]);
+                            }
                         }
-                        None => dst.fill(self.background_of(b)),
+                        None => out[at..at + run].fill(self.background_of(b)),
                     }
                     at += run;
                     i += run;
@@ -757,17 +768,37 @@ mod tests {
                 }
             }
         }
-        let (lo, n) = ([3, 5, 6], [15, 4, 11]);
-        let mut out = vec![0.0; n[0] * n[1] * n[2]];
-        g.gather(lo, n, &mut out);
-        let mut at = 0;
-        for k in lo[2]..lo[2] + n[2] {
-            for j in lo[1]..lo[1] + n[1] {
-                for i in lo[0]..lo[0] + n[0] {
-                    assert_eq!(out[at], want[i + 21 * (j + 19 * k)], "{i} {j} {k}");
-                    at += 1;
+        // Boxes across bricks, inside one, an edge's stencil, single rows and nodes, and boxes
+        // reaching the grid's last node on each axis.
+        let boxes = [
+            ([3, 5, 6], [15, 4, 11]),
+            ([9, 9, 9], [4, 3, 3]),
+            ([6, 7, 2], [3, 4, 3]),
+            ([0, 0, 0], [21, 19, 18]),
+            ([13, 2, 9], [8, 1, 1]),
+            ([17, 15, 14], [4, 4, 4]),
+            ([20, 18, 17], [1, 1, 1]),
+            ([1, 10, 3], [7, 9, 2]),
+        ];
+        for (lo, n) in boxes {
+            // Room past the box, which the gather must leave as it was.
+            let total = n[0] * n[1] * n[2];
+            let mut out = vec![-7.0; total + 9];
+            g.gather(lo, n, &mut out);
+            let mut at = 0;
+            for k in lo[2]..lo[2] + n[2] {
+                for j in lo[1]..lo[1] + n[1] {
+                    for i in lo[0]..lo[0] + n[0] {
+                        assert_eq!(
+                            out[at],
+                            want[i + 21 * (j + 19 * k)],
+                            "{lo:?} {n:?}: {i} {j} {k}"
+                        );
+                        at += 1;
+                    }
                 }
             }
+            assert!(out[total..].iter().all(|&x| x == -7.0), "{lo:?} {n:?}");
         }
     }
 
