@@ -9,6 +9,9 @@ X.pgv --res N`, not timed), then
   * pgvol: `pgvol slice X.pgv -o X.json --layer-height H` with H the grid spacing (one layer per
     node layer), under /usr/bin/time -v: wall seconds of the whole process (reading the file
     included) and its peak RSS;
+  * the Python package, in this interpreter, as whole processes under /usr/bin/time -v too:
+    `pgvol.slice_file(X.pgv, H)` (read slab by slab, as the command line reads it) and
+    `pgvol.Field.load(X.pgv).slice(H)` (the whole volume decoded first);
   * manifold3d: `Manifold.slice(z)` at the same heights in a Python loop (the mesh loaded before
     the clock starts), with each cross-section's area.
 Area error is |pgvol − manifold3d| / manifold3d per layer, over the layers whose manifold3d area is
@@ -42,6 +45,11 @@ def timed(argv: list) -> dict:
         raise SystemExit(f"{argv[1]} failed: {proc.stderr[-2000:]}")
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", proc.stderr)
     return {"s": seconds, "rss_mib": int(rss.group(1)) / 1024 if rss else None}
+
+
+# The Python package's two ways to slice a file, each a whole process given the file and H.
+PYTHON_STREAMED = "import sys, pgvol; pgvol.slice_file(sys.argv[1], float(sys.argv[2]))"
+PYTHON_LOADED = "import sys, pgvol; pgvol.Field.load(sys.argv[1]).slice(float(sys.argv[2]))"
 
 
 def loop_area(points) -> float:
@@ -90,6 +98,8 @@ def run(mesh: str, res: int, work: Path) -> dict:
     out = work / f"{mesh}-{res}.json"
     ours = timed([pgvol, "slice", pgv, "-o", out, "--layer-height", repr(spacing), "-q"])
     heights, areas = pgvol_layers(out)
+    streamed = timed([sys.executable, "-c", PYTHON_STREAMED, pgv, repr(spacing)])
+    loaded = timed([sys.executable, "-c", PYTHON_LOADED, pgv, repr(spacing)])
     peer_s, peer_areas = manifold_areas(source, heights)
     top = max(peer_areas) if peer_areas else 0.0
     errors = [abs(a - b) / b for a, b in zip(areas, peer_areas) if b >= 0.01 * top]
@@ -100,6 +110,10 @@ def run(mesh: str, res: int, work: Path) -> dict:
         "file_mib": pgv.stat().st_size / 2**20,
         "pgvol_s": ours["s"],
         "pgvol_rss_mib": ours["rss_mib"],
+        "python_slice_file_s": streamed["s"],
+        "python_slice_file_rss_mib": streamed["rss_mib"],
+        "python_load_slice_s": loaded["s"],
+        "python_load_slice_rss_mib": loaded["rss_mib"],
         "manifold_s": peer_s,
         "ratio": ours["s"] / peer_s if peer_s > 0 else None,
         "median_area_error": float(np.median(errors)) if errors else None,
@@ -116,8 +130,11 @@ def main() -> None:
     work = args.work or Path(tempfile.mkdtemp(prefix="pgvol-slice-bench-"))
     work.mkdir(parents=True, exist_ok=True)
     rows = []
-    print("| mesh | grid | layers | .pgv | pgvol slice | peak RSS | manifold3d | ratio | median area error |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(
+        "| mesh | grid | layers | .pgv | pgvol slice | peak RSS | manifold3d | ratio | median area error "
+        "| Python slice_file | Python Field.load + slice |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for mesh in args.meshes.split(","):
         for res in (int(r) for r in args.res.split(",")):
             r = run(mesh, res, work)
@@ -125,7 +142,9 @@ def main() -> None:
             print(
                 f"| {mesh} | {res}³ | {r['layers']} | {r['file_mib']:.1f} MiB | {r['pgvol_s']:.2f} s | "
                 f"{r['pgvol_rss_mib']:.0f} MiB | {r['manifold_s']:.3f} s | {r['ratio']:.1f}× | "
-                f"{100 * r['median_area_error']:.3f} % |",
+                f"{100 * r['median_area_error']:.3f} % | {r['python_slice_file_s']:.2f} s, "
+                f"{r['python_slice_file_rss_mib']:.0f} MiB | {r['python_load_slice_s']:.2f} s, "
+                f"{r['python_load_slice_rss_mib']:.0f} MiB |",
                 flush=True,
             )
     if args.json:

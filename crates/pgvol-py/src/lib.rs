@@ -169,6 +169,48 @@ fn remesh<'py>(
     ))
 }
 
+/// The layers of the `.pgv` file at `path`, as `Field.load(path).slice(...)` gives them, read
+/// slab by slab as `pgvol slice` reads it: memory is a window of the volume rather than all of
+/// it, and no decoding of the whole file comes first.
+#[pyfunction]
+#[pyo3(signature = (path, layer_height, *, axis="z", first=None, resolution=None, tolerance=None, progress=None))]
+fn slice_file(
+    py: Python<'_>,
+    path: PathBuf,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Vec<field::Layer>> {
+    let settings = pgvol::SliceOptions {
+        axis: names::axis(py, axis)?,
+        layer_height,
+        first: first.map(f64::from),
+        resolution,
+        tolerance,
+    };
+    let sliced = run(py, progress, |p| {
+        let sliced = pgvol::stream::slice_file(&path, &settings, p)?;
+        // Layers are returned in the field's local coordinates, as `Field.slice` returns them:
+        // exact only near the origin.
+        if !sliced.frame.is_zero() {
+            let [a, u, v] = settings.axis.indices();
+            let mut offset = glam::DVec3::ZERO;
+            (offset[a], offset[u], offset[v]) =
+                (sliced.frame.height, sliced.frame.u, sliced.frame.v);
+            pgvol::checks::require_near(offset, "slicing into arrays")?;
+        }
+        Ok(sliced)
+    })?;
+    Ok(sliced
+        .layers
+        .into_iter()
+        .map(|l| field::Layer::from_layer(py, l))
+        .collect())
+}
+
 /// Sets the largest estimated peak memory, in bytes, a call may start with; None returns to
 /// the default, the memory the machine has available when the call starts.
 #[pyfunction]
@@ -204,6 +246,7 @@ fn _pgvol(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(remesh, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_file, m)?)?;
     m.add_function(wrap_pyfunction!(perturb::perturb, m)?)?;
     m.add_function(wrap_pyfunction!(set_memory_limit, m)?)?;
     m.add_function(wrap_pyfunction!(memory_limit, m)?)?;

@@ -52,6 +52,12 @@ def test_a_far_cube_encodes_evaluates_and_contours_as_at_the_origin(tmp_path):
     again = pgvol.Field.load(tmp_path / "far.pgv")
     near_again = pgvol.Field.load(tmp_path / "near.pgv")
     np.testing.assert_allclose(again(points + SHIFT), near_again(points), atol=1e-5)
+    # Layers come as float32 arrays in the field's own frame, which a far field's is not: both
+    # ways of slicing refuse it alike, and slice the near file.
+    for slicing in (lambda p: pgvol.slice_file(p, 0.1), lambda p: pgvol.Field.load(p).slice(0.1)):
+        with pytest.raises(pgvol.ParameterError, match="works only near the origin"):
+            slicing(tmp_path / "far.pgv")
+        assert len(slicing(tmp_path / "near.pgv")) == 10
 
 
 def test_far_meshes_round_trip_through_files_in_double_precision(tmp_path):

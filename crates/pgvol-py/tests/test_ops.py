@@ -177,3 +177,34 @@ def test_compare_agrees_with_trimesh_closest_points(spot_field, spot_trimesh):
     assert again == result
     with pytest.raises(ValueError, match="samples must be positive"):
         pgvol.compare((v, t), spot_trimesh, samples=0)
+
+
+def test_slice_file_gives_the_layers_of_the_loaded_field(spot_field, spot_trimesh, tmp_path):
+    path = tmp_path / "spot.pgv"
+    spot_field.save(path)
+    h = 0.05
+    streamed = pgvol.slice_file(path, h)
+    loaded = pgvol.Field.load(path).slice(h)
+    assert len(streamed) == len(loaded) > 10
+    for a, b in zip(streamed, loaded):
+        assert a.height == b.height and a.holes == b.holes and len(a.loops) > 0
+        assert all(np.array_equal(p, q) for p, q in zip(a.loops, b.loops, strict=True))
+    middle = streamed[len(streamed) // 2]
+    area = 0.0
+    for loop in middle.loops:
+        x, y = loop[:, 0].astype(np.float64), loop[:, 1].astype(np.float64)
+        area += 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+    reference = section_area(spot_trimesh, middle.height)
+    assert area == pytest.approx(reference, rel=0.02, abs=4 * spot_field.grid.spacing**2)
+    across = pgvol.slice_file(path, 0.2, axis="x", tolerance=0.01)
+    assert [layer.height for layer in across] == [
+        layer.height for layer in spot_field.slice(0.2, axis="x", tolerance=0.01)
+    ]
+    with pytest.raises(pgvol.MissingFileError, match="nowhere.pgv"):
+        pgvol.slice_file(tmp_path / "nowhere.pgv", h)
+    with pytest.raises(pgvol.ParameterError):
+        pgvol.slice_file(path, 0.0)
+    cut = tmp_path / "cut.pgv"
+    cut.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(pgvol.InputFileError, match="cut.pgv"):
+        pgvol.slice_file(cut, h)

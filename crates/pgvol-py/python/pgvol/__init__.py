@@ -55,6 +55,7 @@ from ._pgvol import (
     remesh,
     set_memory_limit,
     signed_distance,
+    slice_file,
     write_mesh,
 )
 
@@ -111,5 +112,6 @@ __all__ = [
     "remesh",
     "set_memory_limit",
     "signed_distance",
+    "slice_file",
     "write_mesh",
 ]

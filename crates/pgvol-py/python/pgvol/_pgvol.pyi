@@ -39,6 +39,7 @@ __all__ = [
     "compare",
     "remesh",
     "signed_distance",
+    "slice_file",
     "perturb",
     "set_memory_limit",
     "memory_limit",
@@ -874,6 +875,20 @@ def remesh(
     per axis (or spacing ``voxel``) by ``method``. ``field`` "exact" places vertices on the
     mesh's exact signed distance; a basis name ("bspline3", ...) on the coefficient volume an
     encode would give. Returns ``(vertices, faces)``."""
+
+def slice_file(
+    path: _PathLike,
+    layer_height: float,
+    *,
+    axis: Literal["x", "y", "z"] = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+    progress: Optional[_Progress] = None,
+) -> List[Layer]:
+    """The layers of the ``.pgv`` file at ``path``, as ``Field.load(path).slice(...)`` gives
+    them, read slab by slab as ``pgvol slice`` reads it: memory is a window of the volume rather
+    than all of it, and no decoding of the whole file comes first."""
 
 def signed_distance(
     vertices: _Points,
