@@ -267,35 +267,50 @@ pub fn slice_bricks<S: BrickSource + ?Sized>(
     let mut window = Window::new(source, axis);
     let mut total = LayerCost::default();
     let node_windows = NodeWindows::new(grid, profile, axis, job.plane.node_coordinates());
-    for run in job.heights.chunks(LAYER_RUN) {
-        let wanted: Vec<usize> = run
-            .iter()
+    let wanted = |run: &[f32]| -> Vec<usize> {
+        run.iter()
             .flat_map(|&h| tap_layers(grid, profile, axis, h))
             .map(|n| n / BRICK_EDGE)
-            .collect();
-        window.hold(&wanted)?;
-        let window = &window;
-        let layers: Vec<(Layer, LayerCost)> = run
-            .par_iter()
-            .map(|&h| {
-                let layer = |n| window.layer(n);
-                let plane = CollapsedPlane::new(
-                    grid,
-                    background,
-                    profile,
-                    axis,
-                    h,
-                    &layer,
-                    Some(&node_windows),
-                );
-                job.layer(&plane, h)
-            })
-            .collect();
+            .collect()
+    };
+    let runs: Vec<&[f32]> = job.heights.chunks(LAYER_RUN).collect();
+    if let Some(first) = runs.first() {
+        window.hold(&wanted(first), Vec::new())?;
+    }
+    for (i, run) in runs.iter().enumerate() {
+        let next = runs.get(i + 1).map(|r| wanted(r));
+        let ahead = next.as_deref().map_or(Vec::new(), |n| window.missing(n));
+        let held = &window;
+        // The next run's new slabs load while this run's layers are contoured, rather than
+        // between the runs, when the threads that finished their layers would wait.
+        let (layers, loaded) = rayon::join(
+            || {
+                run.par_iter()
+                    .map(|&h| {
+                        let layer = |n| held.layer(n);
+                        let plane = CollapsedPlane::new(
+                            grid,
+                            background,
+                            profile,
+                            axis,
+                            h,
+                            &layer,
+                            Some(&node_windows),
+                        );
+                        job.layer(&plane, h)
+                    })
+                    .collect::<Vec<(Layer, LayerCost)>>()
+            },
+            || held.load(&ahead),
+        );
         for (layer, cost) in layers {
             total.nodes += cost.nodes;
             total.blocks += cost.blocks;
             total.crossings += cost.crossings;
             sink(layer)?;
+        }
+        if let Some(next) = next {
+            window.hold(&next, loaded?)?;
         }
     }
     Ok(total)
@@ -456,7 +471,9 @@ mod tests {
                         .iter()
                         .map(|n| n / BRICK_EDGE)
                         .collect();
-                    window.hold(&taps).unwrap();
+                    // Loaded ahead, as slicing loads the next run's slabs.
+                    let loaded = window.load(&window.missing(&taps)).unwrap();
+                    window.hold(&taps, loaded).unwrap();
                     let background = vol.coeffs.background();
                     let layer = |n| window.layer(n);
                     let plane = CollapsedPlane::new(&grid, background, profile, a, h, &layer, None);
