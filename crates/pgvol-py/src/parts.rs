@@ -441,6 +441,80 @@ pub(crate) fn sharpen_layers(
     Ok(out.into_iter().map(|l| Layer::from_layer(py, l)).collect())
 }
 
+/// Bounds as `slice_part` takes them.
+type Bounds = ((f32, f32, f32), (f32, f32, f32));
+
+/// A slicing's parts as `(start, end)` layer numbers, and the shape's bounds.
+type SlicePlan = (Vec<(usize, usize)>, Bounds);
+
+/// The layer numbers of each part of slicing the `.pgv` file at `path` and the shape's bounds,
+/// read from its header; `None` for a file not read slab by slab, whose parts come from the
+/// loaded field.
+#[pyfunction]
+#[pyo3(signature = (path, parts, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+pub(crate) fn plan_slice_file(
+    py: Python<'_>,
+    path: PathBuf,
+    parts: usize,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Option<SlicePlan>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let plan = quiet(py, || parts::plan_slice_file(&path, &settings, parts))?;
+    Ok(plan.map(|(ranges, (lo, hi))| (pairs(ranges), (lo.into(), hi.into()))))
+}
+
+/// The coefficient bricks the layers `start..end` of slicing the file at `path` read, decoded
+/// from the slabs they reach: the bytes `slice_part_bricks` gives for the loaded field.
+#[pyfunction]
+#[pyo3(signature = (path, start, end, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+pub(crate) fn slice_file_part_bricks<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    start: usize,
+    end: usize,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let bytes = quiet(py, || {
+        parts::slice_file_part_bricks(&path, &settings, start..end)
+    })?;
+    Ok(PyBytes::new(py, &bytes))
+}
+
+/// `sharpen_layers` for the file at `path`, from its header.
+#[pyfunction]
+#[pyo3(signature = (path, layers, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sharpen_file_layers(
+    py: Python<'_>,
+    path: PathBuf,
+    layers: Vec<PyRef<'_, Layer>>,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Vec<Layer>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let mut out = layers
+        .iter()
+        .map(|l| l.to_layer(py))
+        .collect::<PyResult<Vec<_>>>()?;
+    drop(layers);
+    quiet(py, || {
+        parts::sharpen_file_layers(&path, &settings, &mut out)
+    })?;
+    Ok(out.into_iter().map(|l| Layer::from_layer(py, l)).collect())
+}
+
 /// Writes layers to an SVG, Common Layer Interface (`binary` for its binary form) or JSON
 /// file by extension, atomically; `units_mm` is millimetres per model unit (CLI headers).
 #[pyfunction]
@@ -484,6 +558,9 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slice_part_bricks, m)?)?;
     m.add_function(wrap_pyfunction!(slice_part, m)?)?;
     m.add_function(wrap_pyfunction!(sharpen_layers, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_slice_file, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_file_part_bricks, m)?)?;
+    m.add_function(wrap_pyfunction!(sharpen_file_layers, m)?)?;
     m.add_function(wrap_pyfunction!(write_layers, m)?)?;
     Ok(())
 }

@@ -167,6 +167,39 @@ def test_slice_in_tasks_gives_the_single_process_layers(client, mesh_path, tmp_p
             assert all(np.array_equal(x, y) for x, y in zip(a.loops, b.loops))
 
 
+def test_slice_parts_of_a_file_are_those_of_the_loaded_field(mesh_path, tmp_path):
+    from pgvol import _pgvol
+
+    path = tmp_path / "spot.pgv"
+    pgvol.Field.from_mesh(*pgvol.read_mesh(mesh_path("spot")), res=96).save(path)
+    field = pgvol.Field.load(path)
+    h = 1.5 * field.grid.spacing
+    for axis in ("z", "x"):
+        plan, bounds = _pgvol.plan_slice_file(path, 5, h, axis=axis)
+        assert plan == _pgvol.plan_slice(field, 5, h, axis=axis) and len(plan) == 5
+        assert np.array_equal(np.array(bounds, np.float32), np.array(field.bounds, np.float32))
+        for s, e in plan:
+            part = _pgvol.slice_file_part_bricks(path, s, e, h, axis=axis)
+            assert part == _pgvol.slice_part_bricks(field, s, e, h, axis=axis), (axis, s, e)
+    want = field.slice(h)
+    # A dense file is not read by slabs: its parts come from the loaded field, alike.
+    dense = tmp_path / "dense.pgv"
+    field.save(dense, dense=True)
+    assert _pgvol.plan_slice_file(dense, 3, h) is None
+    for source in (field, path, dense):
+        got = distributed.slice(source, h, parts=3)
+        assert [l.height for l in got] == [l.height for l in want]
+        for a, b in zip(got, want):
+            assert a.holes == b.holes
+            assert all(np.array_equal(x, y) for x, y in zip(a.loops, b.loops, strict=True))
+    with pytest.raises(pgvol.ParameterError, match="not among"):
+        _pgvol.slice_file_part_bricks(path, 10**6, 10**6 + 1, h)
+    cut = tmp_path / "cut.pgv"
+    cut.write_bytes(path.read_bytes()[:1000])
+    with pytest.raises(pgvol.InputFileError, match="cut.pgv"):
+        distributed.slice(cut, h, parts=2)
+
+
 def test_slice_in_tasks_keeps_the_corners_of_a_sharp_file(client, run_cli, tmp_path):
     box = trimesh.creation.box(extents=[1.0, 1.0, 1.2])
     box.apply_transform(trimesh.transformations.rotation_matrix(0.5, [0, 0, 1]))

@@ -93,10 +93,7 @@ pub fn slice_file(
         return shape.slice(settings, progress).map_err(at);
     }
     let grid = header.grid;
-    let bounds = match header.source_bounds {
-        Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
-        None => (grid.origin, grid.max_corner()),
-    };
+    let bounds = header_bounds(&header);
     let options = options_for(grid.spacing, grid.offset, settings)?;
     let total = pgvol_slice::layer_heights(bounds, &options)
         .map_err(|e| at(e.into()))?
@@ -197,8 +194,21 @@ pub(crate) fn slice_options(shape: &Field, settings: &SliceOptions) -> Result<St
     options_for(grid.spacing, grid.offset, settings)
 }
 
+/// The box a file's shape lies in: the source's bounds where the header has them, else the
+/// grid's.
+pub(crate) fn header_bounds(header: &pgvol_format::PgvHeader) -> (Vec3, Vec3) {
+    match header.source_bounds {
+        Some([lo, hi]) => (Vec3::from(lo), Vec3::from(hi)),
+        None => (header.grid.origin, header.grid.max_corner()),
+    }
+}
+
 /// The stage's options for slicing a field of grid `spacing` and frame `offset` by `settings`.
-fn options_for(spacing: f32, offset: glam::DVec3, settings: &SliceOptions) -> Result<StageOptions> {
+pub(crate) fn options_for(
+    spacing: f32,
+    offset: glam::DVec3,
+    settings: &SliceOptions,
+) -> Result<StageOptions> {
     if !(settings.layer_height.is_finite() && settings.layer_height > 0.0) {
         return Err(Error::parameter(format!(
             "the layer height must be a positive number, got {}",

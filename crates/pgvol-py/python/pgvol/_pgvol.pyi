@@ -62,6 +62,9 @@ __all__ = [
     "slice_part_bricks",
     "slice_part",
     "sharpen_layers",
+    "plan_slice_file",
+    "slice_file_part_bricks",
+    "sharpen_file_layers",
     "write_layers",
 ]
 
@@ -1043,6 +1046,37 @@ def slice_part(
 ) -> List[Layer]: ...
 def sharpen_layers(
     field: Field,
+    layers: List[Layer],
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> List[Layer]: ...
+def plan_slice_file(
+    path: _PathLike,
+    parts: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> Optional[Tuple[List[Tuple[int, int]], Tuple[_Vec3, _Vec3]]]: ...
+def slice_file_part_bricks(
+    path: _PathLike,
+    start: int,
+    end: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> bytes: ...
+def sharpen_file_layers(
+    path: _PathLike,
     layers: List[Layer],
     layer_height: float,
     *,

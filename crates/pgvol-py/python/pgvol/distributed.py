@@ -19,7 +19,8 @@ process, so a machine without a cluster runs the same code path.
   window of them rather than the whole field.
 - ``decode`` sends each task the coefficient bricks around its slab of cells; the tasks'
   triangles are the single-process triangles, welded here at the seams.
-- ``slice`` sends each task the bricks around its range of layers.
+- ``slice`` sends each task the bricks around its range of layers; from a ``.pgv`` path they
+  are decoded from the slabs the range reaches, never the whole file at once.
 
 Tasks are pure functions of their arguments, keyed by them: a task that fails is retried
 (``retries``) and a task lost with its worker is run again by the scheduler, with the same
@@ -275,21 +276,47 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
           resolution: float | None = None, tolerance: float | None = None, client: Any = None,
           parts: int | None = None, retries: int = RETRIES) -> list[Layer]:
     """Slices a field (a ``Field`` or a ``.pgv`` path) in parts: the layers of
-    ``Field.slice`` with the same arguments."""
-    field = _field(source)
+    ``Field.slice`` with the same arguments. A path to a sparse file is read one part's slabs
+    at a time, so this process holds a part's bricks rather than the decoded field."""
     settings: dict[str, Any] = {
         "axis": axis, "first": first, "resolution": resolution, "tolerance": tolerance
     }
-    plan = _pgvol.plan_slice(field, _parts(parts, client), layer_height, **settings)
-    key = uuid.uuid4().hex
-    bricks = _scatter(client, [
-        _pgvol.slice_part_bricks(field, s, e, layer_height, **settings) for s, e in plan
-    ])
-    calls = [(b, field.bounds, layers, layer_height, settings) for b, layers in zip(bricks, plan)]
-    names = [f"pgvol-slice-{key}-{s}-{e}" for s, e in plan]
-    layers = [layer for part in _run(client, _slice_part, calls, names, retries) for layer in part]
-    # A file's sharp section puts corners back, here where the layers are whole.
+    count = _parts(parts, client)
+    if not isinstance(source, Field):
+        path = Path(source)
+        plan = _pgvol.plan_slice_file(path, count, layer_height, **settings)
+        if plan is not None:
+            ranges, bounds = plan
+            layers = _slice_parts(
+                client, ranges, bounds,
+                lambda s, e: _pgvol.slice_file_part_bricks(path, s, e, layer_height, **settings),
+                layer_height, settings, retries)
+            # The file's sharp section puts corners back, here where the layers are whole.
+            return _pgvol.sharpen_file_layers(path, layers, layer_height, **settings)
+    field = _field(source)
+    ranges = _pgvol.plan_slice(field, count, layer_height, **settings)
+    layers = _slice_parts(
+        client, ranges, field.bounds,
+        lambda s, e: _pgvol.slice_part_bricks(field, s, e, layer_height, **settings),
+        layer_height, settings, retries)
     return _pgvol.sharpen_layers(field, layers, layer_height, **settings)
+
+
+def _slice_parts(client: Any, ranges: list[tuple[int, int]], bounds, bricks_of,
+                 layer_height: float, settings: dict, retries: int) -> list[Layer]:
+    """The layers of every range in plan order. Each part's bricks (``bricks_of(start,
+    end)``) are made as the part is handed out and dropped here once sliced or scattered."""
+    if client is None:
+        return [layer for s, e in ranges
+                for layer in _slice_part(bricks_of(s, e), bounds, (s, e), layer_height, settings)]
+    key = uuid.uuid4().hex
+    futures = []
+    for s, e in ranges:
+        [bricks] = client.scatter([bricks_of(s, e)], hash=False)
+        futures.append(client.submit(_slice_part, bricks, bounds, (s, e), layer_height,
+                                     settings, key=f"pgvol-slice-{key}-{s}-{e}", pure=False,
+                                     retries=retries))
+    return [layer for part in client.gather(futures) for layer in part]
 
 
 _EXAMPLES = """examples:

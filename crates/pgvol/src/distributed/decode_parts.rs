@@ -44,7 +44,7 @@ pub fn decode_part_bricks(volume: &CoefficientVolume, cells: Range<usize>) -> Ve
 }
 
 /// The bricks of `volume` whose index along `axis` lies in `range`, all of the other axes.
-fn slab_of(volume: &CoefficientVolume, axis: usize, range: Range<usize>) -> Slab {
+pub(crate) fn slab_of(volume: &CoefficientVolume, axis: usize, range: Range<usize>) -> Slab {
     let counts = volume.coeffs.brick_counts();
     let mut bricks = [0..counts[0], 0..counts[1], 0..counts[2]];
     bricks[axis] = range.start.min(counts[axis])..range.end.min(counts[axis]);
@@ -138,10 +138,22 @@ pub fn slice_part_bricks(
     layers: Range<usize>,
 ) -> Result<Vec<u8>> {
     let options = crate::slice::slice_options(shape, settings)?;
-    let heights = pgvol_slice::layer_heights(shape.bounds, &options)?;
+    let volume = &shape.file.volume;
+    let (axis, bricks) = part_brick_layers(&volume.grid, shape.bounds, &options, layers)?;
+    Ok(slab_of(volume, axis, bricks).to_bytes())
+}
+
+/// The grid axis the layers `layers` of slicing a field on `grid` (its shape within `bounds`)
+/// stack along, and the brick layers along it that [`slice_part_bricks`] sends them.
+pub(crate) fn part_brick_layers(
+    grid: &pgvol_field::Grid,
+    bounds: (Vec3, Vec3),
+    options: &SliceOptions,
+    layers: Range<usize>,
+) -> Result<(usize, Range<usize>)> {
+    let heights = pgvol_slice::layer_heights(bounds, options)?;
     let axis = options.axis.indices()[0];
-    let g = &shape.file.volume.grid;
-    let node = |h: f32| ((h - g.origin[axis]) / g.spacing).clamp(0.0, g.dims[axis] as f32);
+    let node = |h: f32| ((h - grid.origin[axis]) / grid.spacing).clamp(0.0, grid.dims[axis] as f32);
     let (Some(first), Some(last)) = (
         heights.get(layers.start),
         heights.get(layers.end.saturating_sub(1)),
@@ -155,7 +167,7 @@ pub fn slice_part_bricks(
     };
     let lo = (node(*first) as usize).saturating_sub(3) / BRICK_EDGE;
     let hi = (node(*last) as usize + 3) / BRICK_EDGE + 2;
-    Ok(slab_of(&shape.file.volume, axis, lo.saturating_sub(1)..hi).to_bytes())
+    Ok((axis, lo.saturating_sub(1)..hi))
 }
 
 /// The layers `layers` of the slicing, from the bricks of [`slice_part_bricks`]: each the

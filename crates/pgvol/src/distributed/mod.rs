@@ -21,6 +21,7 @@
 
 mod decode_parts;
 mod encode_parts;
+mod file_parts;
 mod slab;
 mod split;
 mod stream_parts;
@@ -34,6 +35,7 @@ pub use encode_parts::{
     assemble_encode, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob, EncodePlan,
     EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
 };
+pub use file_parts::{plan_slice_file, sharpen_file_layers, slice_file_part_bricks, FileSlicePlan};
 pub use slab::Slab;
 pub use split::split;
 pub use stream_parts::{write_encode_parts, write_encode_parts_to, PartsWritten};
