@@ -441,15 +441,8 @@ pub(crate) fn sharpen_layers(
     Ok(out.into_iter().map(|l| Layer::from_layer(py, l)).collect())
 }
 
-/// Bounds as `slice_part` takes them.
-type Bounds = ((f32, f32, f32), (f32, f32, f32));
-
-/// A slicing's parts as `(start, end)` layer numbers, and the shape's bounds.
-type SlicePlan = (Vec<(usize, usize)>, Bounds);
-
-/// The layer numbers of each part of slicing the `.pgv` file at `path` and the shape's bounds,
-/// read from its header; `None` for a file not read slab by slab, whose parts come from the
-/// loaded field.
+/// The layer numbers of each part of slicing the `.pgv` file at `path`, from its header; `None`
+/// for a file not read slab by slab, whose parts come from the loaded field.
 #[pyfunction]
 #[pyo3(signature = (path, parts, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
 pub(crate) fn plan_slice_file(
@@ -461,14 +454,14 @@ pub(crate) fn plan_slice_file(
     first: Option<f32>,
     resolution: Option<f32>,
     tolerance: Option<f32>,
-) -> PyResult<Option<SlicePlan>> {
+) -> PyResult<Option<Vec<(usize, usize)>>> {
     let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let plan = quiet(py, || parts::plan_slice_file(&path, &settings, parts))?;
-    Ok(plan.map(|(ranges, (lo, hi))| (pairs(ranges), (lo.into(), hi.into()))))
+    Ok(plan.map(pairs))
 }
 
-/// The coefficient bricks the layers `start..end` of slicing the file at `path` read, decoded
-/// from the slabs they reach: the bytes `slice_part_bricks` gives for the loaded field.
+/// What the layers `start..end` of slicing the file at `path` read: a `.pgv` file of the file's
+/// own compressed bricks in the slabs they reach, for `slice_file_part`.
 #[pyfunction]
 #[pyo3(signature = (path, start, end, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
 pub(crate) fn slice_file_part_bricks<'py>(
@@ -487,6 +480,28 @@ pub(crate) fn slice_file_part_bricks<'py>(
         parts::slice_file_part_bricks(&path, &settings, start..end)
     })?;
     Ok(PyBytes::new(py, &bytes))
+}
+
+/// The layers `start..end` of slicing, from the bytes `slice_file_part_bricks` gave for them.
+#[pyfunction]
+#[pyo3(signature = (part, start, end, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
+pub(crate) fn slice_file_part(
+    py: Python<'_>,
+    part: Vec<u8>,
+    start: usize,
+    end: usize,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<Vec<Layer>> {
+    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let layers = quiet(py, || parts::slice_file_part(&part, &settings, start..end))?;
+    Ok(layers
+        .into_iter()
+        .map(|l| Layer::from_layer(py, l))
+        .collect())
 }
 
 /// `sharpen_layers` for the file at `path`, from its header.
@@ -560,6 +575,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sharpen_layers, m)?)?;
     m.add_function(wrap_pyfunction!(plan_slice_file, m)?)?;
     m.add_function(wrap_pyfunction!(slice_file_part_bricks, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_file_part, m)?)?;
     m.add_function(wrap_pyfunction!(sharpen_file_layers, m)?)?;
     m.add_function(wrap_pyfunction!(write_layers, m)?)?;
     Ok(())

@@ -92,14 +92,30 @@ pub fn slice_file(
         let shape = Field::from_file(whole_file(&source, path)?);
         return shape.slice(settings, progress).map_err(at);
     }
+    let mut layers = slice_reader(&reader, settings, 0..usize::MAX, progress).map_err(at)?;
+    crate::sharp::sharpen_sliced(&mut layers, &header, settings.axis).map_err(at)?;
+    Ok(Sliced {
+        layers,
+        frame: LayerFrame::new(settings.axis, header.grid.offset),
+    })
+}
+
+/// The layers numbered `range` of slicing the file `reader` reads (a separable basis), slab by
+/// slab, without the sharp section's corners.
+pub(crate) fn slice_reader(
+    reader: &SlabReader,
+    settings: &SliceOptions,
+    range: std::ops::Range<usize>,
+    progress: &dyn Progress,
+) -> Result<Vec<Layer>> {
+    let header = reader.header();
     let grid = header.grid;
-    let bounds = header_bounds(&header);
+    let bounds = header_bounds(header);
     let options = options_for(grid.spacing, grid.offset, settings)?;
-    let total = pgvol_slice::layer_heights(bounds, &options)
-        .map_err(|e| at(e.into()))?
-        .len();
+    let heights = pgvol_slice::layer_heights(bounds, &options)?.len();
+    let total = heights.min(range.end).saturating_sub(range.start);
     let source = FileBricks {
-        reader: &reader,
+        reader,
         grid_counts: brick_counts(grid.dims),
         word_scale: reader.word_scale(),
     };
@@ -113,20 +129,15 @@ pub fn slice_file(
         reader.background(),
         bounds,
         &options,
-        0..usize::MAX,
+        range,
         &mut |layer| {
             layers.push(layer);
             progress.update(layers.len() as f64 / total.max(1) as f64);
             progress::check(progress)
         },
-    )
-    .map_err(at)?;
+    )?;
     progress.finish();
-    crate::sharp::sharpen_sliced(&mut layers, &header, settings.axis).map_err(at)?;
-    Ok(Sliced {
-        layers,
-        frame: LayerFrame::new(settings.axis, grid.offset),
-    })
+    Ok(layers)
 }
 
 /// A sparse `.pgv` file's bricks, decoded slab by slab, kept as the file's 16-bit words where

@@ -10,10 +10,13 @@ use pgvol_core::sparse::BrickValues;
 use pgvol_core::{Background, WordScale, BRICK_EDGE, BRICK_NODES};
 use rayon::prelude::*;
 
-use super::brick_read::{check_all_bricks, BrickReader};
-use super::index::{bit, layout, layout_in_file, BrickData, Layout};
+use super::brick_read::{check_all_bricks, checked_blob, BrickReader};
+use super::index::{bit, layout, layout_in_file, BrickData, IndexBuilder, Layout};
 use super::payload_read::{cut_into_grid_bricks, cut_into_grid_bricks_of, grid_bricks_of};
-use crate::container::{parse_container, v2_header, v2_sizes, MAGIC, TRAILER, VERSION_STREAMED};
+use crate::container::{
+    parse_container, v2_header, v2_sizes, write_streamed_end, write_streamed_start, MAGIC, TRAILER,
+    VERSION_STREAMED,
+};
 use crate::error::err;
 use crate::error::FormatError;
 use crate::header::PgvHeader;
@@ -270,6 +273,48 @@ impl<'a> SlabReader<'a> {
         Ok(CompactSlab { stored, inside })
     }
 
+    /// A version 2 file of the same volume holding, of the stored bricks, only those whose
+    /// coordinate along `axis` lies in `slabs` (their blobs copied as they are, each CRC
+    /// checked), and the side of every other brick: for a reader of those slabs, the file's
+    /// own bricks. The sharp section is left out. A part of a job gets these bytes instead of
+    /// the whole file or its decoded coefficients.
+    pub fn part_file(
+        &self,
+        axis: usize,
+        slabs: std::ops::Range<usize>,
+    ) -> Result<Vec<u8>, FormatError> {
+        let l = &self.layout;
+        let total = l.bricks.total();
+        let mut index = IndexBuilder::new(total);
+        index.inside.copy_from_slice(l.inside);
+        let mut data = Vec::new();
+        let mut entry = 0;
+        for b in 0..total {
+            if !bit(l.stored, b) {
+                continue;
+            }
+            if slabs.contains(&l.bricks.coords(b)[axis]) {
+                let blob = checked_blob(l, b, entry, &self.path)?;
+                index.stored[b / 8] |= 1 << (b % 8);
+                index.push(&blob);
+                data.extend_from_slice(&blob);
+            }
+            entry += 1;
+        }
+        let mut header = self.header.clone();
+        header.sharp = None;
+        if let Some(sp) = header.sparse.as_mut() {
+            sp.stored = index.stored.iter().map(|m| m.count_ones() as usize).sum();
+        }
+        let mut out = Vec::with_capacity(data.len() + 1024);
+        write_streamed_start(&mut out).expect("writing to memory");
+        out.extend_from_slice(&data);
+        let index = index.finish();
+        write_streamed_end(&mut out, data.len() as u64, &index, &header)
+            .expect("writing to memory");
+        Ok(out)
+    }
+
     /// How the 16-bit words of [`SlabReader::compact_slab`] map to values, exactly for every
     /// such word; `None` where the file is not in the `fixed` precision or some 16-bit word's
     /// value is not finite or not exact in f32 (bricks then come as values).
@@ -517,6 +562,62 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A part file's slabs in its range are the whole file's, brick for brick and side for
+    /// side, and the slabs outside hold nothing stored; a damaged brick is refused, not copied
+    /// under a fresh checksum.
+    #[test]
+    fn part_files_hold_the_slabs_of_their_range() {
+        for brick in [8, 16] {
+            let bytes = file_bytes_with(brick);
+            let path = Path::new("s.pgv");
+            let whole = SlabReader::open(&bytes, path).unwrap().unwrap();
+            for axis in 0..3 {
+                let n = whole.brick_counts()[axis];
+                assert!(n >= 2, "brick {brick} axis {axis}: {n} slabs");
+                // Every slab but the first, and the last too where there are more than two.
+                let range = 1..if n > 2 { n - 1 } else { n };
+                let part_bytes = whole.part_file(axis, range.clone()).unwrap();
+                assert!(part_bytes.len() < bytes.len(), "brick {brick} axis {axis}");
+                let part = SlabReader::open(&part_bytes, Path::new("p.pgv"))
+                    .unwrap()
+                    .unwrap();
+                let mut stored = 0;
+                for s in 0..n {
+                    let (a, b) = (whole.slab(axis, s).unwrap(), part.slab(axis, s).unwrap());
+                    if range.contains(&s) {
+                        assert_eq!(a.stored, b.stored, "slab {s} along {axis}");
+                        assert_eq!(a.inside, b.inside, "slab {s} along {axis}");
+                        stored += b.stored.len();
+                    } else {
+                        assert!(b.stored.is_empty(), "slab {s} along {axis}");
+                    }
+                }
+                assert!(stored > 0, "brick {brick} axis {axis}");
+            }
+        }
+        let bytes = file_bytes();
+        let n = bytes.len();
+        let dlen = u64::from_le_bytes(bytes[n - 32..n - 24].try_into().unwrap()) as usize;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.pgv");
+        let mut bad = bytes.clone();
+        bad[12 + dlen / 2] ^= 1;
+        std::fs::write(&path, &bad).unwrap();
+        let source = SlabSource::open(&path).unwrap();
+        let reader = SlabReader::from_source(&source, &path).unwrap().unwrap();
+        let count = reader.brick_counts()[2];
+        let e = reader.part_file(2, 0..count).err().unwrap().to_string();
+        assert!(
+            e.contains("checksum mismatch") && e.contains("d.pgv"),
+            "{e}"
+        );
+        let empty = reader.part_file(2, 0..0).unwrap();
+        let part = SlabReader::open(&empty, Path::new("e.pgv"))
+            .unwrap()
+            .unwrap();
+        assert!((0..count).all(|s| part.slab(2, s).unwrap().stored.is_empty()));
     }
 
     #[test]

@@ -64,6 +64,7 @@ __all__ = [
     "sharpen_layers",
     "plan_slice_file",
     "slice_file_part_bricks",
+    "slice_file_part",
     "sharpen_file_layers",
     "write_layers",
 ]
@@ -1063,7 +1064,7 @@ def plan_slice_file(
     first: Optional[float] = None,
     resolution: Optional[float] = None,
     tolerance: Optional[float] = None,
-) -> Optional[Tuple[List[Tuple[int, int]], Tuple[_Vec3, _Vec3]]]: ...
+) -> Optional[List[Tuple[int, int]]]: ...
 def slice_file_part_bricks(
     path: _PathLike,
     start: int,
@@ -1075,6 +1076,17 @@ def slice_file_part_bricks(
     resolution: Optional[float] = None,
     tolerance: Optional[float] = None,
 ) -> bytes: ...
+def slice_file_part(
+    part: bytes,
+    start: int,
+    end: int,
+    layer_height: float,
+    *,
+    axis: str = "z",
+    first: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tolerance: Optional[float] = None,
+) -> List[Layer]: ...
 def sharpen_file_layers(
     path: _PathLike,
     layers: List[Layer],

@@ -19,8 +19,8 @@ process, so a machine without a cluster runs the same code path.
   window of them rather than the whole field.
 - ``decode`` sends each task the coefficient bricks around its slab of cells; the tasks'
   triangles are the single-process triangles, welded here at the seams.
-- ``slice`` sends each task the bricks around its range of layers; from a ``.pgv`` path they
-  are decoded from the slabs the range reaches, never the whole file at once.
+- ``slice`` sends each task the bricks around its range of layers; from a ``.pgv`` path, the
+  file's own compressed bricks of the slabs the range reaches, never the whole file at once.
 
 Tasks are pure functions of their arguments, keyed by them: a task that fails is retried
 (``retries``) and a task lost with its worker is run again by the scheduler, with the same
@@ -266,18 +266,24 @@ def decode(source: Any, *, client: Any = None, parts: int | None = None, iso: fl
     return _pgvol.weld_parts(pieces, field.grid.spacing, iso=iso, min_component=min_component)
 
 
-def _slice_part(bricks: bytes, bounds, layers: tuple[int, int], layer_height: float,
-                settings: dict) -> list[Layer]:
-    """Task: the layers of one range."""
+def _slice_part(bricks: bytes, layers: tuple[int, int], layer_height: float, settings: dict,
+                bounds) -> list[Layer]:
+    """Task: the layers of one range, from its bricks; ``bounds`` is the field's."""
     return _pgvol.slice_part(bricks, bounds, layers[0], layers[1], layer_height, **settings)
+
+
+def _slice_file_part(part: bytes, layers: tuple[int, int], layer_height: float,
+                     settings: dict) -> list[Layer]:
+    """Task: the layers of one range, from its part of the file."""
+    return _pgvol.slice_file_part(part, layers[0], layers[1], layer_height, **settings)
 
 
 def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | None = None,
           resolution: float | None = None, tolerance: float | None = None, client: Any = None,
           parts: int | None = None, retries: int = RETRIES) -> list[Layer]:
     """Slices a field (a ``Field`` or a ``.pgv`` path) in parts: the layers of
-    ``Field.slice`` with the same arguments. A path to a sparse file is read one part's slabs
-    at a time, so this process holds a part's bricks rather than the decoded field."""
+    ``Field.slice`` with the same arguments. From a path to a sparse file each task gets the
+    file's own bricks of its slabs, so this process never decodes the field."""
     settings: dict[str, Any] = {
         "axis": axis, "first": first, "resolution": resolution, "tolerance": tolerance
     }
@@ -286,9 +292,8 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
         path = Path(source)
         plan = _pgvol.plan_slice_file(path, count, layer_height, **settings)
         if plan is not None:
-            ranges, bounds = plan
             layers = _slice_parts(
-                client, ranges, bounds,
+                client, plan, _slice_file_part, (),
                 lambda s, e: _pgvol.slice_file_part_bricks(path, s, e, layer_height, **settings),
                 layer_height, settings, retries)
             # The file's sharp section puts corners back, here where the layers are whole.
@@ -296,25 +301,26 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
     field = _field(source)
     ranges = _pgvol.plan_slice(field, count, layer_height, **settings)
     layers = _slice_parts(
-        client, ranges, field.bounds,
+        client, ranges, _slice_part, (field.bounds,),
         lambda s, e: _pgvol.slice_part_bricks(field, s, e, layer_height, **settings),
         layer_height, settings, retries)
     return _pgvol.sharpen_layers(field, layers, layer_height, **settings)
 
 
-def _slice_parts(client: Any, ranges: list[tuple[int, int]], bounds, bricks_of,
+def _slice_parts(client: Any, ranges: list[tuple[int, int]], task, extra: tuple, bricks_of,
                  layer_height: float, settings: dict, retries: int) -> list[Layer]:
-    """The layers of every range in plan order. Each part's bricks (``bricks_of(start,
-    end)``) are made as the part is handed out and dropped here once sliced or scattered."""
+    """``task(bricks, range, layer_height, settings, *extra)`` for every range, the layers in
+    plan order. Each part's bricks (``bricks_of(start, end)``) are made as the part is handed out
+    and dropped here once sliced or scattered."""
     if client is None:
         return [layer for s, e in ranges
-                for layer in _slice_part(bricks_of(s, e), bounds, (s, e), layer_height, settings)]
+                for layer in task(bricks_of(s, e), (s, e), layer_height, settings, *extra)]
     key = uuid.uuid4().hex
     futures = []
     for s, e in ranges:
         [bricks] = client.scatter([bricks_of(s, e)], hash=False)
-        futures.append(client.submit(_slice_part, bricks, bounds, (s, e), layer_height,
-                                     settings, key=f"pgvol-slice-{key}-{s}-{e}", pure=False,
+        futures.append(client.submit(task, bricks, (s, e), layer_height, settings, *extra,
+                                     key=f"pgvol-slice-{key}-{s}-{e}", pure=False,
                                      retries=retries))
     return [layer for part in client.gather(futures) for layer in part]
 

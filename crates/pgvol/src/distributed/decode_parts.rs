@@ -44,7 +44,7 @@ pub fn decode_part_bricks(volume: &CoefficientVolume, cells: Range<usize>) -> Ve
 }
 
 /// The bricks of `volume` whose index along `axis` lies in `range`, all of the other axes.
-pub(crate) fn slab_of(volume: &CoefficientVolume, axis: usize, range: Range<usize>) -> Slab {
+fn slab_of(volume: &CoefficientVolume, axis: usize, range: Range<usize>) -> Slab {
     let counts = volume.coeffs.brick_counts();
     let mut bricks = [0..counts[0], 0..counts[1], 0..counts[2]];
     bricks[axis] = range.start.min(counts[axis])..range.end.min(counts[axis]);

@@ -1,33 +1,28 @@
-//! Slicing a `.pgv` file in parts without decoding it whole: the plan comes from the file's
-//! header, and each part's bricks from the slabs of file bricks its layers reach, so the caller
-//! holds one part's bricks at a time rather than the whole volume.
+//! Slicing a `.pgv` file in parts without decoding it: the plan comes from the file's header,
+//! and each part gets the file's own compressed bricks of the slabs its layers reach, as a
+//! `.pgv` file of their own, so the caller holds one part's bytes at a time rather than the
+//! volume, and each part decodes only its slabs.
 
 use std::ops::Range;
 use std::path::Path;
 
-use glam::Vec3;
-use pgvol_core::SparseGrid;
-use pgvol_field::CoefficientVolume;
 use pgvol_format::{PgvHeader, SlabReader, SlabSource};
 use pgvol_slice::Layer;
 
-use super::decode_parts::{part_brick_layers, slab_of};
+use super::decode_parts::part_brick_layers;
 use super::split::split;
 use crate::error::{Error, FileResult, Result};
+use crate::progress::Silent;
 use crate::slice::{header_bounds, options_for, SliceOptions as SliceSettings};
 
-/// The layer numbers of each part of a slicing, and the box the shape lies in.
-pub type FileSlicePlan = (Vec<Range<usize>>, (Vec3, Vec3));
-
-/// A slicing of the file at `path` in at most `parts` parts: each part's layer numbers and the
-/// shape's bounds (what [`super::slice_part`] takes), or `None` when the file is not read slab
-/// by slab (a version 1 or dense file, or a basis that is not separable), whose parts come from
-/// the loaded field ([`super::plan_slice`]).
+/// A slicing of the file at `path` in at most `parts` parts, each part's layer numbers; `None`
+/// when the file is not read slab by slab (a version 1 or dense file, or a basis that is not
+/// separable), whose parts come from the loaded field ([`super::plan_slice`]).
 pub fn plan_slice_file(
     path: &Path,
     settings: &SliceSettings,
     parts: usize,
-) -> Result<Option<FileSlicePlan>> {
+) -> Result<Option<Vec<Range<usize>>>> {
     with_reader(path, |reader| {
         let Some(reader) = reader else {
             return Ok(None);
@@ -35,15 +30,15 @@ pub fn plan_slice_file(
         let header = reader.header();
         crate::frame::require_near(header.grid.offset, "slicing in parts")?;
         let options = options_for(header.grid.spacing, header.grid.offset, settings)?;
-        let bounds = header_bounds(header);
-        let heights = pgvol_slice::layer_heights(bounds, &options)?;
-        Ok(Some((split(heights.len(), parts)?, bounds)))
+        let heights = pgvol_slice::layer_heights(header_bounds(header), &options)?;
+        Ok(Some(split(heights.len(), parts)?))
     })
 }
 
-/// The bricks of the layers `layers` of slicing the file at `path`, the bytes
-/// [`super::slice_part_bricks`] gives for the loaded field, from only the slabs of file bricks
-/// they reach. The file must be one [`plan_slice_file`] plans.
+/// What the layers `layers` of slicing the file at `path` read: a version 2 `.pgv` file holding
+/// the file's own compressed bricks of the slabs those layers reach
+/// ([`SlabReader::part_file`]), for [`slice_file_part`]. The file must be one
+/// [`plan_slice_file`] plans.
 pub fn slice_file_part_bricks(
     path: &Path,
     settings: &SliceSettings,
@@ -60,33 +55,28 @@ pub fn slice_file_part_bricks(
         let grid = header.grid;
         let options = options_for(grid.spacing, grid.offset, settings)?;
         let (axis, bricks) = part_brick_layers(&grid, header_bounds(header), &options, layers)?;
-        let mut coeffs = SparseGrid::new(grid.dims, reader.background());
         let per = reader.grid_bricks_per_slab().max(1);
-        let mut stored = Vec::new();
-        for slab in bricks.start / per..bricks.end.div_ceil(per) {
-            let decoded = reader.slab(axis, slab).reading()?;
-            for b in decoded.inside {
-                coeffs.set_inside(b, true);
-            }
-            stored.extend(decoded.stored);
-        }
-        // In the loaded field's order (file bricks x fastest, then each one's grid bricks), so
-        // the part's bytes are the same.
-        let file_order = |m: &[usize; 3]| {
-            let f = m.map(|c| c / per);
-            ([f[2], f[1], f[0]], [m[2], m[1], m[0]])
-        };
-        stored.sort_unstable_by_key(|(m, _)| file_order(m));
-        for (b, values) in stored {
-            coeffs.insert(b, values);
-        }
-        let volume = CoefficientVolume {
-            grid,
-            basis: header.basis,
-            coeffs,
-        };
-        Ok(slab_of(&volume, axis, bricks).to_bytes())
+        reader
+            .part_file(axis, bricks.start / per..bricks.end.div_ceil(per))
+            .reading()
     })
+}
+
+/// The layers `layers` of slicing, from the bytes [`slice_file_part_bricks`] gave for them:
+/// each the layer slicing the whole file gives, before [`sharpen_file_layers`].
+pub fn slice_file_part(
+    part: &[u8],
+    settings: &SliceSettings,
+    layers: Range<usize>,
+) -> Result<Vec<Layer>> {
+    let name = Path::new("<part of a .pgv file>");
+    let reader = SlabReader::open(part, name).reading()?;
+    let Some(reader) = reader.filter(|r| r.header().basis.is_separable()) else {
+        return Err(Error::parameter(
+            "the bytes are not a part of a sparse .pgv file with a separable basis",
+        ));
+    };
+    crate::slice::slice_reader(&reader, settings, layers, &Silent)
 }
 
 /// Puts back into `layers`, the parts' layers of slicing the file at `path` concatenated in

@@ -35,7 +35,9 @@ pub use encode_parts::{
     assemble_encode, part_encode_bytes, plan_encode, plan_encode_bytes, EncodeJob, EncodePlan,
     EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
 };
-pub use file_parts::{plan_slice_file, sharpen_file_layers, slice_file_part_bricks, FileSlicePlan};
+pub use file_parts::{
+    plan_slice_file, sharpen_file_layers, slice_file_part, slice_file_part_bricks,
+};
 pub use slab::Slab;
 pub use split::split;
 pub use stream_parts::{write_encode_parts, write_encode_parts_to, PartsWritten};
