@@ -300,6 +300,56 @@ pub(crate) fn decode_part<'py>(
     ))
 }
 
+/// The z cells of each part of contouring the `.pgv` file at `path` and its grid spacing, from
+/// its header; `None` for a file not read slab by slab, whose parts come from the loaded field.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub(crate) fn plan_decode_file(
+    py: Python<'_>,
+    path: PathBuf,
+    parts: usize,
+) -> PyResult<Option<(Vec<(usize, usize)>, f32)>> {
+    let plan = quiet(py, || parts::plan_decode_file(&path, parts))?;
+    Ok(plan.map(|(ranges, spacing)| (pairs(ranges), spacing)))
+}
+
+/// What contouring the z cells `start..end` of the file at `path` reads: a `.pgv` file of the
+/// file's own bricks in the slabs the part reaches, for `decode_file_part`.
+#[pyfunction]
+pub(crate) fn decode_file_part_bricks<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    start: usize,
+    end: usize,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let bytes = quiet(py, || parts::decode_file_part_bricks(&path, start..end))?;
+    Ok(PyBytes::new(py, &bytes))
+}
+
+/// The triangles of the z cells `start..end` from the bytes `decode_file_part_bricks` gave:
+/// (vertices, faces).
+#[pyfunction]
+#[pyo3(signature = (part, start, end, *, iso=0.0))]
+#[allow(clippy::type_complexity)]
+pub(crate) fn decode_file_part<'py>(
+    py: Python<'py>,
+    part: Vec<u8>,
+    start: usize,
+    end: usize,
+    iso: f32,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+    let options = pgvol::DecodeOptions {
+        iso,
+        ..Default::default()
+    };
+    let mesh = quiet(py, || parts::decode_file_part(&part, start..end, &options))?;
+    let n = mesh.positions.len();
+    Ok((
+        arrays::vec3s(py, mesh.positions),
+        arrays::triangles(py, mesh.triangles, n)?,
+    ))
+}
+
 /// The mesh of the parts' pieces ((vertices, faces) pairs): seams welded, small pieces removed.
 #[pyfunction]
 #[pyo3(signature = (pieces, spacing, *, iso=0.0, min_component=None))]
@@ -568,6 +618,9 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_decode, m)?)?;
     m.add_function(wrap_pyfunction!(decode_part_bricks, m)?)?;
     m.add_function(wrap_pyfunction!(decode_part, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_decode_file, m)?)?;
+    m.add_function(wrap_pyfunction!(decode_file_part_bricks, m)?)?;
+    m.add_function(wrap_pyfunction!(decode_file_part, m)?)?;
     m.add_function(wrap_pyfunction!(weld_parts, m)?)?;
     m.add_function(wrap_pyfunction!(plan_slice, m)?)?;
     m.add_function(wrap_pyfunction!(slice_part_bricks, m)?)?;

@@ -153,6 +153,36 @@ def test_decode_in_tasks_gives_the_single_process_triangles_welded(client, mesh_
         assert trimesh.Trimesh(dv, df, process=False).is_watertight, parts
 
 
+def test_decode_of_a_file_in_tasks_reads_its_slabs_and_gives_its_triangles(
+        client, mesh_path, tmp_path):
+    from pgvol import _pgvol
+
+    path = tmp_path / "fandisk.pgv"
+    pgvol.Field.from_mesh(*pgvol.read_mesh(mesh_path("fandisk")), res=RES).save(path)
+    field = pgvol.Field.load(path)
+    v, f = field.to_mesh(method="mc")
+    plan, spacing = _pgvol.plan_decode_file(path, 4)
+    assert plan == _pgvol.plan_decode(field, 4) and spacing == field.grid.spacing
+    triangles = 0
+    for s, e in plan:
+        part = _pgvol.decode_file_part_bricks(path, s, e)
+        assert len(part) < path.stat().st_size
+        got = _pgvol.decode_file_part(part, s, e)
+        want = _pgvol.decode_part(_pgvol.decode_part_bricks(field, s, e), s, e)
+        assert len(got[1]) == len(want[1])
+        a, b = triangle_sets(got, want)
+        assert np.array_equal(a, b), (s, e)
+        triangles += len(got[1])
+    assert triangles >= len(f)
+    for parts in (1, 3):
+        dv, df = distributed.decode(path, client=None if parts == 1 else client, parts=parts)
+        got, want = triangle_sets((dv, df), (v, f))
+        assert np.array_equal(got, want), parts
+        assert trimesh.Trimesh(dv, df, process=False).is_watertight, parts
+    with pytest.raises(pgvol.InputFileError):
+        _pgvol.decode_file_part(b"not a part", 0, 1)
+
+
 def test_slice_in_tasks_gives_the_single_process_layers(client, mesh_path, tmp_path):
     field = pgvol.Field.from_mesh(*pgvol.read_mesh(mesh_path("stanford-bunny")), res=RES)
     path = tmp_path / "bunny.pgv"

@@ -273,11 +273,11 @@ impl<'a> SlabReader<'a> {
         Ok(CompactSlab { stored, inside })
     }
 
-    /// A version 2 file of the same volume holding, of the stored bricks, only those whose
-    /// coordinate along `axis` lies in `slabs` (their blobs copied as they are, each CRC
-    /// checked), and the side of every other brick: for a reader of those slabs, the file's
-    /// own bricks. The sharp section is left out. A part of a job gets these bytes instead of
-    /// the whole file or its decoded coefficients.
+    /// A version 2 file of the same volume holding only the bricks whose coordinate along
+    /// `axis` lies in `slabs`: the stored ones' blobs copied as they are (each CRC checked), the
+    /// others' sides; every brick beyond is absent and outside, as a cut of the volume. For a
+    /// reader of those slabs, the file's own bricks. The sharp section is left out. A part of a
+    /// job gets these bytes instead of the whole file or its decoded coefficients.
     pub fn part_file(
         &self,
         axis: usize,
@@ -286,14 +286,17 @@ impl<'a> SlabReader<'a> {
         let l = &self.layout;
         let total = l.bricks.total();
         let mut index = IndexBuilder::new(total);
-        index.inside.copy_from_slice(l.inside);
         let mut data = Vec::new();
         let mut entry = 0;
         for b in 0..total {
+            let within = slabs.contains(&l.bricks.coords(b)[axis]);
             if !bit(l.stored, b) {
+                if within && bit(l.inside, b) {
+                    index.inside[b / 8] |= 1 << (b % 8);
+                }
                 continue;
             }
-            if slabs.contains(&l.bricks.coords(b)[axis]) {
+            if within {
                 let blob = checked_blob(l, b, entry, &self.path)?;
                 index.stored[b / 8] |= 1 << (b % 8);
                 index.push(&blob);
@@ -565,8 +568,8 @@ mod tests {
     }
 
     /// A part file's slabs in its range are the whole file's, brick for brick and side for
-    /// side, and the slabs outside hold nothing stored; a damaged brick is refused, not copied
-    /// under a fresh checksum.
+    /// side, and the slabs outside hold nothing stored or inside; a damaged brick is refused,
+    /// not copied under a fresh checksum.
     #[test]
     fn part_files_hold_the_slabs_of_their_range() {
         for brick in [8, 16] {
@@ -591,7 +594,7 @@ mod tests {
                         assert_eq!(a.inside, b.inside, "slab {s} along {axis}");
                         stored += b.stored.len();
                     } else {
-                        assert!(b.stored.is_empty(), "slab {s} along {axis}");
+                        assert!(b.stored.is_empty() && b.inside.is_empty(), "slab {s}");
                     }
                 }
                 assert!(stored > 0, "brick {brick} axis {axis}");

@@ -57,6 +57,9 @@ __all__ = [
     "plan_decode",
     "decode_part_bricks",
     "decode_part",
+    "plan_decode_file",
+    "decode_file_part_bricks",
+    "decode_file_part",
     "weld_parts",
     "plan_slice",
     "slice_part_bricks",
@@ -1008,6 +1011,13 @@ def plan_decode(field: Field, parts: int) -> List[Tuple[int, int]]: ...
 def decode_part_bricks(field: Field, start: int, end: int) -> bytes: ...
 def decode_part(
     bricks: bytes, start: int, end: int, *, iso: float = 0.0
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
+def plan_decode_file(
+    path: _PathLike, parts: int
+) -> Optional[Tuple[List[Tuple[int, int]], float]]: ...
+def decode_file_part_bricks(path: _PathLike, start: int, end: int) -> bytes: ...
+def decode_file_part(
+    part: bytes, start: int, end: int, *, iso: float = 0.0
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
 def weld_parts(
     pieces: List[Any], spacing: float, *, iso: float = 0.0, min_component: Optional[float] = None

@@ -17,8 +17,9 @@ process, so a machine without a cluster runs the same code path.
   and returns its coefficient bricks; this process assembles the file, bit for bit the file
   of ``Field.from_mesh``. ``encode_file`` writes that file as the parts arrive, holding a
   window of them rather than the whole field.
-- ``decode`` sends each task the coefficient bricks around its slab of cells; the tasks'
-  triangles are the single-process triangles, welded here at the seams.
+- ``decode`` sends each task the coefficient bricks around its slab of cells (from a ``.pgv``
+  path, the file's own compressed bricks of those slabs); the tasks' triangles are the
+  single-process triangles, welded here at the seams.
 - ``slice`` sends each task the bricks around its range of layers; from a ``.pgv`` path, the
   file's own compressed bricks of the slabs the range reaches, never the whole file at once.
 
@@ -240,14 +241,14 @@ def _field(source: Any) -> Field:
     return source if isinstance(source, Field) else Field.load(Path(source))
 
 
-def _scatter(client: Any, items: list) -> list:
-    """Items to hand to tasks: scattered to the cluster (each once) or as they are."""
-    return items if client is None else client.scatter(items, hash=False)
-
-
 def _decode_part(bricks: bytes, cells: tuple[int, int], iso: float):
     """Task: the triangles of one slab of cells."""
     return _pgvol.decode_part(bricks, cells[0], cells[1], iso=iso)
+
+
+def _decode_file_part(part: bytes, cells: tuple[int, int], iso: float):
+    """Task: the triangles of one slab of cells, from its part of the file."""
+    return _pgvol.decode_file_part(part, cells[0], cells[1], iso=iso)
 
 
 def decode(source: Any, *, client: Any = None, parts: int | None = None, iso: float = 0.0,
@@ -255,14 +256,21 @@ def decode(source: Any, *, client: Any = None, parts: int | None = None, iso: fl
            retries: int = RETRIES) -> tuple[np.ndarray, np.ndarray]:
     """Contours a field (a ``Field`` or a ``.pgv`` path) in parts by marching cubes on its own
     grid: (vertices, faces), the triangles of ``Field.to_mesh(method="mc")``, in another
-    order, welded at the seams."""
+    order, welded at the seams. From a path to a sparse file each task gets the file's own
+    bricks of its slabs, so this process never decodes the field."""
+    count = _parts(parts, client)
+    if not isinstance(source, Field):
+        path = Path(source)
+        plan = _pgvol.plan_decode_file(path, count)
+        if plan is not None:
+            ranges, spacing = plan
+            pieces = _in_parts(client, "decode", ranges, _decode_file_part, (iso,),
+                               lambda s, e: _pgvol.decode_file_part_bricks(path, s, e), retries)
+            return _pgvol.weld_parts(pieces, spacing, iso=iso, min_component=min_component)
     field = _field(source)
-    plan = _pgvol.plan_decode(field, _parts(parts, client))
-    key = uuid.uuid4().hex
-    bricks = _scatter(client, [_pgvol.decode_part_bricks(field, s, e) for s, e in plan])
-    calls = [(b, cells, iso) for b, cells in zip(bricks, plan)]
-    names = [f"pgvol-decode-{key}-{s}-{e}" for s, e in plan]
-    pieces = _run(client, _decode_part, calls, names, retries)
+    ranges = _pgvol.plan_decode(field, count)
+    pieces = _in_parts(client, "decode", ranges, _decode_part, (iso,),
+                       lambda s, e: _pgvol.decode_part_bricks(field, s, e), retries)
     return _pgvol.weld_parts(pieces, field.grid.spacing, iso=iso, min_component=min_component)
 
 
@@ -292,37 +300,37 @@ def slice(source: Any, layer_height: float, *, axis: str = "z", first: float | N
         path = Path(source)
         plan = _pgvol.plan_slice_file(path, count, layer_height, **settings)
         if plan is not None:
-            layers = _slice_parts(
-                client, plan, _slice_file_part, (),
+            parts_layers = _in_parts(
+                client, "slice", plan, _slice_file_part, (layer_height, settings),
                 lambda s, e: _pgvol.slice_file_part_bricks(path, s, e, layer_height, **settings),
-                layer_height, settings, retries)
+                retries)
+            layers = [layer for part in parts_layers for layer in part]
             # The file's sharp section puts corners back, here where the layers are whole.
             return _pgvol.sharpen_file_layers(path, layers, layer_height, **settings)
     field = _field(source)
     ranges = _pgvol.plan_slice(field, count, layer_height, **settings)
-    layers = _slice_parts(
-        client, ranges, _slice_part, (field.bounds,),
-        lambda s, e: _pgvol.slice_part_bricks(field, s, e, layer_height, **settings),
-        layer_height, settings, retries)
+    parts_layers = _in_parts(
+        client, "slice", ranges, _slice_part, (layer_height, settings, field.bounds),
+        lambda s, e: _pgvol.slice_part_bricks(field, s, e, layer_height, **settings), retries)
+    layers = [layer for part in parts_layers for layer in part]
     return _pgvol.sharpen_layers(field, layers, layer_height, **settings)
 
 
-def _slice_parts(client: Any, ranges: list[tuple[int, int]], task, extra: tuple, bricks_of,
-                 layer_height: float, settings: dict, retries: int) -> list[Layer]:
-    """``task(bricks, range, layer_height, settings, *extra)`` for every range, the layers in
-    plan order. Each part's bricks (``bricks_of(start, end)``) are made as the part is handed out
-    and dropped here once sliced or scattered."""
+def _in_parts(client: Any, job: str, ranges: list[tuple[int, int]], task, extra: tuple,
+              bricks_of, retries: int) -> list:
+    """``task(bricks, range, *extra)`` for every range, the results in plan order, as tasks
+    named after ``job`` or here. Each part's bricks (``bricks_of(start, end)``) are made as the
+    part is handed out and dropped here once used or scattered."""
     if client is None:
-        return [layer for s, e in ranges
-                for layer in task(bricks_of(s, e), (s, e), layer_height, settings, *extra)]
+        return [task(bricks_of(s, e), (s, e), *extra) for s, e in ranges]
     key = uuid.uuid4().hex
     futures = []
     for s, e in ranges:
         [bricks] = client.scatter([bricks_of(s, e)], hash=False)
-        futures.append(client.submit(task, bricks, (s, e), layer_height, settings, *extra,
-                                     key=f"pgvol-slice-{key}-{s}-{e}", pure=False,
+        futures.append(client.submit(task, bricks, (s, e), *extra,
+                                     key=f"pgvol-{job}-{key}-{s}-{e}", pure=False,
                                      retries=retries))
-    return [layer for part in client.gather(futures) for layer in part]
+    return client.gather(futures)
 
 
 _EXAMPLES = """examples:

@@ -38,9 +38,14 @@ pub fn plan_decode(volume: &CoefficientVolume, parts: usize) -> Result<Vec<Range
 
 /// The coefficient bricks a part needs to contour its cells `cells` (z), as [`Slab`] bytes.
 pub fn decode_part_bricks(volume: &CoefficientVolume, cells: Range<usize>) -> Vec<u8> {
+    slab_of(volume, 2, decode_part_reach(cells)).to_bytes()
+}
+
+/// The brick layers along z a part contouring cells `cells` (z) needs.
+pub(crate) fn decode_part_reach(cells: Range<usize>) -> Range<usize> {
     let lo = (cells.start / BRICK_EDGE).saturating_sub(PART_HALO_BRICKS);
     let hi = cells.end / BRICK_EDGE + 1 + PART_HALO_BRICKS;
-    slab_of(volume, 2, lo..hi).to_bytes()
+    lo..hi
 }
 
 /// The bricks of `volume` whose index along `axis` lies in `range`, all of the other axes.
@@ -58,15 +63,25 @@ fn slab_of(volume: &CoefficientVolume, axis: usize, range: Range<usize>) -> Slab
 pub fn decode_part(bricks: &[u8], cells: Range<usize>, options: &DecodeOptions) -> Result<Mesh> {
     check_part_options(options)?;
     let volume = Slab::from_bytes(bricks)?.volume()?;
+    contour_part(&volume, cells, options)
+}
+
+/// The triangles of [`decode_part`] from `volume`, which holds at least the bricks it sends.
+pub(crate) fn contour_part(
+    volume: &CoefficientVolume,
+    cells: Range<usize>,
+    options: &DecodeOptions,
+) -> Result<Mesh> {
+    check_part_options(options)?;
     let grid = volume.grid;
     let mut mesh = pgvol_contour::contour_volume(
-        &volume,
+        volume,
         &grid,
         options.iso,
         Method::MarchingCubes,
         pgvol_core::progress::QUIET,
     );
-    let last = z_cells(&volume) - 1;
+    let last = z_cells(volume) - 1;
     let (z0, h) = (grid.origin.z, grid.spacing);
     let owner = |t: &[u32; 3]| {
         let c: Vec3 = t.iter().map(|&i| mesh.positions[i as usize]).sum::<Vec3>() / 3.0;

@@ -1,16 +1,18 @@
-//! Slicing a `.pgv` file in parts without decoding it: the plan comes from the file's header,
-//! and each part gets the file's own compressed bricks of the slabs its layers reach, as a
-//! `.pgv` file of their own, so the caller holds one part's bytes at a time rather than the
-//! volume, and each part decodes only its slabs.
+//! Slicing and contouring a `.pgv` file in parts without decoding it: the plan comes from the
+//! file's header, and each part gets the file's own compressed bricks of the slabs it reaches,
+//! as a `.pgv` file of their own, so the caller holds one part's bytes at a time rather than
+//! the volume, and each part decodes only its slabs.
 
 use std::ops::Range;
 use std::path::Path;
 
+use pgvol_core::Mesh;
 use pgvol_format::{PgvHeader, SlabReader, SlabSource};
 use pgvol_slice::Layer;
 
-use super::decode_parts::part_brick_layers;
+use super::decode_parts::{contour_part, decode_part_reach, part_brick_layers};
 use super::split::split;
+use crate::decode::DecodeOptions;
 use crate::error::{Error, FileResult, Result};
 use crate::progress::Silent;
 use crate::slice::{header_bounds, options_for, SliceOptions as SliceSettings};
@@ -46,10 +48,7 @@ pub fn slice_file_part_bricks(
 ) -> Result<Vec<u8>> {
     with_reader(path, |reader| {
         let Some(reader) = reader else {
-            return Err(Error::parameter(
-                "the file is not read slab by slab (a version 1 or dense file, or a basis \
-                 that is not separable); slice the loaded field in parts instead",
-            ));
+            return Err(not_by_slabs());
         };
         let header = reader.header();
         let grid = header.grid;
@@ -98,6 +97,50 @@ pub fn sharpen_file_layers(
         };
         crate::sharp::sharpen_sliced(layers, header, settings.axis)
     })
+}
+
+/// A contouring of the file at `path` in at most `parts` slabs of cells along z, and the grid
+/// spacing [`super::weld_parts`] takes; `None` when the file is not read slab by slab, whose
+/// parts come from the loaded field ([`super::plan_decode`]).
+pub fn plan_decode_file(path: &Path, parts: usize) -> Result<Option<(Vec<Range<usize>>, f32)>> {
+    with_reader(path, |reader| {
+        let Some(reader) = reader else {
+            return Ok(None);
+        };
+        let grid = reader.header().grid;
+        crate::frame::require_near(grid.offset, "a decode in parts")?;
+        // The cells along z, as the loaded field's plan counts them.
+        Ok(Some((split(grid.dims[2] - 1, parts)?, grid.spacing)))
+    })
+}
+
+/// What contouring the z cells `cells` of the file at `path` reads: a `.pgv` file of the file's
+/// own bricks in the slabs along z the part reaches, for [`decode_file_part`].
+pub fn decode_file_part_bricks(path: &Path, cells: Range<usize>) -> Result<Vec<u8>> {
+    with_reader(path, |reader| {
+        let Some(reader) = reader else {
+            return Err(not_by_slabs());
+        };
+        let bricks = decode_part_reach(cells);
+        let per = reader.grid_bricks_per_slab().max(1);
+        reader
+            .part_file(2, bricks.start / per..bricks.end.div_ceil(per))
+            .reading()
+    })
+}
+
+/// The triangles of the z cells `cells`, from the bytes [`decode_file_part_bricks`] gave for
+/// them: those [`super::decode_part`] gives from the loaded field's bricks.
+pub fn decode_file_part(part: &[u8], cells: Range<usize>, options: &DecodeOptions) -> Result<Mesh> {
+    let file = crate::io::read_pgv_bytes(part, Path::new("<part of a .pgv file>"))?;
+    contour_part(&file.volume, cells, options)
+}
+
+fn not_by_slabs() -> Error {
+    Error::parameter(
+        "the file is not read slab by slab (a version 1 or dense file, or a basis that is not \
+         separable); work on the loaded field in parts instead",
+    )
 }
 
 /// `work` on the slab reader of the file at `path` (`None` for a file not read slab by slab),

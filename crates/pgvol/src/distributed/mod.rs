@@ -36,7 +36,8 @@ pub use encode_parts::{
     EncodedPart, GroupBox, JOB_BYTES_PER_TRIANGLE,
 };
 pub use file_parts::{
-    plan_slice_file, sharpen_file_layers, slice_file_part, slice_file_part_bricks,
+    decode_file_part, decode_file_part_bricks, plan_decode_file, plan_slice_file,
+    sharpen_file_layers, slice_file_part, slice_file_part_bricks,
 };
 pub use slab::Slab;
 pub use split::split;
