@@ -11,7 +11,9 @@ X.pgv --res N`, not timed), then
     included) and its peak RSS;
   * the Python package, in this interpreter, as whole processes under /usr/bin/time -v too:
     `pgvol.slice_file(X.pgv, H)` (read slab by slab, as the command line reads it) and
-    `pgvol.Field.load(X.pgv).slice(H)` (the whole volume decoded first);
+    `pgvol.Field.load(X.pgv).slice(H)` (the whole volume decoded first), and
+    `pgvol.distributed.slice(X.pgv, H, parts=8)` without a cluster (the parts one after another
+    in the process, each from its own part of the file);
   * manifold3d: `Manifold.slice(z)` at the same heights in a Python loop (the mesh loaded before
     the clock starts), with each cross-section's area.
 Area error is |pgvol − manifold3d| / manifold3d per layer, over the layers whose manifold3d area is
@@ -50,6 +52,10 @@ def timed(argv: list) -> dict:
 # The Python package's two ways to slice a file, each a whole process given the file and H.
 PYTHON_STREAMED = "import sys, pgvol; pgvol.slice_file(sys.argv[1], float(sys.argv[2]))"
 PYTHON_LOADED = "import sys, pgvol; pgvol.Field.load(sys.argv[1]).slice(float(sys.argv[2]))"
+PYTHON_PARTS = (
+    "import sys; from pgvol import distributed; "
+    "distributed.slice(sys.argv[1], float(sys.argv[2]), parts=8)"
+)
 
 
 def loop_area(points) -> float:
@@ -100,6 +106,7 @@ def run(mesh: str, res: int, work: Path) -> dict:
     heights, areas = pgvol_layers(out)
     streamed = timed([sys.executable, "-c", PYTHON_STREAMED, pgv, repr(spacing)])
     loaded = timed([sys.executable, "-c", PYTHON_LOADED, pgv, repr(spacing)])
+    in_parts = timed([sys.executable, "-c", PYTHON_PARTS, pgv, repr(spacing)])
     peer_s, peer_areas = manifold_areas(source, heights)
     top = max(peer_areas) if peer_areas else 0.0
     errors = [abs(a - b) / b for a, b in zip(areas, peer_areas) if b >= 0.01 * top]
@@ -114,6 +121,8 @@ def run(mesh: str, res: int, work: Path) -> dict:
         "python_slice_file_rss_mib": streamed["rss_mib"],
         "python_load_slice_s": loaded["s"],
         "python_load_slice_rss_mib": loaded["rss_mib"],
+        "python_parts_s": in_parts["s"],
+        "python_parts_rss_mib": in_parts["rss_mib"],
         "manifold_s": peer_s,
         "ratio": ours["s"] / peer_s if peer_s > 0 else None,
         "median_area_error": float(np.median(errors)) if errors else None,
@@ -132,9 +141,9 @@ def main() -> None:
     rows = []
     print(
         "| mesh | grid | layers | .pgv | pgvol slice | peak RSS | manifold3d | ratio | median area error "
-        "| Python slice_file | Python Field.load + slice |"
+        "| Python slice_file | Python Field.load + slice | Python distributed.slice, 8 parts |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for mesh in args.meshes.split(","):
         for res in (int(r) for r in args.res.split(",")):
             r = run(mesh, res, work)
@@ -144,7 +153,8 @@ def main() -> None:
                 f"{r['pgvol_rss_mib']:.0f} MiB | {r['manifold_s']:.3f} s | {r['ratio']:.1f}× | "
                 f"{100 * r['median_area_error']:.3f} % | {r['python_slice_file_s']:.2f} s, "
                 f"{r['python_slice_file_rss_mib']:.0f} MiB | {r['python_load_slice_s']:.2f} s, "
-                f"{r['python_load_slice_rss_mib']:.0f} MiB |",
+                f"{r['python_load_slice_rss_mib']:.0f} MiB | {r['python_parts_s']:.2f} s, "
+                f"{r['python_parts_rss_mib']:.0f} MiB |",
                 flush=True,
             )
     if args.json:
