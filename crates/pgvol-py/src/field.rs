@@ -1253,13 +1253,8 @@ impl Field {
         // Layers are returned in the field's local coordinates, exact only near the origin.
         pgvol::checks::require_near(self.shape.volume().grid.offset, "slicing into arrays")
             .map_err(|e| errors::to_py(py, e))?;
-        let settings = pgvol::SliceOptions {
-            axis: names::axis(py, axis)?,
-            layer_height,
-            first: first.map(f64::from),
-            resolution,
-            tolerance,
-        };
+        let settings =
+            crate::parts::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
         let sliced = run(py, progress, |p| self.shape.slice(&settings, p))?;
         Ok(sliced
             .layers

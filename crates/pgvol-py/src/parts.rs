@@ -288,11 +288,24 @@ pub(crate) fn decode_part<'py>(
     end: usize,
     iso: f32,
 ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+    part_triangles(py, iso, |options| {
+        parts::decode_part(&bricks, start..end, options)
+    })
+}
+
+/// The (vertices, faces) arrays of the part `contour` gives with the options of a part at
+/// level `iso`.
+#[allow(clippy::type_complexity)]
+fn part_triangles<'py>(
+    py: Python<'py>,
+    iso: f32,
+    contour: impl FnOnce(&pgvol::DecodeOptions) -> pgvol::Result<pgvol::Mesh> + Send,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
     let options = pgvol::DecodeOptions {
         iso,
         ..Default::default()
     };
-    let mesh = quiet(py, || parts::decode_part(&bricks, start..end, &options))?;
+    let mesh = quiet(py, || contour(&options))?;
     let n = mesh.positions.len();
     Ok((
         arrays::vec3s(py, mesh.positions),
@@ -338,16 +351,9 @@ pub(crate) fn decode_file_part<'py>(
     end: usize,
     iso: f32,
 ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
-    let options = pgvol::DecodeOptions {
-        iso,
-        ..Default::default()
-    };
-    let mesh = quiet(py, || parts::decode_file_part(&part, start..end, &options))?;
-    let n = mesh.positions.len();
-    Ok((
-        arrays::vec3s(py, mesh.positions),
-        arrays::triangles(py, mesh.triangles, n)?,
-    ))
+    part_triangles(py, iso, |options| {
+        parts::decode_file_part(&part, start..end, options)
+    })
 }
 
 /// The mesh of the parts' pieces ((vertices, faces) pairs): seams welded, small pieces removed.
@@ -384,7 +390,7 @@ pub(crate) fn weld_parts<'py>(
 }
 
 /// Slice settings from the keywords of `Field.slice`.
-fn slice_settings(
+pub(crate) fn slice_settings(
     py: Python<'_>,
     layer_height: f32,
     axis: &str,
