@@ -487,13 +487,24 @@ pub(crate) fn sharpen_layers(
     tolerance: Option<f32>,
 ) -> PyResult<Vec<Layer>> {
     let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let shape = field.shape();
+    sharpened(py, layers, |out| {
+        parts::sharpen_layers(shape, &settings, out)
+    })
+}
+
+/// `layers` with the corners `sharpen` puts back.
+fn sharpened(
+    py: Python<'_>,
+    layers: Vec<PyRef<'_, Layer>>,
+    sharpen: impl FnOnce(&mut [pgvol::Layer]) -> pgvol::Result<()> + Send,
+) -> PyResult<Vec<Layer>> {
     let mut out = layers
         .iter()
         .map(|l| l.to_layer(py))
         .collect::<PyResult<Vec<_>>>()?;
     drop(layers);
-    let shape = field.shape();
-    quiet(py, || parts::sharpen_layers(shape, &settings, &mut out))?;
+    quiet(py, || sharpen(&mut out))?;
     Ok(out.into_iter().map(|l| Layer::from_layer(py, l)).collect())
 }
 
@@ -575,15 +586,9 @@ pub(crate) fn sharpen_file_layers(
     tolerance: Option<f32>,
 ) -> PyResult<Vec<Layer>> {
     let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
-    let mut out = layers
-        .iter()
-        .map(|l| l.to_layer(py))
-        .collect::<PyResult<Vec<_>>>()?;
-    drop(layers);
-    quiet(py, || {
-        parts::sharpen_file_layers(&path, &settings, &mut out)
-    })?;
-    Ok(out.into_iter().map(|l| Layer::from_layer(py, l)).collect())
+    sharpened(py, layers, |out| {
+        parts::sharpen_file_layers(&path, &settings, out)
+    })
 }
 
 /// Writes layers to an SVG, Common Layer Interface (`binary` for its binary form) or JSON
