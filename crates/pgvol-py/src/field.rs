@@ -1238,7 +1238,8 @@ impl Field {
         Ok(Grid { grid })
     }
 
-    /// Layers of closed contours `layer_height` apart along `axis`.
+    /// Layers of closed contours `layer_height` apart along `axis`. To slice a `.pgv` file
+    /// without loading it whole, `slice_file` gives the same layers.
     #[pyo3(signature = (layer_height, *, axis="z", first=None, resolution=None, tolerance=None, progress=None))]
     fn slice(
         &self,

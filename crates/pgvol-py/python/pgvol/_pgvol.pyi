@@ -808,7 +808,8 @@ class Field:
         progress: Optional[_Progress] = None,
     ) -> List[Layer]:
         """Layers of closed contours ``layer_height`` apart along ``axis``, the first half a
-        layer above the bottom unless ``first`` is given."""
+        layer above the bottom unless ``first`` is given. To slice a ``.pgv`` file without
+        loading it whole, ``slice_file`` gives the same layers."""
     def view(
         self,
         path: _PathLike,
