@@ -61,18 +61,19 @@ fn slab_of(volume: &CoefficientVolume, axis: usize, range: Range<usize>) -> Slab
 /// triangle, with the same vertex positions, as the whole contour holds. A triangle belongs to
 /// the cell holding its centroid.
 pub fn decode_part(bricks: &[u8], cells: Range<usize>, options: &DecodeOptions) -> Result<Mesh> {
+    // Before the bricks are read: a wrong option fails at once.
     check_part_options(options)?;
     let volume = Slab::from_bytes(bricks)?.volume()?;
     contour_part(&volume, cells, options)
 }
 
-/// The triangles of [`decode_part`] from `volume`, which holds at least the bricks it sends.
+/// The triangles of [`decode_part`] from `volume`, which holds at least the bricks it sends;
+/// `options` checked by [`check_part_options`].
 pub(crate) fn contour_part(
     volume: &CoefficientVolume,
     cells: Range<usize>,
     options: &DecodeOptions,
 ) -> Result<Mesh> {
-    check_part_options(options)?;
     let grid = volume.grid;
     let mut mesh = pgvol_contour::contour_volume(
         volume,
@@ -100,7 +101,7 @@ pub(crate) fn contour_part(
 }
 
 /// Only what the parts reproduce exactly: marching cubes on the stored grid.
-fn check_part_options(options: &DecodeOptions) -> Result<()> {
+pub(crate) fn check_part_options(options: &DecodeOptions) -> Result<()> {
     if !options.iso.is_finite() {
         return Err(Error::parameter("the level must be a finite number"));
     }

@@ -7,10 +7,10 @@ use std::ops::Range;
 use std::path::Path;
 
 use pgvol_core::Mesh;
-use pgvol_format::{PgvHeader, SlabReader, SlabSource};
+use pgvol_format::{SlabReader, SlabSource};
 use pgvol_slice::Layer;
 
-use super::decode_parts::{contour_part, decode_part_reach, part_brick_layers};
+use super::decode_parts::{check_part_options, contour_part, decode_part_reach, part_brick_layers};
 use super::split::split;
 use crate::decode::DecodeOptions;
 use crate::error::{Error, FileResult, Result};
@@ -87,15 +87,10 @@ pub fn sharpen_file_layers(
     layers: &mut [Layer],
 ) -> Result<()> {
     with_reader(path, |reader| {
-        let header: &PgvHeader = match reader {
-            Some(reader) => reader.header(),
-            None => {
-                return Err(Error::parameter(
-                    "the file is not read slab by slab; sharpen the layers of the loaded field",
-                ))
-            }
+        let Some(reader) = reader else {
+            return Err(not_by_slabs());
         };
-        crate::sharp::sharpen_sliced(layers, header, settings.axis)
+        crate::sharp::sharpen_sliced(layers, reader.header(), settings.axis)
     })
 }
 
@@ -132,6 +127,7 @@ pub fn decode_file_part_bricks(path: &Path, cells: Range<usize>) -> Result<Vec<u
 /// The triangles of the z cells `cells`, from the bytes [`decode_file_part_bricks`] gave for
 /// them: those [`super::decode_part`] gives from the loaded field's bricks.
 pub fn decode_file_part(part: &[u8], cells: Range<usize>, options: &DecodeOptions) -> Result<Mesh> {
+    check_part_options(options)?;
     let file = crate::io::read_pgv_bytes(part, Path::new("<part of a .pgv file>"))?;
     contour_part(&file.volume, cells, options)
 }
