@@ -1254,8 +1254,7 @@ impl Field {
         // Layers are returned in the field's local coordinates, exact only near the origin.
         pgvol::checks::require_near(self.shape.volume().grid.offset, "slicing into arrays")
             .map_err(|e| errors::to_py(py, e))?;
-        let settings =
-            crate::parts::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+        let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
         let sliced = run(py, progress, |p| self.shape.slice(&settings, p))?;
         Ok(sliced
             .layers

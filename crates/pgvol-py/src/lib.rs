@@ -184,7 +184,7 @@ fn slice_file(
     tolerance: Option<f32>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Vec<field::Layer>> {
-    let settings = parts::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let sliced = run(py, progress, |p| {
         let sliced = pgvol::stream::slice_file(&path, &settings, p)?;
         // Layers are returned in the field's local coordinates, as `Field.slice` returns them:

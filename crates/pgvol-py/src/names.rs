@@ -173,3 +173,21 @@ pub(crate) fn bool_op(py: Python<'_>, name: &str) -> PyResult<pgvol::BoolOp> {
         }
     })
 }
+
+/// Slice settings from the keywords of `Field.slice`.
+pub(crate) fn slice_settings(
+    py: Python<'_>,
+    layer_height: f32,
+    axis: &str,
+    first: Option<f32>,
+    resolution: Option<f32>,
+    tolerance: Option<f32>,
+) -> PyResult<pgvol::SliceOptions> {
+    Ok(pgvol::SliceOptions {
+        axis: self::axis(py, axis)?,
+        layer_height,
+        first: first.map(f64::from),
+        resolution,
+        tolerance,
+    })
+}

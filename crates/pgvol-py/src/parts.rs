@@ -389,24 +389,6 @@ pub(crate) fn weld_parts<'py>(
     ))
 }
 
-/// Slice settings from the keywords of `Field.slice`.
-pub(crate) fn slice_settings(
-    py: Python<'_>,
-    layer_height: f32,
-    axis: &str,
-    first: Option<f32>,
-    resolution: Option<f32>,
-    tolerance: Option<f32>,
-) -> PyResult<pgvol::SliceOptions> {
-    Ok(pgvol::SliceOptions {
-        axis: names::axis(py, axis)?,
-        layer_height,
-        first: first.map(f64::from),
-        resolution,
-        tolerance,
-    })
-}
-
 /// The layer numbers of each part of slicing `field`.
 #[pyfunction]
 #[pyo3(signature = (field, parts, layer_height, *, axis="z", first=None, resolution=None, tolerance=None))]
@@ -420,7 +402,7 @@ pub(crate) fn plan_slice(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Vec<(usize, usize)>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     quiet(py, || parts::plan_slice(field.shape(), &settings, parts)).map(pairs)
 }
 
@@ -438,7 +420,7 @@ pub(crate) fn slice_part_bricks<'py>(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Bound<'py, PyBytes>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let bytes = quiet(py, || {
         parts::slice_part_bricks(field.shape(), &settings, start..end)
     })?;
@@ -460,7 +442,7 @@ pub(crate) fn slice_part(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Vec<Layer>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let bounds = (glam::Vec3::from(bounds.0), glam::Vec3::from(bounds.1));
     let layers = quiet(py, || {
         parts::slice_part(&bricks, bounds, &settings, start..end)
@@ -486,7 +468,7 @@ pub(crate) fn sharpen_layers(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Vec<Layer>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let shape = field.shape();
     sharpened(py, layers, |out| {
         parts::sharpen_layers(shape, &settings, out)
@@ -522,7 +504,7 @@ pub(crate) fn plan_slice_file(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Option<Vec<(usize, usize)>>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let plan = quiet(py, || parts::plan_slice_file(&path, &settings, parts))?;
     Ok(plan.map(pairs))
 }
@@ -542,7 +524,7 @@ pub(crate) fn slice_file_part_bricks<'py>(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Bound<'py, PyBytes>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let bytes = quiet(py, || {
         parts::slice_file_part_bricks(&path, &settings, start..end)
     })?;
@@ -563,7 +545,7 @@ pub(crate) fn slice_file_part(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Vec<Layer>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     let layers = quiet(py, || parts::slice_file_part(&part, &settings, start..end))?;
     Ok(layers
         .into_iter()
@@ -585,7 +567,7 @@ pub(crate) fn sharpen_file_layers(
     resolution: Option<f32>,
     tolerance: Option<f32>,
 ) -> PyResult<Vec<Layer>> {
-    let settings = slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
+    let settings = names::slice_settings(py, layer_height, axis, first, resolution, tolerance)?;
     sharpened(py, layers, |out| {
         parts::sharpen_file_layers(&path, &settings, out)
     })
