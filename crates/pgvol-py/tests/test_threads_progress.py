@@ -110,6 +110,22 @@ def test_progress_reports_each_stage_from_0_to_1(spot):
     assert set(layers) == {"slice"}
 
 
+def test_slicing_a_file_reports_its_layers_and_stops_when_asked(spot, tmp_path):
+    path = tmp_path / "spot.pgv"
+    pgvol.Field.from_mesh(*spot, res=64).save(path)
+    calls = []
+    layers = pgvol.slice_file(path, 0.02, progress=lambda s, x: calls.append((s, x)))
+    assert len(layers) > 20
+    assert calls[0] == ("slice", 0.0) and calls[-1] == ("slice", 1.0)
+
+    def progress(stage, done):
+        if done > 0.0:
+            raise Stop("enough")
+
+    with pytest.raises(Stop, match="enough"):
+        pgvol.slice_file(path, 0.002, progress=progress)
+
+
 class Stop(Exception):
     pass
 
