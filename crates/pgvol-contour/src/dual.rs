@@ -22,7 +22,7 @@ use crate::components::{components, ring_slot};
 use crate::crossings::Crossings;
 use crate::cube::{edge_axis, plane_axes, EDGE_START};
 use crate::decider::joins_inside;
-use crate::dual_options::{DualContourOptions, StoredVertices};
+use crate::dual_options::{DualContourOptions, StoredVertices, MAX_OUTSIDE_REACH};
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
 use crate::project::project;
@@ -73,8 +73,21 @@ pub(crate) enum Placement<'o> {
 
 struct CellVertices {
     positions: Vec<Vec3>,
+    /// The lowest corner of each vertex's cell, when asked for.
+    homes: Vec<Vec3>,
     double_faces: Vec<u8>,
     links: Vec<Link>,
+}
+
+/// A dual mesh and, when asked for, the cell each of its cell vertices belongs to.
+#[derive(Clone, Debug, Default)]
+pub struct DualMesh {
+    pub mesh: Mesh,
+    /// The lowest corner of the cell of each cell vertex, in the mesh's frame: one per vertex
+    /// of the mesh but for the vertices after them, which lie on faces between cells (the
+    /// middles of doubled dual edges). A vertex may lie outside its cell (see
+    /// [`DualContourOptions::reach`]).
+    pub homes: Vec<Vec3>,
 }
 
 /// Cell vertex `vertex` (part-local) is the corner `slot` of the quad of crossing `crossing`.
@@ -97,7 +110,8 @@ pub(crate) fn dual_contour(
     crossings: &Crossings,
     field: &dyn Field,
     placement: Placement,
-) -> Mesh {
+    with_homes: bool,
+) -> DualMesh {
     let verts = crossings;
     let blocks = crossings.blocks.active.len();
     let counter = samples.counter(CROSSINGS_PART, 1.0, blocks);
@@ -105,7 +119,7 @@ pub(crate) fn dual_contour(
         .into_par_iter()
         .map(|slot| {
             tick(counter.as_ref());
-            block_vertices(samples, verts, field, placement, slot)
+            block_vertices(samples, verts, field, placement, slot, with_homes)
         })
         .collect();
 
@@ -131,9 +145,11 @@ pub(crate) fn dual_contour(
     });
     let mut positions = Vec::with_capacity(n_vertices as usize);
     let mut double_faces = Vec::with_capacity(n_vertices as usize);
+    let mut homes = Vec::with_capacity(if with_homes { n_vertices as usize } else { 0 });
     for part in &parts {
         positions.extend_from_slice(&part.positions);
         double_faces.extend_from_slice(&part.double_faces);
+        homes.extend_from_slice(&part.homes);
     }
     drop(parts);
     assert!(positions.len() < EXTRA_FLAG as usize, "too many vertices");
@@ -186,7 +202,10 @@ pub(crate) fn dual_contour(
             })
         }));
     }
-    Mesh::new(positions, triangles)
+    DualMesh {
+        mesh: Mesh::new(positions, triangles),
+        homes,
+    }
 }
 
 /// One vertex per loop of every cell owned by the active block at `slot`.
@@ -196,6 +215,7 @@ fn block_vertices(
     field: &dyn Field,
     placement: Placement,
     slot: usize,
+    with_homes: bool,
 ) -> CellVertices {
     let table = case_table();
     let normals = &verts.normals;
@@ -205,6 +225,7 @@ fn block_vertices(
     let owned = verts.block_len(slot);
     let mut part = CellVertices {
         positions: Vec::with_capacity(owned + owned / 4),
+        homes: Vec::new(),
         double_faces: Vec::with_capacity(owned + owned / 4),
         links: Vec::with_capacity(4 * owned + owned),
     };
@@ -257,19 +278,22 @@ fn block_vertices(
                         .map(|x| x.as_dvec3())
                         .filter(|x| x.is_finite());
                     if let Some(x) = given {
-                        let margin = DVec3::splat(CELL_MARGIN);
-                        x.clamp(margin, DVec3::ONE - margin)
+                        let (lo, hi) = reach_bounds(case, f64::from(MAX_OUTSIDE_REACH));
+                        x.clamp(lo, hi)
                     } else {
                         let planes = (0..12).filter(|&e| comps.edge_loop[e] == l as u8).map(|e| {
                             let s = EDGE_START[e];
                             let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
                             (verts.positions[g as usize], normals[g as usize])
                         });
-                        plane_vertex(qef, planes, field, samples, corner, options)
+                        plane_vertex(qef, planes, field, samples, corner, options, case)
                     }
                 }
             };
             part.positions.push(corner + x.as_vec3() * samples.spacing);
+            if with_homes {
+                part.homes.push(corner);
+            }
             part.double_faces.push(comps.double_faces[l]);
         }
     });
@@ -285,6 +309,7 @@ fn plane_vertex(
     samples: &Samples,
     corner: Vec3,
     options: &DualContourOptions,
+    case: usize,
 ) -> DVec3 {
     let threshold = f64::from(options.singular_threshold);
     let h = samples.spacing;
@@ -324,9 +349,69 @@ fn plane_vertex(
         x = c;
     }
     if options.clamp_to_cell {
-        x = x.clamp(DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN));
+        let reach = f64::from(options.reach).clamp(0.0, f64::from(MAX_OUTSIDE_REACH));
+        let (lo, hi) = reach_bounds(case, reach);
+        if reach > 0.0 && feature {
+            // Along an edge the planes leave a line of minimisers: the one nearest the solution
+            // inside the bounds keeps the vertex on the crease, where clamping each axis would
+            // move it off.
+            if let Some(d) = qef.edge_direction(threshold) {
+                x = slide_into(x, d, lo, hi);
+            }
+        }
+        x = x.clamp(lo, hi);
     }
     x
+}
+
+/// The point of the line `x + t d` inside the box `[lo, hi]` nearest `x`, or `x` when the line
+/// misses the box.
+fn slide_into(x: DVec3, d: DVec3, lo: DVec3, hi: DVec3) -> DVec3 {
+    let (mut first, mut last) = (f64::NEG_INFINITY, f64::INFINITY);
+    for a in 0..3 {
+        if d[a].abs() < 1e-9 {
+            if x[a] < lo[a] || x[a] > hi[a] {
+                return x;
+            }
+            continue;
+        }
+        let (s, t) = ((lo[a] - x[a]) / d[a], (hi[a] - x[a]) / d[a]);
+        first = first.max(s.min(t));
+        last = last.min(s.max(t));
+    }
+    if first <= last {
+        x + d * 0.0f64.clamp(first, last)
+    } else {
+        x
+    }
+}
+
+/// Where a vertex of a cell with corner signs `case` (bit `c` set when corner `c` is inside,
+/// x in bit 0) may go, in cell units: the cell less its margin, and up to `reach` beyond each
+/// face whose four corners agree. No edge of such a face is crossed, so the cell beyond it is
+/// none of the four around any crossed edge of this cell: a vertex moved there stays in its
+/// quadrant about each of its quads' edges (the guarantees hold), and two vertices entering
+/// one such cell from opposite faces stay apart while `reach` is below half a cell.
+fn reach_bounds(case: usize, reach: f64) -> (DVec3, DVec3) {
+    let mut lo = DVec3::splat(CELL_MARGIN);
+    let mut hi = DVec3::splat(1.0 - CELL_MARGIN);
+    if reach <= 0.0 {
+        return (lo, hi);
+    }
+    for axis in 0..3 {
+        let face = |side: usize| {
+            let mut corners = (0..8usize).filter(|c| (c >> axis) & 1 == side);
+            let first = corners.next().map_or(0, |c| (case >> c) & 1);
+            corners.all(|c| (case >> c) & 1 == first)
+        };
+        if face(0) {
+            lo[axis] = CELL_MARGIN - reach;
+        }
+        if face(1) {
+            hi[axis] = 1.0 - CELL_MARGIN + reach;
+        }
+    }
+    (lo, hi)
 }
 
 /// Surface nets' vertex, in cell units about `corner`: the mean `c` of the loop's crossings,
@@ -511,4 +596,43 @@ fn extra_position(samples: &Samples, verts: &Crossings, key: u64) -> Vec3 {
         verts.positions[verts.find(n, a) as usize]
     });
     0.5 * (ends[0] + ends[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_widen_only_past_faces_whose_corners_agree() {
+        // Corner 0 alone inside: the three faces away from it have four outside corners.
+        let (lo, hi) = reach_bounds(0b0000_0001, 0.4);
+        assert_eq!(lo, DVec3::splat(CELL_MARGIN));
+        assert_eq!(hi, DVec3::splat(1.4 - CELL_MARGIN));
+        // The lower x half inside: only the x faces agree, each on its own side.
+        let (lo, hi) = reach_bounds(0b0101_0101, 0.4);
+        assert_eq!(lo, DVec3::new(CELL_MARGIN - 0.4, CELL_MARGIN, CELL_MARGIN));
+        assert_eq!(
+            hi,
+            DVec3::new(1.4 - CELL_MARGIN, 1.0 - CELL_MARGIN, 1.0 - CELL_MARGIN)
+        );
+        // No reach: the cell less its margin whatever the signs.
+        let (lo, hi) = reach_bounds(0b0000_0001, 0.0);
+        assert_eq!(
+            (lo, hi),
+            (DVec3::splat(CELL_MARGIN), DVec3::splat(1.0 - CELL_MARGIN))
+        );
+    }
+
+    #[test]
+    fn sliding_keeps_the_point_on_its_line() {
+        let d = DVec3::new(1.0, 1.0, 0.0).normalize();
+        let x = slide_into(DVec3::new(1.2, 0.5, 0.5), d, DVec3::ZERO, DVec3::ONE);
+        assert!(x.distance(DVec3::new(1.0, 0.3, 0.5)) < 1e-12, "{x}");
+        // Inside already: unchanged.
+        let inside = DVec3::splat(0.5);
+        assert_eq!(slide_into(inside, d, DVec3::ZERO, DVec3::ONE), inside);
+        // A line that misses the box leaves the point for the clamp.
+        let miss = DVec3::new(0.5, 0.5, 2.0);
+        assert_eq!(slide_into(miss, d, DVec3::ZERO, DVec3::ONE), miss);
+    }
 }

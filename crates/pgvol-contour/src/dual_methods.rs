@@ -5,7 +5,7 @@ use glam::Vec3;
 use pgvol_core::Mesh;
 
 use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal, Refine};
-use crate::dual::{self, Placement};
+use crate::dual::{self, DualMesh, Placement};
 use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
@@ -57,26 +57,29 @@ pub fn dual_contour(
     };
     let nodes = DenseNodes::new(values, dims);
     match Samples::checked(&nodes, origin, spacing, iso) {
-        Some(samples) => dual_contour_with(&samples, field, options, &place, None),
+        Some(samples) => dual_contour_with(&samples, field, options, &place, None, false).mesh,
         None => Mesh::default(),
     }
 }
 
 /// [`dual_contour`] on any source of samples, with the edge crossings and their normals from
-/// `place`, and the vertices of the cells `stored` gives taken from it.
+/// `place`, and the vertices of the cells `stored` gives taken from it; each vertex's cell too
+/// when `with_homes`.
 pub(crate) fn dual_contour_with(
     samples: &Samples,
     field: &dyn Field,
     options: &DualContourOptions,
     place: &PlaceWithNormal,
     stored: Option<&StoredVertices>,
-) -> Mesh {
+    with_homes: bool,
+) -> DualMesh {
     let crossings = all_crossings(samples, Place::WithNormal(place), EXTRA_FLAG);
     dual::dual_contour(
         samples,
         &crossings,
         field,
         Placement::Planes(options, stored),
+        with_homes,
     )
 }
 
@@ -122,5 +125,5 @@ pub fn surface_nets(
 /// [`marching_cubes_with`]: crate::marching_cubes_with
 pub(crate) fn surface_nets_with(samples: &Samples, field: &dyn Field, refine: &Refine) -> Mesh {
     let crossings = all_crossings(samples, Place::Position(refine), EXTRA_FLAG);
-    dual::dual_contour(samples, &crossings, field, Placement::Mean)
+    dual::dual_contour(samples, &crossings, field, Placement::Mean, false).mesh
 }

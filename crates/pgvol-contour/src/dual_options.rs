@@ -23,6 +23,12 @@ pub struct DualContourOptions {
     /// leaves it on the least-squares plane of the crossings, which blended normals tilt.
     /// Default `true`.
     pub project_smooth: bool,
+    /// How far, in cells, a vertex may leave its cell through a face the surface does not
+    /// cross (all four corners on one side), capped just below half a cell. Where planes meet
+    /// at a thin wedge (a 45° notch whose tip no node lies in), the crease lies in a cell the
+    /// surface does not cross, and a vertex kept in its own cell cuts the tip off. The
+    /// guarantees of `clamp_to_cell` still hold (see `reach_bounds` in the source). Default 0.
+    pub reach: f32,
 }
 
 /// Relative singular value cut of the QEF, measured on a cube rotated 30° about x and y (side
@@ -46,8 +52,15 @@ pub const DEFAULT_SINGULAR_THRESHOLD: f32 = 0.1;
 /// Vertices given from outside for some cells: called with a cell's lowest corner (the
 /// contour's local coordinates) for every cell the surface crosses once (one loop), it returns
 /// that cell's vertex in cell units, or `None` to place it as usual. The vertex is kept inside
-/// the cell as every dual contouring vertex is, so the guarantees hold whatever it returns.
+/// the cell as every dual contouring vertex is, but for up to [`MAX_OUTSIDE_REACH`] beyond faces the
+/// surface does not cross (as [`DualContourOptions::reach`] allows), so the guarantees hold
+/// whatever it returns.
 pub type StoredVertices<'a> = dyn Fn(glam::Vec3) -> Option<glam::Vec3> + Sync + 'a;
+
+/// The farthest, in cells, that [`DualContourOptions::reach`] and a stored vertex may take a
+/// vertex outside its cell: below half a cell by the margin kept clear of faces, so vertices
+/// entering one cell from opposite faces stay apart.
+pub const MAX_OUTSIDE_REACH: f32 = 0.499;
 
 /// Default of [`DualContourOptions::feature_offset`], in cells.
 pub const DEFAULT_FEATURE_OFFSET: f32 = 0.5;
@@ -59,6 +72,7 @@ impl Default for DualContourOptions {
             singular_threshold: DEFAULT_SINGULAR_THRESHOLD,
             feature_offset: DEFAULT_FEATURE_OFFSET,
             project_smooth: true,
+            reach: 0.0,
         }
     }
 }

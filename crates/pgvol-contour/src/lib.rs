@@ -67,9 +67,11 @@ mod volume;
 mod volume_root;
 mod window_or;
 
+pub use dual::DualMesh;
 pub use dual_methods::{dual_contour, surface_nets};
 pub use dual_options::{
     DualContourOptions, StoredVertices, DEFAULT_FEATURE_OFFSET, DEFAULT_SINGULAR_THRESHOLD,
+    MAX_OUTSIDE_REACH,
 };
 pub use field::Field;
 pub use grids::{resampled_grid, resampled_grid_of};

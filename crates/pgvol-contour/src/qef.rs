@@ -79,6 +79,22 @@ impl Qef {
 }
 
 impl Qef {
+    /// The direction of the line of minimisers where exactly two directions pass the cut of
+    /// [`Self::solve_about`] (the planes meet at an edge): the eigenvector left out.
+    pub fn edge_direction(&self, rel_threshold: f64) -> Option<DVec3> {
+        let (values, vectors) = symmetric_eigen(self.ata);
+        let largest = values.max_element();
+        if largest.is_nan() || largest <= 0.0 {
+            return None;
+        }
+        let cutoff = largest * rel_threshold * rel_threshold;
+        let mut free = (0..3).filter(|&i| values[i] <= cutoff);
+        match (free.next(), free.next()) {
+            (Some(i), None) => Some(vectors.col(i)),
+            _ => None,
+        }
+    }
+
     /// The common case without the eigen decomposition: planes so nearly parallel that only
     /// one direction passes the cut. A few power steps bring a direction `v` close to the top
     /// eigenvector; its Rayleigh quotient `q` is at most the largest eigenvalue, and the larger
@@ -175,6 +191,25 @@ mod tests {
         }
         let ortho = v.transpose() * v;
         assert!((ortho - DMat3::IDENTITY).abs_diff_eq(DMat3::ZERO, 1e-12));
+    }
+
+    #[test]
+    fn two_planes_leave_their_edge_free() {
+        let mut q = Qef::default();
+        let (a, b) = (DVec3::new(1.0, 1.0, 0.0).normalize(), DVec3::Z);
+        q.add(DVec3::new(0.5, 0.5, 0.0), a);
+        q.add(DVec3::new(0.0, 0.0, 0.3), b);
+        let d = q.edge_direction(0.1).expect("an edge");
+        assert!(d.dot(a).abs() < 1e-12 && d.dot(b).abs() < 1e-12, "{d}");
+        // One plane (a face) or three (a corner) have no single free direction.
+        q.add(
+            DVec3::new(0.5, 0.5, 0.0),
+            DVec3::new(1.0, -1.0, 0.0).normalize(),
+        );
+        assert!(q.edge_direction(0.1).is_none());
+        let mut face = Qef::default();
+        face.add(DVec3::ZERO, DVec3::X);
+        assert!(face.edge_direction(0.1).is_none());
     }
 
     #[test]

@@ -5,6 +5,7 @@ use glam::Vec3;
 use pgvol_field::{CoefficientVolume, Grid};
 
 use crate::crossings::with_normal;
+use crate::dual::DualMesh;
 use crate::dual_methods::{dual_contour_with, surface_nets_with};
 use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::edge_cubic::crossing_on_grid_edge;
@@ -197,7 +198,7 @@ pub fn contour_field(
     options: &DualContourOptions,
     report: Report,
 ) -> Result<pgvol_core::Mesh, SamplesError> {
-    contour_field_placing(field, grid, inner, iso, method, options, None, report)
+    contour_field_placing(field, grid, inner, iso, method, options, None, report).map(|d| d.mesh)
 }
 
 /// [`contour_field`], with dual contouring's Hermite data from `hermite` where it answers.
@@ -211,7 +212,7 @@ fn contour_field_placing(
     options: &DualContourOptions,
     hermite: Option<&EdgeHermite>,
     report: Report,
-) -> Result<pgvol_core::Mesh, SamplesError> {
+) -> Result<DualMesh, SamplesError> {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
     if nodes != Some(inner.len()) {
         return Err(SamplesError::Count {
@@ -226,7 +227,7 @@ fn contour_field_placing(
     let nodes = PaddedNodes::new(inner, grid.dims, iso + grid.spacing);
     let padded = padded(grid);
     let Some(samples) = Samples::checked(&nodes, padded.origin, padded.spacing, iso) else {
-        return Ok(pgvol_core::Mesh::default());
+        return Ok(DualMesh::default());
     };
     let samples = samples.reporting(Some(Span::whole(report)));
     let (lo, hi) = (grid.origin, grid.max_corner());
@@ -238,8 +239,11 @@ fn contour_field_placing(
             crate::place::lerp_crossing(a, va, b, vb, iso)
         }
     };
-    let mesh = match method {
-        Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
+    let mut out = match method {
+        Method::MarchingCubes => DualMesh {
+            mesh: marching_cubes_samples(&samples, &refine),
+            homes: Vec::new(),
+        },
         Method::DualContouring => {
             let place = |a: Vec3, va, b: Vec3, vb, axis| {
                 if let Some(h) = hermite {
@@ -270,11 +274,15 @@ fn contour_field_placing(
             } else {
                 field
             };
-            dual_contour_with(&samples, placing, options, &place, None)
+            dual_contour_with(&samples, placing, options, &place, None, hermite.is_some())
         }
-        Method::SurfaceNets => surface_nets_with(&samples, field, &refine),
+        Method::SurfaceNets => DualMesh {
+            mesh: surface_nets_with(&samples, field, &refine),
+            homes: Vec::new(),
+        },
     };
-    Ok(in_frame_of(grid, mesh))
+    out.mesh = in_frame_of(grid, out.mesh);
+    Ok(out)
 }
 
 /// Hermite data of a grid edge given from outside: called with the edge's ends `a` (lower) and
@@ -288,7 +296,9 @@ pub type EdgeHermite<'a> = dyn Fn(Vec3, Vec3, usize, bool) -> Option<(Vec3, Vec3
 /// other edges, and the vertices' projection onto the zero set, use `field`, but for the cells
 /// and edges of the padding, which take the edge's direction as normal and are not projected:
 /// only cells outside the grid use them. A crossing is kept
-/// on its edge as every crossing is, so the guarantees hold whatever `hermite` gives.
+/// on its edge as every crossing is, so the guarantees hold whatever `hermite` gives. The
+/// mesh comes with the cell of each cell vertex, for callers that compare vertices cell by
+/// cell.
 ///
 /// # Errors
 ///
@@ -301,7 +311,7 @@ pub fn contour_field_hermite(
     options: &DualContourOptions,
     hermite: &EdgeHermite,
     report: Report,
-) -> Result<pgvol_core::Mesh, SamplesError> {
+) -> Result<DualMesh, SamplesError> {
     contour_field_placing(
         field,
         grid,
@@ -380,8 +390,10 @@ fn contour_nodes(
                 _ => volume.value_gradient(p),
             };
             match interior {
-                Some(_) => dual_contour_with(&samples, &inside_only, options, &place, stored),
-                None => dual_contour_with(&samples, volume, options, &place, stored),
+                Some(_) => {
+                    dual_contour_with(&samples, &inside_only, options, &place, stored, false).mesh
+                }
+                None => dual_contour_with(&samples, volume, options, &place, stored, false).mesh,
             }
         }
         Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
@@ -488,15 +500,17 @@ mod tests {
         }
     }
 
-    /// Given vertices are taken, kept inside their cells, and the mesh stays closed and
-    /// oriented even where they are far from the surface.
+    /// Given vertices are taken, kept inside their cells but past faces the surface does not
+    /// cross, and the mesh stays closed, oriented and free of degenerate triangles even where
+    /// they are far from the surface.
     #[test]
     fn dual_contouring_takes_given_vertices() {
         let volume = sphere_volume(0.6);
         let h = volume.grid.spacing;
         let origin = volume.grid.origin;
-        // Every cell's vertex at its far corner, which the margin moves back inside.
-        let given = |_corner: Vec3| Some(Vec3::ONE);
+        // Every cell's vertex 0.4 beyond its far corner: the margin moves it back inside across
+        // crossed faces, and MAX_OUTSIDE_REACH allows it across the others.
+        let given = |_corner: Vec3| Some(Vec3::splat(1.4));
         let method = Method::DualContouring;
         let quiet = pgvol_core::progress::QUIET;
         let mesh = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&given));
@@ -505,11 +519,26 @@ mod tests {
             s.watertight && s.winding_consistent && s.volume > 0.0,
             "{s:?}"
         );
+        let mut outside = 0;
         for p in &mesh.positions {
             let f = (*p - origin) / h;
             let f = f - f.floor();
-            assert!(f.cmpgt(Vec3::splat(0.99)).all(), "{f}");
+            for a in 0..3 {
+                let beyond = (f[a] - 0.4).abs() < 1e-3;
+                assert!(f[a] > 0.99 || beyond, "{f}");
+                outside += usize::from(beyond);
+            }
         }
+        assert!(outside > mesh.positions.len() / 4, "{outside}");
+        let smallest = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                (b - a).cross(c - a).length()
+            })
+            .fold(f32::INFINITY, f32::min);
+        assert!(smallest > 0.0, "{smallest}");
         // With no vertex given, the same cells get a vertex as without stored vertices, but
         // none takes the feature offset: on a sphere its vertices lie nearer the surface.
         let none = |_corner: Vec3| None;

@@ -29,7 +29,15 @@ fn cube_file(n: usize) -> PgvFile {
     let mut header = header_for(&volume, "interp", None);
     let cells = SharpCells {
         keys: vec![0, 7, 8, 100],
-        positions: vec![[128, 128, 128], [0, 255, 3], [9, 200, 77], [255, 0, 255]],
+        // Each in its cell but the last, which lies past two faces.
+        positions: [
+            [0.5, 0.5, 0.5],
+            [0.0, 1.0, 0.01],
+            [0.04, 0.8, 0.3],
+            [1.25, 0.0, -0.25],
+        ]
+        .map(SharpCells::quantise)
+        .to_vec(),
     };
     header.sharp = Some(encode_sharp(&cells));
     PgvFile { header, volume }

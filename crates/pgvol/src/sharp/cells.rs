@@ -1,8 +1,10 @@
 //! Which cell of a grid each vertex of a dual mesh belongs to.
 //!
-//! Dual contouring keeps every cell's vertex `CELL_MARGIN` (1e-3 of a cell) clear of the cell's
-//! faces; the only other vertices of its meshes (midpoints of doubled dual edges) lie on faces
-//! or edges. So a vertex strictly inside a cell, by half that margin, is that cell's vertex.
+//! A mesh contoured with its vertices' cells (`pgvol_contour::DualMesh::homes`) says so.
+//! Otherwise dual contouring kept every cell's vertex `CELL_MARGIN` (1e-3 of a cell) clear of
+//! the cell's faces, and the only other vertices of its meshes (midpoints of doubled dual
+//! edges) lie on faces or edges; so a vertex strictly inside a cell, by half that margin, is
+//! that cell's vertex.
 
 use glam::Vec3;
 use pgvol_core::{Grid, Mesh};
@@ -36,22 +38,44 @@ pub(crate) fn cell_of(grid: &Grid, p: Vec3) -> Option<(u64, Vec3)> {
     Some(((i + nx * (j + ny * k)) as u64, f))
 }
 
-/// The vertices of `mesh` that are alone in their cell of `grid`, by ascending key. Cells with
-/// two or more vertices (two sheets through one cell) are left out: their vertices are not
-/// interchangeable between two contourings.
-pub(crate) fn single_vertices(mesh: &Mesh, grid: &Grid) -> Vec<CellVertex> {
-    let mut all: Vec<CellVertex> = mesh
+/// The cell vertices of `mesh` on `grid`: the first `homes.len()` vertices lie in the cells
+/// whose lowest corners `homes` gives (possibly outside them); without `homes`, each vertex
+/// strictly inside a cell is its vertex.
+fn cell_vertices<'a>(
+    mesh: &'a Mesh,
+    homes: &'a [Vec3],
+    grid: &'a Grid,
+) -> impl Iterator<Item = CellVertex> + 'a {
+    let h = grid.spacing;
+    let homed = homes.iter().zip(&mesh.positions).enumerate();
+    let homed = homed.filter_map(move |(v, (&corner, &p))| {
+        let (key, _) = cell_of(grid, corner + Vec3::splat(0.5 * h))?;
+        Some(CellVertex {
+            key,
+            vertex: v as u32,
+            local: (p - corner) / h,
+        })
+    });
+    let placed = mesh
         .positions
         .iter()
         .enumerate()
-        .filter_map(|(v, &p)| {
-            cell_of(grid, p).map(|(key, local)| CellVertex {
-                key,
-                vertex: v as u32,
-                local,
-            })
+        .filter(|_| homes.is_empty());
+    let placed = placed.filter_map(move |(v, &p)| {
+        cell_of(grid, p).map(|(key, local)| CellVertex {
+            key,
+            vertex: v as u32,
+            local,
         })
-        .collect();
+    });
+    homed.chain(placed)
+}
+
+/// The vertices of `mesh` (with `homes` as [`cell_vertices`] takes them) that are alone in
+/// their cell of `grid`, by ascending key. Cells with two or more vertices (two sheets through
+/// one cell) are left out: their vertices are not interchangeable between two contourings.
+pub(crate) fn single_vertices(mesh: &Mesh, homes: &[Vec3], grid: &Grid) -> Vec<CellVertex> {
+    let mut all: Vec<CellVertex> = cell_vertices(mesh, homes, grid).collect();
     all.sort_unstable_by_key(|c| (c.key, c.vertex));
     let mut single = Vec::with_capacity(all.len());
     let mut i = 0;
@@ -68,13 +92,10 @@ pub(crate) fn single_vertices(mesh: &Mesh, grid: &Grid) -> Vec<CellVertex> {
     single
 }
 
-/// The keys of the cells of `grid` holding a vertex of `mesh`, ascending.
-pub(crate) fn cell_keys(mesh: &Mesh, grid: &Grid) -> Vec<u64> {
-    let mut keys: Vec<u64> = mesh
-        .positions
-        .iter()
-        .filter_map(|&p| cell_of(grid, p).map(|c| c.0))
-        .collect();
+/// The keys of the cells of `grid` holding a vertex of `mesh` (with `homes` as
+/// [`cell_vertices`] takes them), ascending.
+pub(crate) fn cell_keys(mesh: &Mesh, homes: &[Vec3], grid: &Grid) -> Vec<u64> {
+    let mut keys: Vec<u64> = cell_vertices(mesh, homes, grid).map(|c| c.key).collect();
     keys.sort_unstable();
     keys.dedup();
     keys
@@ -118,8 +139,20 @@ mod tests {
             ],
             vec![[0, 1, 2]],
         );
-        let single = single_vertices(&mesh, &grid);
+        let single = single_vertices(&mesh, &[], &grid);
         assert_eq!(single.len(), 1);
         assert_eq!(single[0].vertex, 2);
+        // With their cells given, vertices may lie outside them: the first two are the cells
+        // at (0, 2, 3) and (1, 2, 3), the third (on no cell list) is left out.
+        let homes = [Vec3::new(-1.0, 0.0, 0.5), Vec3::new(-0.5, 0.0, 0.5)];
+        let homed = single_vertices(&mesh, &homes, &grid);
+        assert_eq!(homed.len(), 2);
+        assert_eq!(cell_at(&grid, homed[1].key), [1, 2, 3]);
+        assert!(
+            (homed[1].local - Vec3::new(-0.6, 0.6, 0.4))
+                .abs()
+                .max_element()
+                < 1e-5
+        );
     }
 }

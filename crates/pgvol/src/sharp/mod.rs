@@ -152,7 +152,8 @@ pub fn attach(
                     return Err(Error::new(ErrorKind::Cancelled, "cancelled"));
                 }
                 let sub = &cell_box.grid;
-                let exact = exact.contour_from_faces(sub, &Silent)?;
+                let exact =
+                    exact.contour_from_faces(sub, pgvol_contour::MAX_OUTSIDE_REACH, &Silent)?;
                 let quiet = pgvol_core::progress::QUIET;
                 let smooth = pgvol_contour::dual_contour_interior(&file.volume, sub, 0.0, quiet);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -275,7 +276,7 @@ mod tests {
         let dc = Method::DualContouring;
         let exact = ExactDistance::new(&cube, sign)
             .unwrap()
-            .contour_from_faces(&grid, &Silent)
+            .contour_from_faces(&grid, pgvol_contour::MAX_OUTSIDE_REACH, &Silent)
             .unwrap();
         let decode = DecodeOptions {
             method: dc,
@@ -293,7 +294,7 @@ mod tests {
                     return false;
                 };
                 let q = SharpCells::quantise(target.to_array());
-                (0..3).all(|a| q[a].abs_diff(boxed.positions[i][a]) <= 1)
+                (0..3).all(|a| (q[a] - boxed.positions[i][a]).abs() <= 1.01 / 128.0)
             })
             .count();
         assert!(

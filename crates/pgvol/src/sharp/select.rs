@@ -2,6 +2,7 @@
 //! smooth fit's vertex is off the exact one.
 
 use glam::Vec3;
+use pgvol_contour::DualMesh;
 use pgvol_core::{Grid, Mesh};
 
 use super::cells::{cell_at, cell_keys, key_of, single_vertices, CellVertex};
@@ -234,15 +235,15 @@ fn cell_containing(grid: &Grid, p: Vec3) -> Option<u64> {
 /// `grid`'s nodes whose interior holds the owned cells.
 pub(crate) fn stored_cells(
     owned: &[u64],
-    exact: &Mesh,
+    exact: &DualMesh,
     smooth: &Mesh,
     grid: &Grid,
     tolerance: f32,
     closest: &(dyn Fn(Vec3) -> Option<Vec3> + Sync),
 ) -> Vec<(u64, Vec3)> {
-    let exact_cells = single_vertices(exact, grid);
-    let smooth_cells = single_vertices(smooth, grid);
-    let exact_keys = cell_keys(exact, grid);
+    let exact_cells = single_vertices(&exact.mesh, &exact.homes, grid);
+    let smooth_cells = single_vertices(smooth, &[], grid);
+    let exact_keys = cell_keys(&exact.mesh, &exact.homes, grid);
     let h = grid.spacing;
     smooth_cells
         .iter()
