@@ -140,8 +140,8 @@ pub fn encode_sharp(cells: &SharpCells) -> SharpSection {
 pub fn decode_sharp(section: &SharpSection, dims: [usize; 3]) -> Result<SharpCells, String> {
     let bad = |problem: String| {
         format!(
-            "the sharp-feature section {problem}: the file is corrupt; encode the mesh again, \
-             or contour by another method than dual contouring"
+            "the sharp-feature section {problem}: the file is corrupt; encode the mesh again \
+             (decoding by marching cubes or surface nets does not read the section)"
         )
     };
     if section.bits != SHARP_BITS {
