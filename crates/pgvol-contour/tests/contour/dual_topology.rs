@@ -1,17 +1,28 @@
 //! Dual contouring and surface nets are duals of the marching cubes surface: the same closed,
 //! oriented manifold topology on every input.
 
+use pgvol_contour::{DualContourOptions, MAX_OUTSIDE_REACH};
 use proptest::prelude::*;
 
+use crate::fields::trilinear;
 use crate::grids::{checkerboard, random_field, single_cell, Rng, Samples};
 use crate::topology::{check_closed_manifold, check_surface};
 
-/// Checks both dual meshes and that they have the marching cubes surface's topology: the same
-/// Euler characteristic and the same number of components.
+/// Checks the dual meshes (dual contouring with vertices in their cells and reaching out of
+/// them, surface nets) and that they have the marching cubes surface's topology: the same Euler
+/// characteristic and the same number of components.
 pub fn check_dual_of_mc(samples: &Samples, iso: f32) {
     let mc = samples.contour(iso);
+    let reaching = DualContourOptions {
+        reach: MAX_OUTSIDE_REACH,
+        ..DualContourOptions::default()
+    };
     for (method, dual) in [
         ("dual contouring", samples.dual_trilinear(iso)),
+        (
+            "dual contouring reaching out",
+            samples.dual_with(iso, &trilinear(samples), &reaching),
+        ),
         ("surface nets", samples.nets_trilinear(iso)),
     ] {
         assert_eq!(
@@ -27,7 +38,7 @@ pub fn check_dual_of_mc(samples: &Samples, iso: f32) {
         // trilinear gradients lean toward a unit jump at the border: the enclosed volume comes
         // out negative though every edge is used once each way), so its volume sign is not
         // checked; surface nets keep each vertex in its cell and are.
-        let d = if method == "dual contouring" {
+        let d = if method.starts_with("dual contouring") {
             check_closed_manifold(&dual)
         } else {
             check_surface(&dual)
