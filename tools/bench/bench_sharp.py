@@ -1,6 +1,6 @@
 """Sharp edges through the file: bytes, mean normal deviation and Hausdorff distance of
-marching cubes and dual contouring decoded from `.pgv` files without and with the sharp-feature
-section, against dual contouring of the exact distance (`pgvol remesh --method dc`).
+marching cubes, surface nets and dual contouring decoded from `.pgv` files without and with the
+sharp-feature section, against dual contouring of the exact distance (`pgvol remesh --method dc`).
 
 Usage (normally through tools/bench/run.sh):
     python tools/bench/bench_sharp.py [--res 128] [--parts a,b,...] [--sharp-angle DEG]
@@ -9,7 +9,7 @@ Parts: five of issue 34 (a plate with three holes, two boxes crossing at 45 degr
 nut, all made with manifold3d; fandisk and the rocker arm), generated CAD-like parts (a rotated
 box, a cylinder, a chamfered and a filleted block, a thin wall) and two smooth meshes (the
 Stanford bunny, spot). For each: `pgvol encode P -o P.pgv --res N --sharp off|auto`, then
-`pgvol decode --method mc|dc`, then `pgvol compare P OUT --samples 50000 --json`. Hausdorff is in
+`pgvol decode --method mc|sn|dc`, then `pgvol compare P OUT --samples 50000 --json`. Hausdorff is in
 grid spacings. The "targets" columns check the issue's targets: dc with the section within
 0.15 deg of dc on the exact field or within 1.25x of it (whichever allows more), Hausdorff at
 most 0.5 spacing, the file at most 1.3x the bytes without the section, and (on smooth meshes)
@@ -114,7 +114,7 @@ def measure(exe: Path, name: str, res: int, angle: float | None, work: Path) -> 
         row[f"bytes_{sharp}"] = int(info["bytes"])
         row[f"stored_{sharp}"] = (info.get("sharp") or {}).get("stored_cells", 0)
         spacing = float(info["grid"]["spacing"])
-        for method in ("mc", "dc") if sharp == "off" else ("dc",):
+        for method in ("mc", "sn", "dc") if sharp == "off" else ("sn", "dc"):
             out = work / f"{name}-{sharp}-{method}.ply"
             common.run_json([exe, "decode", pgv, "-o", out, "--method", method, "--json"])
             row[f"{method}_{sharp}"] = compare(exe, src, out)
@@ -156,9 +156,10 @@ def main() -> None:
     print("Hausdorff in grid spacings; bytes of the file without / with the sharp section.\n")
     print(
         "| part | bytes off / auto | cells stored | MC | DC | DC + sharp | DC exact "
-        "| Hausdorff DC / DC + sharp / exact | MC / (DC + sharp) | targets |"
+        "| Hausdorff DC / DC + sharp / exact | MC / (DC + sharp) | SN / SN + sharp "
+        "| Hausdorff SN / SN + sharp | targets |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         for name in args.parts.split(","):
@@ -167,10 +168,12 @@ def main() -> None:
             mc, dc, sharp, exact = (row[k][0] for k in ("mc_off", "dc_off", "dc_auto", "dc_exact"))
             hd = " / ".join(f"{row[k][1] / h:.2f}" for k in ("dc_off", "dc_auto", "dc_exact"))
             growth = row["bytes_auto"] / row["bytes_off"]
+            sn = " / ".join(f"{row[k][0]:.2f}" for k in ("sn_off", "sn_auto"))
+            sn_hd = " / ".join(f"{row[k][1] / h:.2f}" for k in ("sn_off", "sn_auto"))
             print(
                 f"| {name} | {row['bytes_off']} / {row['bytes_auto']} ({growth:.3f}x) "
                 f"| {row['stored_auto']} | {mc:.2f} | {dc:.2f} | {sharp:.2f} | {exact:.2f} "
-                f"| {hd} | {mc / sharp:.1f} | {targets(row)} |",
+                f"| {hd} | {mc / sharp:.1f} | {sn} | {sn_hd} | {targets(row)} |",
                 flush=True,
             )
 

@@ -67,8 +67,18 @@ pub(crate) enum Placement<'o> {
     /// the crossings must carry normals. Cells crossed once take the vertex the stored
     /// vertices give, when they give one.
     Planes(&'o DualContourOptions, Option<&'o StoredVertices<'o>>),
-    /// At the mean of the crossings, moved onto the zero set (surface nets).
-    Mean,
+    /// At the mean of the crossings, moved onto the zero set (surface nets). Cells crossed
+    /// once take the vertex the stored vertices give, when they give one.
+    Mean(Option<&'o StoredVertices<'o>>),
+}
+
+impl<'o> Placement<'o> {
+    /// The vertices given for cells crossed once, if any.
+    fn stored(&self) -> Option<&'o StoredVertices<'o>> {
+        match *self {
+            Placement::Planes(_, stored) | Placement::Mean(stored) => stored,
+        }
+    }
 }
 
 struct CellVertices {
@@ -269,25 +279,27 @@ fn block_vertices(
             });
         }
         for (l, qef) in qefs.iter().take(comps.n_loops as usize).enumerate() {
-            let x = match placement {
-                Placement::Mean => mean_on_surface(field, samples, corner, qef.mass_point()),
-                Placement::Planes(options, stored) => {
-                    let given = stored
-                        .filter(|_| comps.n_loops == 1)
-                        .and_then(|f| f(corner))
-                        .map(|x| x.as_dvec3())
-                        .filter(|x| x.is_finite());
-                    if let Some(x) = given {
-                        let (lo, hi) = reach_bounds(case, f64::from(MAX_OUTSIDE_REACH));
-                        x.clamp(lo, hi)
-                    } else {
-                        let planes = (0..12).filter(|&e| comps.edge_loop[e] == l as u8).map(|e| {
-                            let s = EDGE_START[e];
-                            let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
-                            (verts.positions[g as usize], normals[g as usize])
-                        });
-                        plane_vertex(qef, planes, field, samples, corner, options, case)
-                    }
+            let given = placement
+                .stored()
+                .filter(|_| comps.n_loops == 1)
+                .and_then(|f| f(corner))
+                .map(|x| x.as_dvec3())
+                .filter(|x| x.is_finite());
+            let x = match (given, placement) {
+                (Some(x), _) => {
+                    let (lo, hi) = reach_bounds(case, f64::from(MAX_OUTSIDE_REACH));
+                    x.clamp(lo, hi)
+                }
+                (None, Placement::Mean(_)) => {
+                    mean_on_surface(field, samples, corner, qef.mass_point())
+                }
+                (None, Placement::Planes(options, _)) => {
+                    let planes = (0..12).filter(|&e| comps.edge_loop[e] == l as u8).map(|e| {
+                        let s = EDGE_START[e];
+                        let g = find([i + s[0], j + s[1], k + s[2]], edge_axis(e));
+                        (verts.positions[g as usize], normals[g as usize])
+                    });
+                    plane_vertex(qef, planes, field, samples, corner, options, case)
                 }
             };
             part.positions.push(corner + x.as_vec3() * samples.spacing);

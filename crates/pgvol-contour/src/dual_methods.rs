@@ -114,7 +114,7 @@ pub fn surface_nets(
     let refine = |a, va, b, vb| cubic_edge_root(field, a, va, b, vb, iso);
     let nodes = DenseNodes::new(values, dims);
     match Samples::checked(&nodes, origin, spacing, iso) {
-        Some(samples) => surface_nets_with(&samples, field, &refine),
+        Some(samples) => surface_nets_with(&samples, field, &refine, None),
         None => Mesh::default(),
     }
 }
@@ -123,7 +123,12 @@ pub fn surface_nets(
 /// [`marching_cubes_with`].
 ///
 /// [`marching_cubes_with`]: crate::marching_cubes_with
-pub(crate) fn surface_nets_with(samples: &Samples, field: &dyn Field, refine: &Refine) -> Mesh {
+pub(crate) fn surface_nets_with(
+    samples: &Samples,
+    field: &dyn Field,
+    refine: &Refine,
+    stored: Option<&StoredVertices>,
+) -> Mesh {
     let crossings = all_crossings(samples, Place::Position(refine), EXTRA_FLAG);
-    dual::dual_contour(samples, &crossings, field, Placement::Mean, false).mesh
+    dual::dual_contour(samples, &crossings, field, Placement::Mean(stored), false).mesh
 }

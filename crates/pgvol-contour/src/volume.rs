@@ -54,9 +54,10 @@ pub fn contour_volume(
     contour_volume_placing(volume, grid, iso, method, report, None)
 }
 
-/// [`contour_volume`], with dual contouring taking the vertices of the cells `stored` gives
-/// (called with each singly crossed cell's lowest corner in `grid`'s local coordinates; the
-/// other methods ignore it). The guarantees of [`contour_volume`] hold whatever it gives.
+/// [`contour_volume`], with dual contouring and surface nets taking the vertices of the cells
+/// `stored` gives (called with each singly crossed cell's lowest corner in `grid`'s local
+/// coordinates; marching cubes ignores it). The guarantees of [`contour_volume`] hold whatever
+/// it gives.
 /// With `stored`, the other cells' vertices take no feature offset
 /// ([`DualContourOptions::feature_offset`]): the stored cells are where the creases are, and
 /// elsewhere the offset would bend curved surfaces into false creases.
@@ -277,7 +278,7 @@ fn contour_field_placing(
             dual_contour_with(&samples, placing, options, &place, None, hermite.is_some())
         }
         Method::SurfaceNets => DualMesh {
-            mesh: surface_nets_with(&samples, field, &refine),
+            mesh: surface_nets_with(&samples, field, &refine, None),
             homes: Vec::new(),
         },
     };
@@ -396,7 +397,7 @@ fn contour_nodes(
                 None => dual_contour_with(&samples, volume, options, &place, stored, false).mesh,
             }
         }
-        Method::SurfaceNets => surface_nets_with(&samples, volume, &refine),
+        Method::SurfaceNets => surface_nets_with(&samples, volume, &refine, stored),
     }
 }
 
@@ -504,44 +505,48 @@ mod tests {
     /// cross, and the mesh stays closed, oriented and free of degenerate triangles even where
     /// they are far from the surface.
     #[test]
-    fn dual_contouring_takes_given_vertices() {
+    fn dual_methods_take_given_vertices() {
         let volume = sphere_volume(0.6);
         let h = volume.grid.spacing;
         let origin = volume.grid.origin;
-        // Every cell's vertex 0.4 beyond its far corner: the margin moves it back inside across
-        // crossed faces, and MAX_OUTSIDE_REACH allows it across the others.
-        let given = |_corner: Vec3| Some(Vec3::splat(1.4));
-        let method = Method::DualContouring;
         let quiet = pgvol_core::progress::QUIET;
-        let mesh = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&given));
-        let s = mesh.stats();
-        assert!(
-            s.watertight && s.winding_consistent && s.volume > 0.0,
-            "{s:?}"
-        );
-        let mut outside = 0;
-        for p in &mesh.positions {
-            let f = (*p - origin) / h;
-            let f = f - f.floor();
-            for a in 0..3 {
-                let beyond = (f[a] - 0.4).abs() < 1e-3;
-                assert!(f[a] > 0.99 || beyond, "{f}");
-                outside += usize::from(beyond);
+        for method in [Method::DualContouring, Method::SurfaceNets] {
+            // Every cell's vertex 0.4 beyond its far corner: the margin moves it back inside
+            // across crossed faces, and MAX_OUTSIDE_REACH allows it across the others.
+            let given = |_corner: Vec3| Some(Vec3::splat(1.4));
+            let mesh =
+                contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&given));
+            let s = mesh.stats();
+            assert!(
+                s.watertight && s.winding_consistent && s.volume > 0.0,
+                "{method:?}: {s:?}"
+            );
+            let mut outside = 0;
+            for p in &mesh.positions {
+                let f = (*p - origin) / h;
+                let f = f - f.floor();
+                for a in 0..3 {
+                    let beyond = (f[a] - 0.4).abs() < 1e-3;
+                    assert!(f[a] > 0.99 || beyond, "{method:?}: {f}");
+                    outside += usize::from(beyond);
+                }
             }
+            assert!(outside > mesh.positions.len() / 4, "{method:?}: {outside}");
+            let smallest = mesh
+                .triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                    (b - a).cross(c - a).length()
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert!(smallest > 0.0, "{method:?}: {smallest}");
         }
-        assert!(outside > mesh.positions.len() / 4, "{outside}");
-        let smallest = mesh
-            .triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                (b - a).cross(c - a).length()
-            })
-            .fold(f32::INFINITY, f32::min);
-        assert!(smallest > 0.0, "{smallest}");
-        // With no vertex given, the same cells get a vertex as without stored vertices, but
-        // none takes the feature offset: on a sphere its vertices lie nearer the surface.
+        // With no vertex given, the same cells get a vertex as without stored vertices. Dual
+        // contouring's vertices then take no feature offset, so on a sphere they lie nearer the
+        // surface; surface nets place theirs as they always do.
         let none = |_corner: Vec3| None;
+        let method = Method::DualContouring;
         let plain = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&none));
         let offset = contour_volume(&volume, &volume.grid, 0.0, method, quiet);
         assert_eq!(plain.positions.len(), offset.positions.len());
@@ -550,6 +555,11 @@ mod tests {
             total / m.positions.len() as f32 / h
         };
         assert!(off_sphere(&plain) < off_sphere(&offset));
+        let method = Method::SurfaceNets;
+        let plain = contour_volume_placing(&volume, &volume.grid, 0.0, method, quiet, Some(&none));
+        let nets = contour_volume(&volume, &volume.grid, 0.0, method, quiet);
+        assert_eq!(plain.positions, nets.positions);
+        assert_eq!(plain.triangles, nets.triangles);
     }
 
     #[test]

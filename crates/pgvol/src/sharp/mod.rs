@@ -205,11 +205,11 @@ pub fn attach(
     Ok(report)
 }
 
-/// The stored cells of `file` that a decoding by `options` uses: dual contouring of the
-/// surface on the file's own grid; `None` otherwise or when the file has none.
+/// The stored cells of `file` that a decoding by `options` uses: dual contouring or surface
+/// nets of the surface on the file's own grid; `None` otherwise or when the file has none.
 pub(crate) fn cells_for(file: &PgvFile, options: &DecodeOptions) -> Result<Option<SharpCells>> {
-    let uses =
-        options.method == Method::DualContouring && options.res.is_none() && options.iso == 0.0;
+    let dual = matches!(options.method, Method::DualContouring | Method::SurfaceNets);
+    let uses = dual && options.res.is_none() && options.iso == 0.0;
     match &file.header.sharp {
         Some(section) if uses => decode_sharp(section, file.volume.grid.dims)
             .map(Some)
