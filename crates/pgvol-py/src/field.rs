@@ -392,7 +392,7 @@ fn drain(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<pgvol::edit::Drain>
 impl Field {
     /// Encodes a triangle mesh: signed distance on a cube grid around it, fitted with a basis.
     #[staticmethod]
-    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", fit="interp", sign="auto", z_step=None, progress=None))]
+    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", fit="interp", sign="auto", z_step=None, sharp="off", sharp_angle=None, progress=None))]
     fn from_mesh(
         py: Python<'_>,
         vertices: &Bound<'_, PyAny>,
@@ -404,6 +404,8 @@ impl Field {
         fit: &str,
         sign: &str,
         z_step: Option<f32>,
+        sharp: &str,
+        sharp_angle: Option<f32>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Field> {
         let positions = arrays::world_points(vertices, "vertices")?;
@@ -414,6 +416,10 @@ impl Field {
             fit: names::fit(py, fit, z_step)?,
             band,
             sign: names::sign(py, sign)?,
+            sharp: pgvol::sharp::SharpOptions {
+                enabled: names::sharp(py, sharp)?,
+                angle: sharp_angle.unwrap_or(pgvol::sharp::DEFAULT_SHARP_ANGLE),
+            },
         };
         let encoded = run(py, progress, |p| {
             let mesh = pgvol::io::mesh_from_world(&positions, triangles)?.mesh;

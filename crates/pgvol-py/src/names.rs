@@ -68,6 +68,15 @@ pub(crate) fn sign(py: Python<'_>, name: &str) -> PyResult<pgvol::SignMode> {
     })
 }
 
+/// "off" or "auto": whether encoding stores sharp-feature vertices.
+pub(crate) fn sharp(py: Python<'_>, name: &str) -> PyResult<bool> {
+    match name {
+        "off" => Ok(false),
+        "auto" => Ok(true),
+        _ => Err(unknown(py, "sharp", name, "off or auto")),
+    }
+}
+
 /// "mc" (marching cubes), "sn" (surface nets) or "dc" (dual contouring).
 pub(crate) fn method(py: Python<'_>, name: &str) -> PyResult<pgvol::Method> {
     Ok(match name {

@@ -32,6 +32,7 @@ fn encode_options(
         fit: pgvol::FitMethod::Interp,
         band,
         sign: names::sign(py, sign)?,
+        sharp: pgvol::sharp::SharpOptions::default(),
     })
 }
 

@@ -143,3 +143,32 @@ def test_vdb_level_sets_load_as_the_cli_encodes_them(run_cli, tmp_path):
     assert np.all(np.abs(values[:2]) < 0.1) and values[2] < -2.0, values
     with pytest.raises(pgvol.InputFileError, match="'velocity'"):
         pgvol.Field.from_vdb(vdb, grid="nope")
+
+
+def test_sharp_vertices_from_python_are_the_files_the_cli_writes(run_cli, tmp_path):
+    # Turned so that every corner's cell is crossed at 64^3, where the stored vertices hold the
+    # corners to 0.004 spacing (crates/pgvol/tests/sharp_encode.rs).
+    box = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
+    turn = trimesh.transformations.rotation_matrix(0.5, [0, 1, 0])
+    box.apply_transform(turn @ trimesh.transformations.rotation_matrix(0.5, [1, 0, 0]))
+    box.export(tmp_path / "box.obj")
+    pgv = tmp_path / "box.pgv"
+    run_cli("encode", tmp_path / "box.obj", "-o", pgv, "--res", 64, "--sharp", "auto", "-q")
+    vertices, faces = pgvol.read_mesh(tmp_path / "box.obj")
+    sharp = pgvol.Field.from_mesh(vertices, faces, res=64, sharp="auto")
+    assert sharp.to_bytes() == pgv.read_bytes()
+    plain = pgvol.Field.from_mesh(vertices, faces, res=64)
+    assert len(plain.to_bytes()) < len(sharp.to_bytes())
+    h = sharp.grid.spacing
+
+    def corner_gap(field, method):
+        v, _ = field.to_mesh(method=method)
+        return max(np.min(np.linalg.norm(v - c, axis=1)) for c in box.vertices) / h
+
+    for method in ("dc", "sn"):
+        near, far = corner_gap(sharp, method), corner_gap(plain, method)
+        assert near < 0.1 and near < 0.5 * far, f"{method}: corners {near:.3f} against {far:.3f}"
+    with pytest.raises(pgvol.ParameterError, match="sharp 'on'"):
+        pgvol.Field.from_mesh(vertices, faces, res=32, sharp="on")
+    with pytest.raises(pgvol.ParameterError, match="crease angle"):
+        pgvol.Field.from_mesh(vertices, faces, res=32, sharp="auto", sharp_angle=0.0)

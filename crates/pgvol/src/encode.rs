@@ -19,6 +19,7 @@ use crate::error::{Error, ErrorKind, FileResult, Result};
 use crate::grid::GridSpec;
 use crate::memory::{check_grid, BYTES_PER_NODE};
 use crate::progress::{self, Progress};
+use crate::sharp::store::{attach, SharpOptions, SharpReport};
 use crate::timings::Timings;
 
 /// Exact distances within this many grid spacings of the surface when encoding: the cubic
@@ -49,6 +50,9 @@ pub struct EncodeOptions {
     pub band: f32,
     /// How inside is told from outside (default automatic).
     pub sign: SignMode,
+    /// Whether the exact vertices of the cells at creases and corners are stored, so that dual
+    /// contouring of the file keeps them sharp (default not: see [`SharpOptions`]).
+    pub sharp: SharpOptions,
 }
 
 impl Default for EncodeOptions {
@@ -59,6 +63,7 @@ impl Default for EncodeOptions {
             fit: FitMethod::Interp,
             band: ENCODE_BAND,
             sign: SignMode::Auto,
+            sharp: SharpOptions::default(),
         }
     }
 }
@@ -75,6 +80,7 @@ impl EncodeOptions {
                 self.band
             )));
         }
+        self.sharp.validate()?;
         if let FitMethod::Iso { z_step: Some(z) } = self.fit {
             let max = pgvol_field::MAX_Z_STEP;
             if !(z.is_finite() && z > 0.0 && z <= max) {
@@ -95,6 +101,8 @@ pub struct Encoded {
     pub file: PgvFile,
     /// The fit's solver report.
     pub fit: FitReport,
+    /// What the sharp-feature section holds.
+    pub sharp: SharpReport,
     /// Seconds per stage.
     pub timings: Timings,
 }
@@ -124,10 +132,14 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     }
     let sides = Sides::of_volume(&fitted.volume);
     require_mesh_surface(sides, "the encoded field", mesh, grid.spacing)?;
-    let file = encoded_file(mesh, fitted.volume, &fitted.report, fitted.band);
+    let mut file = encoded_file(mesh, fitted.volume, &fitted.report, fitted.band);
+    let start = Instant::now();
+    let sharp = attach(&mut file, mesh, options.sign, &options.sharp, progress)?;
+    timings.sharp = start.elapsed().as_secs_f64();
     Ok(Encoded {
         file,
         fit: fitted.report,
+        sharp,
         timings,
     })
 }

@@ -213,6 +213,7 @@ impl Field {
             fit: FitMethod::Interp,
             band: ENCODE_BAND + options.reach.abs() / grid.spacing,
             sign: options.sign,
+            sharp: crate::sharp::store::SharpOptions::default(),
         };
         let walls = match options.wall {
             // The walls' operation maps the field and fits it again (see `Field::shell`).

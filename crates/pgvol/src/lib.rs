@@ -84,6 +84,7 @@ mod emptiness;
 mod encode;
 mod error;
 mod eval;
+mod exact_distance;
 mod exact_field;
 mod export;
 mod field_value;

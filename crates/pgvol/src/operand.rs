@@ -210,6 +210,7 @@ impl LoadedOperand {
                     fit: FitMethod::Interp,
                     band: ENCODE_BAND + reach / grid.spacing,
                     sign,
+                    sharp: crate::sharp::store::SharpOptions::default(),
                 };
                 crate::memory::check_sparse_encode("encoding the mesh", mesh, &grid, options.band)?;
                 let fitted = fit_volume(mesh, grid, &options, &mut Timings::default(), progress)?;

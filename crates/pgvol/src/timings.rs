@@ -9,6 +9,8 @@ pub struct Timings {
     pub sdf: f64,
     /// Fitting the coefficients.
     pub fit: f64,
+    /// Finding and storing sharp-feature vertices.
+    pub sharp: f64,
     /// Contouring.
     pub contour: f64,
     /// Writing the output.

@@ -88,6 +88,7 @@ pub fn encode_vdb(
     Ok(Encoded {
         file: PgvFile { header, volume },
         fit: report,
+        sharp: crate::sharp::store::SharpReport::default(),
         timings,
     })
 }

@@ -3,7 +3,7 @@
 //! measured; the issue asks 0.1), where the smooth field alone rounds them off by 0.48.
 
 use glam::{Mat3, Vec3};
-use pgvol::{EncodeOptions, Field, GridSpec, SignMode, Silent, SliceOptions};
+use pgvol::{EncodeOptions, Field, GridSpec, Silent, SliceOptions};
 
 /// A turned prism's file with its sharp section, and the turn.
 fn prism_field() -> (Field, Mat3) {
@@ -15,16 +15,15 @@ fn prism_field() -> (Field, Mat3) {
     }
     let options = EncodeOptions {
         grid: GridSpec::Res(64),
+        sharp: pgvol::sharp::SharpOptions {
+            enabled: true,
+            ..Default::default()
+        },
         ..EncodeOptions::default()
     };
-    let mut file = pgvol::encode(&prism, &options, &Silent).unwrap().file;
-    let sharp = pgvol::sharp::SharpOptions {
-        enabled: true,
-        ..Default::default()
-    };
-    let report = pgvol::sharp::attach(&mut file, &prism, SignMode::Auto, &sharp, &Silent).unwrap();
-    assert!(report.stored_cells > 0, "{report:?}");
-    (Field::from_file(file), turn)
+    let encoded = pgvol::encode(&prism, &options, &Silent).unwrap();
+    assert!(encoded.sharp.stored_cells > 0, "{:?}", encoded.sharp);
+    (Field::from_file(encoded.file), turn)
 }
 
 /// The farthest, over the layers and over the prism's four vertical edges,

@@ -295,8 +295,11 @@ pub fn encode(a: EncodeArgs) -> Result<()> {
                 "output": a.output, "grid": grid, "basis": file.volume.basis, "bytes": bytes,
                 "storage": storage, "fit": report, "unit": unit, "sharp": sharp,
             }),
-            &Seconds::since(start)
-                .stages([("sdf", encoded.timings.sdf), ("fit", encoded.timings.fit)]),
+            &Seconds::since(start).stages([
+                ("sdf", encoded.timings.sdf),
+                ("fit", encoded.timings.fit),
+                ("sharp", encoded.timings.sharp),
+            ]),
         );
     }
     if !a.out.quiet {
@@ -356,15 +359,14 @@ fn encode_mesh(
         },
         band: a.band,
         sign: a.sign.into(),
+        sharp: pgvol::sharp::SharpOptions {
+            enabled: a.sharp == SharpArg::Auto,
+            angle: a.sharp_angle,
+        },
     };
     let bars = Bars::new(a.out.silent());
-    let mut encoded = pgvol::encode(&mesh, &options, &bars).map_err(|e| at_input(e, mesh_path))?;
-    let sharp = pgvol::sharp::SharpOptions {
-        enabled: a.sharp == SharpArg::Auto,
-        angle: a.sharp_angle,
-    };
-    let sharp = pgvol::sharp::attach(&mut encoded.file, &mesh, options.sign, &sharp, &bars)
-        .map_err(|e| at_input(e, mesh_path))?;
+    let encoded = pgvol::encode(&mesh, &options, &bars).map_err(|e| at_input(e, mesh_path))?;
+    let sharp = encoded.sharp;
     Ok((encoded, unit, Some(sharp)))
 }
 

@@ -431,6 +431,8 @@ class Field:
         fit: Literal["interp", "iso", "wls"] = "interp",
         sign: Literal["auto", "winding", "pseudonormal", "parity"] = "auto",
         z_step: Optional[float] = None,
+        sharp: Literal["off", "auto"] = "off",
+        sharp_angle: Optional[float] = None,
         progress: Optional[_Progress] = None,
     ) -> "Field":
         """Encodes a triangle mesh.
@@ -440,6 +442,10 @@ class Field:
         ``band`` grid spacings of the surface (widen it for larger offsets and shells) and
         fitted with ``basis`` ("bspline3", "bspline2", "trilinear", "pg" or "pg-n<N>-r<R>").
         Vertices are welded and degenerate triangles dropped as when reading a file.
+        ``sharp="auto"`` stores the exact vertices of the cells at creases turning by more than
+        ``sharp_angle`` degrees (default 30), so that ``to_mesh(method="dc")`` (or "sn") on the file's own
+        grid keeps them sharp, as ``pgvol encode --sharp auto`` does; the distributed encode
+        does not store them.
         """
     @overload
     @staticmethod

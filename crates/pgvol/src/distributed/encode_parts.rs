@@ -42,7 +42,7 @@ fn group_counts(grid: &Grid) -> [usize; 3] {
 }
 
 /// Refuses what cannot be encoded in parts: fits other than `Interp` and pseudo-Gaussians
-/// solve one global system.
+/// solve one global system, and sharp-feature vertices compare with the whole fitted file.
 pub(crate) fn check_parts_options(options: &EncodeOptions) -> Result<()> {
     options.validate()?;
     if options.fit != FitMethod::Interp {
@@ -55,6 +55,12 @@ pub(crate) fn check_parts_options(options: &EncodeOptions) -> Result<()> {
         return Err(Error::parameter(
             "pseudo-Gaussian coefficients come from one global solve and cannot be computed in \
              parts; use bspline3, bspline2 or trilinear",
+        ));
+    }
+    if options.sharp.enabled {
+        return Err(Error::parameter(
+            "sharp-feature vertices are chosen against the whole fitted file, so they cannot be \
+             computed in parts; encode in one process to store them, or leave them off",
         ));
     }
     Ok(())
@@ -362,6 +368,7 @@ pub fn assemble_encode(mesh: &Mesh, options: &EncodeOptions, parts: &[&[u8]]) ->
     Ok(Encoded {
         file,
         fit,
+        sharp: crate::sharp::store::SharpReport::default(),
         timings: Timings::default(),
     })
 }
