@@ -151,17 +151,24 @@ def test_sharp_edges_and_corners_survive_the_file(pgvol, work_dir):
     assert mesh.volume > 0, f"output has non-positive volume {mesh.volume}"
 
 
+def _through_file(pgvol, src, stem, res: int, sharp: str, method: str):
+    """`src` encoded at `res` with `--sharp sharp` to `stem-SHARP.pgv` and decoded by `method`:
+    the output's path and the grid spacing."""
+    pgv = stem.with_name(f"{stem.name}-{sharp}.pgv")
+    args = [pgvol, "encode", src, "-o", pgv, "--res", res, "--sharp", sharp, "--json"]
+    spacing = helpers.run_json(args)["grid"]["spacing"]
+    out = stem.with_name(f"{stem.name}-{sharp}-{method}.ply")
+    helpers.run_ok([pgvol, "decode", pgv, "-o", out, "--method", method, "-q"])
+    return out, spacing
+
+
 def test_surface_nets_take_the_stored_vertices(pgvol, work_dir):
     folder = work_dir / "sharp-nets"
     folder.mkdir(parents=True, exist_ok=True)
     src, corners = _rotated_cube(folder)
     deviation, gaps = {}, {}
     for sharp in ("off", "auto"):
-        pgv = folder / f"cube-{sharp}.pgv"
-        args = [pgvol, "encode", src, "-o", pgv, "--res", RES, "--sharp", sharp, "--json"]
-        spacing = helpers.run_json(args)["grid"]["spacing"]
-        out = folder / f"cube-{sharp}-sn.ply"
-        helpers.run_ok([pgvol, "decode", pgv, "-o", out, "--method", "sn", "-q"])
+        out, spacing = _through_file(pgvol, src, folder / "cube", RES, sharp, "sn")
         deviation[sharp] = _normal_deviation(pgvol, src, out)
         mesh = helpers.load_output(out)
         gaps[sharp] = max(np.min(np.linalg.norm(mesh.vertices - c, axis=1)) for c in corners)
@@ -205,11 +212,7 @@ def test_stored_vertices_reach_into_a_notch(pgvol, work_dir):
     src, bars = _crossed_bars(folder)
     far = {}
     for sharp in ("off", "auto"):
-        pgv = folder / f"bars-{sharp}.pgv"
-        args = [pgvol, "encode", src, "-o", pgv, "--res", NOTCH_RES, "--sharp", sharp, "--json"]
-        spacing = helpers.run_json(args)["grid"]["spacing"]
-        out = folder / f"bars-{sharp}-dc.ply"
-        helpers.run_ok([pgvol, "decode", pgv, "-o", out, "--method", "dc", "-q"])
+        out, spacing = _through_file(pgvol, src, folder / "bars", NOTCH_RES, sharp, "dc")
         mesh = helpers.load_output(out)
         far[sharp] = _farthest_from(bars, mesh, 100_000) / spacing
         assert mesh.is_watertight and mesh.is_winding_consistent, sharp
