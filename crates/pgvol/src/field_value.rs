@@ -25,6 +25,7 @@ use crate::mesh_io;
 use crate::pgv_io::read_pgv;
 use crate::progress::{self, Progress, Silent};
 use crate::resolution::{check_pieces, check_wall};
+use crate::sharp::store::{attach, SharpOptions};
 use crate::timings::Timings;
 
 /// Grid nodes per axis when a mesh is encoded on the fly for an offset or a shell.
@@ -64,6 +65,10 @@ pub struct OpenOptions {
     /// How inside is told from outside in a mesh (default [`SignMode::Auto`]); a `.pgv` file
     /// stores its signs, and any other mode is refused for one.
     pub sign: SignMode,
+    /// Whether a mesh's sharp-feature vertices are stored with its field, as
+    /// [`EncodeOptions::sharp`] (default not); a `.pgv` file keeps the ones it has, and asking
+    /// for them is refused for one.
+    pub sharp: SharpOptions,
 }
 
 impl Default for OpenOptions {
@@ -74,6 +79,7 @@ impl Default for OpenOptions {
             reach: 0.0,
             wall: None,
             sign: SignMode::Auto,
+            sharp: SharpOptions::default(),
         }
     }
 }
@@ -157,6 +163,15 @@ impl Field {
             Some(_) => e,
             None => e.at(path),
         };
+        let from_mesh = !(is_pgv(path) || crate::vdb_in::is_vdb(path));
+        if options.sharp.enabled && !from_mesh {
+            return Err(Error::new(
+                ErrorKind::BadParameter,
+                "sharp-feature vertices are found from a mesh; a .pgv file keeps those it was \
+                 encoded with, and a .vdb level set has none (pass the mesh to store them)",
+            )
+            .at(path));
+        }
         if is_pgv(path) {
             if options.sign != SignMode::Auto {
                 return Err(Error::new(
@@ -213,7 +228,7 @@ impl Field {
             fit: FitMethod::Interp,
             band: ENCODE_BAND + options.reach.abs() / grid.spacing,
             sign: options.sign,
-            sharp: crate::sharp::store::SharpOptions::default(),
+            sharp: SharpOptions::default(),
         };
         let walls = match options.wall {
             // The walls' operation maps the field and fits it again (see `Field::shell`).
@@ -230,8 +245,10 @@ impl Field {
         let band = encode.band * grid.spacing;
         let mut header = pgvol_format::header_for(&volume, "interp", Some(&mesh));
         header.metadata.insert(BAND_KEY.into(), format!("{band}"));
+        let mut file = PgvFile { header, volume };
+        attach(&mut file, &mesh, options.sign, &options.sharp, progress)?;
         Ok(Field {
-            file: PgvFile { header, volume },
+            file,
             bounds: (lo, hi),
             band: Some(band),
             mesh: Some(Arc::new(mesh)),

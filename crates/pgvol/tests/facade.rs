@@ -420,6 +420,7 @@ fn missing_inputs_are_input_errors_naming_the_file() {
                 reach: 0.0,
                 wall: None,
                 sign: SignMode::Auto,
+                ..Default::default()
             },
             &Silent,
         )
@@ -879,6 +880,7 @@ fn load_names_the_mesh_when_encoding_it_fails() {
             reach: 0.0,
             wall: None,
             sign: SignMode::Auto,
+            ..Default::default()
         },
         &Recorder::cancelling_in(""),
     )
@@ -892,6 +894,7 @@ fn load_names_the_mesh_when_encoding_it_fails() {
             reach: 0.1,
             wall: None,
             sign: SignMode::Auto,
+            ..Default::default()
         },
         &Silent,
     )

@@ -17,6 +17,7 @@ fn sphere() -> Field {
             reach: WALL,
             wall: None,
             sign: SignMode::Auto,
+            ..OpenOptions::default()
         },
         &Silent,
     )

@@ -100,3 +100,27 @@ fn a_bad_crease_angle_or_an_encode_in_parts_is_refused() {
     assert!(e.to_string().contains("in parts"), "{e}");
     assert!(pgvol::distributed::plan_encode(&cube, &options(false), 2).is_ok());
 }
+
+#[test]
+fn a_field_opened_from_a_mesh_stores_the_section_when_asked() {
+    let (cube, corners) = turned_cube();
+    let options = pgvol::OpenOptions {
+        res: 64,
+        sharp: options(true).sharp,
+        ..pgvol::OpenOptions::default()
+    };
+    let field = Field::for_operations(cube.clone(), &options, &Silent).unwrap();
+    assert!(field.header().sharp.is_some());
+    assert!(corner_gap(&field, Method::DualContouring, &corners) < 0.1);
+    let plain = Field::for_operations(cube, &pgvol::OpenOptions::default(), &Silent).unwrap();
+    assert!(plain.header().sharp.is_none());
+    // A file keeps the section it was encoded with: asking for one is refused.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cube.pgv");
+    plain
+        .save(&path, &pgvol::StorageOptions::default())
+        .unwrap();
+    let e = Field::open(&path, &options, &Silent).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::BadParameter, "{e}");
+    assert!(e.to_string().contains("from a mesh"), "{e}");
+}

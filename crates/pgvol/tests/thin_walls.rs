@@ -40,6 +40,7 @@ fn rocker(reach: f32) -> Field {
             reach,
             wall: None,
             sign: SignMode::Auto,
+            ..OpenOptions::default()
         },
         &Silent,
     )

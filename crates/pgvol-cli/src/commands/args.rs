@@ -130,6 +130,26 @@ impl From<MethodArg> for pgvol::Method {
     }
 }
 
+/// Whether encoding stores sharp-feature vertices.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq)]
+pub enum SharpArg {
+    /// Stored where the shape has creases or corners.
+    Auto,
+    /// None stored.
+    #[default]
+    Off,
+}
+
+/// A crease angle in degrees, strictly between 0 and 180.
+pub fn parse_angle(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(a) if a.is_finite() && a > 0.0 && a < 180.0 => Ok(a),
+        _ => Err(format!(
+            "'{s}' is not an angle in degrees between 0 and 180"
+        )),
+    }
+}
+
 /// Output options shared by every command.
 #[derive(Args, Clone, Copy, Debug)]
 pub struct OutputArgs {
@@ -379,6 +399,7 @@ impl ShapeOutputArgs {
             reach,
             wall: None,
             sign: self.sign.into(),
+            sharp: pgvol::sharp::SharpOptions::default(),
         };
         pgvol::Field::open(input, &options, bars)
     }
@@ -399,6 +420,7 @@ impl ShapeOutputArgs {
             reach,
             wall: Some(wall),
             sign: self.sign.into(),
+            sharp: pgvol::sharp::SharpOptions::default(),
         };
         pgvol::Field::open(input, &options, bars).map_err(|e| grid_error(e, input))
     }

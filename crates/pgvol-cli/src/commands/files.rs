@@ -7,8 +7,8 @@ use clap::Args;
 use serde::Serialize;
 
 use super::args::{
-    at_input, load_mesh_with_unit, non_negative, BasisArgs, GridArgs, MeshInputArgs, MethodArg,
-    OutputArgs, PathArg, SignArg,
+    at_input, load_mesh_with_unit, non_negative, parse_angle, BasisArgs, GridArgs, MeshInputArgs,
+    MethodArg, OutputArgs, PathArg, SharpArg, SignArg,
 };
 use crate::output::outln;
 use crate::progress::Bars;
@@ -82,25 +82,6 @@ pub struct EncodeArgs {
     pub verbose: bool,
     #[command(flatten)]
     pub out: OutputArgs,
-}
-
-/// Whether encoding stores sharp-feature vertices.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq)]
-pub enum SharpArg {
-    /// Stored where the shape has creases or corners.
-    Auto,
-    /// None stored.
-    #[default]
-    Off,
-}
-
-fn parse_angle(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(a) if a.is_finite() && a > 0.0 && a < 180.0 => Ok(a),
-        _ => Err(format!(
-            "'{s}' is not an angle in degrees between 0 and 180"
-        )),
-    }
 }
 
 /// Coefficient precision in the file.

@@ -7,7 +7,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::args::{at_input, grid_error, OutputArgs, PathArg, ShapeOutputArgs, SignArg};
+use super::args::{
+    at_input, grid_error, parse_angle, OutputArgs, PathArg, ShapeOutputArgs, SharpArg, SignArg,
+};
 use super::lattice::{build_lattice, write_solid, GradeArgs, StyleArg};
 use crate::output::outln;
 use crate::progress::Bars;
@@ -84,6 +86,15 @@ pub struct SliceArgs {
     /// How inside is told from outside when the input is a mesh.
     #[arg(long, value_enum, default_value_t)]
     pub sign: SignArg,
+    /// When the input is a mesh: `auto` stores the exact vertices of the cells at its creases
+    /// and corners with the field, as `encode --sharp auto` does, so that the layers keep the
+    /// corners of its sections; `off` stores none. A .pgv file's layers keep the corners its
+    /// own section marks [default: off].
+    #[arg(long, value_enum)]
+    pub sharp: Option<SharpArg>,
+    /// Crease angle in degrees for `--sharp auto` (see `encode --help`).
+    #[arg(long, value_name = "DEG", default_value_t = pgvol::sharp::DEFAULT_SHARP_ANGLE, value_parser = parse_angle)]
+    pub sharp_angle: f32,
     #[command(flatten)]
     pub out: OutputArgs,
 }
@@ -111,19 +122,33 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let sign: pgvol::SignMode = a.sign.into();
     let t = Instant::now();
     // A .pgv file is sliced as it is read, a window of its bricks at a time.
-    let sliced = if pgvol::io::is_pgv(&a.input) && sign == pgvol::SignMode::Auto {
-        pgvol::stream::slice_file(&a.input, &settings, &bars).map_err(|e| at_input(e, &a.input))?
-    } else {
-        let open = pgvol::OpenOptions {
-            res: a.res as usize,
-            sign,
-            ..Default::default()
-        };
-        let shape = pgvol::Field::open(&a.input, &open, &bars)?;
-        shape
-            .slice(&settings, &bars)
-            .map_err(|e| at_input(e, &a.input))?
+    let sharp = pgvol::sharp::SharpOptions {
+        enabled: a.sharp == Some(SharpArg::Auto),
+        angle: a.sharp_angle,
     };
+    let sliced =
+        if pgvol::io::is_pgv(&a.input) && sign == pgvol::SignMode::Auto && a.sharp.is_none() {
+            pgvol::stream::slice_file(&a.input, &settings, &bars)
+                .map_err(|e| at_input(e, &a.input))?
+        } else {
+            if a.sharp.is_some() && pgvol::io::is_pgv(&a.input) {
+                anyhow::bail!(
+                "{}: --sharp applies to mesh inputs; a .pgv file's layers keep the corners its \
+                 own sharp section marks (encode the mesh with --sharp auto to store one)",
+                a.input.display()
+            );
+            }
+            let open = pgvol::OpenOptions {
+                res: a.res as usize,
+                sign,
+                sharp,
+                ..Default::default()
+            };
+            let shape = pgvol::Field::open(&a.input, &open, &bars)?;
+            shape
+                .slice(&settings, &bars)
+                .map_err(|e| at_input(e, &a.input))?
+        };
     let slice_seconds = t.elapsed().as_secs_f64();
     let layers = sliced.layers;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
