@@ -140,6 +140,16 @@ pub enum SharpArg {
     Off,
 }
 
+impl SharpArg {
+    /// The library's options for this choice and crease angle (degrees).
+    pub fn options(self, angle: f32) -> pgvol::sharp::SharpOptions {
+        pgvol::sharp::SharpOptions {
+            enabled: self == SharpArg::Auto,
+            angle,
+        }
+    }
+}
+
 /// A crease angle in degrees, strictly between 0 and 180.
 pub fn parse_angle(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {

@@ -340,10 +340,7 @@ fn encode_mesh(
         },
         band: a.band,
         sign: a.sign.into(),
-        sharp: pgvol::sharp::SharpOptions {
-            enabled: a.sharp == SharpArg::Auto,
-            angle: a.sharp_angle,
-        },
+        sharp: a.sharp.options(a.sharp_angle),
     };
     let bars = Bars::new(a.out.silent());
     let encoded = pgvol::encode(&mesh, &options, &bars).map_err(|e| at_input(e, mesh_path))?;

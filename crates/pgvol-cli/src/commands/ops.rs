@@ -122,33 +122,28 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let sign: pgvol::SignMode = a.sign.into();
     let t = Instant::now();
     // A .pgv file is sliced as it is read, a window of its bricks at a time.
-    let sharp = pgvol::sharp::SharpOptions {
-        enabled: a.sharp == Some(SharpArg::Auto),
-        angle: a.sharp_angle,
-    };
-    let sliced =
-        if pgvol::io::is_pgv(&a.input) && sign == pgvol::SignMode::Auto && a.sharp.is_none() {
-            pgvol::stream::slice_file(&a.input, &settings, &bars)
-                .map_err(|e| at_input(e, &a.input))?
-        } else {
-            if a.sharp.is_some() && pgvol::io::is_pgv(&a.input) {
-                anyhow::bail!(
-                "{}: --sharp applies to mesh inputs; a .pgv file's layers keep the corners its \
-                 own sharp section marks (encode the mesh with --sharp auto to store one)",
-                a.input.display()
-            );
-            }
-            let open = pgvol::OpenOptions {
-                res: a.res as usize,
-                sign,
-                sharp,
-                ..Default::default()
-            };
-            let shape = pgvol::Field::open(&a.input, &open, &bars)?;
-            shape
-                .slice(&settings, &bars)
-                .map_err(|e| at_input(e, &a.input))?
+    let is_pgv = pgvol::io::is_pgv(&a.input);
+    if is_pgv && a.sharp.is_some() {
+        anyhow::bail!(
+            "{}: --sharp applies to mesh inputs; a .pgv file's layers keep the corners its own \
+             sharp section marks (encode the mesh with --sharp auto to store one)",
+            a.input.display()
+        );
+    }
+    let sliced = if is_pgv && sign == pgvol::SignMode::Auto {
+        pgvol::stream::slice_file(&a.input, &settings, &bars).map_err(|e| at_input(e, &a.input))?
+    } else {
+        let open = pgvol::OpenOptions {
+            res: a.res as usize,
+            sign,
+            sharp: a.sharp.unwrap_or_default().options(a.sharp_angle),
+            ..Default::default()
         };
+        let shape = pgvol::Field::open(&a.input, &open, &bars)?;
+        shape
+            .slice(&settings, &bars)
+            .map_err(|e| at_input(e, &a.input))?
+    };
     let slice_seconds = t.elapsed().as_secs_f64();
     let layers = sliced.layers;
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
