@@ -30,8 +30,16 @@
 
 use std::path::Path;
 
+use glam::Vec3;
+
 /// The largest frame offset a header may declare: the coordinate range meshes are accepted in.
 pub(crate) const MAX_OFFSET: f64 = 1e8;
+/// Largest magnitude of a grid corner's coordinates in its local frame: ten times the largest
+/// mesh coordinate the readers accept.
+const MAX_GRID_COORDINATE: f32 = 1e9;
+/// Least grid spacing relative to the grid's largest coordinate: 16 steps of single precision
+/// per spacing.
+const MIN_RELATIVE_SPACING: f32 = 1.0 / (1 << 19) as f32;
 
 use crate::error::{err, FormatError};
 use crate::header::{PgvHeader, ENCODING_DENSE_F32, ENCODING_PERTURBATION};
@@ -409,11 +417,42 @@ fn checked_header(
         .dims
         .iter()
         .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
-    match nodes {
-        Some(n) if n as u128 <= pgvol_field::MAX_GRID_NODES => Ok((header, n)),
-        _ => Err(err(
+    let nodes = match nodes {
+        Some(n) if n as u128 <= pgvol_field::MAX_GRID_NODES => n,
+        _ => {
+            return Err(err(
+                path,
+                format!("grid dimensions {:?} are too large", g.dims),
+            ))
+        }
+    };
+    // Corners far beyond any mesh the readers accept, or nodes too close for single precision
+    // to tell apart, make positions that no stage can index.
+    let far = g
+        .origin
+        .abs()
+        .max((g.origin + g.spacing * Vec3::from_array(g.dims.map(|n| (n - 1) as f32))).abs());
+    if !(far.is_finite() && far.max_element() <= MAX_GRID_COORDINATE) {
+        return Err(err(
             path,
-            format!("grid dimensions {:?} are too large", g.dims),
-        )),
+            format!(
+                "grid of spacing {:e} from origin {} reaches beyond {MAX_GRID_COORDINATE:e} in \
+                 magnitude",
+                g.spacing, g.origin
+            ),
+        ));
     }
+    if g.spacing < far.max_element() * MIN_RELATIVE_SPACING {
+        return Err(err(
+            path,
+            format!(
+                "grid spacing {:e} is too small for single precision at coordinates up to {:e} \
+                 (at least {:e} of them)",
+                g.spacing,
+                far.max_element(),
+                MIN_RELATIVE_SPACING
+            ),
+        ));
+    }
+    Ok((header, nodes))
 }

@@ -191,6 +191,32 @@ mod tests {
         assert!(e.contains("too large"), "{e}");
     }
 
+    /// Grids whose nodes no stage can index: a spacing that carries the corners past any mesh,
+    /// one too small for single precision to tell nodes apart, an origin beyond any mesh.
+    #[test]
+    fn grids_beyond_single_precision_are_refused() {
+        for (case, want) in [
+            ("huge spacing", "reaches beyond"),
+            ("tiny spacing", "too small for single precision"),
+            ("far origin", "reaches beyond"),
+        ] {
+            let mut f = sample_file();
+            let g = &mut f.header.grid;
+            match case {
+                "huge spacing" => g.spacing = 3e38,
+                "tiny spacing" => g.spacing = 1e-45,
+                _ => g.origin.x = 1e30,
+            }
+            let e = decode_pgv(&encode_pgv(&f), Path::new("g.pgv"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("g.pgv: ") && e.contains(want), "{e}");
+        }
+        // The sample grid itself reads back.
+        let f = sample_file();
+        assert_eq!(decode_pgv(&encode_pgv(&f), Path::new("g.pgv")).unwrap(), f);
+    }
+
     proptest! {
         #[test]
         fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {

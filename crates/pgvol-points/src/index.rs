@@ -76,22 +76,43 @@ impl<'a> PointIndex<'a> {
         &self.points
     }
 
-    /// Calls `f(index, squared distance)` for every point within `r` of `p`.
+    /// Calls `f(index, squared distance)` for every point within `r` of `p`, cell by cell in
+    /// raster order (x fastest).
     pub fn for_each_within(&self, p: Vec3, r: f32, mut f: impl FnMut(usize, f32)) {
         let lo = ((p - r) / self.cell).floor().as_ivec3();
         let hi = ((p + r) / self.cell).floor().as_ivec3();
         let r2 = r * r;
+        let mut scan = |(a, b): (u32, u32)| {
+            for &i in &self.order[a as usize..b as usize] {
+                let d2 = self.points[i as usize].distance_squared(p);
+                if d2 <= r2 {
+                    f(i as usize, d2);
+                }
+            }
+        };
+        let span = |a: i32, b: i32| (i64::from(b) - i64::from(a) + 1).max(0) as u64;
+        let in_reach = span(lo.x, hi.x)
+            .saturating_mul(span(lo.y, hi.y))
+            .saturating_mul(span(lo.z, hi.z));
+        if in_reach > self.cells.len() as u64 {
+            // A reach of many cells (a query far from the other points, an outlier's
+            // neighbours): the occupied cells are fewer, so they are the ones visited, in the
+            // same order.
+            let mut near: Vec<([i32; 3], (u32, u32))> = self
+                .cells
+                .iter()
+                .filter(|(c, _)| (0..3).all(|a| c[a] >= lo[a] && c[a] <= hi[a]))
+                .map(|(&c, &range)| (c, range))
+                .collect();
+            near.sort_unstable_by_key(|&([x, y, z], _)| (z, y, x));
+            near.into_iter().for_each(|(_, range)| scan(range));
+            return;
+        }
         for z in lo.z..=hi.z {
             for y in lo.y..=hi.y {
                 for x in lo.x..=hi.x {
-                    let Some(&(a, b)) = self.cells.get(&[x, y, z]) else {
-                        continue;
-                    };
-                    for &i in &self.order[a as usize..b as usize] {
-                        let d2 = self.points[i as usize].distance_squared(p);
-                        if d2 <= r2 {
-                            f(i as usize, d2);
-                        }
+                    if let Some(&range) = self.cells.get(&[x, y, z]) {
+                        scan(range);
                     }
                 }
             }
@@ -203,5 +224,53 @@ mod tests {
             got.iter().map(|x| x.1).collect::<Vec<_>>(),
             want[..7].iter().map(|x| x.1).collect::<Vec<_>>()
         );
+    }
+
+    /// A point far from the rest reaches across ~10¹⁴ cells of the others' size: the query
+    /// visits the occupied cells instead, so it ends, with the same neighbours and order.
+    #[test]
+    fn an_outlier_finds_its_neighbours_without_visiting_empty_cells() {
+        let mut points: Vec<Vec3> = (0..2000)
+            .map(|i| {
+                let t = i as f32 * 0.618;
+                Vec3::new(t.sin(), (t * 1.7).cos(), (t * 0.3).sin() * 0.5)
+            })
+            .collect();
+        points.push(Vec3::splat(1.0e5));
+        let index = PointIndex::new(&points, 0.02);
+        let q = points[2000];
+        let mut got = Vec::new();
+        index.nearest(q, 4, 1.0e6, &mut got);
+        let mut want: Vec<(f32, u32)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.distance_squared(q), i as u32))
+            .collect();
+        want.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(got, want[..4].to_vec());
+        // Raster order of cells (x fastest) either way: the points within a reach of 3 cells
+        // (which visits every cell in reach) and of 15 (which visits the occupied ones).
+        let index = PointIndex::new(&points, 0.05);
+        let rank: Vec<usize> = {
+            let mut rank = vec![0; points.len()];
+            for (at, &i) in index.order.iter().enumerate() {
+                rank[i as usize] = at;
+            }
+            rank
+        };
+        for r in [0.15f32, 0.75] {
+            let q = points[7];
+            let mut got = Vec::new();
+            index.for_each_within(q, r, |i, _| got.push(i));
+            let mut want: Vec<usize> = (0..points.len())
+                .filter(|&i| points[i].distance_squared(q) <= r * r)
+                .collect();
+            want.sort_by_key(|&i| {
+                let [x, y, z] = (points[i] / 0.05).floor().as_ivec3().to_array();
+                (z, y, x, rank[i])
+            });
+            assert!(want.len() > 5, "{r}: {}", want.len());
+            assert_eq!(got, want, "reach {r}");
+        }
     }
 }

@@ -650,9 +650,7 @@ impl Field {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
-        let points = self
-            .shape
-            .to_local(&arrays::world_points(points, "points")?);
+        let points = self.shape.to_local(&query_points(points)?);
         let values = py.detach(|| self.shape.volume().values_many(&points));
         Ok(arrays::vector(py, values))
     }
@@ -664,9 +662,7 @@ impl Field {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
     ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<f32>>)> {
-        let points = self
-            .shape
-            .to_local(&arrays::world_points(points, "points")?);
+        let points = self.shape.to_local(&query_points(points)?);
         let (values, gradients): (Vec<f32>, Vec<glam::Vec3>) =
             py.detach(|| self.shape.volume().eval_many(&points).into_iter().unzip());
         Ok((arrays::vector(py, values), arrays::vec3s(py, gradients)))
@@ -679,7 +675,7 @@ impl Field {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let points = arrays::world_points(points, "points")?;
+        let points = query_points(points)?;
         let exact: Vec<bool> = py.detach(|| {
             self.shape
                 .eval(&points)
@@ -1361,4 +1357,12 @@ impl Field {
             g.spacing
         )
     }
+}
+
+/// (N, 3) query points in world coordinates, refused where not finite or beyond the coordinate
+/// range, as the `eval` command refuses them.
+fn query_points(points: &Bound<'_, PyAny>) -> PyResult<Vec<glam::DVec3>> {
+    let world = arrays::world_points(points, "points")?;
+    pgvol::Field::check_query_points(&world).map_err(|e| errors::to_py(points.py(), e))?;
+    Ok(world)
 }

@@ -4,6 +4,7 @@ the same mesh by code that is not pgvol's."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import trimesh
 
 import pgvol
@@ -78,6 +79,19 @@ def test_values_with_and_without_gradients_agree(spot_field, spot_trimesh):
     points = near_surface_points(spot_trimesh, 2000, 0.2, seed=5)
     values, _ = spot_field.eval_with_gradient(points)
     np.testing.assert_allclose(spot_field(points), values, rtol=1e-6, atol=1e-7)
+
+
+def test_points_without_a_place_are_refused_not_clamped(spot_field, spot_trimesh):
+    """A NaN, infinite or huge coordinate would be clamped into the grid and get the value of
+    some other point; every query refuses it, naming the row, as the `eval` command does."""
+    good = near_surface_points(spot_trimesh, 4, 0.1, seed=3)
+    for bad in (np.nan, np.inf, -1e30):
+        points = good.copy()
+        points[2, 1] = bad
+        for query in (spot_field, spot_field.eval_with_gradient, spot_field.is_exact):
+            with pytest.raises(pgvol.ParameterError, match="point 2 "):
+                query(points)
+    assert np.isfinite(spot_field(good)).all()
 
 
 def test_a_sphere_is_its_analytic_distance(tmp_path):

@@ -19,6 +19,15 @@ pub fn read_cli(bytes: &[u8], name: &Path) -> Result<Vec<Layer>, FileError> {
     let layers = if header.contains("$$BINARY") {
         read_binary(body).map_err(fail)?
     } else {
+        // ASCII geometry ends with this command; without it the file was cut short, and the
+        // layers read would be only its first ones.
+        if find(body, b"$$GEOMETRYEND").is_none() {
+            return Err(fail(
+                "the ASCII geometry has no $$GEOMETRYEND: the file was cut short, and its last \
+                 layers would be missing"
+                    .into(),
+            ));
+        }
         read_ascii(&String::from_utf8_lossy(body)).map_err(fail)?
     };
     if layers.iter().all(|l| l.loops.is_empty()) {
@@ -215,6 +224,12 @@ mod tests {
             write_cli_with(&path, &layers, 1.0, encoding).unwrap();
             let bytes = std::fs::read(&path).unwrap();
             assert_eq!(read_cli(&bytes, &path).unwrap(), layers, "{encoding:?}");
+            if encoding == CliEncoding::Ascii {
+                // Cut after the first layer's lines, the rest would read as a shorter file.
+                let cut = find(&bytes, b"$$LAYER/1.25").unwrap();
+                let e = read_cli(&bytes[..cut], &path).unwrap_err().to_string();
+                assert!(e.contains("cut short"), "{e}");
+            }
         }
         let e = read_cli(b"$$HEADERSTART\n$$ASCII\n", Path::new("x.cli")).unwrap_err();
         assert!(e.to_string().starts_with("x.cli: "), "{e}");

@@ -28,6 +28,13 @@ fn read(text: &str) -> Result<Vec<Layer>, String> {
         })?;
         number(value).ok_or_else(|| format!("{key}=\"{value}\" is not a finite number"))
     };
+    if !text.trim_end().ends_with("</svg>") {
+        return Err(
+            "the file ends before its closing </svg>: it was cut short, and its last \
+             layers would be missing; slice again to write it whole"
+                .into(),
+        );
+    }
     let (u_offset, v_offset) = (offset("data-u-offset")?, offset("data-v-offset")?);
     let mut layers: Vec<Layer> = Vec::new();
     for tag in tags(text) {
@@ -180,6 +187,16 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
         let back = read_svg(&text, Path::new("layers.svg")).unwrap();
         assert_eq!(back.len(), 3);
+        // Cut anywhere, the file is refused rather than read as its first layers.
+        let whole = text.trim_end().len();
+        for cut in (0..whole).step_by(7) {
+            let e = read_svg(&text[..cut], Path::new("layers.svg")).unwrap_err();
+            let e = e.to_string();
+            assert!(
+                e.contains("cut short") || e.contains("no <svg>"),
+                "{cut}: {e}"
+            );
+        }
         for (a, b) in layers.iter().zip(&back) {
             assert_eq!(a.height, b.height);
             assert_eq!(a.loops.len(), b.loops.len());

@@ -87,6 +87,25 @@ pub struct Evaluation {
 }
 
 impl Field {
+    /// Refuses query points that are not finite or not below
+    /// [`MAX_COORDINATE`](pgvol_mesh::MAX_COORDINATE) in magnitude, naming the first (counted
+    /// from 0): where [`Field::eval`] would clamp them into the grid and give a value that
+    /// belongs to another point.
+    pub fn check_query_points(points: &[DVec3]) -> Result<()> {
+        let limit = f64::from(pgvol_mesh::MAX_COORDINATE);
+        match points
+            .iter()
+            .position(|p| !p.is_finite() || p.abs().max_element() >= limit)
+        {
+            None => Ok(()),
+            Some(i) => Err(Error::parameter(format!(
+                "point {i} is ({}, {}, {}): coordinates must be finite and below {limit:e} in \
+                 magnitude",
+                points[i].x, points[i].y, points[i].z
+            ))),
+        }
+    }
+
     /// Value and gradient of the field at each point (world coordinates, taken into the
     /// field's frame in f64), in parallel, each flagged by whether it is an exact distance.
     pub fn eval(&self, points: &[DVec3]) -> Vec<Evaluation> {
