@@ -369,6 +369,26 @@ def test_replaced_outputs_keep_their_mode_and_read_only_ones_need_force(dirs, pg
     assert stat.S_IMODE(out.stat().st_mode) == 0o444
 
 
+def test_an_output_that_is_the_input_needs_force(dirs, pgvol):
+    in_dir, _ = dirs
+    src = in_dir / "tetra.obj"
+    src.write_text(GOOD_OBJ)
+    before = src.read_bytes()
+    # The same file by another spelling of its path is refused too.
+    other = in_dir / "." / "tetra.obj"
+    r = helpers.run([pgvol, "remesh", src, "-o", other, "--res", 16], timeout=120)
+    assert r.returncode == 1 and "is also the input" in r.stderr, r.describe()
+    assert "--force" in r.stderr and src.read_bytes() == before
+    pgv = in_dir / "t.pgv"
+    helpers.run_ok([pgvol, "encode", src, "-o", pgv, "--res", 16])
+    kept = pgv.read_bytes()
+    r = helpers.run([pgvol, "offset", pgv, "-o", pgv, "--distance", 0.01], timeout=120)
+    assert r.returncode == 1 and "is also the input" in r.stderr, r.describe()
+    assert pgv.read_bytes() == kept
+    helpers.run_ok([pgvol, "offset", pgv, "-o", pgv, "--distance", 0.01, "--force"])
+    assert pgv.read_bytes() != kept
+
+
 def test_eval_refuses_an_endless_points_file(knot_pgv, tmp_path, pgvol):
     points = tmp_path / "points.csv"
     points.symlink_to("/dev/zero")

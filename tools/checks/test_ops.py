@@ -317,6 +317,25 @@ def test_a_drain_outside_the_cavity_is_refused(pgvol, tmp_path):
             assert r.returncode == 1 and "drain 1" in r.stderr and "outside the shape" in r.stderr, r.describe()
 
 
+def test_hollowing_that_would_change_nothing_is_refused(pgvol, tmp_path):
+    """A drain narrower than the grid resolves would leave the cavity sealed, and walls thicker
+    than half the part leave no cavity: both refused, with what would work, where the result
+    would otherwise be the solid unchanged. trimesh confirms the accepted drain opens the cavity
+    (one piece) where the unresolved one would not."""
+    spot = helpers.shared_meshes_dir() / "spot.obj"
+    inside = helpers.load_input(spot).bounds.mean(axis=0)
+    out = tmp_path / "hollow.obj"
+    base = [pgvol, "shell", spot, "-o", out, "--hollow", "--res", 48]
+    drain = lambda d: ",".join(f"{c}" for c in [*inside, 0, 0, -1, d])  # noqa: E731
+    r = helpers.run([*base, "--thickness", 0.1, "--drain", drain(0.001)], timeout=300)
+    assert r.returncode == 1 and "drain 1's diameter" in r.stderr and "--res" in r.stderr, r.describe()
+    assert not out.exists()
+    r = helpers.run([*base, "--thickness", 5], timeout=300)
+    assert r.returncode == 1 and "leave no cavity" in r.stderr, r.describe()
+    helpers.run_ok([*base, "--thickness", 0.1, "--drain", drain(0.2), "-q"])
+    assert len(trimesh.load(out, force="mesh").split(only_watertight=False)) == 1
+
+
 def test_info_shows_the_reach_offsets_may_use(pgvol, mesh_path, tmp_path):
     """`--band W` keeps exact distances for offsets to W − 2 spacings: `info` says so, and an
     offset just inside that reach is accepted, one just beyond it refused."""

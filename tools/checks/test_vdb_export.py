@@ -250,6 +250,17 @@ def test_band_beyond_the_stored_distances_is_refused(pgvol, spot):
     assert not out.exists()
 
 
+def test_a_level_set_too_large_for_memory_is_refused_with_its_figure(pgvol, spot):
+    """Resampled at 4096³, the spot's level set would list tens of millions of leaves: refused
+    with the figure, the count following the surface so the refusal comes in seconds."""
+    folder, pgv, _, _, _ = spot
+    out = folder / "huge.vdb"
+    run = helpers.run([pgvol, "export", pgv, "-o", out, "--res", 4096, "--max-memory", "4G"], timeout=60)
+    assert run.returncode == 1, run.describe()
+    assert "GB of memory" in run.stderr and "--max-memory" in run.stderr, run.stderr
+    assert not out.exists()
+
+
 @needs_openvdb
 def test_far_from_the_origin_keeps_world_positions(pgvol, mesh_path, work_dir):
     """A field far from the origin (stored with a frame offset) lands at its world position."""

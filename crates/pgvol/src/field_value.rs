@@ -24,7 +24,7 @@ use crate::memory;
 use crate::mesh_io;
 use crate::pgv_io::read_pgv;
 use crate::progress::{self, Progress, Silent};
-use crate::resolution::{check_pieces, check_wall};
+use crate::resolution::{check_pieces, check_wall, figure};
 use crate::sharp::store::{attach, SharpOptions};
 use crate::timings::Timings;
 
@@ -567,14 +567,28 @@ impl Field {
     }
 }
 
-/// Warns when hollowing an open mesh, and refuses a drain whose point is not in the cavity
-/// left inside walls of `thickness` (it would open nothing).
+/// Warns when hollowing an open mesh; refuses walls of `thickness` that leave no cavity, a
+/// drain narrower than the grid resolves, and a drain whose point is not in the cavity (it
+/// would open nothing).
 pub(crate) fn check_drains(
     shape: &Field,
     thickness: f32,
     drains: &[Drain],
     progress: &dyn Progress,
 ) -> Result<()> {
+    // The field is a convex combination of its coefficients, so none below −thickness means
+    // no point deeper than the walls: the "hollowed" shape would be the solid unchanged.
+    let [least, _] = shape.file.volume.coeffs.value_range();
+    if least >= -thickness {
+        return Err(Error::new(
+            ErrorKind::EmptyResult,
+            format!(
+                "walls of {thickness} leave no cavity: the shape is nowhere more than {} inside \
+                 its surface; a thinner wall would",
+                figure(-least.min(0.0))
+            ),
+        ));
+    }
     if let Some(mesh) = &shape.mesh {
         let stats = mesh.stats();
         if stats.boundary_edges > 0 {
@@ -586,6 +600,11 @@ pub(crate) fn check_drains(
         }
     }
     for (n, drain) in drains.iter().enumerate() {
+        crate::resolution::check_hole(
+            &format!("drain {}'s diameter", n + 1),
+            drain.diameter,
+            &shape.file.volume.grid,
+        )?;
         // The hole runs from its point outward: a point outside the cavity opens nothing.
         let value = shape.file.volume.value(drain.point);
         if value >= -thickness {

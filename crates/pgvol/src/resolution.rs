@@ -22,7 +22,7 @@ pub const PIECES_FACTOR: usize = 4;
 pub const EXTRA_PIECES: usize = 4;
 
 /// `x` to four significant digits, for a person reading the message.
-fn figure(x: f32) -> String {
+pub(crate) fn figure(x: f32) -> String {
     let digits = 3 - x.abs().log10().floor() as i32;
     if !x.is_normal() || digits > 9 {
         return format!("{x:.3e}");
@@ -56,6 +56,24 @@ fn grid_size(nodes: usize) -> String {
 /// Refuses `what` (a sentence subject, "the wall") of `thickness` on `grid` when it is thinner
 /// than [`MIN_WALL_SPACINGS`] spacings, with the grid that would resolve it.
 pub fn check_wall(what: &str, thickness: f32, grid: &Grid) -> Result<()> {
+    check_width(what, ("a wall", "thinner"), thickness, grid)
+}
+
+/// Refuses a hole (`what`, a sentence subject, "drain 1's diameter") of `diameter` on `grid`
+/// narrower than [`MIN_WALL_SPACINGS`] spacings: the grid closes it, and a cavity it was to
+/// open stays sealed.
+pub fn check_hole(what: &str, diameter: f32, grid: &Grid) -> Result<()> {
+    check_width(what, ("a hole", "narrower"), diameter, grid)
+}
+
+/// [`check_wall`] for a feature named by `noun` ("a wall") and measured by `adjective`
+/// ("thinner").
+fn check_width(
+    what: &str,
+    (noun, adjective): (&str, &str),
+    thickness: f32,
+    grid: &Grid,
+) -> Result<()> {
     let least = MIN_WALL_SPACINGS * grid.spacing;
     if thickness >= least {
         return Ok(());
@@ -65,10 +83,9 @@ pub fn check_wall(what: &str, thickness: f32, grid: &Grid) -> Result<()> {
     Err(Error::new(
         ErrorKind::Unresolved,
         format!(
-            "{what} {} is thinner than the grid resolves: a wall needs \
-             {MIN_WALL_SPACINGS} grid spacings ({}, the spacing being {}) or it breaks into \
-             pieces; a grid of spacing {} or finer ({}) would resolve it, as would a wall of {} \
-             or more",
+            "{what} {} is {adjective} than the grid resolves: {noun} needs \
+             {MIN_WALL_SPACINGS} grid spacings ({}, the spacing being {}) or the grid loses it; \
+             a grid of spacing {} or finer ({}) would resolve it, as would {noun} of {} or more",
             figure(thickness),
             figure(least),
             figure(grid.spacing),

@@ -66,6 +66,13 @@ pub(crate) fn write_vdb(
             .at(path));
         }
     }
+    // Inside leaves are listed too: a fine resampling of a large inside is refused from the
+    // source's inside bricks alone, before the count below visits every leaf of the grid.
+    crate::memory::check_memory(
+        "writing the OpenVDB level set",
+        inside_leaves_at_least(volume, grid).saturating_mul(BYTES_PER_VDB_LEAF),
+        "lower the resolution or the band",
+    )?;
     let leaves = leaf_counts(grid);
     let bounds = LeafBounds::new(volume, grid);
     let candidate = |n: usize| {
@@ -78,10 +85,7 @@ pub(crate) fn write_vdb(
     };
     let all = leaves[0] * leaves[1] * leaves[2];
     // Counted before they are listed, so a job too large is refused before it allocates.
-    let count = (0..all)
-        .into_par_iter()
-        .filter(|&n| candidate(n).is_some())
-        .count();
+    let count = listed_count(&bounds, leaves, background);
     crate::memory::check_memory(
         "writing the OpenVDB level set",
         (count as u64).saturating_mul(BYTES_PER_VDB_LEAF),
@@ -109,6 +113,56 @@ pub(crate) fn write_vdb(
     })
     .writing()
 }
+
+/// A lower bound on the leaves of `grid` inside the shape: per absent inside brick of the
+/// volume, the leaves that fit in its nodes' box shrunk by the two spacings a basis function
+/// reaches (so no stored coefficient weighs on them), each in one brick only.
+fn inside_leaves_at_least(volume: &CoefficientVolume, grid: &Grid) -> u64 {
+    let coeffs = &volume.coeffs;
+    let side = (BRICK_EDGE - 1) as f32 - 4.0;
+    let per_axis = (side * volume.grid.spacing / (LEAF_EDGE as f32 * grid.spacing)).floor() - 1.0;
+    // A NaN ratio (a spacing of zero) bounds nothing.
+    if per_axis.is_nan() || per_axis < 1.0 {
+        return 0;
+    }
+    let inside = coeffs
+        .all_bricks()
+        .filter(|&b| !coeffs.is_stored(b) && coeffs.is_inside(b))
+        .count() as u64;
+    inside.saturating_mul((per_axis as u64).saturating_pow(3))
+}
+
+/// How many leaves of a grid of `leaves` per axis are not outside by `bounds`: those the
+/// writer lists. Blocks of leaves on one side are counted whole, so the count follows the
+/// surface rather than the grid's volume.
+fn listed_count(bounds: &LeafBounds, leaves: [usize; 3], background: f32) -> usize {
+    let listed = |b: [usize; 3]| bounds.side(b, background) != Some(Side::Outside);
+    let blocks = leaves.map(|n| n.div_ceil(COUNT_BLOCK));
+    (0..blocks[0] * blocks[1] * blocks[2])
+        .into_par_iter()
+        .map(|n| {
+            let block = [
+                n % blocks[0],
+                n / blocks[0] % blocks[1],
+                n / (blocks[0] * blocks[1]),
+            ];
+            let first = block.map(|c| c * COUNT_BLOCK);
+            let len: [usize; 3] = std::array::from_fn(|a| COUNT_BLOCK.min(leaves[a] - first[a]));
+            match bounds.block_side(first, len, background) {
+                Some(Side::Outside) => 0,
+                Some(Side::Inside) => len[0] * len[1] * len[2],
+                None => (first[2]..first[2] + len[2])
+                    .flat_map(|k| (first[1]..first[1] + len[1]).map(move |j| (j, k)))
+                    .flat_map(|(j, k)| (first[0]..first[0] + len[0]).map(move |i| [i, j, k]))
+                    .filter(|&b| listed(b))
+                    .count(),
+            }
+        })
+        .sum()
+}
+
+/// Leaves per axis of the blocks the count of leaves decides at once.
+const COUNT_BLOCK: usize = 8;
 
 /// Leaves per axis covering `grid`'s nodes.
 fn leaf_counts(grid: &Grid) -> [usize; 3] {
@@ -192,13 +246,19 @@ impl<'a> LeafBounds<'a> {
     /// The side of every node of leaf `b` when the field there is at or beyond `background`
     /// in magnitude; `None` when it has to be sampled.
     fn side(&self, b: [usize; 3], background: f32) -> Option<Side> {
+        self.block_side(b, [1; 3], background)
+    }
+
+    /// [`LeafBounds::side`] for the block of `len` leaves from leaf `first`, all at once.
+    fn block_side(&self, first: [usize; 3], len: [usize; 3], background: f32) -> Option<Side> {
         if self.bricks.is_empty() {
             return None;
         }
         let g = &self.volume.grid;
-        let lo = b.map(|c| c * LEAF_EDGE);
-        let hi: [usize; 3] =
-            std::array::from_fn(|a| (lo[a] + LEAF_EDGE - 1).min(self.grid.dims[a] - 1));
+        let lo = first.map(|c| c * LEAF_EDGE);
+        let hi: [usize; 3] = std::array::from_fn(|a| {
+            ((first[a] + len[a]) * LEAF_EDGE - 1).min(self.grid.dims[a] - 1)
+        });
         let (ulo, uhi) = (
             g.to_grid(self.grid.point(lo[0], lo[1], lo[2])),
             g.to_grid(self.grid.point(hi[0], hi[1], hi[2])),
@@ -257,5 +317,42 @@ fn one_side([min, max]: [f32; 2], background: f32) -> Option<Side> {
         Some(Side::Inside)
     } else {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counting blocks of leaves at once gives the count leaf by leaf, on a sphere resampled
+    /// finer than its file and at its own grid, and for bands of one and six voxels.
+    #[test]
+    fn blocks_count_what_leaves_count() {
+        let cube = |n| Grid::cube_res(glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0), n).unwrap();
+        let grid = cube(40);
+        let [nx, ny, nz] = grid.dims;
+        let mut values = Vec::with_capacity(nx * ny * nz);
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    values.push(grid.point(i, j, k).length() - 0.6);
+                }
+            }
+        }
+        let volume = CoefficientVolume::new(grid, Basis::Bspline3, values).unwrap();
+        for target in [grid, cube(301)] {
+            let bounds = LeafBounds::new(&volume, &target);
+            let leaves = leaf_counts(&target);
+            for band in [1.0, 6.0] {
+                let background = band * target.spacing;
+                let one_by_one = (0..leaves[2])
+                    .flat_map(|k| (0..leaves[1]).map(move |j| (j, k)))
+                    .flat_map(|(j, k)| (0..leaves[0]).map(move |i| [i, j, k]))
+                    .filter(|&b| bounds.side(b, background) != Some(Side::Outside))
+                    .count();
+                assert!(one_by_one > 0);
+                assert_eq!(listed_count(&bounds, leaves, background), one_by_one);
+            }
+        }
     }
 }

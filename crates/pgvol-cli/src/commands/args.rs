@@ -170,7 +170,7 @@ pub struct OutputArgs {
     /// No progress bars or notes on standard error.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Replace an output file even when it is read-only.
+    /// Replace an output file even when it is read-only or is the command's input.
     #[arg(long)]
     pub force: bool,
     /// Refuse jobs whose estimated peak memory exceeds SIZE (e.g. 8G, 512M) [default: the
@@ -212,6 +212,31 @@ impl OutputArgs {
     /// --force.
     pub fn check(self, output: &Path) -> Result<()> {
         Ok(check_output(output, self.force)?)
+    }
+
+    /// Refuses an `output` that is one of the command's `inputs` (the same file, by any path)
+    /// unless --force is given: the input would be replaced by the result.
+    pub fn check_not_an_input(self, output: &Path, inputs: &[&Path]) -> Result<()> {
+        if self.force {
+            return Ok(());
+        }
+        let Ok(out) = std::fs::canonicalize(output) else {
+            return Ok(());
+        };
+        if inputs
+            .iter()
+            .any(|i| std::fs::canonicalize(i).is_ok_and(|i| i == out))
+        {
+            return Err(pgvol::Error::new(
+                pgvol::ErrorKind::OutputFile,
+                "is also the input, which the result would replace; write to another file, or \
+                 allow replacing it",
+            )
+            .at(output)
+            .with_remedy(pgvol::Remedy::Replace)
+            .into());
+        }
+        Ok(())
     }
 
     /// Progress and notes are off in JSON mode too, so standard error stays clean for scripts.

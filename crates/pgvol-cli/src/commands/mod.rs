@@ -126,6 +126,7 @@ pub fn run(command: Command) -> Result<()> {
     pgvol::limits::set_memory_limit(command.out().max_memory);
     if let Some((output, out)) = command.output() {
         out.check(output)?;
+        out.check_not_an_input(output, &command.inputs())?;
     }
     match command {
         Command::Remesh(a) => remesh::run(a),
@@ -176,6 +177,35 @@ impl Command {
         }
     }
 
+    /// The files the command reads (operands that name no file are left out).
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        match self {
+            Command::Remesh(a) => vec![&a.input],
+            Command::Compare(a) => vec![&a.a, &a.b],
+            Command::Sdf(a) => vec![&a.mesh],
+            Command::Encode(a) => a.mesh.iter().map(|p| p.as_path()).collect(),
+            Command::Decode(a) => vec![&a.input],
+            Command::Info(a) => vec![&a.input],
+            Command::Export(a) => vec![&a.input],
+            Command::Eval(a) => vec![&a.input, &a.points],
+            Command::Slice(a) => vec![&a.input],
+            Command::Points(a) => vec![&a.input],
+            Command::Contours(a) => vec![&a.input],
+            Command::Offset(a) => vec![&a.input],
+            Command::Shell(a) => vec![&a.input],
+            Command::Lattice(a) => vec![&a.input],
+            Command::Csg(a) => files(&a.operands),
+            Command::Repair(a) => vec![&a.input],
+            Command::Blend(a) => {
+                let mut all = files(&a.primaries);
+                all.extend(a.points.as_deref());
+                all
+            }
+            Command::Perturb(a) => vec![&a.input],
+            Command::View(a) => vec![&a.input],
+        }
+    }
+
     /// The file the command writes and its output options, when it writes one.
     fn output(&self) -> Option<(&std::path::Path, OutputArgs)> {
         match self {
@@ -199,4 +229,15 @@ impl Command {
             Command::Compare(_) | Command::Info(_) => None,
         }
     }
+}
+
+/// The operands that name a file.
+fn files(operands: &[pgvol::Operand]) -> Vec<&std::path::Path> {
+    operands
+        .iter()
+        .filter_map(|o| match o {
+            pgvol::Operand::File(p) => Some(p.as_path()),
+            _ => None,
+        })
+        .collect()
 }
