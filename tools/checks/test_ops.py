@@ -336,6 +336,20 @@ def test_hollowing_that_would_change_nothing_is_refused(pgvol, tmp_path):
     assert len(trimesh.load(out, force="mesh").split(only_watertight=False)) == 1
 
 
+def test_an_offset_beyond_the_reach_says_what_would_hold_it(pgvol, mesh_path, tmp_path):
+    """Beyond the file's exact reach the refusal names the encode that would hold it; beyond
+    the grid's box, where no band would, it says so instead of naming an absurd band."""
+    pgv = tmp_path / "spot.pgv"
+    helpers.run_ok([pgvol, "encode", mesh_path("spot"), "-o", pgv, "--res", 48, "-q"])
+    out = tmp_path / "o.obj"
+    r = helpers.run([pgvol, "offset", pgv, "-o", out, "--distance", 0.5])
+    assert r.returncode == 1 and "pgvol encode MESH --band" in r.stderr, r.describe()
+    for far in ("1e30", "-50"):
+        r = helpers.run([pgvol, "offset", pgv, "-o", out, f"--distance={far}"])
+        assert r.returncode == 1 and "reaches beyond the field's grid" in r.stderr, r.describe()
+        assert "--band" not in r.stderr and not out.exists(), r.describe()
+
+
 def test_info_shows_the_reach_offsets_may_use(pgvol, mesh_path, tmp_path):
     """`--band W` keeps exact distances for offsets to W − 2 spacings: `info` says so, and an
     offset just inside that reach is accepted, one just beyond it refused."""

@@ -7,7 +7,7 @@ pub fn flag_hint(remedy: Remedy) -> Option<String> {
     Some(match remedy {
         Remedy::Replace => "--force replaces it".to_string(),
         Remedy::MemoryLimit => "--max-memory sets the limit".to_string(),
-        Remedy::Band(spacings) => format!("--band {spacings}"),
+        Remedy::Band(spacings) => format!("pgvol encode MESH --band {spacings} writes such a file"),
         Remedy::FinerGrid => "--res sets the grid".to_string(),
         Remedy::CoveringBox => "--box x0,y0,z0,x1,y1,z1".to_string(),
         _ => return None,
@@ -32,7 +32,10 @@ mod tests {
             pgvol::Error::parameter("too narrow").with_remedy(Remedy::Band(12.0)),
         )
         .context("decoding x.pgv");
-        assert_eq!(hint_for(&e).as_deref(), Some("--band 12"));
+        assert_eq!(
+            hint_for(&e).as_deref(),
+            Some("pgvol encode MESH --band 12 writes such a file")
+        );
         let plain = anyhow::Error::new(pgvol::Error::parameter("bad"));
         assert_eq!(hint_for(&plain), None);
         for remedy in [

@@ -19,11 +19,15 @@ pub enum MeshFormat {
 impl MeshFormat {
     /// The format named by the extension of `path`, ignoring case.
     pub fn from_path(path: &Path) -> Result<MeshFormat, MeshError> {
-        const EXPECTED: &str = "(expected .obj, .gltf, .glb, .stl, .ply, .3mf)";
+        Self::named(path, "(expected .obj, .gltf, .glb, .stl, .ply, .3mf)")
+    }
+
+    /// [`MeshFormat::from_path`], naming the `expected` extensions when there is none.
+    fn named(path: &Path, expected: &str) -> Result<MeshFormat, MeshError> {
         let Some(ext) = path.extension() else {
             return Err(MeshError::new(
                 path,
-                format!("no file extension {EXPECTED}"),
+                format!("no file extension {expected}"),
             ));
         };
         let ext = ext.to_string_lossy();
@@ -36,7 +40,7 @@ impl MeshFormat {
             "3mf" => Ok(MeshFormat::ThreeMf),
             _ => Err(MeshError::new(
                 path,
-                format!("unknown extension '.{ext}' {EXPECTED}"),
+                format!("unknown extension '.{ext}' {expected}"),
             )),
         }
     }
@@ -61,7 +65,7 @@ impl MeshFormat {
     /// The format of an output file named `path`: as [`MeshFormat::from_path`], refusing the
     /// formats that are only read.
     pub fn for_output(path: &Path) -> Result<MeshFormat, MeshError> {
-        let format = MeshFormat::from_path(path)?;
+        let format = MeshFormat::named(path, "(expected .obj, .gltf, .glb, .stl, .ply)")?;
         if !format.writable() {
             return Err(MeshError::new(
                 path,

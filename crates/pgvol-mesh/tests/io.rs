@@ -172,6 +172,13 @@ fn format_from_path_is_case_insensitive_and_names_bad_extensions() {
     );
     let e = MeshFormat::for_output(Path::new("x.3mf")).unwrap_err();
     assert!(e.problem.contains("read but not written"), "{e}");
+    // An output's unknown extension is answered with the formats that are written.
+    let e = MeshFormat::for_output(Path::new("out.xyz")).unwrap_err();
+    assert!(
+        e.problem
+            .ends_with("(expected .obj, .gltf, .glb, .stl, .ply)"),
+        "{e}"
+    );
     assert!(read(Path::new("noext"))
         .unwrap_err()
         .to_string()

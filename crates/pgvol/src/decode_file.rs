@@ -72,7 +72,7 @@ fn decode_slabs(
         // A separable basis reaches 2 spacings (`pgvol_ops::support_reach`).
         let support = 2.0 * volume_grid.spacing;
         let band = header_band(header).unwrap_or(0.0) - support;
-        check_reach_within(band, support, volume_grid.spacing, options.iso)?;
+        check_reach_within(band, support, &volume_grid, options.iso)?;
     }
     let grid = target_grid_of(&volume_grid, options.res)?;
     let per_slab = reader.grid_bricks_per_slab().pow(3);

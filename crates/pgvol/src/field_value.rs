@@ -309,12 +309,7 @@ impl Field {
     /// a record, the band measured from the coefficients.
     pub fn check_reach(&self, reach: f32) -> Result<()> {
         let support = pgvol_ops::support_reach(&self.file.volume);
-        check_reach_within(
-            self.exact_band(),
-            support,
-            self.file.volume.grid.spacing,
-            reach,
-        )
+        check_reach_within(self.exact_band(), support, &self.file.volume.grid, reach)
     }
 
     /// Points given in world coordinates, in the field's local frame (the offset subtracted in
@@ -404,10 +399,20 @@ impl Field {
 }
 
 /// Refuses reaching `reach` from the surface of a field that is an exact distance only within
-/// `band`, whose basis support reaches `support`, on a grid of `spacing`.
-pub(crate) fn check_reach_within(band: f32, support: f32, spacing: f32, reach: f32) -> Result<()> {
+/// `band`, whose basis support reaches `support`, on `grid`. A reach beyond the grid's box
+/// needs another grid, not a wider band.
+pub(crate) fn check_reach_within(band: f32, support: f32, grid: &Grid, reach: f32) -> Result<()> {
+    let across = grid.spacing * (grid.dims.iter().max().copied().unwrap_or(2) - 1) as f32;
+    if reach.abs() >= band && reach.abs() >= across {
+        return Err(Error::parameter(format!(
+            "{} reaches beyond the field's grid, {} across: no band of this grid holds \
+             distances that far; encode the mesh on a grid with that much room, or ask for less",
+            figure(reach),
+            figure(across)
+        )));
+    }
     if reach.abs() >= band {
-        let needed = ((reach.abs() + support) / spacing).ceil() + 1.0;
+        let needed = ((reach.abs() + support) / grid.spacing).ceil() + 1.0;
         return Err(Error::new(
             ErrorKind::BadParameter,
             format!(

@@ -24,7 +24,7 @@ pub const EXTRA_PIECES: usize = 4;
 /// `x` to four significant digits, for a person reading the message.
 pub(crate) fn figure(x: f32) -> String {
     let digits = 3 - x.abs().log10().floor() as i32;
-    if !x.is_normal() || digits > 9 {
+    if !x.is_normal() || !(-6..=9).contains(&digits) {
         return format!("{x:.3e}");
     }
     format!("{:.*}", digits.max(0) as usize, x)
