@@ -389,6 +389,16 @@ def test_an_output_that_is_the_input_needs_force(dirs, pgvol):
     assert pgv.read_bytes() != kept
 
 
+def test_a_level_set_lost_to_speck_removal_says_so(knot_pgv, tmp_path, pgvol):
+    """When the speck limit removes every piece, the refusal names the limit rather than
+    calling the field empty; with the default limit the same file decodes."""
+    out = tmp_path / "o.obj"
+    r = helpers.run([pgvol, "decode", knot_pgv, "-o", out, "--min-component", "1e30", "-q"])
+    assert r.returncode == 1 and "every piece of the level set" in r.stderr, r.describe()
+    assert "1.000e30" in r.stderr and not out.exists(), r.describe()
+    helpers.run_ok([pgvol, "decode", knot_pgv, "-o", out, "-q"])
+
+
 def test_eval_refuses_an_endless_points_file(knot_pgv, tmp_path, pgvol):
     points = tmp_path / "points.csv"
     points.symlink_to("/dev/zero")

@@ -34,10 +34,10 @@ pub(crate) fn remove_specks(
     min_component: Option<f32>,
     h: f32,
     progress: &dyn Progress,
-) {
+) -> (usize, f32) {
     let limit = min_component.unwrap_or(SPECK_VOXELS * h * h * h);
     if limit.is_nan() || limit <= 0.0 {
-        return;
+        return (0, limit);
     }
     let removed = mesh.remove_small_components(limit as f64);
     if removed > 0 {
@@ -47,6 +47,7 @@ pub(crate) fn remove_specks(
             if removed == 1 { "" } else { "s" }
         ));
     }
+    (removed, limit)
 }
 
 impl Default for DecodeOptions {
@@ -127,11 +128,33 @@ pub(crate) fn finish_mesh(
     spacing: f32,
     progress: &dyn Progress,
 ) -> Result<Mesh> {
-    remove_specks(&mut mesh, options.min_component, spacing, progress);
+    let (removed, limit) = remove_specks(&mut mesh, options.min_component, spacing, progress);
+    if mesh.triangles.is_empty() && removed > 0 {
+        return Err(Error::new(
+            ErrorKind::EmptyResult,
+            format!(
+                "every piece of the level set {} ({removed}) encloses less than {limit:.3e}, the \
+                 smallest piece volume kept; a smaller limit (0 keeps every piece) or a finer \
+                 grid would keep them",
+                options.iso
+            ),
+        ));
+    }
     if mesh.triangles.is_empty() {
+        // A grid coarser than the field's may step over a thin shape.
+        let coarse = match options.res {
+            Some(res) => format!(
+                " at {res} nodes per axis, which may step over a thin shape; a finer grid may \
+                 find it"
+            ),
+            None => String::new(),
+        };
         return Err(Error::new(
             ErrorKind::BadParameter,
-            format!("the level set {} is empty in this field", options.iso),
+            format!(
+                "the level set {} is empty in this field{coarse}",
+                options.iso
+            ),
         ));
     }
     Ok(mesh)

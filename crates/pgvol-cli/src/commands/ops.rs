@@ -149,10 +149,25 @@ pub fn slice(a: SliceArgs) -> Result<()> {
     let loops: usize = layers.iter().map(|l| l.loops.len()).sum();
     if loops == 0 {
         // Nothing to build: refuse rather than write a file of empty layers.
+        let heights = match (layers.first(), layers.last()) {
+            (Some(f), Some(l)) if layers.len() > 1 => {
+                format!("{} layers from {} to {}", layers.len(), f.height, l.height)
+            }
+            (Some(f), _) => format!("one layer, at {}", f.height),
+            _ => {
+                anyhow::bail!(
+                    "{}: a layer height of {} puts no layer through the shape's box along its \
+                     axis: it is taller than the part; a smaller --layer-height, or --first at \
+                     a height within the part, would",
+                    a.input.display(),
+                    a.layer_height
+                )
+            }
+        };
         anyhow::bail!(
-            "{}: no layer holds a contour: the shape has no inside at the layer heights; a \
-             mesh without thickness (a flat or open sheet) encloses none, and --first and \
-             --layer-height must put layers through the solid",
+            "{}: no layer holds a contour ({heights}): the shape has no inside at the layer \
+             heights; a mesh without thickness (a flat or open sheet) encloses none, and \
+             --first and --layer-height must put layers through the solid",
             a.input.display()
         );
     }
