@@ -32,7 +32,16 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     // A third-party parser must not be able to take the process down on hostile input.
     let (models, _materials) = match catch_unwind(AssertUnwindSafe(load)) {
         Ok(Ok(loaded)) => loaded,
-        Ok(Err(e)) => return Err(MeshError::new(name, describe(&e))),
+        Ok(Err(e)) => {
+            let line = match e {
+                tobj::LoadError::PositionParseError => first_bad_line(bytes, "v", 3),
+                tobj::LoadError::NormalParseError => first_bad_line(bytes, "vn", 3),
+                tobj::LoadError::TexcoordParseError => first_bad_line(bytes, "vt", 1),
+                _ => None,
+            };
+            let at = line.map_or(String::new(), |n| format!(" on line {n}"));
+            return Err(MeshError::new(name, format!("{}{at}", describe(&e))));
+        }
         Err(_) => return Err(MeshError::new(name, "malformed OBJ (the parser gave up)")),
     };
 
@@ -179,6 +188,20 @@ fn check_lines(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
         copy[at] = b'#';
     }
     Ok(Cow::Owned(copy))
+}
+
+/// The first line (counted from 1) of `bytes` that starts with the keyword `key` and is not
+/// followed by at least `least` numbers, for naming the line a parser refused.
+fn first_bad_line(bytes: &[u8], key: &str, least: usize) -> Option<usize> {
+    let text = String::from_utf8_lossy(bytes);
+    text.lines().enumerate().find_map(|(n, line)| {
+        let mut words = line.split_whitespace();
+        if words.next() != Some(key) {
+            return None;
+        }
+        let numbers: Vec<Option<f32>> = words.map(|w| w.parse().ok()).collect();
+        (numbers.len() < least || numbers.iter().any(Option::is_none)).then_some(n + 1)
+    })
 }
 
 fn describe(e: &tobj::LoadError) -> String {

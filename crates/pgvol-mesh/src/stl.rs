@@ -42,6 +42,22 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
             ),
         ));
     };
+    if expected > bytes.len() as u64 && is_text(bytes) {
+        // A binary count read from text is meaningless: say what the file does look like.
+        return Err(MeshError::new(
+            name,
+            format!(
+                "not an STL file: it is text, but ASCII STL starts with 'solid' and this starts \
+                 with '{}'; as binary STL its size ({} bytes) does not match",
+                String::from_utf8_lossy(&bytes[..bytes.len().min(12)])
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+                    .trim(),
+                bytes.len()
+            ),
+        ));
+    }
     if expected > bytes.len() as u64 {
         let holds = (bytes.len() - PREAMBLE) / FACET;
         return Err(MeshError::new(
@@ -63,6 +79,13 @@ pub(crate) fn read(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {
     ))
 }
 
+/// Whether the beginning of `bytes` is text: no control characters but whitespace.
+fn is_text(bytes: &[u8]) -> bool {
+    bytes[..bytes.len().min(512)]
+        .iter()
+        .all(|&b| !b.is_ascii_control() || b.is_ascii_whitespace())
+}
+
 /// ASCII if it starts with "solid" and the beginning has no control characters (binary headers
 /// that start with "solid" are usually followed by NULs or other control bytes). Bytes above
 /// 0x7F are allowed for UTF-8 solid names.
@@ -73,11 +96,7 @@ fn looks_ascii(bytes: &[u8]) -> bool {
         .unwrap_or(bytes.len());
     let text = &bytes[start..];
     let probe = &text[..text.len().min(512)];
-    text.len() >= 5
-        && text[..5].eq_ignore_ascii_case(b"solid")
-        && probe
-            .iter()
-            .all(|&b| !b.is_ascii_control() || b.is_ascii_whitespace())
+    text.len() >= 5 && text[..5].eq_ignore_ascii_case(b"solid") && is_text(probe)
 }
 
 fn read_binary(bytes: &[u8], name: &Path) -> Result<Mesh, MeshError> {

@@ -23,7 +23,11 @@ pub(crate) fn problem(mesh: &Mesh, owner: &str) -> Option<String> {
     for (i, p) in mesh.positions.iter().enumerate() {
         if let Some(c) = p.to_array().into_iter().find(|c| !c.is_finite()) {
             let what = if c.is_nan() { "NaN" } else { "infinity" };
-            return Some(format!("vertex {i} has a non-finite coordinate ({what})"));
+            // The position too: a reader may have reordered the file's vertices.
+            return Some(format!(
+                "vertex {i} (counted from 0; at {}, {}, {}) has a non-finite coordinate ({what})",
+                p.x, p.y, p.z
+            ));
         }
     }
     if !mesh.offset.is_finite() {

@@ -387,6 +387,11 @@ fn binary_stl_detected_by_size_even_when_header_says_solid() {
             "holds 37",
         ],
     );
+    // Text that is not ASCII STL is not reported as a binary file cut short.
+    let text = b"xolid t\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   \
+                 vertex 0 1 0\n  endloop\n endfacet\nendsolid t\n";
+    let msg = err_of(read_bytes(text, MeshFormat::Stl, Path::new("x.stl")));
+    assert_mentions(&msg, &["x.stl", "it is text", "starts with 'xolid t'"]);
 }
 
 #[test]
@@ -649,12 +654,24 @@ fn invalid_content_errors_name_file_and_problem() {
     let msg = err_of(obj("v 0 0 0\nv 1 NaN 0\nv 0 1 0\nf 1 2 3\n"));
     assert_mentions(
         &msg,
-        &["m.obj", "vertex 1 has a non-finite coordinate (NaN)"],
+        &[
+            "m.obj",
+            "vertex 1 (counted from 0; at 1, NaN, 0) has a non-finite coordinate (NaN)",
+        ],
+    );
+    let msg = err_of(obj("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n"));
+    assert_mentions(
+        &msg,
+        &["m.obj", "malformed vertex position ('v' line) on line 2"],
     );
     let msg = err_of(obj("v 0 0 0\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n"));
     assert_mentions(
         &msg,
-        &["m.obj", "vertex 2 has a non-finite coordinate (infinity)"],
+        &[
+            "m.obj",
+            "vertex 2 (counted from 0; at 0, 1, inf)",
+            "(infinity)",
+        ],
     );
     let msg = err_of(obj("v 0 0 0\nv 1 0 0\nv 0 3e38 0\nf 1 2 3\n"));
     assert_mentions(

@@ -114,9 +114,10 @@ pub fn check_pieces(
     Err(Error::new(
         ErrorKind::Unresolved,
         format!(
-            "{operation}: the result breaks into {after} pieces where the shape has {before}: \
-             parts of it are thinner than the grid resolves ({MIN_WALL_SPACINGS} spacings of \
-             {}); a grid twice as fine ({}) would hold parts half as thin",
+            "{operation}: the result breaks into {after} pieces where the shape has {before}, \
+             more than parts the operation separates would give: parts of it are likely thinner \
+             than the grid resolves ({MIN_WALL_SPACINGS} spacings of {}); a grid twice as fine \
+             ({}) would hold parts half as thin and keep only the pieces that are real",
             figure(grid.spacing),
             grid_size(nodes)
         ),

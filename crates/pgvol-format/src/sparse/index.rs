@@ -154,11 +154,18 @@ fn layout_of<'a>(
     if !scale_ok {
         return Err(err(
             path,
-            format!(
-                "fixed scale {:?} with precision {}: 'fixed' needs a valid scale, others none",
-                sp.fixed,
-                sp.precision.name()
-            ),
+            match sp.fixed {
+                Some(f) => format!(
+                    "the fixed scale (step {}, knee {}, ratio {}) with precision '{}': 'fixed' \
+                     needs a step finite and above 0, a knee below 2^31 and a ratio from 1 to \
+                     65536, and the other precisions no scale",
+                    f.step,
+                    f.knee,
+                    f.ratio,
+                    sp.precision.name()
+                ),
+                None => "precision 'fixed' without its fixed scale".to_string(),
+            },
         ));
     }
     if !(sp.clamp.is_finite() && sp.clamp >= 0.0) {
