@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import manifold3d
+
 import numpy as np
 import pytest
 
@@ -126,6 +128,24 @@ def test_liming_blend_is_a_closed_manifold(pgvol, work_dir):
     quadrant = (mesh.bounds[1, 0] - mesh.bounds[0, 0]) * (mesh.bounds[1, 1] - mesh.bounds[0, 1]) * side
     removed = quadrant - helpers.signed_volume(mesh)
     assert 0.0 < removed < 0.18 * side
+
+
+def test_planes_are_cut_at_the_box_given(pgvol, work_dir):
+    """Two half-spaces intersected within the box [−1, 1]³ are the quarter of the box behind
+    both planes: manifold3d's own intersection of the box with the two half-spaces, in volume
+    and bounds, not the grid's wider cube."""
+    out = work_dir / "edit" / "quarter.stl"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    helpers.run_ok(
+        [pgvol, "csg", "intersection", "plane:1,0,0,0", "plane:0,1,0,0", "--box=-1,-1,-1,1,1,1",
+         "-o", out, "--res", 64, "-q"]
+    )
+    mesh = helpers.load_output(out)
+    reference = manifold3d.Manifold.cube([2, 2, 2], center=True).trim_by_plane([-1, 0, 0], 0)
+    reference = reference.trim_by_plane([0, -1, 0], 0)
+    assert abs(helpers.signed_volume(mesh) - reference.volume()) < 0.01 * reference.volume()
+    lo, hi = reference.bounding_box()[:3], reference.bounding_box()[3:]
+    assert np.allclose(mesh.bounds, [lo, hi], atol=0.02), mesh.bounds
 
 
 def test_denoising_smooths_a_noisy_sphere_inside_the_mask_only(pgvol, work_dir):

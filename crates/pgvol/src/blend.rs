@@ -175,15 +175,17 @@ pub fn blend(
             }
         }
     };
+    let clip = crate::csg::clip_box(&loaded[..primaries.len()], settings.bounds);
     let field = |p: Vec3| -> f32 {
-        match operator {
+        let blended = match operator {
             BlendOperator::IPatch { .. } => pgvol_ops::renormalised(&raw, p, step),
             _ => {
                 let (pv, bv) = (value(prim, p), value(rest, p));
                 let region = bv.iter().all(|&b| b < 0.0);
                 pgvol_ops::edge_blend(&pv, region, || pgvol_ops::renormalised(&raw, p, step))
             }
-        }
+        };
+        crate::csg::clipped(blended, p, clip)
     };
     let band = ENCODE_BAND * grid.spacing;
     // Renormalised fields are distances only near their surface: a generous constant keeps

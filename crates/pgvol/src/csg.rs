@@ -282,6 +282,26 @@ fn csg(
     Ok(volume)
 }
 
+/// The box unbounded operands are cut at: the given `bounds` when some operand (a plane, a
+/// cylinder) has no bounds of its own, so the result ends at the box asked for rather than at
+/// the grid's wider cube. Bounded operands lie within their box already and are not cut.
+pub(crate) fn clip_box(
+    operands: &[LoadedOperand],
+    bounds: Option<(Vec3, Vec3)>,
+) -> Option<(Vec3, Vec3)> {
+    bounds.filter(|_| operands.iter().any(|o| o.bounds().is_none()))
+}
+
+/// `value` cut at the box `clip`, when there is one: the larger of it and the box's distance.
+pub(crate) fn clipped(value: f32, p: Vec3, clip: Option<(Vec3, Vec3)>) -> f32 {
+    let Some((lo, hi)) = clip else {
+        return value;
+    };
+    let q = (p - 0.5 * (lo + hi)).abs() - 0.5 * (hi - lo);
+    let box_distance = q.max(Vec3::ZERO).length() + q.max_element().min(0.0);
+    value.max(box_distance)
+}
+
 /// The operands placed on one grid covering them (as `settings` asks), combined by
 /// `settings.op` node by node within `band` grid spacings of the surface and fitted again; one
 /// operand is resampled. `job` names the work in a refusal for memory.
@@ -304,9 +324,10 @@ pub(crate) fn combine_operands(
     progress.stage("combining the fields");
     let band = band * grid.spacing;
     let (op, blend) = (settings.op, settings.blend);
+    let clip = clip_box(&loaded, settings.bounds);
     let volume = pgvol_ops::sample_bricks(grid, Basis::Bspline3, band, blend.lipschitz(), |p| {
         let mut values = [0.0f32; 16];
-        if fields.len() <= values.len() {
+        let combined = if fields.len() <= values.len() {
             for (v, f) in values.iter_mut().zip(&fields) {
                 *v = f.value(p);
             }
@@ -314,7 +335,8 @@ pub(crate) fn combine_operands(
         } else {
             let values: Vec<f32> = fields.iter().map(|f| f.value(p)).collect();
             pgvol_ops::combine(op, blend, &values)
-        }
+        };
+        clipped(combined, p, clip)
     })
     .map_err(ops_error)?;
     crate::progress::check(progress)?;

@@ -81,6 +81,7 @@ pub struct BlendArgs {
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub through: Option<pgvol::glam::DVec3>,
     /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: the bounded primaries' box).
+    /// With a plane or cylinder among the primaries the result is cut at this box.
     #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
     pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
     #[command(flatten)]

@@ -100,7 +100,8 @@ pub struct CsgArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub radius: Option<f32>,
     /// The box the result covers, x0,y0,z0,x1,y1,z1 (default: every bounded operand's box,
-    /// grown by the radius); needed when every operand is a plane or cylinder.
+    /// grown by the radius); needed when every operand is a plane or cylinder. With a plane or
+    /// cylinder among the operands the result is cut at this box.
     #[arg(long = "box", value_parser = parse_box, allow_hyphen_values = true)]
     pub bounds: Option<(pgvol::glam::Vec3, pgvol::glam::Vec3)>,
     #[command(flatten)]
