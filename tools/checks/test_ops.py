@@ -350,6 +350,21 @@ def test_an_offset_beyond_the_reach_says_what_would_hold_it(pgvol, mesh_path, tm
         assert "--band" not in r.stderr and not out.exists(), r.describe()
 
 
+def test_an_offset_lost_between_nodes_names_the_grid(pgvol, tmp_path):
+    """Shrinking a 0.5-thick plate by 0.05 leaves 0.4, which a grid of spacing 0.43 misses: the
+    refusal names the spacing and a finer grid, and that grid holds the plate (trimesh: two
+    faces 0.4 apart)."""
+    plate = tmp_path / "plate.stl"
+    trimesh.creation.box(extents=[0.5, 50, 50]).export(plate)
+    out = tmp_path / "o.stl"
+    r = helpers.run([pgvol, "offset", plate, "-o", out, "--distance=-0.05"], timeout=300)
+    assert r.returncode == 1 and "the result is empty" in r.stderr, r.describe()
+    assert "spacing 0.433" in r.stderr and "--res" in r.stderr and not out.exists(), r.describe()
+    helpers.run_ok([pgvol, "offset", plate, "-o", out, "--distance=-0.05", "--res", 512, "-q"])
+    thickness = np.ptp(trimesh.load(out).vertices[:, 0])
+    assert abs(thickness - 0.4) < 0.03, thickness
+
+
 def test_info_shows_the_reach_offsets_may_use(pgvol, mesh_path, tmp_path):
     """`--band W` keeps exact distances for offsets to W − 2 spacings: `info` says so, and an
     offset just inside that reach is accepted, one just beyond it refused."""

@@ -150,7 +150,7 @@ pub(crate) fn finish_mesh(
             None => String::new(),
         };
         return Err(Error::new(
-            ErrorKind::BadParameter,
+            ErrorKind::EmptyResult,
             format!(
                 "the level set {} is empty in this field{coarse}",
                 options.iso

@@ -30,10 +30,14 @@ fn write_result(
     }
     let mesh = result
         .to_mesh(&args.decode_options(), progress)
-        .map_err(|e| {
-            anyhow::anyhow!(
-                "{operation}: the result is empty (the operation removed the whole shape): {e}"
-            )
+        .map_err(|e| match e.kind() {
+            pgvol::ErrorKind::EmptyResult => anyhow::anyhow!(
+                "{operation}: the result is empty: {e}; either the operation removes the whole \
+                 shape, or what it leaves is thinner than the grid's spacing {} holds, which a \
+                 finer grid (--res) would show",
+                result.grid().spacing
+            ),
+            _ => e.into(),
         })?;
     pgvol::io::write_mesh(output, &mesh)?;
     Ok(mesh.triangles.len())
