@@ -71,3 +71,22 @@ def test_self_distance_is_zero(name, self_compare, reference_mesh):
     assert report["samples"] > 0, report
     for key in ("hausdorff", "chamfer_l1", "mean_a_to_b", "mean_b_to_a"):
         assert 0 <= report[key] < 1e-6 * diag, f"{name}: {key}={report[key]!r} for a mesh against itself (diag {diag})"
+
+
+def test_text_report_keeps_small_figures_and_marks_open_volumes(pgvol, mesh_path, tmp_path):
+    """A part in metres (the cow scaled by 1e-4) keeps its digits in the text report, where six
+    decimals would print zeros; an open mesh's volume, which depends on the origin, is marked."""
+    import trimesh
+
+    small = tmp_path / "cow-small.obj"
+    cow = trimesh.load(mesh_path("cow"), force="mesh", process=False)
+    cow.apply_scale(1e-4)
+    cow.export(small)
+    text = helpers.run_ok([pgvol, "compare", small, small, "--samples", 2000]).stdout
+    area = next(line for line in text.splitlines() if line.startswith("area")).split()[1:]
+    assert all(abs(float(a) - cow.area) < 1e-3 * cow.area for a in area), (area, cow.area)
+    assert "0.000000 " not in text.split("volume")[1], text
+    suzanne = mesh_path("suzanne")
+    text = helpers.run_ok([pgvol, "compare", suzanne, suzanne, "--samples", 2000]).stdout
+    volume = next(line for line in text.splitlines() if line.startswith("volume"))
+    assert volume.count("(open)") == 2, volume

@@ -43,21 +43,21 @@ pub fn run(a: CompareArgs) -> Result<()> {
     }
     outln!("A: {}\nB: {}", a.a.display(), a.b.display());
     outln!("samples per mesh      {}", c.samples);
-    outln!("B diagonal            {:.6}", c.diagonal);
+    outln!("B diagonal            {}", fig(c.diagonal));
     outln!(
-        "Hausdorff             {:.6} ({:.4} %)",
-        c.hausdorff,
+        "Hausdorff             {} ({:.4} %)",
+        fig(c.hausdorff),
         c.hausdorff_pct
     );
     outln!(
-        "Chamfer-L1            {:.6} ({:.4} %)",
-        c.chamfer_l1,
+        "Chamfer-L1            {} ({:.4} %)",
+        fig(c.chamfer_l1),
         c.chamfer_l1_pct
     );
     outln!(
-        "mean A->B, B->A       {:.6}, {:.6}",
-        c.mean_a_to_b,
-        c.mean_b_to_a
+        "mean A->B, B->A       {}, {}",
+        fig(c.mean_a_to_b),
+        fig(c.mean_b_to_a)
     );
     outln!(
         "normal deviation      mean {:.3} deg, p95 {:.3} deg",
@@ -66,10 +66,10 @@ pub fn run(a: CompareArgs) -> Result<()> {
     );
     let v = &c.vertex_deviation;
     outln!(
-        "vertex deviation      mean {:.6} ({:.4} %), max {:.6} ({:.4} %) over {} vertices of A",
-        v.mean,
+        "vertex deviation      mean {} ({:.4} %), max {} ({:.4} %) over {} vertices of A",
+        fig(v.mean),
         c.vertex_deviation_mean_pct,
-        v.max,
+        fig(v.max),
         c.vertex_deviation_max_pct,
         v.vertices
     );
@@ -79,14 +79,14 @@ pub fn run(a: CompareArgs) -> Result<()> {
         v.normal_max_deg
     );
     outln!(
-        "depth buffers         mean |difference| {:.6} ({:.4} %) over {} views at {}^2",
-        c.depth_buffer.mean_abs,
+        "depth buffers         mean |difference| {} ({:.4} %) over {} views at {}^2",
+        fig(c.depth_buffer.mean_abs),
         c.depth_buffer_pct,
         c.depth_buffer.views.len(),
         c.depth_buffer.resolution
     );
     outln!("");
-    outln!("{:<22}{:>16}{:>16}", "", "A", "B");
+    outln!("{:<22}{:>18}{:>18}", "", "A", "B");
     let rows: [(&str, String, String); 10] = [
         (
             "triangles",
@@ -130,17 +130,33 @@ pub fn run(a: CompareArgs) -> Result<()> {
         ),
         (
             "volume",
-            format!("{:.6}", c.a.volume),
-            format!("{:.6}", c.b.volume),
+            volume(c.a.volume, c.a.watertight),
+            volume(c.b.volume, c.b.watertight),
         ),
-        (
-            "area",
-            format!("{:.6}", c.a.area),
-            format!("{:.6}", c.b.area),
-        ),
+        ("area", fig(c.a.area), fig(c.b.area)),
     ];
     for (name, x, y) in rows {
-        outln!("{name:<22}{x:>16}{y:>16}");
+        outln!("{name:<22}{x:>18}{y:>18}");
     }
     Ok(())
+}
+
+/// A length, area or volume for reading: six decimals, or four significant digits in
+/// scientific notation where six decimals would show only zeros (a part in metres).
+fn fig(x: impl Into<f64>) -> String {
+    let x = x.into();
+    if x != 0.0 && x.abs() < 1e-3 {
+        format!("{x:.4e}")
+    } else {
+        format!("{x:.6}")
+    }
+}
+
+/// The enclosed volume, marked for an open mesh, whose volume depends on where the origin is.
+fn volume(v: impl Into<f64>, watertight: bool) -> String {
+    if watertight {
+        fig(v)
+    } else {
+        format!("{} (open)", fig(v))
+    }
 }
