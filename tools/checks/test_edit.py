@@ -77,6 +77,7 @@ def test_smooth_union_of_boxes_has_no_sharp_seam(pgvol, work_dir):
         (["union", "plane:0,0,1,0", "plane:1,0,0,0"], ["--box"]),
         (["union", SPHERE_A, SPHERE_B, "--radius", "-1"], ["radius"]),
         (["union", SPHERE_A, "missing.stl"], ["missing.stl"]),
+        (["union", SPHERE_A, "torus:0,0,0,1"], ["'torus' is not an analytic solid", "cylinder:"]),
     ],
 )
 def test_bad_csg_input_is_explained(pgvol, work_dir, args, words):

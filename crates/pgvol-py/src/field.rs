@@ -455,6 +455,12 @@ impl Field {
                 .transpose()?
                 .map(single),
         };
+        if cloud.points.is_empty() {
+            return Err(errors::parameter(
+                py,
+                "points: the array holds no points; a surface needs a cloud of points on it",
+            ));
+        }
         if let Some(n) = &cloud.normals {
             if n.len() != cloud.points.len() {
                 return Err(errors::parameter(

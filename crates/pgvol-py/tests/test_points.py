@@ -112,3 +112,5 @@ def test_bad_sections_are_refused_by_name(cloud):
         pgvol.Field.from_points(cloud, cloud[:2], res=48)
     with pytest.raises(pgvol.ParameterError, match="unknown method"):
         pgvol.Field.from_points(cloud, method="rbf")
+    with pytest.raises(pgvol.ParameterError, match="holds no points"):
+        pgvol.Field.from_points(np.zeros((0, 3)), res=48)

@@ -268,7 +268,18 @@ impl Operand {
                     radius: positive(kind, "radius", v[6])?,
                 })
             }
-            // Windows drive letters and other paths with a colon.
+            // A word before the colon that names no file is a solid misspelt or unknown;
+            // Windows drive letters (one letter) and other paths with a colon are files.
+            _ if kind.len() > 1
+                && kind.chars().all(|c| c.is_ascii_alphabetic())
+                && !std::path::Path::new(text).exists() =>
+            {
+                return Err(Error::parameter(format!(
+                    "'{kind}' is not an analytic solid: they are sphere:cx,cy,cz,r, \
+                     box:cx,cy,cz,hx,hy,hz, plane:nx,ny,nz,d and cylinder:px,py,pz,ax,ay,az,r \
+                     (and no file '{text}' exists)"
+                )))
+            }
             _ => return Ok(Operand::File(PathBuf::from(text))),
         };
         Ok(Operand::Primary(primary))

@@ -28,7 +28,9 @@ pub struct PerturbArgs {
     /// kept).
     #[arg(short, long)]
     pub output: PathArg,
-    /// Most perturbation functions added.
+    /// Most perturbation functions the fitting loop adds (`loop_functions` in --json); the
+    /// passes after it that remove stray pieces add more, so the `functions` total can exceed
+    /// it.
     #[arg(long, default_value_t = pgvol::perturbation::PerturbOptions::default().max_functions as u64,
           value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     pub max_functions: u64,
