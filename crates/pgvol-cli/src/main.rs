@@ -11,7 +11,7 @@ mod progress;
 mod remedy;
 mod report;
 
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches, Parser};
 
 /// Turns triangle meshes into smooth implicit fields (coefficient volumes) and back into meshes.
 ///
@@ -27,6 +27,22 @@ struct Cli {
     command: commands::Command,
 }
 
+/// The command line, every option's value allowed to be a negative number: `--voxel -0.1` is
+/// then refused by the option's own check ("must be positive") rather than read as an unknown
+/// flag `-0`.
+fn command_line() -> clap::Command {
+    Cli::command().mut_subcommands(|sub| {
+        let takes_values: Vec<clap::Id> = sub
+            .get_arguments()
+            .filter(|a| a.get_action().takes_values())
+            .map(|a| a.get_id().clone())
+            .collect();
+        takes_values.into_iter().fold(sub, |sub, id| {
+            sub.mut_arg(id, |a| a.allow_negative_numbers(true))
+        })
+    })
+}
+
 fn main() {
     // Interrupted or terminated mid-write: remove the temporary files, keep the old outputs.
     // Without the handler the process still ends, only leaving the temporaries behind.
@@ -35,7 +51,8 @@ fn main() {
         eprintln!("pgvol: interrupted");
         std::process::exit(130);
     });
-    let cli = Cli::parse();
+    let matches = command_line().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     if let Err(e) = commands::run(cli.command) {
         match remedy::hint_for(&e) {
             Some(hint) => eprintln!("error: {} ({hint})", message(&e)),
@@ -82,6 +99,26 @@ mod tests {
                 Some(line.trim().to_string())
             })
             .collect()
+    }
+
+    /// A negative value reaches the option's own check, which names the option; flags that
+    /// are not numbers stay flags.
+    #[test]
+    fn negative_values_are_values() {
+        let parse = |words: &str| {
+            let matches = command_line().try_get_matches_from(words.split_whitespace())?;
+            Cli::from_arg_matches(&matches)
+        };
+        let cli = parse("pgvol encode m.obj -o x.pgv --voxel -0.1 -q").unwrap();
+        let commands::Command::Encode(a) = cli.command else {
+            panic!("not an encode")
+        };
+        assert_eq!(a.grid.voxel, Some(-0.1));
+        assert!(a.out.quiet);
+        let Err(e) = parse("pgvol encode m.obj -o x.pgv --res -5") else {
+            panic!("--res -5 parsed")
+        };
+        assert!(e.to_string().contains("'-5' for '--res"), "{e}");
     }
 
     #[test]

@@ -188,7 +188,7 @@ pub mod limits {
     pub use crate::lattice::BYTES_PER_LATTICE_BRICK;
     pub use crate::memory::{memory_limit, set_memory_limit};
     pub use crate::points::MAX_CUBIC_CENTRES;
-    pub use crate::repair::{DEFAULT_ALPHA, DEFAULT_COARSE};
+    pub use crate::repair::{DEFAULT_ALPHA, DEFAULT_COARSE, MAX_ALPHA};
     pub use crate::resolution::{EXTRA_PIECES, MIN_WALL_SPACINGS, PIECES_FACTOR};
     pub use crate::slice::DEFAULT_UNITS_MM;
     pub use crate::vdb_export::{MAX_VDB_BAND, VDB_GRID_NAME};

@@ -14,6 +14,11 @@ use crate::progress::Progress;
 /// 1.3 % of the sphere's radius; see `docs/editing.md`).
 pub const DEFAULT_ALPHA: f32 = 1.0;
 
+/// Largest normal derivative accepted, in magnitude: a distance-like field's is near 1 (the
+/// useful range measured is 0 to 2), and far beyond it the restored cap's values dwarf the
+/// field's around it.
+pub const MAX_ALPHA: f32 = 10.0;
+
 /// Default coarse samples along a denoising mask's longest side.
 pub const DEFAULT_COARSE: usize = 30;
 
@@ -46,9 +51,10 @@ impl Field {
     ) -> Result<Repaired> {
         crate::frame::require_near(self.file.volume.grid.offset, "repair")?;
         if let Restore::Protrusion { alpha, .. } = restore {
-            if !alpha.is_finite() {
+            if !(alpha.is_finite() && alpha.abs() <= MAX_ALPHA) {
                 return Err(Error::parameter(format!(
-                    "alpha must be finite, got {alpha}"
+                    "alpha must be a normal derivative from -{MAX_ALPHA} to {MAX_ALPHA} (that \
+                     of a distance is 1), got {alpha}"
                 )));
             }
         }
