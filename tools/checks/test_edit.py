@@ -185,6 +185,7 @@ def test_denoising_smooths_a_noisy_sphere_inside_the_mask_only(pgvol, work_dir):
         (["--mask=0,0,0,1,1,1", "--face=z"], ["+z"]),
         (["--mask=0,0,0,1,1,1"], ["--face"]),
         (["--mask=-0.5,-0.5,0.5,0.5,0.5,1.1", "--face=-z", "--alpha=-1e30"], ["alpha", "-10 to 10"]),
+        (["--mask=-1e7,-1e7,-1e7,1e7,1e7,1e7", "--face=-z"], ["takes in the whole shape"]),
     ],
 )
 def test_bad_repair_input_is_explained(pgvol, work_dir, extra, words):

@@ -5,7 +5,7 @@ use pgvol_field::CoefficientVolume;
 use pgvol_ops::{Mask, MaskReport, Restore};
 
 use crate::emptiness::{require_surface, IfEmpty, Sides};
-use crate::error::{Error, Result};
+use crate::error::{Error, ErrorKind, Result};
 use crate::field_value::Field;
 use crate::progress::Progress;
 
@@ -57,6 +57,22 @@ impl Field {
                      of a distance is 1), got {alpha}"
                 )));
             }
+        }
+        // A mask over the whole shape leaves no field outside it to continue: the result is
+        // empty, known before a solve over the whole mask.
+        let (lo, hi) = self.bounds;
+        if masks
+            .iter()
+            .any(|m| m.lo.cmple(lo).all() && m.hi.cmpge(hi).all())
+        {
+            return Err(Error::new(
+                ErrorKind::EmptyResult,
+                format!(
+                    "the restored field would be empty: a mask takes in the whole shape ({lo} \
+                     to {hi}), so nothing of it is kept; masks around only the parts to restore \
+                     keep the rest"
+                ),
+            ));
         }
         check_repair_memory(&self.file.volume, masks, restore)?;
         progress.stage("restoring the masks");
