@@ -205,10 +205,17 @@ fn choices_out_of_range_are_refused_with_what_would_work() {
     );
     refuse(
         ViewOptions {
-            iso: 5.0,
+            iso: 1.0,
             ..ViewOptions::default()
         },
         "exact distance only within",
+    );
+    refuse(
+        ViewOptions {
+            iso: 5.0,
+            ..ViewOptions::default()
+        },
+        "reaches beyond the field's grid",
     );
     refuse(
         ViewOptions {
