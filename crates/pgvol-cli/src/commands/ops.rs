@@ -160,9 +160,10 @@ pub fn slice(a: SliceArgs) -> Result<()> {
             (Some(f), _) => format!("one layer, at {}", f.height),
             _ => {
                 anyhow::bail!(
-                    "{}: a layer height of {} puts no layer through the shape's box along its \
-                     axis: it is taller than the part; a smaller --layer-height, or --first at \
-                     a height within the part, would",
+                    "{}: no layer holds a contour: a layer height of {} puts no layer within \
+                     the shape's extent along its axis, so the part is thinner than one layer \
+                     (a mesh without thickness, a flat or open sheet, has none); a smaller \
+                     --layer-height, or --first at a height within the part, would",
                     a.input.display(),
                     a.layer_height
                 )
