@@ -360,33 +360,31 @@ def test_replaced_outputs_keep_their_mode_and_read_only_ones_need_force(dirs, pg
     helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 16])
     assert stat.S_IMODE(out.stat().st_mode) == 0o600
     os.chmod(out, 0o444)
-    before = out.read_bytes()
-    r = helpers.run([pgvol, "remesh", src, "-o", out, "--res", 24], timeout=120)
-    assert r.returncode == 1 and "--force" in r.stderr, r.describe()
-    assert out.read_bytes() == before
-    helpers.run_ok([pgvol, "remesh", src, "-o", out, "--res", 24, "--force"])
-    assert out.read_bytes() != before
+    _refused_until_forced([pgvol, "remesh", src, "-o", out, "--res", 24], out, "read-only")
     assert stat.S_IMODE(out.stat().st_mode) == 0o444
+
+
+def _refused_until_forced(command: list, kept: Path, says: str):
+    """`command` fails saying `says` and `--force`, leaving `kept` as it was; with `--force` it
+    replaces `kept`."""
+    before = kept.read_bytes()
+    r = helpers.run(command, timeout=120)
+    assert r.returncode == 1 and says in r.stderr and "--force" in r.stderr, r.describe()
+    assert kept.read_bytes() == before
+    helpers.run_ok([*command, "--force"])
+    assert kept.read_bytes() != before
 
 
 def test_an_output_that_is_the_input_needs_force(dirs, pgvol):
     in_dir, _ = dirs
     src = in_dir / "tetra.obj"
     src.write_text(GOOD_OBJ)
-    before = src.read_bytes()
     # The same file by another spelling of its path is refused too.
     other = in_dir / "." / "tetra.obj"
-    r = helpers.run([pgvol, "remesh", src, "-o", other, "--res", 16], timeout=120)
-    assert r.returncode == 1 and "is also the input" in r.stderr, r.describe()
-    assert "--force" in r.stderr and src.read_bytes() == before
     pgv = in_dir / "t.pgv"
     helpers.run_ok([pgvol, "encode", src, "-o", pgv, "--res", 16])
-    kept = pgv.read_bytes()
-    r = helpers.run([pgvol, "offset", pgv, "-o", pgv, "--distance", 0.01], timeout=120)
-    assert r.returncode == 1 and "is also the input" in r.stderr, r.describe()
-    assert pgv.read_bytes() == kept
-    helpers.run_ok([pgvol, "offset", pgv, "-o", pgv, "--distance", 0.01, "--force"])
-    assert pgv.read_bytes() != kept
+    _refused_until_forced([pgvol, "offset", pgv, "-o", pgv, "--distance", 0.01], pgv, "is also the input")
+    _refused_until_forced([pgvol, "remesh", src, "-o", other, "--res", 16], src, "is also the input")
 
 
 def test_a_level_set_lost_to_speck_removal_says_so(knot_pgv, tmp_path, pgvol):

@@ -202,24 +202,35 @@ pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
 mod tests {
     use super::*;
 
-    #[test]
-    fn nearest_matches_brute_force() {
-        let points: Vec<Vec3> = (0..500)
+    /// `n` points along a closed curve through the box [−1, 1]² × [−0.5, 0.5].
+    fn curve(n: usize) -> Vec<Vec3> {
+        (0..n)
             .map(|i| {
                 let t = i as f32 * 0.618;
                 Vec3::new(t.sin(), (t * 1.7).cos(), (t * 0.3).sin() * 0.5)
             })
-            .collect();
-        let index = PointIndex::new(&points, 0.05);
-        let q = Vec3::new(0.1, -0.2, 0.05);
-        let mut got = Vec::new();
-        index.nearest(q, 7, 10.0, &mut got);
-        let mut want: Vec<(f32, u32)> = points
+            .collect()
+    }
+
+    /// Every point with its squared distance to `q`, nearest first.
+    fn by_distance(points: &[Vec3], q: Vec3) -> Vec<(f32, u32)> {
+        let mut all: Vec<(f32, u32)> = points
             .iter()
             .enumerate()
             .map(|(i, p)| (p.distance_squared(q), i as u32))
             .collect();
-        want.sort_by(|a, b| a.0.total_cmp(&b.0));
+        all.sort_by(|a, b| a.0.total_cmp(&b.0));
+        all
+    }
+
+    #[test]
+    fn nearest_matches_brute_force() {
+        let points = curve(500);
+        let index = PointIndex::new(&points, 0.05);
+        let q = Vec3::new(0.1, -0.2, 0.05);
+        let mut got = Vec::new();
+        index.nearest(q, 7, 10.0, &mut got);
+        let want = by_distance(&points, q);
         assert_eq!(
             got.iter().map(|x| x.1).collect::<Vec<_>>(),
             want[..7].iter().map(|x| x.1).collect::<Vec<_>>()
@@ -230,24 +241,13 @@ mod tests {
     /// visits the occupied cells instead, so it ends, with the same neighbours and order.
     #[test]
     fn an_outlier_finds_its_neighbours_without_visiting_empty_cells() {
-        let mut points: Vec<Vec3> = (0..2000)
-            .map(|i| {
-                let t = i as f32 * 0.618;
-                Vec3::new(t.sin(), (t * 1.7).cos(), (t * 0.3).sin() * 0.5)
-            })
-            .collect();
+        let mut points = curve(2000);
         points.push(Vec3::splat(1.0e5));
         let index = PointIndex::new(&points, 0.02);
         let q = points[2000];
         let mut got = Vec::new();
         index.nearest(q, 4, 1.0e6, &mut got);
-        let mut want: Vec<(f32, u32)> = points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.distance_squared(q), i as u32))
-            .collect();
-        want.sort_by(|a, b| a.0.total_cmp(&b.0));
-        assert_eq!(got, want[..4].to_vec());
+        assert_eq!(got, by_distance(&points, q)[..4].to_vec());
         // Raster order of cells (x fastest) either way: the points within a reach of 3 cells
         // (which visits every cell in reach) and of 15 (which visits the occupied ones).
         let index = PointIndex::new(&points, 0.05);
