@@ -414,6 +414,7 @@ fn fit_on_grid(
     planes: Option<&SectionPlanes>,
     progress: &dyn Progress,
 ) -> Result<(Reconstructed, Option<Sections>)> {
+    crate::points_warnings::warn_about_outliers(&cloud.points, progress);
     let spacing = pgvol_points::mean_spacing(&cloud.points);
     pgvol_points::check_spacing(&cloud.points, spacing, &grid)
         .map_err(|e| Error::new(ErrorKind::BadParameter, e.to_string()).caused_by(e))?;
