@@ -94,6 +94,34 @@ fn encoding_in_parts_gives_the_same_file_bytes() {
 }
 
 #[test]
+fn sharp_feature_vertices_in_parts_are_the_single_process_ones() {
+    let mesh = load_shared("fandisk");
+    let options = EncodeOptions {
+        grid: GridSpec::Res(96),
+        sharp: pgvol::sharp::SharpOptions {
+            enabled: true,
+            ..Default::default()
+        },
+        ..EncodeOptions::default()
+    };
+    let whole = pgvol::encode(&mesh, &options, &Silent).unwrap();
+    assert!(whole.sharp.stored_cells > 1000, "{:?}", whole.sharp);
+    let want = pgvol::io::pgv_bytes(&whole.file, &StorageOptions::default())
+        .unwrap()
+        .bytes;
+    for parts in [2, 8] {
+        let got = encode_in_parts(&mesh, &options, parts);
+        assert_eq!(got.sharp, whole.sharp);
+        let bytes = pgvol::io::pgv_bytes(&got.file, &StorageOptions::default())
+            .unwrap()
+            .bytes;
+        assert!(bytes == want, "{parts} parts give other bytes");
+        let streamed = streamed_in_parts(&mesh, &options, parts);
+        assert!(streamed == want, "{parts} streamed parts give other bytes");
+    }
+}
+
+#[test]
 fn streamed_parts_that_stop_leave_the_file_as_it_was() {
     let mesh = load_shared("spot");
     let options = EncodeOptions {

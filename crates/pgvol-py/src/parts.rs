@@ -24,7 +24,7 @@ fn encode_options(
     voxel: Option<f32>,
     band: f32,
     basis: &str,
-    sign: &str,
+    (sign, sharp, sharp_angle): (&str, &str, Option<f32>),
 ) -> PyResult<pgvol::EncodeOptions> {
     Ok(pgvol::EncodeOptions {
         grid: grid_spec(py, res, voxel)?,
@@ -32,7 +32,10 @@ fn encode_options(
         fit: pgvol::FitMethod::Interp,
         band,
         sign: names::sign(py, sign)?,
-        sharp: pgvol::sharp::SharpOptions::default(),
+        sharp: pgvol::sharp::SharpOptions {
+            enabled: names::sharp(py, sharp)?,
+            angle: sharp_angle.unwrap_or(pgvol::sharp::DEFAULT_SHARP_ANGLE),
+        },
     })
 }
 
@@ -59,7 +62,7 @@ fn pairs(ranges: Vec<Range<usize>>) -> Vec<(usize, usize)> {
 /// The parts of an encode as `(y0, y1, z0, z1, bytes)`: the fitting groups along y and z it
 /// covers, and its estimated peak bytes.
 #[pyfunction]
-#[pyo3(signature = (vertices, faces, parts, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+#[pyo3(signature = (vertices, faces, parts, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto", sharp="off", sharp_angle=None))]
 pub(crate) fn plan_encode(
     py: Python<'_>,
     vertices: &Bound<'_, PyAny>,
@@ -70,8 +73,10 @@ pub(crate) fn plan_encode(
     band: f32,
     basis: &str,
     sign: &str,
+    sharp: &str,
+    sharp_angle: Option<f32>,
 ) -> PyResult<Vec<PlannedPart>> {
-    let options = encode_options(py, res, voxel, band, basis, sign)?;
+    let options = encode_options(py, res, voxel, band, basis, (sign, sharp, sharp_angle))?;
     let mesh = mesh(py, vertices, faces)?;
     quiet(py, || {
         let plan = parts::plan_encode(&mesh, &options, parts)?;
@@ -130,7 +135,7 @@ pub(crate) struct EncodeJob {
 #[pymethods]
 impl EncodeJob {
     #[new]
-    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+    #[pyo3(signature = (vertices, faces, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto", sharp="off", sharp_angle=None))]
     fn new(
         py: Python<'_>,
         vertices: &Bound<'_, PyAny>,
@@ -140,8 +145,10 @@ impl EncodeJob {
         band: f32,
         basis: &str,
         sign: &str,
+        sharp: &str,
+        sharp_angle: Option<f32>,
     ) -> PyResult<EncodeJob> {
-        let options = encode_options(py, res, voxel, band, basis, sign)?;
+        let options = encode_options(py, res, voxel, band, basis, (sign, sharp, sharp_angle))?;
         let mesh = mesh(py, vertices, faces)?;
         let job = quiet(py, || parts::EncodeJob::new(&mesh, &options))?;
         Ok(EncodeJob { job })
@@ -178,7 +185,7 @@ impl EncodeJob {
 
 /// The field of a mesh from its parts' bricks, in plan order.
 #[pyfunction]
-#[pyo3(signature = (vertices, faces, bricks, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+#[pyo3(signature = (vertices, faces, bricks, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto", sharp="off", sharp_angle=None))]
 pub(crate) fn assemble_encode(
     py: Python<'_>,
     vertices: &Bound<'_, PyAny>,
@@ -189,8 +196,10 @@ pub(crate) fn assemble_encode(
     band: f32,
     basis: &str,
     sign: &str,
+    sharp: &str,
+    sharp_angle: Option<f32>,
 ) -> PyResult<Field> {
-    let options = encode_options(py, res, voxel, band, basis, sign)?;
+    let options = encode_options(py, res, voxel, band, basis, (sign, sharp, sharp_angle))?;
     let mesh = mesh(py, vertices, faces)?;
     let encoded = quiet(py, || {
         let slices: Vec<&[u8]> = bricks.iter().map(Vec::as_slice).collect();
@@ -204,7 +213,7 @@ pub(crate) fn assemble_encode(
 /// `("whole", grid)` when the automatic precision needs the parts assembled in memory. An exception raised by the
 /// iterable stops the write and is raised again.
 #[pyfunction]
-#[pyo3(signature = (vertices, faces, parts, path, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto"))]
+#[pyo3(signature = (vertices, faces, parts, path, *, res=None, voxel=None, band=4.0, basis="bspline3", sign="auto", sharp="off", sharp_angle=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn write_encode_parts(
     py: Python<'_>,
@@ -217,8 +226,10 @@ pub(crate) fn write_encode_parts(
     band: f32,
     basis: &str,
     sign: &str,
+    sharp: &str,
+    sharp_angle: Option<f32>,
 ) -> PyResult<(&'static str, crate::field::Grid)> {
-    let options = encode_options(py, res, voxel, band, basis, sign)?;
+    let options = encode_options(py, res, voxel, band, basis, (sign, sharp, sharp_angle))?;
     let mesh = mesh(py, vertices, faces)?;
     let grid = quiet(py, || options.grid.grid_for(&mesh))?;
     let source = parts.try_iter()?.unbind();

@@ -111,6 +111,20 @@ def test_a_file_written_as_parts_arrive_is_the_single_process_file(client, mesh_
     assert out.read_bytes() == b"before"
 
 
+def test_sharp_feature_vertices_in_parts_are_the_single_process_ones(client, mesh_path,
+                                                                      tmp_path):
+    mesh = pgvol.read_mesh(mesh_path("fandisk"))
+    want = pgvol.Field.from_mesh(*mesh, res=RES, sharp="auto", sharp_angle=25).to_bytes()
+    assert want != pgvol.Field.from_mesh(*mesh, res=RES).to_bytes()
+    got = distributed.encode(mesh, res=RES, sharp="auto", sharp_angle=25, client=client,
+                             parts=8)
+    assert got.to_bytes() == want
+    out = tmp_path / "fandisk.pgv"
+    distributed.encode_file(mesh, out, res=RES, sharp="auto", sharp_angle=25, client=client,
+                            parts=8)
+    assert out.read_bytes() == want
+
+
 def test_an_exception_in_the_parts_stops_the_write(mesh_path, tmp_path):
     from pgvol import _pgvol
 
@@ -330,6 +344,14 @@ def test_command_line_front_end_writes_the_single_process_file(mesh_path, tmp_pa
     assert r.returncode == 0, r.stderr
     assert '"workers": 2' in r.stdout
     want = pgvol.Field.from_mesh(*pgvol.read_mesh(mesh_path("spot")), res=96).to_bytes()
+    assert out.read_bytes() == want
+    sharp = subprocess.run(
+        [sys.executable, "-m", "pgvol.distributed", "encode", str(mesh_path("fandisk")),
+         "-o", str(out), "--res", "96", "--sharp", "auto", "--sharp-angle", "25", "--local", "1"],
+        capture_output=True, text=True, timeout=300)
+    assert sharp.returncode == 0, sharp.stderr
+    want = pgvol.Field.from_mesh(*pgvol.read_mesh(mesh_path("fandisk")), res=96, sharp="auto",
+                                 sharp_angle=25).to_bytes()
     assert out.read_bytes() == want
     bad = subprocess.run(
         [sys.executable, "-m", "pgvol.distributed", "encode", str(tmp_path / "none.obj"),

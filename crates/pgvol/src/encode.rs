@@ -16,10 +16,11 @@ use crate::band::BAND_KEY;
 use crate::distance::{mesh_sdf, sample, sample_sparse, MeshDistance};
 use crate::emptiness::{is_flat, require_mesh_surface, Sides, FLAT_MESH};
 use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::exact_distance::ExactDistance;
 use crate::grid::GridSpec;
 use crate::memory::{check_grid, BYTES_PER_NODE};
 use crate::progress::{self, Progress};
-use crate::sharp::store::{attach, SharpOptions, SharpReport};
+use crate::sharp::store::{attach_with, SharpOptions, SharpReport};
 use crate::timings::Timings;
 
 /// Exact distances within this many grid spacings of the surface when encoding: the cubic
@@ -126,7 +127,11 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
         _ => check_grid("encoding", &grid, BYTES_PER_NODE)?,
     }
     let mut timings = Timings::default();
-    let fitted = fit_volume(mesh, grid, options, &mut timings, progress)?;
+    let start = Instant::now();
+    // Built once: the sharp-feature stage queries the same distance.
+    let exact = ExactDistance::new(mesh, options.sign)?;
+    let fitted = fit_volume_with(exact.sdf(), grid, options, (&mut timings, start), progress)?;
+    let exact = options.sharp.enabled.then_some(exact);
     if let Some(message) = unconverged(&fitted.report) {
         progress.warn(&message);
     }
@@ -134,7 +139,15 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     require_mesh_surface(sides, "the encoded field", mesh, grid.spacing)?;
     let mut file = encoded_file(mesh, fitted.volume, &fitted.report, fitted.band);
     let start = Instant::now();
-    let sharp = attach(&mut file, mesh, options.sign, &options.sharp, progress)?;
+    let sign = options.sign;
+    let sharp = attach_with(
+        &mut file,
+        mesh,
+        sign,
+        exact.as_ref(),
+        &options.sharp,
+        progress,
+    )?;
     timings.sharp = start.elapsed().as_secs_f64();
     Ok(Encoded {
         file,
@@ -230,15 +243,27 @@ pub(crate) fn fit_volume(
     timings: &mut Timings,
     progress: &dyn Progress,
 ) -> Result<Fitted> {
-    let fit_options = FitOptions::default();
     let start = Instant::now();
     let sdf = mesh_sdf(mesh, options.sign)?;
+    fit_volume_with(&sdf, grid, options, (timings, start), progress)
+}
+
+/// [`fit_volume`] with the mesh's distance queries `sdf` built, since `start` (the distance
+/// stage's time counts from there).
+fn fit_volume_with(
+    sdf: &pgvol_sdf::MeshSdf,
+    grid: pgvol_core::Grid,
+    options: &EncodeOptions,
+    (timings, start): (&mut Timings, Instant),
+    progress: &dyn Progress,
+) -> Result<Fitted> {
+    let fit_options = FitOptions::default();
     let mut band = None;
     let fitted = match options.fit {
         FitMethod::Interp => {
             // Sparse from end to end: band bricks sampled, fitted locally, far bricks a side.
             band = Some(options.band);
-            let sampled = sample_sparse(&sdf, &grid, options.band, progress)?;
+            let sampled = sample_sparse(sdf, &grid, options.band, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
             // Handed over, so the fit drops the samples behind it.
             let samples = sampled.values;
@@ -250,7 +275,7 @@ pub(crate) fn fit_volume(
             let width = options.band.max(fit_options.band);
             band = Some(width);
             let extent = Extent::Band(width);
-            let sampled = sample(&sdf, &grid, extent, progress)?;
+            let sampled = sample(sdf, &grid, extent, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
             // Closest points need no sign, so they skip the winding number.
             let surface = ClosestFn(|p: Vec3, reach: f32| {
@@ -269,7 +294,7 @@ pub(crate) fn fit_volume(
                     grid,
                     options.basis,
                     options.fit,
-                    &MeshDistance(&sdf),
+                    &MeshDistance(sdf),
                     &fit_options,
                     update,
                 )

@@ -30,6 +30,17 @@ impl<'m> ExactDistance<'m> {
         Ok(Self { mesh, sdf })
     }
 
+    /// The mesh's distance queries.
+    pub(crate) fn sdf(&self) -> &pgvol_sdf::MeshSdf {
+        &self.sdf
+    }
+
+    /// The closest-point hierarchy of the oriented mesh (the same triangles, in the same
+    /// order, as the mesh given).
+    pub(crate) fn bvh(&self) -> &pgvol_sdf::Bvh {
+        self.sdf.bvh()
+    }
+
     /// The surface contoured on `grid` (see [`contour_exact`]); the distance stage's time,
     /// counted from `start`, and the contour's go to `timings`.
     pub(crate) fn contour(

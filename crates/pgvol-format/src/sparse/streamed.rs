@@ -114,6 +114,11 @@ impl<'w> StreamedPgv<'w> {
         })
     }
 
+    /// Puts `section` in the header the file ends with (it is written by [`StreamedPgv::finish`]).
+    pub fn set_sharp(&mut self, section: Option<crate::sharp::SharpSection>) {
+        self.header.sharp = section;
+    }
+
     /// The node layers along z whose coefficients writing the next file brick layers up to
     /// (not including) `end` reads.
     fn nodes_read(&self, end: usize) -> Range<usize> {

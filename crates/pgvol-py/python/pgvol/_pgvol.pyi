@@ -444,8 +444,8 @@ class Field:
         Vertices are welded and degenerate triangles dropped as when reading a file.
         ``sharp="auto"`` stores the exact vertices of the cells at creases turning by more than
         ``sharp_angle`` degrees (default 30), so that ``to_mesh(method="dc")`` (or "sn") on the file's own
-        grid keeps them sharp, as ``pgvol encode --sharp auto`` does; the distributed encode
-        does not store them.
+        grid keeps them sharp, as ``pgvol encode --sharp auto`` and ``pgvol.distributed.encode``
+        with the same options do.
         """
     @overload
     @staticmethod
@@ -976,6 +976,8 @@ class EncodeJob:
         band: float = 4.0,
         basis: str = "bspline3",
         sign: str = "auto",
+        sharp: Literal["off", "auto"] = "off",
+        sharp_angle: Optional[float] = None,
     ) -> "EncodeJob": ...
     def encode_part(self, y0: int, y1: int, z0: int, z1: int) -> EncodedPart: ...
     def part_bytes(self, y0: int, y1: int, z0: int, z1: int) -> int: ...
@@ -990,6 +992,8 @@ def plan_encode(
     band: float = 4.0,
     basis: str = "bspline3",
     sign: str = "auto",
+    sharp: Literal["off", "auto"] = "off",
+    sharp_angle: Optional[float] = None,
 ) -> List[Tuple[int, int, int, int, int]]: ...
 def assemble_encode(
     vertices: _Points,
@@ -1001,6 +1005,8 @@ def assemble_encode(
     band: float = 4.0,
     basis: str = "bspline3",
     sign: str = "auto",
+    sharp: Literal["off", "auto"] = "off",
+    sharp_angle: Optional[float] = None,
 ) -> Field: ...
 def write_encode_parts(
     vertices: _Points,
@@ -1013,6 +1019,8 @@ def write_encode_parts(
     band: float = 4.0,
     basis: str = "bspline3",
     sign: str = "auto",
+    sharp: Literal["off", "auto"] = "off",
+    sharp_angle: Optional[float] = None,
 ) -> Tuple[Literal["written", "whole"], Grid]: ...
 def plan_decode(field: Field, parts: int) -> List[Tuple[int, int]]: ...
 def decode_part_bricks(field: Field, start: int, end: int) -> bytes: ...

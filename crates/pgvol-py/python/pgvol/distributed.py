@@ -195,15 +195,19 @@ class _EncodeRun:
 
 
 def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, band: float = 4.0,
-           basis: str = "bspline3", sign: str = "auto", client: Any = None,
+           basis: str = "bspline3", sign: str = "auto", sharp: str = "off",
+           sharp_angle: float | None = None, client: Any = None,
            parts: int | None = None, output: str | os.PathLike | None = None,
            retries: int = RETRIES) -> Field:
     """Encodes a mesh (a path, a (vertices, faces) pair or a trimesh) in parts: the same field,
     bit for bit, as ``Field.from_mesh`` with the interp fit. ``parts`` defaults to four per
     worker thread (one without a client); ``output`` saves the field as a ``.pgv``. The field
-    is assembled here whole; ``encode_file`` writes the file holding a window of it."""
+    is assembled here whole; ``encode_file`` writes the file holding a window of it.
+    ``sharp="auto"`` stores the sharp-feature vertices as ``Field.from_mesh`` does: the parts
+    compute coefficients only, and this process chooses the vertices against them."""
     options: dict[str, Any] = {
-        "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
+        "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign,
+        "sharp": sharp, "sharp_angle": sharp_angle,
     }
     job = _EncodeRun(mesh, options, client, parts, retries)
     results = job.run()
@@ -216,17 +220,20 @@ def encode(mesh: Any, *, res: int | None = None, voxel: float | None = None, ban
 
 def encode_file(mesh: Any, output: str | os.PathLike, *, res: int | None = None,
                 voxel: float | None = None, band: float = 4.0, basis: str = "bspline3",
-                sign: str = "auto", client: Any = None, parts: int | None = None,
+                sign: str = "auto", sharp: str = "off", sharp_angle: float | None = None,
+                client: Any = None, parts: int | None = None,
                 retries: int = RETRIES) -> Grid:
     """Encodes a mesh in parts straight to the ``.pgv`` file ``output``, bit for bit the file
     ``encode`` saves, written as the parts arrive in plan order: this process holds a window
-    of slabs of coefficients, not the whole field. Returns the field's grid.
+    of slabs of coefficients, not the whole field, and of the coefficients near creases when
+    ``sharp="auto"``. Returns the field's grid.
 
     When the automatic precision cannot be chosen a slab at a time (coefficients beyond the fixed precision's
     range, never seen on distance fields), the file is written by ``encode``, holding the
     whole field. ``output`` is replaced atomically and left as it was on failure."""
     options: dict[str, Any] = {
-        "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign
+        "res": res, "voxel": voxel, "band": band, "basis": basis, "sign": sign,
+        "sharp": sharp, "sharp_angle": sharp_angle,
     }
     job = _EncodeRun(mesh, options, client, parts, retries)
     outcome, grid = _pgvol.write_encode_parts(job.vertices, job.faces, job.in_order(), output,
@@ -395,6 +402,11 @@ def main(argv: list[str] | None = None) -> int:
     enc.add_argument("--sign", default="auto",
                      choices=["auto", "winding", "pseudonormal", "parity"],
                      help="inside/outside test (default %(default)s)")
+    enc.add_argument("--sharp", default="off", choices=["off", "auto"],
+                     help="store the vertices of cells at creases, as pgvol encode --sharp auto "
+                          "(default %(default)s)")
+    enc.add_argument("--sharp-angle", type=float, default=None, metavar="DEG",
+                     help="crease angle for --sharp auto (default 30)")
     common(enc)
 
     dec = sub.add_parser("decode", help=".pgv -> mesh by marching cubes on the file's grid",
@@ -420,7 +432,8 @@ def main(argv: list[str] | None = None) -> int:
                                   "output": args.output, "workers": worker_count(client)}
         if args.command == "encode":
             grid = encode_file(args.input, args.output, res=args.res, voxel=args.voxel,
-                               band=args.band, basis=args.basis, sign=args.sign, client=client,
+                               band=args.band, basis=args.basis, sign=args.sign,
+                               sharp=args.sharp, sharp_angle=args.sharp_angle, client=client,
                                parts=args.parts)
             report["grid"] = list(grid.dims)
         elif args.command == "decode":

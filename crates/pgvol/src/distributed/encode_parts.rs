@@ -42,7 +42,7 @@ fn group_counts(grid: &Grid) -> [usize; 3] {
 }
 
 /// Refuses what cannot be encoded in parts: fits other than `Interp` and pseudo-Gaussians
-/// solve one global system, and sharp-feature vertices compare with the whole fitted file.
+/// solve one global system.
 pub(crate) fn check_parts_options(options: &EncodeOptions) -> Result<()> {
     options.validate()?;
     if options.fit != FitMethod::Interp {
@@ -55,12 +55,6 @@ pub(crate) fn check_parts_options(options: &EncodeOptions) -> Result<()> {
         return Err(Error::parameter(
             "pseudo-Gaussian coefficients come from one global solve and cannot be computed in \
              parts; use bspline3, bspline2 or trilinear",
-        ));
-    }
-    if options.sharp.enabled {
-        return Err(Error::parameter(
-            "sharp-feature vertices are chosen against the whole fitted file, so they cannot be \
-             computed in parts; encode in one process to store them, or leave them off",
         ));
     }
     Ok(())
@@ -364,11 +358,20 @@ pub fn assemble_encode(mesh: &Mesh, options: &EncodeOptions, parts: &[&[u8]]) ->
             format!("cannot assemble the parts: {e}"),
         )
     })?;
-    let file = encoded_file(mesh, volume, &fit, Some(options.band));
+    let mut file = encoded_file(mesh, volume, &fit, Some(options.band));
+    // The parts hold coefficients only: the sharp-feature vertices are chosen here, against
+    // the assembled file, as a single process does.
+    let sharp = crate::sharp::store::attach(
+        &mut file,
+        mesh,
+        options.sign,
+        &options.sharp,
+        &crate::progress::Silent,
+    )?;
     Ok(Encoded {
         file,
         fit,
-        sharp: crate::sharp::store::SharpReport::default(),
+        sharp,
         timings: Timings::default(),
     })
 }

@@ -59,6 +59,22 @@ impl Slab {
 
     /// Applies the slab to `values`: sides first, then the stored bricks in order.
     pub fn apply(self, values: &mut SparseGrid) {
+        self.apply_sides(values);
+        for (b, v) in self.stored {
+            values.insert(b, v);
+        }
+    }
+
+    /// [`Slab::apply`] of the sides and of copies of the stored bricks `keep` names.
+    pub fn apply_some(&self, values: &mut SparseGrid, keep: impl Fn([usize; 3]) -> bool) {
+        self.apply_sides(values);
+        for (b, v) in self.stored.iter().filter(|(b, _)| keep(*b)) {
+            values.insert(*b, v.clone());
+        }
+    }
+
+    /// Marks the slab's inside bricks in `values`.
+    fn apply_sides(&self, values: &mut SparseGrid) {
         let [bx, by, _] = self.bricks.clone().map(|r| r.len());
         let lo = self.bricks.clone().map(|r| r.start);
         for (start, len) in &self.inside_runs {
@@ -71,9 +87,6 @@ impl Slab {
                 ];
                 values.set_inside(b, true);
             }
-        }
-        for (b, v) in self.stored {
-            values.insert(b, v);
         }
     }
 

@@ -16,6 +16,8 @@ use super::slab::Slab;
 use super::tiling::Tiling;
 use crate::encode::{encoded_header, sparse_options, EncodeOptions, StorageOptions};
 use crate::error::{Error, ErrorKind, FileResult, Result};
+use crate::progress::Silent;
+use crate::sharp::store::SharpPlan;
 
 /// How writing an encode's parts ended.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,6 +75,10 @@ pub fn write_encode_parts_to(
     let counts = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
     let grid_bricks: usize = counts.iter().product();
     let mut tiling = Tiling::new(counts);
+    // Sharp-feature vertices are chosen against the coefficient bricks near creases, kept
+    // aside as they pass through the window.
+    let sharp = SharpPlan::new(mesh, options.sign, None, &grid, &options.sharp, &Silent)?;
+    let mut near_creases: Option<SparseGrid> = None;
     let mut window: Option<CoefficientVolume> = None;
     let mut writer: Option<StreamedPgv> = None;
     // The output, until the first part gives the header that starts the file.
@@ -91,6 +97,11 @@ pub fn write_encode_parts_to(
             basis: options.basis,
             coeffs: SparseGrid::new(grid.dims, slab.background),
         });
+        if sharp.has_boxes() {
+            let kept =
+                near_creases.get_or_insert_with(|| SparseGrid::new(grid.dims, slab.background));
+            slab.apply_some(kept, |b| sharp.needs_brick(b));
+        }
         slab.apply(&mut volume.coeffs);
         let w = match writer.as_mut() {
             Some(w) => w,
@@ -113,9 +124,18 @@ pub fn write_encode_parts_to(
         volume.coeffs.retain(|b, _| (b[2] + 1) * BRICK_EDGE > keep);
     }
     tiling.finish()?;
-    let (Some(w), Some(volume)) = (writer, window) else {
+    let (Some(mut w), Some(volume)) = (writer, window) else {
         return Err(Error::parameter("no parts to write"));
     };
+    if let Some(coeffs) = near_creases {
+        let kept = CoefficientVolume {
+            grid,
+            basis: options.basis,
+            coeffs,
+        };
+        let (section, _) = sharp.section(&kept, &Silent)?;
+        w.set_sharp(section);
+    }
     match w.finish(&volume, stored == grid_bricks) {
         Ok(report) => Ok(PartsWritten::Written(report)),
         Err(StreamError::WholeVolume) => Ok(PartsWritten::NeedsWholeVolume),
