@@ -3,7 +3,7 @@ weak-scaling figures that predict larger clusters and grids.
 
     .venv/bin/python tools/bench/bench_distributed.py [--res 2048] [--workers 2]
         [--meshes stanford-bunny,rocker-arm-1m] [--worker-budget 1.1e9] [--json OUT.json]
-        [--work DIR] [--skip-single]
+        [--work DIR] [--skip-single] [--sharp off|auto]
     .venv/bin/python tools/bench/bench_distributed.py --identity [--res 256] [--parts 8]
 
 (.venv is the test command's environment: it has the pgvol package, dask and distributed.)
@@ -79,9 +79,9 @@ def mesh_arrays(name: str, work: Path):
     return v, f, path
 
 
-def single_process(path: Path, res: int, out: Path, timeout: float) -> dict:
+def single_process(path: Path, res: int, out: Path, timeout: float, sharp: str) -> dict:
     argv = [TIME, "-v", str(common.pgvol_bin()), "encode", str(path), "-o", str(out),
-            "--res", str(res), "--force"]
+            "--res", str(res), "--sharp", sharp, "--force"]
     start = time.perf_counter()
     r = subprocess.run(argv, capture_output=True, text=True, timeout=timeout)
     seconds = time.perf_counter() - start
@@ -109,15 +109,16 @@ def scheduler_overhead(client, n: int = 1000) -> float:
 
 
 def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Path,
-             skip_single: bool, timeout: float) -> dict:
+             skip_single: bool, timeout: float, sharp: str) -> dict:
     import pgvol
     from pgvol import distributed
 
     v, f, path = mesh_arrays(name, work)
-    row: dict = {"mesh": name, "triangles": int(len(f)), "res": res, "workers": workers}
+    row: dict = {"mesh": name, "triangles": int(len(f)), "res": res, "workers": workers,
+                 "sharp": sharp}
     single_out = work / f"{name}-{res}-single.pgv"
     if not skip_single:
-        row["single"] = single_process(path, res, single_out, timeout)
+        row["single"] = single_process(path, res, single_out, timeout, sharp)
     parts, plan = choose_parts((v, f), res, workers, budget)
     largest = max(plan, key=lambda p: p["bytes"])
     row.update(parts=len(plan), estimate_max_part=largest["bytes"],
@@ -128,7 +129,7 @@ def run_mesh(client, name: str, res: int, workers: int, budget: float, work: Pat
     base = client.run(reset_peak)
     client_base = reset_peak()
     start = time.perf_counter()
-    distributed.encode_file((v, f), out, res=res, client=client, parts=parts)
+    distributed.encode_file((v, f), out, res=res, sharp=sharp, client=client, parts=parts)
     row["s"] = time.perf_counter() - start
     peaks = client.run(peak_rss)
     row["worker_peak"] = max(peaks.values())
@@ -315,6 +316,8 @@ def main() -> int:
                     help="only compare encode, decode and slice in --parts parts with the "
                          "single-process calls on the seven shared meshes at --res")
     ap.add_argument("--parts", type=int, default=8)
+    ap.add_argument("--sharp", default="off", choices=["off", "auto"],
+                    help="sharp-feature vertices, as pgvol encode --sharp (default off)")
     args = ap.parse_args()
     if args.identity:
         identity(args.res, args.parts)
@@ -331,7 +334,7 @@ def main() -> int:
         overhead = scheduler_overhead(client)
         for name in args.meshes.split(","):
             row = run_mesh(client, name, args.res, args.workers, args.worker_budget, work,
-                           args.skip_single, args.timeout)
+                           args.skip_single, args.timeout, args.sharp)
             row["overhead_per_task_s"] = overhead
             row["predictions"] = predict(row, overhead, args.worker_budget)
             rows.append(row)
