@@ -198,6 +198,27 @@ struct Sampler<'a> {
     /// Whether the nodes are the volume's own with a separable basis, where evaluating a brick
     /// (a 3-tap blur of its coefficients) costs less than bounding its support.
     on_own_grid: bool,
+    /// The volume node of the grid's first node, when every node of the grid is one of the
+    /// volume's (a box of them).
+    first_volume_node: Option<[usize; 3]>,
+}
+
+/// The node of `volume`'s grid at `grid`'s first node when `grid` is a box of `volume`'s nodes:
+/// the same spacing and frame, its origin a node of `volume` to a thousandth of a spacing, and
+/// its far corner inside `volume`'s grid.
+fn volume_node_of(volume: &Grid, grid: &Grid) -> Option<[usize; 3]> {
+    if grid.spacing != volume.spacing || grid.offset != volume.offset {
+        return None;
+    }
+    let at = (grid.origin - volume.origin) / volume.spacing;
+    let first = at.round();
+    if (at - first).abs().max_element() > 1e-3 || first.min_element() < 0.0 {
+        return None;
+    }
+    let first = first.to_array().map(|c| c as usize);
+    (0..3)
+        .all(|a| first[a] + grid.dims[a] <= volume.dims[a])
+        .then_some(first)
 }
 
 impl<'a> Sampler<'a> {
@@ -233,7 +254,9 @@ impl<'a> Sampler<'a> {
             layers,
             ranges,
             supports,
-            on_own_grid: *grid == volume.grid && volume.basis.is_separable(),
+            on_own_grid: volume_node_of(&volume.grid, grid).is_some()
+                && volume.basis.is_separable(),
+            first_volume_node: volume_node_of(&volume.grid, grid),
         }
     }
 
@@ -300,6 +323,16 @@ impl<'a> Sampler<'a> {
                     out[at..at + n[0]].copy_from_slice(&values[at..at + n[0]]);
                 }
             }
+            return out;
+        }
+        if let Some(first) = self
+            .first_volume_node
+            .filter(|_| self.volume.basis.is_separable())
+        {
+            // A grid on the volume's own nodes (a box of them): the nodes' values from the
+            // coefficients around them, as on the whole grid, not by evaluating the basis.
+            let lo = [0, 1, 2].map(|a| first[a] + lo[a]);
+            pgvol_field::fit::box_node_values_into(self.volume, lo, n, &mut out);
             return out;
         }
         for k in 0..n[2] {
@@ -490,6 +523,51 @@ mod tests {
     use crate::samples::PaddedNodes;
     use crate::test_volumes::two_balls;
     use pgvol_field::Basis;
+
+    #[test]
+    fn a_box_of_the_volumes_nodes_takes_their_values_from_the_coefficients() {
+        let v = two_balls(Basis::Bspline3);
+        let g = v.grid;
+        let first = [5usize, 7, 3];
+        let sub = Grid {
+            origin: g.origin + glam::Vec3::new(5.0, 7.0, 3.0) * g.spacing,
+            dims: [21, 19, 25],
+            ..g
+        };
+        assert_eq!(volume_node_of(&g, &sub), Some(first));
+        // Off the nodes, at another spacing or past the grid: sampled as any grid.
+        let off = Grid {
+            origin: sub.origin + glam::Vec3::splat(0.5 * g.spacing),
+            ..sub
+        };
+        assert_eq!(volume_node_of(&g, &off), None);
+        let finer = Grid {
+            spacing: 0.5 * g.spacing,
+            ..sub
+        };
+        assert_eq!(volume_node_of(&g, &finer), None);
+        let past = Grid {
+            dims: [40, 19, 25],
+            ..sub
+        };
+        assert_eq!(volume_node_of(&g, &past), None);
+        let whole = pgvol_field::fit::node_values_sparse(&v);
+        let sampler = Sampler::new(&v, &sub, 0.0, 0..sub.dims[2].div_ceil(BRICK_EDGE));
+        for b in [[0, 0, 0], [1, 2, 1], [2, 2, 3]] {
+            let values = sampler.evaluate(b);
+            let (lo, n) = brick_extent(&sub, b);
+            for k in 0..n[2] {
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        let node = [lo[0] + i, lo[1] + j, lo[2] + k];
+                        let want = whole.get([0, 1, 2].map(|a| first[a] + node[a]));
+                        let got = values[i + BRICK_EDGE * (j + BRICK_EDGE * k)];
+                        assert_eq!(got.to_bits(), want.to_bits(), "{b:?} {node:?}");
+                    }
+                }
+            }
+        }
+    }
 
     /// Every active block of full sampling is a candidate, and the boxes read hold the same
     /// sides as full sampling, with bounds standing in for some values.

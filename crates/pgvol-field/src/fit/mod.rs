@@ -32,7 +32,9 @@ pub use options::{FitMethod, FitOptions};
 pub use report::{FitReport, FitStages};
 pub use sign_check::spurious_sign_changes;
 pub use sparse_interp::SPARSE_GROUP;
-pub use sparse_node_values::{brick_node_values, brick_node_values_into, node_values_sparse};
+pub use sparse_node_values::{
+    box_node_values_into, brick_node_values, brick_node_values_into, node_values_sparse,
+};
 pub use wls::wls_band;
 
 use std::time::Instant;

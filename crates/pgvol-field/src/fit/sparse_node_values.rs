@@ -68,23 +68,55 @@ pub fn brick_node_values_into(volume: &CoefficientVolume, b: [usize; 3], out: &m
     let coeffs = &volume.coeffs;
     let (lo, n) = coeffs.brick_extent(b);
     out.fill(coeffs.background_of(b));
-    let Some((side, centre)) = taps(volume.basis) else {
-        // Radial bases: evaluated directly.
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let p = volume.grid.point(lo[0] + i, lo[1] + j, lo[2] + k);
-                    out[i + BRICK_EDGE * (j + BRICK_EDGE * k)] = volume.value(p);
-                }
-            }
-        }
-        return;
+    let Some(taps) = taps(volume.basis) else {
+        return direct_node_values(volume, lo, n, out);
     };
     let mut win = [0.0f32; WIN * WIN * WIN];
     window(coeffs, b, lo, n, &mut win);
     if n == [BRICK_EDGE; 3] {
-        return blur_whole(&win, side, centre, out);
+        return blur_whole(&win, taps.0, taps.1, out);
     }
+    blur_box(&win, n, taps, out);
+}
+
+/// The field at the `n` nodes (at most a brick's per axis) of the volume's own grid from node
+/// `lo`, anywhere in the grid, laid out as a brick's (x fastest, [`BRICK_EDGE`] per row): the
+/// values [`brick_node_values`] gives at those nodes, to the bit. Entries past `n` are left as
+/// they are.
+pub fn box_node_values_into(
+    volume: &CoefficientVolume,
+    lo: [usize; 3],
+    n: [usize; 3],
+    out: &mut BrickValues,
+) {
+    debug_assert!(n.iter().all(|&k| k <= BRICK_EDGE));
+    let Some(taps) = taps(volume.basis) else {
+        return direct_node_values(volume, lo, n, out);
+    };
+    let mut win = [0.0f32; WIN * WIN * WIN];
+    gathered_window(&volume.coeffs, lo, n, &mut win);
+    blur_box(&win, n, taps, out);
+}
+
+/// Radial bases: the field evaluated at each node.
+fn direct_node_values(
+    volume: &CoefficientVolume,
+    lo: [usize; 3],
+    n: [usize; 3],
+    out: &mut BrickValues,
+) {
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let p = volume.grid.point(lo[0] + i, lo[1] + j, lo[2] + k);
+                out[i + BRICK_EDGE * (j + BRICK_EDGE * k)] = volume.value(p);
+            }
+        }
+    }
+}
+
+/// The 3-tap blur along x, y and z of the window of `n` nodes, into `out`'s first `n` nodes.
+fn blur_box(win: &Window, n: [usize; 3], (side, centre): (f32, f32), out: &mut BrickValues) {
     let blur = |a: f32, c: f32, d: f32| side * (a + d) + centre * c;
     let mut xs = [0.0f32; WIN * WIN * WIN];
     for z in 0..n[2] + 2 {
@@ -272,6 +304,55 @@ mod tests {
             }
         }
         assert!(inner >= 8, "{inner}");
+    }
+
+    #[test]
+    fn boxes_anywhere_give_the_bricks_node_values_to_the_bit() {
+        let dims = [21, 17, 30];
+        let grid = Grid {
+            origin: Vec3::new(-0.3, 0.1, 0.2),
+            spacing: 0.07,
+            dims,
+            offset: Default::default(),
+        };
+        let dense: Vec<f32> = (0..grid.len())
+            .map(|i| ((i * 37) % 11) as f32 * 0.1 - 0.5)
+            .collect();
+        for basis in [Basis::Bspline2, Basis::Bspline3, Basis::Pg { n: 3, r: 1.5 }] {
+            let mut coeffs = SparseGrid::from_dense(dims, &dense, Background::clamp(0.6));
+            let mut turn = 0;
+            coeffs.retain(|_, _| {
+                turn += 1;
+                turn % 3 != 0
+            });
+            let vol = CoefficientVolume::from_sparse(grid, basis, coeffs).unwrap();
+            let whole = node_values_sparse(&vol);
+            // Boxes off the bricks' lattice, across brick faces, at both ends of the grid.
+            for (lo, n) in [
+                ([3, 5, 9], [8, 8, 8]),
+                ([0, 0, 0], [5, 8, 3]),
+                ([15, 9, 22], [6, 8, 8]),
+                ([7, 1, 13], [1, 7, 2]),
+            ] {
+                let mut out = [f32::NAN; BRICK_NODES];
+                box_node_values_into(&vol, lo, n, &mut out);
+                for k in 0..n[2] {
+                    for j in 0..n[1] {
+                        for i in 0..n[0] {
+                            let got = out[i + BRICK_EDGE * (j + BRICK_EDGE * k)];
+                            let want = whole.get([lo[0] + i, lo[1] + j, lo[2] + k]);
+                            assert_eq!(
+                                got.to_bits(),
+                                want.to_bits(),
+                                "{basis:?} {lo:?} {i} {j} {k}"
+                            );
+                        }
+                    }
+                }
+                // Entries past the box are left alone.
+                assert!(out[BRICK_NODES - 1].is_nan() || n == [BRICK_EDGE; 3]);
+            }
+        }
     }
 
     #[test]
