@@ -163,7 +163,9 @@ impl<'a> SharpPlan<'a> {
         if plan.given.is_none() {
             plan.built = Some(ExactDistance::new(mesh, sign)?);
         }
-        let bvh = plan.exact().bvh();
+        let Some(bvh) = plan.exact().map(ExactDistance::bvh) else {
+            return Ok(plan);
+        };
         let triangle = |p| bvh.closest(p, f32::INFINITY).map(|c| c.triangle);
         let flat = FlatSides::new(SHARP_FLAT_BELOW, SHARP_FLAT_REACH, SHARP_FLAT_TURN);
         let features = feature_cells(mesh, &sharp, grid, SHARP_MIN_LENGTH, &flat, &triangle);
@@ -200,12 +202,9 @@ impl<'a> SharpPlan<'a> {
         Ok(plan)
     }
 
-    fn exact(&self) -> &ExactDistance<'a> {
-        match (self.given, &self.built) {
-            (Some(given), _) => given,
-            (None, Some(built)) => built,
-            (None, None) => unreachable!("a plan with creases has the exact distance"),
-        }
+    /// The mesh's exact distance, once the mesh is known to have creases.
+    fn exact(&self) -> Option<&ExactDistance<'a>> {
+        self.given.or(self.built.as_ref())
     }
 
     /// Whether any cell may get a vertex: else no coefficient is read.
@@ -229,12 +228,11 @@ impl<'a> SharpPlan<'a> {
             feature_cells: self.feature_cells,
             ..SharpReport::default()
         };
-        if self.boxes.is_empty() {
+        let Some(exact) = self.exact().filter(|_| !self.boxes.is_empty()) else {
             return Ok((None, nothing));
-        }
+        };
         let grid = volume.grid;
         let boxes = &self.boxes;
-        let exact = self.exact();
         let bvh = exact.bvh();
         let closest = |p| bvh.closest(p, f32::INFINITY).map(|c| c.point);
         let done = AtomicUsize::new(0);
