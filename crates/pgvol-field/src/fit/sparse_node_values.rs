@@ -306,9 +306,9 @@ mod tests {
         assert!(inner >= 8, "{inner}");
     }
 
-    #[test]
-    fn boxes_anywhere_give_the_bricks_node_values_to_the_bit() {
-        let dims = [21, 17, 30];
+    /// Coefficients varying node to node on a grid of `dims`, one brick in three left to the
+    /// background of its side.
+    fn patchy_volume(dims: [usize; 3], basis: Basis) -> CoefficientVolume {
         let grid = Grid {
             origin: Vec3::new(-0.3, 0.1, 0.2),
             spacing: 0.07,
@@ -318,14 +318,19 @@ mod tests {
         let dense: Vec<f32> = (0..grid.len())
             .map(|i| ((i * 37) % 11) as f32 * 0.1 - 0.5)
             .collect();
+        let mut coeffs = SparseGrid::from_dense(dims, &dense, Background::clamp(0.6));
+        let mut turn = 0;
+        coeffs.retain(|_, _| {
+            turn += 1;
+            turn % 3 != 0
+        });
+        CoefficientVolume::from_sparse(grid, basis, coeffs).unwrap()
+    }
+
+    #[test]
+    fn boxes_anywhere_give_the_bricks_node_values_to_the_bit() {
         for basis in [Basis::Bspline2, Basis::Bspline3, Basis::Pg { n: 3, r: 1.5 }] {
-            let mut coeffs = SparseGrid::from_dense(dims, &dense, Background::clamp(0.6));
-            let mut turn = 0;
-            coeffs.retain(|_, _| {
-                turn += 1;
-                turn % 3 != 0
-            });
-            let vol = CoefficientVolume::from_sparse(grid, basis, coeffs).unwrap();
+            let vol = patchy_volume([21, 17, 30], basis);
             let whole = node_values_sparse(&vol);
             // Boxes off the bricks' lattice, across brick faces, at both ends of the grid.
             for (lo, n) in [
@@ -358,29 +363,13 @@ mod tests {
     #[test]
     fn match_the_dense_node_values_for_every_basis_and_leave_far_bricks_alone() {
         for dims in [[21, 17, 30], [9, 9, 9], [2, 12, 5]] {
-            let grid = Grid {
-                origin: Vec3::new(-0.3, 0.1, 0.2),
-                spacing: 0.07,
-                dims,
-                offset: Default::default(),
-            };
-            let dense: Vec<f32> = (0..grid.len())
-                .map(|i| ((i * 37) % 11) as f32 * 0.1 - 0.5)
-                .collect();
             for basis in [
                 Basis::Trilinear,
                 Basis::Bspline2,
                 Basis::Bspline3,
                 Basis::Pg { n: 3, r: 1.5 },
             ] {
-                // Keep one brick in three; the others become the background of their side.
-                let mut coeffs = SparseGrid::from_dense(dims, &dense, Background::clamp(0.6));
-                let mut turn = 0;
-                coeffs.retain(|_, _| {
-                    turn += 1;
-                    turn % 3 != 0
-                });
-                let vol = CoefficientVolume::from_sparse(grid, basis, coeffs).unwrap();
+                let vol = patchy_volume(dims, basis);
                 let want = node_values(&vol);
                 let got = node_values_sparse(&vol).to_dense();
                 for (i, (a, b)) in want.iter().zip(&got).enumerate() {
