@@ -250,7 +250,7 @@ pub(crate) fn fit_volume(
 
 /// [`fit_volume`] with the mesh's distance queries `sdf` built, since `start` (the distance
 /// stage's time counts from there).
-fn fit_volume_with(
+pub(crate) fn fit_volume_with(
     sdf: &pgvol_sdf::MeshSdf,
     grid: pgvol_core::Grid,
     options: &EncodeOptions,

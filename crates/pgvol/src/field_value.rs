@@ -16,16 +16,17 @@ use pgvol_sdf::SignMode;
 
 use crate::band::{recorded_band, BAND_KEY};
 use crate::encode::{
-    fit_volume, is_pgv, EncodeOptions, StorageOptions, StorageReport, ENCODE_BAND,
+    fit_volume_with, is_pgv, EncodeOptions, StorageOptions, StorageReport, ENCODE_BAND,
 };
 use crate::error::{Error, ErrorKind, Result};
+use crate::exact_distance::ExactDistance;
 use crate::grid::GridSpec;
 use crate::memory;
 use crate::mesh_io;
 use crate::pgv_io::read_pgv;
 use crate::progress::{self, Progress, Silent};
 use crate::resolution::{check_pieces, check_wall, figure};
-use crate::sharp::store::{attach, SharpOptions};
+use crate::sharp::store::{attach_with, SharpOptions};
 use crate::timings::Timings;
 
 /// Grid nodes per axis when a mesh is encoded on the fly for an offset or a shell.
@@ -241,12 +242,26 @@ impl Field {
             _ => "encoding the mesh and making its walls",
         };
         memory::check_sparse_encode_then(job, &mesh, &grid, encode.band, walls)?;
-        let volume = fit_volume(&mesh, grid, &encode, &mut Timings::default(), progress)?.volume;
+        // Built once: the sharp-feature stage queries the same distance.
+        let start = std::time::Instant::now();
+        let exact = ExactDistance::new(&mesh, options.sign)?;
+        let timings = (&mut Timings::default(), start);
+        let volume = fit_volume_with(exact.sdf(), grid, &encode, timings, progress)?.volume;
+        let exact = options.sharp.enabled.then_some(exact);
         let band = encode.band * grid.spacing;
         let mut header = pgvol_format::header_for(&volume, "interp", Some(&mesh));
         header.metadata.insert(BAND_KEY.into(), format!("{band}"));
         let mut file = PgvFile { header, volume };
-        attach(&mut file, &mesh, options.sign, &options.sharp, progress)?;
+        let sign = options.sign;
+        attach_with(
+            &mut file,
+            &mesh,
+            sign,
+            exact.as_ref(),
+            &options.sharp,
+            progress,
+        )?;
+        drop(exact);
         Ok(Field {
             file,
             bounds: (lo, hi),
