@@ -115,12 +115,18 @@ struct QuadRun {
     extra: Vec<u64>,
 }
 
+/// Which cells get vertices, named by their lowest sample.
+pub(crate) type CellKeep<'a> = dyn Fn([usize; 3]) -> bool + Sync + 'a;
+
+/// The dual mesh of `crossings`; with `only`, just the vertices of the cells it keeps (with
+/// their cells when `with_homes`) and no triangles.
 pub(crate) fn dual_contour(
     samples: &Samples,
     crossings: &Crossings,
     field: &dyn Field,
     placement: Placement,
     with_homes: bool,
+    only: Option<&CellKeep>,
 ) -> DualMesh {
     let verts = crossings;
     let blocks = crossings.blocks.active.len();
@@ -129,9 +135,17 @@ pub(crate) fn dual_contour(
         .into_par_iter()
         .map(|slot| {
             tick(counter.as_ref());
-            block_vertices(samples, verts, field, placement, slot, with_homes)
+            block_vertices(samples, verts, field, (placement, only), slot, with_homes)
         })
         .collect();
+    if only.is_some() {
+        let mut out = DualMesh::default();
+        for part in parts {
+            out.mesh.positions.extend_from_slice(&part.positions);
+            out.homes.extend_from_slice(&part.homes);
+        }
+        return out;
+    }
 
     // Each (crossing, ring slot) is written by exactly one cell, so the links can be stored in
     // parallel; the atomics only make that expressible, the result does not depend on order.
@@ -223,7 +237,7 @@ fn block_vertices(
     samples: &Samples,
     verts: &Crossings,
     field: &dyn Field,
-    placement: Placement,
+    (placement, only): (Placement, Option<&CellKeep>),
     slot: usize,
     with_homes: bool,
 ) -> CellVertices {
@@ -243,6 +257,9 @@ fn block_vertices(
     let origin = block.origin;
     let find = |n: [usize; 3], axis: usize| verts.find_from(slot, origin, n, axis);
     for_crossed_cells(table, samples.iso, block, |cell, case, joined| {
+        if only.is_some_and(|keep| !keep(cell)) {
+            return;
+        }
         let [i, j, k] = cell;
         let comps = components(case, joined);
         let corner = samples.node([i, j, k]);

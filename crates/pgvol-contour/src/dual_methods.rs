@@ -4,11 +4,13 @@
 use glam::Vec3;
 use pgvol_core::Mesh;
 
+use crate::cell_set::edge_touches;
 use crate::crossings::{all_crossings, with_normal, Place, PlaceWithNormal, Refine};
-use crate::dual::{self, DualMesh, Placement};
+use crate::dual::{self, CellKeep, DualMesh, Placement};
 use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::extract::EXTRA_FLAG;
 use crate::field::Field;
+use crate::place::lerp_crossing;
 use crate::root::cubic_edge_root;
 use crate::samples::{DenseNodes, Samples};
 
@@ -57,14 +59,18 @@ pub fn dual_contour(
     };
     let nodes = DenseNodes::new(values, dims);
     match Samples::checked(&nodes, origin, spacing, iso) {
-        Some(samples) => dual_contour_with(&samples, field, options, &place, None, false).mesh,
+        Some(samples) => {
+            dual_contour_with(&samples, field, options, &place, None, false, None).mesh
+        }
         None => Mesh::default(),
     }
 }
 
 /// [`dual_contour`] on any source of samples, with the edge crossings and their normals from
 /// `place`, and the vertices of the cells `stored` gives taken from it; each vertex's cell too
-/// when `with_homes`.
+/// when `with_homes`. With `only` (cells named by their lowest sample), just those cells'
+/// vertices come out, with their cells and no triangles: the other edges get no crossing
+/// placed, the other cells no vertex.
 pub(crate) fn dual_contour_with(
     samples: &Samples,
     field: &dyn Field,
@@ -72,15 +78,30 @@ pub(crate) fn dual_contour_with(
     place: &PlaceWithNormal,
     stored: Option<&StoredVertices>,
     with_homes: bool,
+    only: Option<&CellKeep>,
 ) -> DualMesh {
-    let crossings = all_crossings(samples, Place::WithNormal(place), EXTRA_FLAG);
-    dual::dual_contour(
-        samples,
-        &crossings,
-        field,
-        Placement::Planes(options, stored),
-        with_homes,
-    )
+    let Some(keep) = only else {
+        let crossings = all_crossings(samples, Place::WithNormal(place), EXTRA_FLAG);
+        let placement = Placement::Planes(options, stored);
+        return dual::dual_contour(samples, &crossings, field, placement, with_homes, None);
+    };
+    // An edge none of whose cells is kept is only counted: its ends' linear crossing, no
+    // normal, and no call of `place`, which is where the field is read.
+    let inv_h = 1.0 / samples.spacing;
+    let place_kept = |a: Vec3, va: f32, b: Vec3, vb: f32, axis: usize| {
+        let n = ((a - samples.origin) * inv_h)
+            .round()
+            .to_array()
+            .map(|x| x as usize);
+        if edge_touches(keep, n, axis) {
+            place(a, va, b, vb, axis)
+        } else {
+            (lerp_crossing(a, va, b, vb, samples.iso), Vec3::ZERO)
+        }
+    };
+    let crossings = all_crossings(samples, Place::WithNormal(&place_kept), EXTRA_FLAG);
+    let placement = Placement::Planes(options, stored);
+    dual::dual_contour(samples, &crossings, field, placement, true, Some(keep))
 }
 
 /// Extracts the surface `value == iso` by surface nets: one vertex per surface component of
@@ -130,5 +151,13 @@ pub(crate) fn surface_nets_with(
     stored: Option<&StoredVertices>,
 ) -> Mesh {
     let crossings = all_crossings(samples, Place::Position(refine), EXTRA_FLAG);
-    dual::dual_contour(samples, &crossings, field, Placement::Mean(stored), false).mesh
+    dual::dual_contour(
+        samples,
+        &crossings,
+        field,
+        Placement::Mean(stored),
+        false,
+        None,
+    )
+    .mesh
 }

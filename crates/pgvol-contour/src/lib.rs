@@ -35,6 +35,7 @@
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
 mod blocks;
+mod cell_set;
 mod cells;
 mod components;
 mod crossings;
@@ -67,6 +68,7 @@ mod volume;
 mod volume_root;
 mod window_or;
 
+pub use cell_set::CellSet;
 pub use dual::DualMesh;
 pub use dual_methods::{dual_contour, surface_nets};
 pub use dual_options::{
@@ -81,5 +83,5 @@ pub use quality::min_angle_histogram;
 pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
 pub use volume::{
     contour_field, contour_field_hermite, contour_sampled, contour_volume, contour_volume_placing,
-    dual_contour_interior, EdgeHermite, Method, SamplesError,
+    dual_contour_interior, dual_vertices_interior, EdgeHermite, Method, SamplesError,
 };

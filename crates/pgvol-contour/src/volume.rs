@@ -4,8 +4,9 @@
 use glam::Vec3;
 use pgvol_field::{CoefficientVolume, Grid};
 
+use crate::cell_set::CellSet;
 use crate::crossings::with_normal;
-use crate::dual::DualMesh;
+use crate::dual::{CellKeep, DualMesh};
 use crate::dual_methods::{dual_contour_with, surface_nets_with};
 use crate::dual_options::{DualContourOptions, StoredVertices};
 use crate::edge_cubic::crossing_on_grid_edge;
@@ -70,7 +71,8 @@ pub fn contour_volume_placing(
     stored: Option<&StoredVertices>,
 ) -> pgvol_core::Mesh {
     let options = dual_options(stored.is_some());
-    contour_volume_with(volume, grid, iso, (method, &options), report, stored, false)
+    let method = (method, &options);
+    contour_volume_with(volume, grid, iso, method, report, stored, (false, None)).mesh
 }
 
 /// Dual contouring's options for a volume whose creases are (`true`) or are not given by
@@ -97,11 +99,24 @@ pub fn dual_contour_interior(
     report: Report,
 ) -> pgvol_core::Mesh {
     let method = (Method::DualContouring, &dual_options(true));
-    contour_volume_with(volume, grid, iso, method, report, None, true)
+    contour_volume_with(volume, grid, iso, method, report, None, (true, None)).mesh
+}
+
+/// The vertices [`dual_contour_interior`] gives the cells of `grid` in `cells`, each with its
+/// cell, and no triangles: the other cells' crossings and vertices are not worked out.
+pub fn dual_vertices_interior(
+    volume: &CoefficientVolume,
+    grid: &Grid,
+    iso: f32,
+    cells: &CellSet,
+    report: Report,
+) -> DualMesh {
+    let method = (Method::DualContouring, &dual_options(true));
+    contour_volume_with(volume, grid, iso, method, report, None, (true, Some(cells)))
 }
 
 /// [`contour_volume_placing`], the padding's cells refined on the field or (`interior_only`)
-/// not.
+/// not; with `only`, dual contouring's vertices of those cells alone, with their cells.
 fn contour_volume_with(
     volume: &CoefficientVolume,
     grid: &Grid,
@@ -109,8 +124,8 @@ fn contour_volume_with(
     (method, options): (Method, &DualContourOptions),
     report: Report,
     stored: Option<&StoredVertices>,
-    interior_only: bool,
-) -> pgvol_core::Mesh {
+    (interior_only, only): (bool, Option<&CellSet>),
+) -> DualMesh {
     if method == Method::MarchingCubes {
         let mut mesh = pgvol_core::Mesh::default();
         let collect = &mut |part: crate::runs::RunPart| {
@@ -119,7 +134,10 @@ fn contour_volume_with(
             Ok(())
         };
         return match crate::runs::contour_runs(&mut { volume }, grid, iso, report, collect) {
-            Ok(()) => in_frame_of(grid, mesh),
+            Ok(()) => DualMesh {
+                mesh: in_frame_of(grid, mesh),
+                homes: Vec::new(),
+            },
             Err(crate::runs::RunsError::TooManyVertices) => panic!("too many vertices"),
         };
     }
@@ -128,16 +146,20 @@ fn contour_volume_with(
     let nodes = crate::sparse_sample::VolumeNodes::new(volume, grid, iso, sampling);
     let rest = Some(span.part(SAMPLING_PART, 1.0));
     let interior = interior_only.then(|| (grid.origin, grid.max_corner()));
-    let mesh = contour_nodes(
+    let keep = only.map(|cells| move |c: [usize; 3]| cells.contains_padded(c, 1));
+    let out = contour_nodes(
         volume,
         &padded(grid),
         &nodes,
         iso,
         (method, interior),
         rest,
-        (options, stored),
+        (options, stored, keep.as_ref().map(|k| k as &CellKeep)),
     );
-    in_frame_of(grid, mesh)
+    DualMesh {
+        mesh: in_frame_of(grid, out.mesh),
+        homes: out.homes,
+    }
 }
 
 /// The part of [`contour_volume`]'s progress spent evaluating the field at nodes.
@@ -160,8 +182,9 @@ pub(crate) fn contour_samples(
         iso,
         (method, None),
         None,
-        (&DualContourOptions::default(), None),
+        (&DualContourOptions::default(), None, None),
     )
+    .mesh
 }
 
 /// Why [`contour_field`] cannot contour the samples it is given.
@@ -199,10 +222,12 @@ pub fn contour_field(
     options: &DualContourOptions,
     report: Report,
 ) -> Result<pgvol_core::Mesh, SamplesError> {
-    contour_field_placing(field, grid, inner, iso, method, options, None, report).map(|d| d.mesh)
+    let hermite = (None, None);
+    contour_field_placing(field, grid, inner, iso, method, options, hermite, report).map(|d| d.mesh)
 }
 
-/// [`contour_field`], with dual contouring's Hermite data from `hermite` where it answers.
+/// [`contour_field`], with dual contouring's Hermite data from `hermite` where it answers, and
+/// (`only`) the vertices of those cells alone.
 #[allow(clippy::too_many_arguments)]
 fn contour_field_placing(
     field: &dyn Field,
@@ -211,7 +236,7 @@ fn contour_field_placing(
     iso: f32,
     method: Method,
     options: &DualContourOptions,
-    hermite: Option<&EdgeHermite>,
+    (hermite, only): (Option<&EdgeHermite>, Option<&CellSet>),
     report: Report,
 ) -> Result<DualMesh, SamplesError> {
     let nodes = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
@@ -275,7 +300,17 @@ fn contour_field_placing(
             } else {
                 field
             };
-            dual_contour_with(&samples, placing, options, &place, None, hermite.is_some())
+            let keep = only.map(|cells| move |c: [usize; 3]| cells.contains_padded(c, 1));
+            let keep = keep.as_ref().map(|k| k as &CellKeep);
+            dual_contour_with(
+                &samples,
+                placing,
+                options,
+                &place,
+                None,
+                hermite.is_some(),
+                keep,
+            )
         }
         Method::SurfaceNets => DualMesh {
             mesh: surface_nets_with(&samples, field, &refine, None),
@@ -299,11 +334,13 @@ pub type EdgeHermite<'a> = dyn Fn(Vec3, Vec3, usize, bool) -> Option<(Vec3, Vec3
 /// only cells outside the grid use them. A crossing is kept
 /// on its edge as every crossing is, so the guarantees hold whatever `hermite` gives. The
 /// mesh comes with the cell of each cell vertex, for callers that compare vertices cell by
-/// cell.
+/// cell. With `only`, just the vertices of those cells of `grid` come out, and no triangles:
+/// the other edges and cells are not worked out.
 ///
 /// # Errors
 ///
 /// As [`contour_field`].
+#[allow(clippy::too_many_arguments)]
 pub fn contour_field_hermite(
     field: &dyn Field,
     grid: &Grid,
@@ -311,16 +348,18 @@ pub fn contour_field_hermite(
     iso: f32,
     options: &DualContourOptions,
     hermite: &EdgeHermite,
+    only: Option<&CellSet>,
     report: Report,
 ) -> Result<DualMesh, SamplesError> {
+    let dc = Method::DualContouring;
     contour_field_placing(
         field,
         grid,
         inner,
         iso,
-        Method::DualContouring,
+        dc,
         options,
-        Some(hermite),
+        (Some(hermite), only),
         report,
     )
 }
@@ -351,8 +390,9 @@ pub fn contour_sampled(
             iso,
             (method, None),
             None,
-            (&DualContourOptions::default(), None),
-        ),
+            (&DualContourOptions::default(), None, None),
+        )
+        .mesh,
     )
 }
 
@@ -366,15 +406,23 @@ fn contour_nodes(
     iso: f32,
     (method, interior): (Method, Option<(Vec3, Vec3)>),
     span: Option<Span>,
-    (options, stored): (&DualContourOptions, Option<&StoredVertices>),
-) -> pgvol_core::Mesh {
+    (options, stored, only): (
+        &DualContourOptions,
+        Option<&StoredVertices>,
+        Option<&CellKeep>,
+    ),
+) -> DualMesh {
     let Some(samples) = Samples::checked(nodes, grid.origin, grid.spacing, iso) else {
-        return pgvol_core::Mesh::default();
+        return DualMesh::default();
     };
     let samples = samples.reporting(span);
     let refine = volume_refine(volume, iso);
+    let mesh_only = |mesh| DualMesh {
+        mesh,
+        homes: Vec::new(),
+    };
     match method {
-        Method::MarchingCubes => marching_cubes_samples(&samples, &refine),
+        Method::MarchingCubes => mesh_only(marching_cubes_samples(&samples, &refine)),
         Method::DualContouring => {
             // On the volume's own grid, crossing and normal come from one read of the edge's
             // coefficients; elsewhere as for marching cubes, then a general evaluation.
@@ -390,14 +438,13 @@ fn contour_nodes(
                 }
                 _ => volume.value_gradient(p),
             };
-            match interior {
-                Some(_) => {
-                    dual_contour_with(&samples, &inside_only, options, &place, stored, false).mesh
-                }
-                None => dual_contour_with(&samples, volume, options, &place, stored, false).mesh,
-            }
+            let field: &dyn Field = match interior {
+                Some(_) => &inside_only,
+                None => volume,
+            };
+            dual_contour_with(&samples, field, options, &place, stored, false, only)
         }
-        Method::SurfaceNets => surface_nets_with(&samples, volume, &refine, stored),
+        Method::SurfaceNets => mesh_only(surface_nets_with(&samples, volume, &refine, stored)),
     }
 }
 
@@ -481,6 +528,57 @@ mod tests {
             same > 100 && moved > 10,
             "{same} inside, {moved} padding vertices moved"
         );
+    }
+
+    /// Asked for some cells only, interior dual contouring gives those cells exactly the
+    /// vertices of the whole contour, with their cells, and nothing else.
+    #[test]
+    fn the_cells_asked_for_get_the_whole_contours_vertices() {
+        let v = two_balls(Basis::Bspline3);
+        let h = v.grid.spacing;
+        let sub = Grid {
+            origin: v.grid.point(6, 8, 10),
+            spacing: h,
+            dims: [16, 14, 12],
+            offset: Default::default(),
+        };
+        let quiet = pgvol_core::progress::QUIET;
+        let whole = dual_contour_interior(&v, &sub, 0.0, quiet);
+        // Each vertex of the whole contour by its cell (kept a margin inside it).
+        let cell_of = |p: Vec3| ((p - sub.origin) / h).floor().to_array().map(|x| x as i64);
+        let in_grid = |c: [i64; 3]| (0..3).all(|a| c[a] >= 0 && c[a] + 1 < sub.dims[a] as i64);
+        let mut by_cell: Vec<([i64; 3], Vec3)> = whole
+            .positions
+            .iter()
+            .map(|&p| (cell_of(p), p))
+            .filter(|&(c, _)| in_grid(c))
+            .collect();
+        by_cell.sort_by(|a, b| {
+            a.0.cmp(&b.0)
+                .then(a.1.to_array().partial_cmp(&b.1.to_array()).unwrap())
+        });
+        // Every other crossed cell, in a checkerboard.
+        let picked = |c: [i64; 3]| (c[0] + c[1] + c[2]) % 2 == 0;
+        let mut cells = CellSet::new(sub.dims);
+        for &(c, _) in by_cell.iter().filter(|(c, _)| picked(*c)) {
+            assert!(cells.insert(c.map(|x| x as usize)));
+        }
+        let some = dual_vertices_interior(&v, &sub, 0.0, &cells, quiet);
+        assert!(some.mesh.triangles.is_empty());
+        assert_eq!(some.homes.len(), some.mesh.positions.len());
+        let mut got: Vec<([i64; 3], Vec3)> = some
+            .homes
+            .iter()
+            .zip(&some.mesh.positions)
+            .map(|(&home, &p)| (cell_of(home + Vec3::splat(0.5 * h)), p))
+            .collect();
+        got.sort_by(|a, b| {
+            a.0.cmp(&b.0)
+                .then(a.1.to_array().partial_cmp(&b.1.to_array()).unwrap())
+        });
+        let expected: Vec<_> = by_cell.into_iter().filter(|(c, _)| picked(*c)).collect();
+        assert!(expected.len() > 100, "{} vertices", expected.len());
+        assert_eq!(got, expected);
     }
 
     #[test]

@@ -74,10 +74,12 @@ impl<'m> ExactDistance<'m> {
     /// not answer are found as [`Self::contour`] finds them, and smooth cells' vertices are
     /// projected onto the distance's zero set as there. A vertex may leave its cell by up to
     /// `reach` cells (`DualContourOptions::reach`); the mesh comes with each vertex's cell.
+    /// With `only`, just those cells' vertices and no triangles.
     pub(crate) fn contour_from_faces(
         &self,
         grid: &Grid,
         reach: f32,
+        only: Option<&pgvol_contour::CellSet>,
         progress: &dyn Progress,
     ) -> Result<DualMesh> {
         let sampled = sample(&self.sdf, grid, Extent::Band(NODE_BAND), progress)?;
@@ -95,7 +97,7 @@ impl<'m> ExactDistance<'m> {
         progress::stage(progress, "contour", |update| {
             let values = &sampled.values;
             pgvol_contour::contour_field_hermite(
-                &field, grid, values, 0.0, &options, &hermite, update,
+                &field, grid, values, 0.0, &options, &hermite, only, update,
             )
         })?
         .map_err(|e| Error::new(ErrorKind::Internal, e.to_string()).caused_by(e))
@@ -121,7 +123,10 @@ mod tests {
         }
         let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::splat(1.0), 24).unwrap();
         let exact = ExactDistance::new(&cube, SignMode::Auto).unwrap();
-        let out = exact.contour_from_faces(&grid, 0.0, &Silent).unwrap().mesh;
+        let out = exact
+            .contour_from_faces(&grid, 0.0, None, &Silent)
+            .unwrap()
+            .mesh;
         let h = grid.spacing;
         // Signed distance from the cube, in its own frame.
         let from_cube = |p: Vec3| {

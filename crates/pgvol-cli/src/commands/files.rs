@@ -66,9 +66,9 @@ pub struct EncodeArgs {
     /// `auto` stores the exact dual-contouring vertices of the cells at creases and corners, so
     /// that `decode --method dc` (or `sn`) keeps them sharp; smooth shapes store nothing and cost nothing,
     /// and elsewhere the work follows the cells near creases (measured CPU time of the whole
-    /// encoding: 1.1x that of `off` on the bunny at 256³-512³, 2.0x on fandisk at 256³,
-    /// 1.3x at 512³, 1.1-1.3x at 1024³-2048³).
-    /// `off` stores none.
+    /// encoding: 1.1x that of `off` on the bunny at 256³-512³, 1.6x on fandisk at 256³,
+    /// 1.3x at 512³, 1.1x at 1024³-2048³).
+    /// `off` stores none: the default decoding (marching cubes) does not read the section.
     #[arg(long, value_enum, default_value_t)]
     pub sharp: SharpArg,
     /// Crease angle in degrees: edges of the mesh whose faces turn by more (and still do a grid

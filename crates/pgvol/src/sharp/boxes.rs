@@ -25,6 +25,24 @@ pub(crate) struct CellBox {
     pub grid: Grid,
 }
 
+impl CellBox {
+    /// The owned cells, named on the box's sub-grid of `grid`.
+    pub(crate) fn owned_cells(&self, grid: &Grid) -> pgvol_contour::CellSet {
+        // The sub-grid's first node, on `grid`.
+        let first = ((self.grid.origin - grid.origin) / grid.spacing)
+            .round()
+            .to_array()
+            .map(|x| x as u64);
+        let mut set = pgvol_contour::CellSet::new(self.grid.dims);
+        for &key in &self.owned {
+            let c = cell_at(grid, key);
+            let inside = set.insert([0, 1, 2].map(|a| (c[a] - first[a]) as usize));
+            debug_assert!(inside, "an owned cell lies in its box's sub-grid");
+        }
+        set
+    }
+}
+
 /// `keys` (ascending cells of `grid`) grouped by the box of [`BOX_CELLS`]³ cells each lies in,
 /// each group with the sub-grid spanning its cells' bounds and the margin.
 pub(crate) fn boxes(keys: &[u64], grid: &Grid) -> Vec<CellBox> {

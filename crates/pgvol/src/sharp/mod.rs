@@ -99,7 +99,7 @@ mod tests {
         let dc = Method::DualContouring;
         let exact = ExactDistance::new(&cube, sign)
             .unwrap()
-            .contour_from_faces(&grid, pgvol_contour::MAX_OUTSIDE_REACH, &Silent)
+            .contour_from_faces(&grid, pgvol_contour::MAX_OUTSIDE_REACH, None, &Silent)
             .unwrap();
         let decode = DecodeOptions {
             method: dc,

@@ -4,6 +4,7 @@
 use glam::Vec3;
 use pgvol_contour::DualMesh;
 use pgvol_core::{Grid, Mesh};
+use rayon::prelude::*;
 
 use super::cells::{cell_at, cell_keys, key_of, single_vertices, CellVertex};
 
@@ -15,7 +16,7 @@ use super::cells::{cell_at, cell_keys, key_of, single_vertices, CellVertex};
 pub(crate) fn sharp_edges(mesh: &Mesh, angle: f32) -> SharpEdges {
     let normals: Vec<Vec3> = mesh
         .triangles
-        .iter()
+        .par_iter()
         .map(|t| {
             let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
             (b - a).cross(c - a).normalize_or_zero()
@@ -32,7 +33,8 @@ pub(crate) fn sharp_edges(mesh: &Mesh, angle: f32) -> SharpEdges {
             })
         })
         .collect();
-    edges.sort_unstable();
+    // Equal entries are identical, so the parallel sort's order is the sequential one.
+    edges.par_sort_unstable();
     let cos = angle.cos();
     let edges = edges
         .windows(2)
@@ -75,7 +77,7 @@ pub(crate) fn feature_cells(
     let normals = &sharp.normals;
     let sharp: Vec<(u32, u32)> = sharp
         .edges
-        .iter()
+        .par_iter()
         .filter(|&&(a, b, s, t)| {
             let test = CreaseTest {
                 mesh,

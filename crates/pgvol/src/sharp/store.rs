@@ -46,9 +46,9 @@ pub const SHARP_TOLERANCE: f32 = 0.005;
 /// Whether and how encoding stores sharp-feature vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SharpOptions {
-    /// Store them (default `false`: finding them costs time in proportion to the cells near
-    /// creases, more than the encoding's own on crease-rich parts); smooth shapes store
-    /// nothing either way and cost nothing.
+    /// Store them (default `false`: the default decoding, marching cubes, does not read them,
+    /// and finding them costs time in proportion to the cells near creases); smooth shapes
+    /// store nothing either way and cost nothing.
     pub enabled: bool,
     /// Crease angle in degrees (default [`DEFAULT_SHARP_ANGLE`]).
     pub angle: f32,
@@ -244,16 +244,20 @@ impl<'a> SharpPlan<'a> {
                         return Err(Error::new(ErrorKind::Cancelled, "cancelled"));
                     }
                     let sub = &cell_box.grid;
-                    let exact =
-                        exact.contour_from_faces(sub, pgvol_contour::MAX_OUTSIDE_REACH, &Silent)?;
+                    // Only the owned cells' vertices are compared: the rest of the box, most of
+                    // its crossed cells, is not contoured.
+                    let owned = cell_box.owned_cells(&grid);
+                    let reach = pgvol_contour::MAX_OUTSIDE_REACH;
+                    let exact = exact.contour_from_faces(sub, reach, Some(&owned), &Silent)?;
                     let quiet = pgvol_core::progress::QUIET;
-                    let smooth = pgvol_contour::dual_contour_interior(volume, sub, 0.0, quiet);
+                    let smooth =
+                        pgvol_contour::dual_vertices_interior(volume, sub, 0.0, &owned, quiet);
                     let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
                     update.update(finished as f64 / boxes.len() as f64);
                     Ok(stored_cells(
                         &cell_box.owned,
                         &exact,
-                        &smooth,
+                        &smooth.mesh,
                         &grid,
                         SHARP_TOLERANCE,
                         &closest,
