@@ -490,19 +490,25 @@ mod tests {
         assert!(worst < 1e-3 * v.grid.spacing, "{worst}");
     }
 
+    /// The two balls' volume and a sub-grid of its nodes from node `first`, `dims` nodes wide.
+    fn two_balls_and_sub_grid(first: [usize; 3], dims: [usize; 3]) -> (CoefficientVolume, Grid) {
+        let v = two_balls(Basis::Bspline3);
+        let sub = Grid {
+            origin: v.grid.point(first[0], first[1], first[2]),
+            spacing: v.grid.spacing,
+            dims,
+            offset: Default::default(),
+        };
+        (v, sub)
+    }
+
     /// On a sub-grid cutting through the shape, the cells a cell or more inside the sub-grid get
     /// the vertices [`contour_volume_placing`] gives the cells it stores none for, and the
     /// padding's own cells differ.
     #[test]
     fn interior_dual_contouring_keeps_the_inside_cells_vertices() {
-        let v = two_balls(Basis::Bspline3);
+        let (v, sub) = two_balls_and_sub_grid([8, 10, 12], [14, 12, 10]);
         let h = v.grid.spacing;
-        let sub = Grid {
-            origin: v.grid.point(8, 10, 12),
-            spacing: h,
-            dims: [14, 12, 10],
-            offset: Default::default(),
-        };
         let quiet = pgvol_core::progress::QUIET;
         let none = |_corner: Vec3| None;
         let dc = Method::DualContouring;
@@ -534,14 +540,8 @@ mod tests {
     /// vertices of the whole contour, with their cells, and nothing else.
     #[test]
     fn the_cells_asked_for_get_the_whole_contours_vertices() {
-        let v = two_balls(Basis::Bspline3);
+        let (v, sub) = two_balls_and_sub_grid([6, 8, 10], [16, 14, 12]);
         let h = v.grid.spacing;
-        let sub = Grid {
-            origin: v.grid.point(6, 8, 10),
-            spacing: h,
-            dims: [16, 14, 12],
-            offset: Default::default(),
-        };
         let quiet = pgvol_core::progress::QUIET;
         let whole = dual_contour_interior(&v, &sub, 0.0, quiet);
         // Each vertex of the whole contour by its cell (kept a margin inside it).
