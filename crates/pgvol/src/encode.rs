@@ -122,7 +122,8 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     }
     match options.fit {
         FitMethod::Interp => {
-            crate::memory::check_sparse_encode("encoding", mesh, &grid, options.band)?
+            let creases = crate::memory::crease_bytes(mesh, options.sharp.enabled);
+            crate::memory::check_sparse_encode_then("encoding", mesh, &grid, options.band, creases)?
         }
         _ => check_grid("encoding", &grid, BYTES_PER_NODE)?,
     }

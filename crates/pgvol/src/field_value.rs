@@ -241,7 +241,8 @@ impl Field {
             0 => "encoding the mesh",
             _ => "encoding the mesh and making its walls",
         };
-        memory::check_sparse_encode_then(job, &mesh, &grid, encode.band, walls)?;
+        let then = walls.saturating_add(memory::crease_bytes(&mesh, options.sharp.enabled));
+        memory::check_sparse_encode_then(job, &mesh, &grid, encode.band, then)?;
         // Built once: the sharp-feature stage queries the same distance.
         let start = std::time::Instant::now();
         let exact = ExactDistance::new(&mesh, options.sign)?;

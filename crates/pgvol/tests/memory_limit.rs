@@ -340,3 +340,37 @@ fn a_shell_is_refused_before_its_work_with_the_figure_of_its_stored_bricks() {
     let walls = shape.shell(&options, &Silent).unwrap();
     assert!(walls.volume().coeffs.stored_count() > 0);
 }
+
+/// Finding creases holds every half-edge of the mesh, so asking for sharp features raises the
+/// estimate of an encode of many triangles: a limit between the two refuses only that one.
+#[test]
+fn finding_creases_counts_in_the_encodes_estimate() {
+    let _limit = Limit::take();
+    // 131,072 triangles on a 16³ grid: the triangles are nearly all of the estimate, 400
+    // bytes each without creases to find and 464 with them.
+    let mesh = pgvol::mesh::shapes::octasphere(7);
+    let plain = EncodeOptions {
+        grid: GridSpec::Res(16),
+        ..Default::default()
+    };
+    let sharp = EncodeOptions {
+        sharp: pgvol::sharp::SharpOptions {
+            enabled: true,
+            ..Default::default()
+        },
+        ..plain
+    };
+    pgvol::limits::set_memory_limit(Some(mesh.triangles.len() as u64 * 430));
+    let without = pgvol::encode(&mesh, &plain, &Silent).map(|_| ());
+    let with = pgvol::encode(&mesh, &sharp, &Silent).map(|_| ());
+    pgvol::limits::set_memory_limit(None);
+    assert!(without.is_ok(), "{without:?}");
+    let refused = with.unwrap_err();
+    assert_eq!(refused.kind(), ErrorKind::ResourceLimit, "{refused}");
+    assert!(
+        refused
+            .message()
+            .contains("encoding on a 16 x 16 x 16 grid"),
+        "{refused}"
+    );
+}
