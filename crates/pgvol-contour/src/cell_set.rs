@@ -3,7 +3,8 @@
 //! and quads are skipped, and a cell's vertex depends only on its own corners and edges, so the
 //! cells asked for get the vertices a whole contouring gives them.
 
-/// Cells of a grid, each named by its lowest node `[i, j, k]`.
+/// Cells of a grid, each named by its lowest node `[i, j, k]`: a flag per cell of the grid,
+/// meant for the small sub-grids that hold the cells of interest.
 #[derive(Clone, Debug)]
 pub struct CellSet {
     /// Cells per axis.
