@@ -14,9 +14,9 @@ use pgvol_core::sparse::{brick_offset, BrickValues};
 use pgvol_core::{SparseGrid, BRICK_EDGE, BRICK_NODES};
 
 use super::node_values::taps;
+use super::sparse_node_values::blurred_brick_into;
 use crate::basis::Basis;
 use crate::prefilter::prefilter_lanes;
-use crate::stencil::mirror;
 
 /// Bricks per edge of a group: the groups of `GROUP`³ bricks share one halo, whose cost per
 /// brick falls as the group grows, while a group only partly in the band filters nodes no brick
@@ -423,57 +423,22 @@ fn sign_changes_in(
     spacing: f32,
     bricks: &[[usize; 3]],
 ) -> usize {
-    let Some((side, centre)) = taps(basis) else {
+    let Some(taps) = taps(basis) else {
         return 0;
     };
-    let dims = coeffs.dims();
     bricks
         .par_iter()
         .map(|&b| {
-            let (lo, n) = coeffs.brick_extent(b);
-            // The brick and one node around it, mirrored at the grid's borders.
-            let w_lo = lo.map(|c| c.saturating_sub(1));
-            let wn = [0, 1, 2].map(|a| (lo[a] + n[a] + 1).min(dims[a]) - w_lo[a]);
-            let mut window = [0.0f32; PADDED];
-            coeffs.gather(w_lo, wn, &mut window);
-            // Window index of node `lo + t − 1` along each axis.
-            let mut index = [[0usize; BRICK_EDGE + 2]; 3];
-            for (a, index) in index.iter_mut().enumerate() {
-                for (t, at) in index[..n[a] + 2].iter_mut().enumerate() {
-                    *at = mirror((lo[a] + t) as i64 - 1, dims[a]) - w_lo[a];
-                }
-            }
-            let [ix, iy, iz] = index;
-            let blur = |p: f32, h: f32, q: f32| side * (p + q) + centre * h;
-            // One axis at a time: x over the padded y, z; then y; then z.
-            let (e, f) = (BRICK_EDGE, BRICK_EDGE + 2);
-            let mut xs = [0.0f32; PADDED];
-            for tk in 0..n[2] + 2 {
-                for tj in 0..n[1] + 2 {
-                    let row = wn[0] * (iy[tj] + wn[1] * iz[tk]);
-                    for i in 0..n[0] {
-                        let r = |t: usize| window[row + ix[t]];
-                        xs[i + e * (tj + f * tk)] = blur(r(i), r(i + 1), r(i + 2));
-                    }
-                }
-            }
-            let mut ys = [0.0f32; PADDED];
-            for tk in 0..n[2] + 2 {
-                for j in 0..n[1] {
-                    for i in 0..n[0] {
-                        let r = |t: usize| xs[i + e * (t + f * tk)];
-                        ys[i + e * (j + e * tk)] = blur(r(j), r(j + 1), r(j + 2));
-                    }
-                }
-            }
+            let (_, n) = coeffs.brick_extent(b);
+            let mut values = [0.0f32; BRICK_NODES];
+            blurred_brick_into(coeffs, taps, b, &mut values);
             let sampled = samples.brick_values(b);
             let mut count = 0;
             for k in 0..n[2] {
                 for j in 0..n[1] {
-                    for i in 0..n[0] {
-                        let r = |t: usize| ys[i + e * (j + e * t)];
-                        let v = blur(r(k), r(k + 1), r(k + 2));
-                        let d = sampled[brick_offset([i, j, k])];
+                    let at = brick_offset([0, j, k]);
+                    let row = values[at..at + n[0]].iter().zip(&sampled[at..at + n[0]]);
+                    for (&v, &d) in row {
                         if d.abs() > spacing && (v < 0.0) != (d < 0.0) {
                             count += 1;
                         }
@@ -485,9 +450,6 @@ fn sign_changes_in(
         .sum()
 }
 
-/// Values in a brick with one node of padding per side.
-const PADDED: usize = (BRICK_EDGE + 2) * (BRICK_EDGE + 2) * (BRICK_EDGE + 2);
-
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
@@ -495,6 +457,7 @@ mod tests {
 
     use super::*;
     use crate::analytic::Sphere;
+    use crate::volume::CoefficientVolume;
 
     use crate::prefilter::{CUBIC_POLE, QUADRATIC_POLE};
 
@@ -607,6 +570,13 @@ mod tests {
             let all: Vec<[usize; 3]> = want.stored().map(|(b, _)| b).collect();
             let whole = sign_changes_in(Basis::Bspline3, &want, &samples, h, &all);
             assert!(whole > 0, "the noise changes no sign");
+            if group == 2 {
+                // The count by the dense check, from the field at every node of the grid.
+                let volume = CoefficientVolume::from_sparse(grid, Basis::Bspline3, want.clone())
+                    .expect("a volume of the grid");
+                let dense = crate::fit::spurious_sign_changes(&volume, &samples.to_dense());
+                assert_eq!(whole, dense);
+            }
             assert_eq!(counted.changes, whole, "group {group}");
             let owned = SampleStore::Owned(samples.clone());
             let (got, dropping) = prefilter_layers(owned, CUBIC_POLE, 0, group, 0.0, check, None);

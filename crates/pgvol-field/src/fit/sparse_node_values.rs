@@ -66,11 +66,24 @@ pub fn brick_node_values(volume: &CoefficientVolume, b: [usize; 3]) -> BrickValu
 /// [`brick_node_values`] into `out`, which a caller can keep on the heap without moving it.
 pub fn brick_node_values_into(volume: &CoefficientVolume, b: [usize; 3], out: &mut BrickValues) {
     let coeffs = &volume.coeffs;
-    let (lo, n) = coeffs.brick_extent(b);
-    out.fill(coeffs.background_of(b));
     let Some(taps) = taps(volume.basis) else {
+        let (lo, n) = coeffs.brick_extent(b);
+        out.fill(coeffs.background_of(b));
         return direct_node_values(volume, lo, n, out);
     };
+    blurred_brick_into(coeffs, taps, b, out);
+}
+
+/// [`brick_node_values_into`] for a separable basis of node weights `(side, centre)`, from the
+/// coefficients alone.
+pub(crate) fn blurred_brick_into(
+    coeffs: &SparseGrid,
+    taps: (f32, f32),
+    b: [usize; 3],
+    out: &mut BrickValues,
+) {
+    let (lo, n) = coeffs.brick_extent(b);
+    out.fill(coeffs.background_of(b));
     let mut win = [0.0f32; WIN * WIN * WIN];
     window(coeffs, b, lo, n, &mut win);
     if n == [BRICK_EDGE; 3] {
