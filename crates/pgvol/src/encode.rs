@@ -129,10 +129,23 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     }
     let mut timings = Timings::default();
     let start = Instant::now();
-    // Built once: the sharp-feature stage queries the same distance.
+    // Built once: the sharp-feature stage queries the same distance. Without it, the fit
+    // lets the distance queries go once it has its samples.
     let exact = ExactDistance::new(mesh, options.sign)?;
-    let fitted = fit_volume_with(exact.sdf(), grid, options, (&mut timings, start), progress)?;
-    let exact = options.sharp.enabled.then_some(exact);
+    let (fitted, exact) = if options.sharp.enabled {
+        let fitted = fit_volume_with(
+            exact.sdf().into(),
+            grid,
+            options,
+            (&mut timings, start),
+            progress,
+        )?;
+        (fitted, Some(exact))
+    } else {
+        let distances = Distances::Owned(Box::new(exact.into_sdf()));
+        let fitted = fit_volume_with(distances, grid, options, (&mut timings, start), progress)?;
+        (fitted, None)
+    };
     if let Some(message) = unconverged(&fitted.report) {
         progress.warn(&message);
     }
@@ -246,13 +259,43 @@ pub(crate) fn fit_volume(
 ) -> Result<Fitted> {
     let start = Instant::now();
     let sdf = mesh_sdf(mesh, options.sign)?;
-    fit_volume_with(&sdf, grid, options, (timings, start), progress)
+    fit_volume_with(
+        Distances::Owned(Box::new(sdf)),
+        grid,
+        options,
+        (timings, start),
+        progress,
+    )
+}
+
+/// A mesh's distance queries handed to [`fit_volume_with`]: borrowed from a caller that queries
+/// them again afterwards, or owned, to be dropped as soon as the fit needs no more of them
+/// (an interpolating fit once its samples are taken, which leaves the fit the memory of the
+/// hierarchy: about 190 bytes per triangle).
+pub(crate) enum Distances<'a> {
+    Borrowed(&'a pgvol_sdf::MeshSdf),
+    Owned(Box<pgvol_sdf::MeshSdf>),
+}
+
+impl Distances<'_> {
+    fn sdf(&self) -> &pgvol_sdf::MeshSdf {
+        match self {
+            Distances::Borrowed(sdf) => sdf,
+            Distances::Owned(sdf) => sdf,
+        }
+    }
+}
+
+impl<'a> From<&'a pgvol_sdf::MeshSdf> for Distances<'a> {
+    fn from(sdf: &'a pgvol_sdf::MeshSdf) -> Self {
+        Distances::Borrowed(sdf)
+    }
 }
 
 /// [`fit_volume`] with the mesh's distance queries `sdf` built, since `start` (the distance
 /// stage's time counts from there).
 pub(crate) fn fit_volume_with(
-    sdf: &pgvol_sdf::MeshSdf,
+    distances: Distances,
     grid: pgvol_core::Grid,
     options: &EncodeOptions,
     (timings, start): (&mut Timings, Instant),
@@ -264,8 +307,9 @@ pub(crate) fn fit_volume_with(
         FitMethod::Interp => {
             // Sparse from end to end: band bricks sampled, fitted locally, far bricks a side.
             band = Some(options.band);
-            let sampled = sample_sparse(sdf, &grid, options.band, progress)?;
+            let sampled = sample_sparse(distances.sdf(), &grid, options.band, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
+            drop(distances);
             // Handed over, so the fit drops the samples behind it.
             let samples = sampled.values;
             progress::stage(progress, "fit", |update| {
@@ -273,6 +317,7 @@ pub(crate) fn fit_volume_with(
             })?
         }
         FitMethod::Wls => {
+            let sdf = distances.sdf();
             let width = options.band.max(fit_options.band);
             band = Some(width);
             let extent = Extent::Band(width);
@@ -289,6 +334,7 @@ pub(crate) fn fit_volume_with(
             })?
         }
         FitMethod::Iso { .. } => {
+            let sdf = distances.sdf();
             timings.sdf = start.elapsed().as_secs_f64();
             progress::stage(progress, "fit", |update| {
                 pgvol_field::fit(

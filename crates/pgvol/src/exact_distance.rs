@@ -35,6 +35,11 @@ impl<'m> ExactDistance<'m> {
         &self.sdf
     }
 
+    /// The distance queries alone, the oriented mesh dropped.
+    pub(crate) fn into_sdf(self) -> pgvol_sdf::MeshSdf {
+        self.sdf
+    }
+
     /// The closest-point hierarchy of the oriented mesh (the same triangles, in the same
     /// order, as the mesh given).
     pub(crate) fn bvh(&self) -> &pgvol_sdf::Bvh {

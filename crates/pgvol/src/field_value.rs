@@ -16,7 +16,7 @@ use pgvol_sdf::SignMode;
 
 use crate::band::{recorded_band, BAND_KEY};
 use crate::encode::{
-    fit_volume_with, is_pgv, EncodeOptions, StorageOptions, StorageReport, ENCODE_BAND,
+    fit_volume_with, is_pgv, Distances, EncodeOptions, StorageOptions, StorageReport, ENCODE_BAND,
 };
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact_distance::ExactDistance;
@@ -247,8 +247,16 @@ impl Field {
         let start = std::time::Instant::now();
         let exact = ExactDistance::new(&mesh, options.sign)?;
         let timings = (&mut Timings::default(), start);
-        let volume = fit_volume_with(exact.sdf(), grid, &encode, timings, progress)?.volume;
-        let exact = options.sharp.enabled.then_some(exact);
+        let (volume, exact) = if options.sharp.enabled {
+            let distances = exact.sdf().into();
+            let volume = fit_volume_with(distances, grid, &encode, timings, progress)?.volume;
+            (volume, Some(exact))
+        } else {
+            // The distance queries go once the fit has its samples.
+            let distances = Distances::Owned(Box::new(exact.into_sdf()));
+            let volume = fit_volume_with(distances, grid, &encode, timings, progress)?.volume;
+            (volume, None)
+        };
         let band = encode.band * grid.spacing;
         let mut header = pgvol_format::header_for(&volume, "interp", Some(&mesh));
         header.metadata.insert(BAND_KEY.into(), format!("{band}"));
