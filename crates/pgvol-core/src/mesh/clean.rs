@@ -3,8 +3,10 @@
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::Mesh;
 
@@ -135,26 +137,32 @@ impl Mesh {
     /// were removed.
     pub fn drop_unused_vertices(&mut self) -> usize {
         let n = self.positions.len();
-        let mut used = vec![false; n];
-        for &i in self.triangles.iter().flatten() {
-            if let Some(u) = used.get_mut(i as usize) {
-                *u = true;
+        // Marked and renumbered on every thread; only the compaction, a sequential pass, is
+        // serial.
+        let used: Vec<AtomicBool> = (0..n).map(|_| AtomicBool::new(false)).collect();
+        self.triangles.par_iter().for_each(|t| {
+            for &i in t {
+                if let Some(u) = used.get(i as usize) {
+                    u.store(true, Relaxed);
+                }
             }
-        }
+        });
         let mut new_index = vec![u32::MAX; n];
         let mut kept = 0u32;
         for i in 0..n {
-            if used[i] {
+            if used[i].load(Relaxed) {
                 new_index[i] = kept;
                 self.positions[kept as usize] = self.positions[i];
                 kept += 1;
             }
         }
         self.positions.truncate(kept as usize);
-        for i in self.triangles.iter_mut().flatten() {
-            // Out-of-range indices stay out of range rather than aliasing a real vertex.
-            *i = new_index.get(*i as usize).copied().unwrap_or(u32::MAX);
-        }
+        self.triangles.par_iter_mut().for_each(|t| {
+            for i in t {
+                // Out-of-range indices stay out of range rather than aliasing a real vertex.
+                *i = new_index.get(*i as usize).copied().unwrap_or(u32::MAX);
+            }
+        });
         n - kept as usize
     }
 }
