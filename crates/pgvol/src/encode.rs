@@ -271,7 +271,7 @@ pub(crate) fn fit_volume(
 /// A mesh's distance queries handed to [`fit_volume_with`]: borrowed from a caller that queries
 /// them again afterwards, or owned, to be dropped as soon as the fit needs no more of them
 /// (an interpolating fit once its samples are taken, which leaves the fit the memory of the
-/// hierarchy: about 190 bytes per triangle).
+/// hierarchy and the winding-number tree).
 pub(crate) enum Distances<'a> {
     Borrowed(&'a pgvol_sdf::MeshSdf),
     Owned(Box<pgvol_sdf::MeshSdf>),
