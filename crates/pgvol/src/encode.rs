@@ -132,20 +132,8 @@ pub fn encode(mesh: &Mesh, options: &EncodeOptions, progress: &dyn Progress) -> 
     // Built once: the sharp-feature stage queries the same distance. Without it, the fit
     // lets the distance queries go once it has its samples.
     let exact = ExactDistance::new(mesh, options.sign)?;
-    let (fitted, exact) = if options.sharp.enabled {
-        let fitted = fit_volume_with(
-            exact.sdf().into(),
-            grid,
-            options,
-            (&mut timings, start),
-            progress,
-        )?;
-        (fitted, Some(exact))
-    } else {
-        let distances = Distances::Owned(Box::new(exact.into_sdf()));
-        let fitted = fit_volume_with(distances, grid, options, (&mut timings, start), progress)?;
-        (fitted, None)
-    };
+    let timed = (&mut timings, start);
+    let (fitted, exact) = fit_exact(exact, options.sharp.enabled, grid, options, timed, progress)?;
     if let Some(message) = unconverged(&fitted.report) {
         progress.warn(&message);
     }
@@ -268,11 +256,36 @@ pub(crate) fn fit_volume(
     )
 }
 
+/// [`fit_volume_with`] of the distance of `exact`, handed back when `keep` asks (for a later
+/// stage querying the same distance), else dropped once the fit needs no more of it.
+pub(crate) fn fit_exact<'m>(
+    exact: ExactDistance<'m>,
+    keep: bool,
+    grid: pgvol_core::Grid,
+    options: &EncodeOptions,
+    timings: (&mut Timings, Instant),
+    progress: &dyn Progress,
+) -> Result<(Fitted, Option<ExactDistance<'m>>)> {
+    if keep {
+        let fitted = fit_volume_with(
+            Distances::Borrowed(exact.sdf()),
+            grid,
+            options,
+            timings,
+            progress,
+        )?;
+        return Ok((fitted, Some(exact)));
+    }
+    let distances = Distances::Owned(Box::new(exact.into_sdf()));
+    let fitted = fit_volume_with(distances, grid, options, timings, progress)?;
+    Ok((fitted, None))
+}
+
 /// A mesh's distance queries handed to [`fit_volume_with`]: borrowed from a caller that queries
 /// them again afterwards, or owned, to be dropped as soon as the fit needs no more of them
 /// (an interpolating fit once its samples are taken, which leaves the fit the memory of the
 /// hierarchy and the winding-number tree).
-pub(crate) enum Distances<'a> {
+enum Distances<'a> {
     Borrowed(&'a pgvol_sdf::MeshSdf),
     Owned(Box<pgvol_sdf::MeshSdf>),
 }
@@ -286,15 +299,9 @@ impl Distances<'_> {
     }
 }
 
-impl<'a> From<&'a pgvol_sdf::MeshSdf> for Distances<'a> {
-    fn from(sdf: &'a pgvol_sdf::MeshSdf) -> Self {
-        Distances::Borrowed(sdf)
-    }
-}
-
 /// [`fit_volume`] with the mesh's distance queries `sdf` built, since `start` (the distance
 /// stage's time counts from there).
-pub(crate) fn fit_volume_with(
+fn fit_volume_with(
     distances: Distances,
     grid: pgvol_core::Grid,
     options: &EncodeOptions,

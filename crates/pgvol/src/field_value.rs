@@ -15,9 +15,7 @@ use pgvol_ops::{Drain, ShellSide};
 use pgvol_sdf::SignMode;
 
 use crate::band::{recorded_band, BAND_KEY};
-use crate::encode::{
-    fit_volume_with, is_pgv, Distances, EncodeOptions, StorageOptions, StorageReport, ENCODE_BAND,
-};
+use crate::encode::{fit_exact, is_pgv, EncodeOptions, StorageOptions, StorageReport, ENCODE_BAND};
 use crate::error::{Error, ErrorKind, Result};
 use crate::exact_distance::ExactDistance;
 use crate::grid::GridSpec;
@@ -247,16 +245,9 @@ impl Field {
         let start = std::time::Instant::now();
         let exact = ExactDistance::new(&mesh, options.sign)?;
         let timings = (&mut Timings::default(), start);
-        let (volume, exact) = if options.sharp.enabled {
-            let distances = exact.sdf().into();
-            let volume = fit_volume_with(distances, grid, &encode, timings, progress)?.volume;
-            (volume, Some(exact))
-        } else {
-            // The distance queries go once the fit has its samples.
-            let distances = Distances::Owned(Box::new(exact.into_sdf()));
-            let volume = fit_volume_with(distances, grid, &encode, timings, progress)?.volume;
-            (volume, None)
-        };
+        let keep = options.sharp.enabled;
+        let (fitted, exact) = fit_exact(exact, keep, grid, &encode, timings, progress)?;
+        let volume = fitted.volume;
         let band = encode.band * grid.spacing;
         let mut header = pgvol_format::header_for(&volume, "interp", Some(&mesh));
         header.metadata.insert(BAND_KEY.into(), format!("{band}"));
