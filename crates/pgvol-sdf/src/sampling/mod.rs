@@ -90,6 +90,14 @@ struct GridRow {
     exact: usize,
 }
 
+/// What a thread keeps from one row of grid bricks to the next.
+#[derive(Default)]
+struct RowScratch {
+    row: row::Scratch,
+    /// Row buffers to write values into.
+    rows: Vec<Vec<f32>>,
+}
+
 /// Cuts the sampler's rows (`pieces`: their offsets in small bricks within the grid brick row
 /// `[gj, gk]`, and their values) into grid bricks. A brick is stored when a node lies within
 /// the band or its signs differ; otherwise it is all `+clamp` or all `−clamp` and only its side
@@ -107,6 +115,21 @@ fn cut_row(
         exact: pieces.iter().map(|(_, r)| r.exact).sum(),
     };
     let mut brick = [0.0f32; BRICK_NODES];
+    // Every small brick of the row holds one value: each grid brick is what the loop below
+    // makes of one such value, without looking at the small bricks one by one.
+    let single = pieces.first().and_then(|(_, row)| row.single);
+    if let Some(v) = single.filter(|&v| pieces.iter().all(|(_, row)| row.single == Some(v))) {
+        for gi in 0..nx.div_ceil(BRICK_EDGE) {
+            let b = [gi, gj, gk];
+            if v.abs() < clamp {
+                brick.fill(v);
+                out.stored.push((b, Box::new(brick)));
+            } else if v < 0.0 {
+                out.inside.push(b);
+            }
+        }
+        return out;
+    }
     for gi in 0..nx.div_ceil(BRICK_EDGE) {
         let i0 = gi * BRICK_EDGE;
         let ni = (i0 + BRICK_EDGE).min(nx) - i0;
@@ -230,7 +253,7 @@ impl MeshSdf {
         // after another so each carries its winding number along x, then cut into grid bricks.
         let rows: Vec<GridRow> = (0..total)
             .into_par_iter()
-            .map_init(row::Scratch::default, |scratch, r| {
+            .map_init(RowScratch::default, |scratch, r| {
                 if stop.load(Ordering::Relaxed) {
                     return GridRow::default();
                 }
@@ -240,12 +263,19 @@ impl MeshSdf {
                     for dj in 0..per {
                         let (sj, sk) = (gj * per + dj, gk * per + dk);
                         if sj < plan.bricks[1] && sk < plan.bricks[2] {
-                            let values = self.sample_row(&plan, sj + plan.bricks[1] * sk, scratch);
+                            let row = sj + plan.bricks[1] * sk;
+                            let buffer = scratch.rows.pop().unwrap_or_default();
+                            let values = self.sample_row(&plan, row, &mut scratch.row, buffer);
                             pieces.push(([dj, dk], values));
                         }
                     }
                 }
                 let out = cut_row(grid, [gj, gk], &pieces, clamp);
+                // The row buffers serve the next rows: most of a large grid's rows write none
+                // of their nodes, and clearing them would cost more than sampling them.
+                scratch
+                    .rows
+                    .extend(pieces.into_iter().map(|(_, piece)| piece.values));
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(16) || n == total {
                     progress.update(n as f64 / total as f64);
@@ -299,7 +329,7 @@ impl MeshSdf {
         let results: Vec<RowValues> = (0..rows)
             .into_par_iter()
             .map_init(row::Scratch::default, |scratch, r| {
-                let mut out = self.sample_row(&plan, r, scratch);
+                let mut out = self.sample_row(&plan, r, scratch, Vec::new());
                 out.fill_uniform(nx, brick);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(64) || n == rows {
@@ -359,6 +389,37 @@ mod tests {
                 assert_eq!(d, b);
             } else {
                 assert_eq!(b.abs(), clamp);
+            }
+        }
+    }
+
+    /// Grids much larger than their surface: whole rows and whole region tiles lie away from
+    /// it, outside (a small sphere) or inside (a large one), and take one sign at once. The
+    /// band's signs and values are the dense grid's.
+    #[test]
+    fn far_rows_and_tiles_have_the_dense_grids_signs() {
+        let grid = Grid::cube_res(Vec3::splat(-1.0), Vec3::ONE, 150).unwrap();
+        for radius in [0.15f32, 0.9] {
+            let mut mesh = sphere(3);
+            mesh.positions.iter_mut().for_each(|p| *p *= radius);
+            let sdf = MeshSdf::new(&mesh, SignMode::Winding).unwrap();
+            let dense = sdf.sample(&grid, Extent::Dense, &|_| {});
+            let band = sdf.sample(&grid, Extent::Band(3.0), &|_| {});
+            let sparse = sdf.sample_sparse(&grid, 3.0, &|_| {}).values.to_dense();
+            let clamp = 3.0 * grid.spacing;
+            let inside = dense.values.iter().filter(|d| **d < 0.0).count();
+            assert!(
+                inside > 0 && inside < grid.len(),
+                "{radius}: {inside} inside"
+            );
+            for ((d, b), s) in dense.values.iter().zip(&band.values).zip(&sparse) {
+                assert_eq!(d.signum(), b.signum(), "{radius}");
+                assert_eq!(b.to_bits(), s.to_bits(), "{radius}");
+                if d.abs() <= clamp {
+                    assert_eq!(d, b);
+                } else {
+                    assert_eq!(b.abs(), clamp);
+                }
             }
         }
     }

@@ -73,6 +73,14 @@ impl BrickBox {
     }
 }
 
+/// The region signs of one tile.
+enum TileSigns {
+    /// Every brick has this sign (or every brick's is unknown).
+    Same(Option<bool>),
+    /// Per brick of the tile, indexed in it.
+    Each(RegionSigns),
+}
+
 impl MeshSdf {
     /// Which bricks of `area` lie within `reach` of some triangle's bounding box: the only ones
     /// that can hold band nodes (the way OpenVDB finds its narrow band). A brick's cell runs up
@@ -150,7 +158,7 @@ impl MeshSdf {
             return None;
         }
         let tiles = area.size.map(|n| n.div_ceil(REGION_TILE));
-        let tile_signs: Vec<(BrickBox, RegionSigns)> = (0..tiles.iter().product::<usize>())
+        let tile_signs: Vec<(BrickBox, TileSigns)> = (0..tiles.iter().product::<usize>())
             .into_par_iter()
             .map(|t| {
                 let at = [
@@ -170,9 +178,19 @@ impl MeshSdf {
         for (tile, signs) in &tile_signs {
             for k in 0..tile.size[2] {
                 for j in 0..tile.size[1] {
-                    for i in 0..tile.size[0] {
-                        let b = [tile.lo[0] + i, tile.lo[1] + j, tile.lo[2] + k];
-                        sign.set(area.index(b), signs.get(tile.index(b)));
+                    let row = [tile.lo[0], tile.lo[1] + j, tile.lo[2] + k];
+                    let first = area.index(row);
+                    match signs {
+                        // A run of bricks along x a word at a time.
+                        TileSigns::Same(region) => {
+                            sign.set_run(first..first + tile.size[0], *region)
+                        }
+                        TileSigns::Each(each) => {
+                            let from = tile.index(row);
+                            for i in 0..tile.size[0] {
+                                sign.set(first + i, each.get(from + i));
+                            }
+                        }
                     }
                 }
             }
@@ -187,21 +205,11 @@ impl MeshSdf {
         near: &Bits,
         area: &BrickBox,
         tile: &BrickBox,
-    ) -> RegionSigns {
+    ) -> TileSigns {
         let len = tile.len();
         let [sx, sy, sz] = tile.size;
-        let mut sign = RegionSigns::new(len);
-        let mut seen = Bits::new(len);
-        let mut queue = std::collections::VecDeque::new();
         let span = grid.spacing * BRICK as f32;
-        let is_near = |b: usize| {
-            let [i, j, k] = [b % sx, (b / sx) % sy, b / (sx * sy)];
-            near.get(area.index([tile.lo[0] + i, tile.lo[1] + j, tile.lo[2] + k]))
-        };
-        for start in 0..len {
-            if seen.get(start) || is_near(start) {
-                continue;
-            }
+        let region_sign = |start: usize| {
             let at = [
                 tile.lo[0] + start % sx,
                 tile.lo[1] + (start / sx) % sy,
@@ -210,7 +218,30 @@ impl MeshSdf {
             let centre = grid.origin
                 + (glam::Vec3::new(at[0] as f32, at[1] as f32, at[2] as f32) + 0.5) * span;
             let w = self.winding_number(centre);
-            let region_sign = ((w - 0.5).abs() >= REGION_SIGN_MARGIN).then_some(w > 0.5);
+            ((w - 0.5).abs() >= REGION_SIGN_MARGIN).then_some(w > 0.5)
+        };
+        // A tile with no near brick is one region, flooded from its first brick: far from a
+        // small surface, most tiles of a large grid.
+        let rows = (0..sz)
+            .flat_map(|k| (0..sy).map(move |j| [tile.lo[0], tile.lo[1] + j, tile.lo[2] + k]));
+        if rows.clone().all(|row| {
+            let first = area.index(row);
+            !near.any_in(first..first + sx)
+        }) {
+            return TileSigns::Same(region_sign(0));
+        }
+        let mut sign = RegionSigns::new(len);
+        let mut seen = Bits::new(len);
+        let mut queue = std::collections::VecDeque::new();
+        let is_near = |b: usize| {
+            let [i, j, k] = [b % sx, (b / sx) % sy, b / (sx * sy)];
+            near.get(area.index([tile.lo[0] + i, tile.lo[1] + j, tile.lo[2] + k]))
+        };
+        for start in 0..len {
+            if seen.get(start) || is_near(start) {
+                continue;
+            }
+            let region_sign = region_sign(start);
             seen.set(start);
             queue.push_back(start);
             while let Some(b) = queue.pop_front() {
@@ -242,6 +273,6 @@ impl MeshSdf {
                 }
             }
         }
-        sign
+        TileSigns::Each(sign)
     }
 }

@@ -37,6 +37,9 @@ pub(super) struct RowValues {
     pub(super) exact: usize,
     /// Per brick along x, its value when every node has it (and it was not written).
     pub(super) uniform: Vec<Option<f32>>,
+    /// The value every brick of the row has, when they all have the same one: far from a small
+    /// surface, most rows of a large grid.
+    pub(super) single: Option<f32>,
 }
 
 impl RowValues {
@@ -101,14 +104,39 @@ impl RowOut<'_> {
 type Filled = Option<f32>;
 
 impl MeshSdf {
-    pub(super) fn sample_row(&self, plan: &Plan, row: usize, scratch: &mut Scratch) -> RowValues {
+    /// The values go into `values`, whatever it held before: every node a non-uniform brick
+    /// holds is written, and a uniform brick's are not read (a reused buffer is not cleared).
+    pub(super) fn sample_row(
+        &self,
+        plan: &Plan,
+        row: usize,
+        scratch: &mut Scratch,
+        mut values: Vec<f32>,
+    ) -> RowValues {
         let grid = plan.grid;
         let [nx, ny, nz] = grid.dims;
         let size = plan.brick;
         let (bj, bk) = (row % plan.bricks[1], row / plan.bricks[1]);
         let (j0, j1) = (bj * size, (bj * size + size).min(ny));
         let (k0, k1) = (bk * size, (bk * size + size).min(nz));
-        let mut values = vec![0.0f32; nx * (j1 - j0) * (k1 - k0)];
+        values.resize(nx * (j1 - j0) * (k1 - k0), 0.0);
+        // A row far from every triangle whose bricks' regions share one sign is that sign
+        // throughout, as the loop below finds brick by brick: most rows of a large grid.
+        let first = plan.flags.index([0, bj, bk]);
+        let bricks = first..first + plan.bricks[0];
+        if let (Some(near), Some(regions)) = (&plan.near, &plan.regions) {
+            if !near.any_in(bricks.clone()) {
+                if let Some(inside) = regions.same_in(bricks) {
+                    let v = if inside { -plan.clamp } else { plan.clamp };
+                    return RowValues {
+                        values,
+                        exact: 0,
+                        uniform: vec![Some(v); plan.bricks[0]],
+                        single: Some(v),
+                    };
+                }
+            }
+        }
         let mut out = RowOut {
             values: &mut values,
             nx,
@@ -120,20 +148,23 @@ impl MeshSdf {
         let mut uniform = vec![None; plan.bricks[0]];
         let mut carry = WindingCarry::default();
         let mut previous_far = false;
+        let whole = self.winding_is_whole();
         for (bi, filled) in uniform.iter_mut().enumerate() {
             let b = plan.flags.index([bi, bj, bk]);
-            let brick = Brick::new(
-                grid,
-                [bi * size, j0, k0],
-                [(bi * size + size).min(nx), j1, k1],
-            );
+            let brick = || {
+                Brick::new(
+                    grid,
+                    [bi * size, j0, k0],
+                    [(bi * size + size).min(nx), j1, k1],
+                )
+            };
             let far = plan.near.as_ref().is_some_and(|near| !near.get(b));
             *filled = if far {
                 match plan.regions.as_ref().and_then(|r| r.get(b)) {
                     Some(inside) => {
                         // A whole winding number carries across any distance without drift
                         // (only crossings change it); otherwise the next brick starts afresh.
-                        if !self.winding_is_whole() {
+                        if !whole {
                             carry.forget();
                         }
                         Some(if inside { -plan.clamp } else { plan.clamp })
@@ -141,20 +172,26 @@ impl MeshSdf {
                     // Two neighbouring far bricks: no triangle meets either, so nothing is
                     // crossed between them.
                     None => {
-                        self.signs_only(&brick, plan, &mut carry, previous_far, scratch, &mut out)
+                        self.signs_only(&brick(), plan, &mut carry, previous_far, scratch, &mut out)
                     }
                 }
             } else {
-                let (filled, n) = self.near_brick(&brick, plan, &mut carry, scratch, &mut out);
+                let (filled, n) = self.near_brick(&brick(), plan, &mut carry, scratch, &mut out);
                 exact += n;
                 filled
             };
             previous_far = far;
         }
+        let single = uniform
+            .first()
+            .copied()
+            .flatten()
+            .filter(|&v| uniform.iter().all(|&u| u == Some(v)));
         RowValues {
             values,
             exact,
             uniform,
+            single,
         }
     }
 
