@@ -19,7 +19,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use pgvol_core::progress::Interrupt;
 use pgvol_core::sparse::BrickValues;
-use pgvol_core::{Background, SparseGrid, BRICK_EDGE, BRICK_NODES};
+use pgvol_core::{Background, PerThread, SparseGrid, BRICK_EDGE, BRICK_NODES};
 
 use near::BrickBox;
 pub use near::{BRICK, REGION_TILE};
@@ -242,40 +242,32 @@ impl MeshSdf {
         let [_, by, bz] = grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
         let ys = ys.start.min(by)..ys.end.min(by);
         let zs = zs.start.min(bz)..zs.end.min(bz);
-        let per = BRICK_EDGE / BRICK;
         let plan = self.band_plan(grid, width, plan_box(grid, ys.clone(), zs.clone()));
         let clamp = plan.clamp;
         let done = AtomicUsize::new(0);
         // Set at a report that finds the caller wants to stop: rows not yet begun are skipped.
         let stop = AtomicBool::new(false);
         let total = ys.len() * zs.len();
-        // One task per row of grid bricks: the sampler's rows of small bricks it covers, one
-        // after another so each carries its winding number along x, then cut into grid bricks.
+        // One task per row of grid bricks (`grid_row`), handed out one at a time: rows cost what
+        // their surface costs, and larger pieces left one thread running alone at the end.
+        let scratches = PerThread::<RowScratch>::new();
         let rows: Vec<GridRow> = (0..total)
             .into_par_iter()
-            .map_init(RowScratch::default, |scratch, r| {
+            .with_max_len(1)
+            .map(|r| {
                 if stop.load(Ordering::Relaxed) {
                     return GridRow::default();
                 }
-                let (gj, gk) = (ys.start + r % ys.len(), zs.start + r / ys.len());
-                let mut pieces = Vec::new();
-                for dk in 0..per {
-                    for dj in 0..per {
-                        let (sj, sk) = (gj * per + dj, gk * per + dk);
-                        if sj < plan.bricks[1] && sk < plan.bricks[2] {
-                            let row = sj + plan.bricks[1] * sk;
-                            let buffer = scratch.rows.pop().unwrap_or_default();
-                            let values = self.sample_row(&plan, row, &mut scratch.row, buffer);
-                            pieces.push(([dj, dk], values));
-                        }
-                    }
-                }
-                let out = cut_row(grid, [gj, gk], &pieces, clamp);
-                // The row buffers serve the next rows: most of a large grid's rows write none
-                // of their nodes, and clearing them would cost more than sampling them.
-                scratch
-                    .rows
-                    .extend(pieces.into_iter().map(|(_, piece)| piece.values));
+                scratches.with(|scratch| {
+                    self.grid_row(
+                        grid,
+                        &plan,
+                        [ys.start + r % ys.len(), zs.start + r / ys.len()],
+                        scratch,
+                    )
+                })
+            })
+            .map(|out| {
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(16) || n == total {
                     progress.update(n as f64 / total as f64);
@@ -303,6 +295,37 @@ impl MeshSdf {
             exact_nodes,
             clamp,
         }
+    }
+
+    /// The grid bricks of the row `[gj, gk]`: the sampler's rows of small bricks it covers, one
+    /// after another so each carries its winding number along x, then cut into grid bricks.
+    fn grid_row(
+        &self,
+        grid: &Grid,
+        plan: &Plan,
+        [gj, gk]: [usize; 2],
+        scratch: &mut RowScratch,
+    ) -> GridRow {
+        let per = BRICK_EDGE / BRICK;
+        let mut pieces = Vec::new();
+        for dk in 0..per {
+            for dj in 0..per {
+                let (sj, sk) = (gj * per + dj, gk * per + dk);
+                if sj < plan.bricks[1] && sk < plan.bricks[2] {
+                    let row = sj + plan.bricks[1] * sk;
+                    let buffer = scratch.rows.pop().unwrap_or_default();
+                    let values = self.sample_row(plan, row, &mut scratch.row, buffer);
+                    pieces.push(([dj, dk], values));
+                }
+            }
+        }
+        let out = cut_row(grid, [gj, gk], &pieces, plan.clamp);
+        // The row buffers serve the next rows: most of a large grid's rows write none of their
+        // nodes, and clearing them would cost more than sampling them.
+        scratch
+            .rows
+            .extend(pieces.into_iter().map(|(_, piece)| piece.values));
+        out
     }
 
     /// Signed distance on `grid`, exact where `extent` asks. `progress` gets the fraction done.
