@@ -7,10 +7,10 @@ use rayon::prelude::*;
 
 use super::bricks::Bricks;
 use super::free_words::settle_free_words;
-use super::predict::{for_each_node, predict_at};
+use super::predict::{delta_x_rows, for_each_node, predict_at};
 use super::quantise::{dequantise, quantise};
 use super::stored_band::{node_flags, KeptBrick};
-use crate::sparse_params::{Compression, Precision, SparseParams};
+use crate::sparse_params::{Compression, Precision, Predictor, SparseParams};
 
 /// The zig-zag code of a residual of `bits` (16 or 32) bits read as two's complement: `2s`
 /// for `s ≥ 0`, `−2s − 1` below. Branch-free: the residual is sign-extended by shifts.
@@ -27,10 +27,21 @@ pub(crate) fn brick_raw(params: &[u8], words: &[u32], n: [usize; 3], sp: &Sparse
     let bits = 8 * w as u32;
     let mask = if w == 4 { u32::MAX } else { 0xffff };
     let mut residuals = Vec::with_capacity(words.len());
-    for_each_node(n, |at, node| {
-        let p = predict_at(words, n, at, node, sp.predictor, mask);
-        residuals.push(zigzag(words[at].wrapping_sub(p) & mask, bits));
-    });
+    if sp.predictor == Predictor::DeltaX {
+        // The default predictor row by row: each word is predicted by the one before it.
+        for (at, from) in delta_x_rows(n) {
+            let mut p = from.map_or(0, |f| words[f]);
+            for &w in &words[at..at + n[0]] {
+                residuals.push(zigzag(w.wrapping_sub(p) & mask, bits));
+                p = w;
+            }
+        }
+    } else {
+        for_each_node(n, |at, node| {
+            let p = predict_at(words, n, at, node, sp.predictor, mask);
+            residuals.push(zigzag(words[at].wrapping_sub(p) & mask, bits));
+        });
+    }
     let mut raw = params.to_vec();
     if sp.shuffle {
         for b in 0..w {
@@ -111,11 +122,24 @@ fn encode_brick(
     if sp.precision == Precision::Fixed && s.tolerance_steps > 0 {
         settle_free_words(&mut words, &loose, n, sp.predictor, s.tolerance_steps);
     }
-    let decoded = dequantise(&params, &words, sp.precision, sp.fixed);
     let mut worst = 0.0f32;
-    for ((a, d), l) in values.iter().zip(decoded).zip(&loose) {
-        if !l {
-            worst = worst.max((a - d).abs());
+    let mut take = |a: f32, d: f32| worst = worst.max((a - d).abs());
+    match (sp.precision, sp.fixed) {
+        // Word by word where a word decodes alone, and only the needed ones.
+        (Precision::Fixed, Some(scale)) => {
+            for ((&a, &w), l) in values.iter().zip(&words).zip(&loose) {
+                if !l {
+                    take(a, scale.value(w));
+                }
+            }
+        }
+        _ => {
+            let decoded = dequantise(&params, &words, sp.precision, sp.fixed);
+            for ((&a, d), l) in values.iter().zip(decoded).zip(&loose) {
+                if !l {
+                    take(a, d);
+                }
+            }
         }
     }
     let raw = brick_raw(&params, &words, n, sp);

@@ -2,7 +2,7 @@
 //! (`fixed` only): moved towards their prediction, so that their residuals are zero.
 
 use super::options::EncodeOptions;
-use super::predict::{for_each_node, predict_at};
+use super::predict::{delta_x_rows, for_each_node, predict_at};
 use crate::sparse_params::Predictor;
 
 /// How many coarse `fixed` words a coefficient the band does not need may move: the tolerance
@@ -25,23 +25,80 @@ pub(crate) fn settle_free_words(
     pred: Predictor,
     tolerance: i32,
 ) {
+    if pred == Predictor::DeltaX {
+        // The default predictor row by row: each word is predicted by the one before it.
+        for (at, from) in delta_x_rows(n) {
+            let mut p = from.map_or(0, |f| words[f]);
+            for (word, &free) in words[at..at + n[0]].iter_mut().zip(&free[at..]) {
+                if free {
+                    *word = settled(*word, p, tolerance);
+                }
+                p = *word;
+            }
+        }
+    } else {
+        settle_node_by_node(words, free, n, pred, tolerance);
+    }
+}
+
+/// [`settle_free_words`] for any predictor, a node at a time.
+fn settle_node_by_node(
+    words: &mut [u32],
+    free: &[bool],
+    n: [usize; 3],
+    pred: Predictor,
+    tolerance: i32,
+) {
     for_each_node(n, |at, node| {
         if free[at] {
-            let p = predict_at(words, n, at, node, pred, u32::MAX) as i32;
-            let q = words[at] as i32;
-            let (lo, hi) = if q >= 0 {
-                (q.saturating_sub(tolerance).max(0), q)
-            } else {
-                (q, q.saturating_add(tolerance).min(0))
-            };
-            words[at] = p.clamp(lo, hi) as u32;
+            let p = predict_at(words, n, at, node, pred, u32::MAX);
+            words[at] = settled(words[at], p, tolerance);
         }
     });
+}
+
+/// The word between `word` and `tolerance` words nearer to zero that is closest to the
+/// prediction `p`.
+fn settled(word: u32, p: u32, tolerance: i32) -> u32 {
+    let (p, q) = (p as i32, word as i32);
+    let (lo, hi) = if q >= 0 {
+        (q.saturating_sub(tolerance).max(0), q)
+    } else {
+        (q, q.saturating_add(tolerance).min(0))
+    };
+    p.clamp(lo, hi) as u32
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The row-by-row `delta-x` path settles the words as the node-by-node one does.
+        #[test]
+        fn delta_x_rows_settle_as_nodes_do(
+            n in proptest::array::uniform3(1usize..12),
+            seed in any::<u64>(),
+            tolerance in 0i32..40,
+        ) {
+            let mut s = seed | 1;
+            let mut next = || {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                s
+            };
+            let len = n[0] * n[1] * n[2];
+            let words: Vec<u32> = (0..len).map(|_| ((next() % 201) as i32 - 100) as u32).collect();
+            let free: Vec<bool> = (0..len).map(|_| next() % 3 != 0).collect();
+            let mut rows = words.clone();
+            settle_free_words(&mut rows, &free, n, Predictor::DeltaX, tolerance);
+            let mut nodes = words;
+            settle_node_by_node(&mut nodes, &free, n, Predictor::DeltaX, tolerance);
+            prop_assert_eq!(rows, nodes);
+        }
+    }
 
     #[test]
     fn free_words_follow_the_prediction_within_the_tolerance() {

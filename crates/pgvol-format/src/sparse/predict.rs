@@ -28,6 +28,28 @@ pub(crate) fn for_each_node(n: [usize; 3], mut visit: impl FnMut(usize, [usize; 
     }
 }
 
+/// The rows along x of a brick of `n` nodes in coding order, as the index of their first word
+/// and of the word that predicts it under `delta-x` (the word above it in y, else the one
+/// before it in z; none, a prediction of 0, for the first row). Every later word of a row is
+/// predicted by the word before it.
+#[inline]
+pub(crate) fn delta_x_rows(n: [usize; 3]) -> impl Iterator<Item = (usize, Option<usize>)> {
+    let (sy, sz) = (n[0], n[0] * n[1]);
+    (0..n[2]).flat_map(move |k| {
+        (0..n[1]).map(move |j| {
+            let at = sy * j + sz * k;
+            let from = if j > 0 {
+                Some(at - sy)
+            } else if k > 0 {
+                Some(at - sz)
+            } else {
+                None
+            };
+            (at, from)
+        })
+    })
+}
+
 /// The prediction of word `at`, whose node `node` the caller knows.
 #[inline]
 pub(crate) fn predict_at(
@@ -72,6 +94,26 @@ pub(crate) fn predict_at(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each row's first word gets the prediction `predict_at` gives it.
+    #[test]
+    fn delta_x_rows_start_with_the_words_prediction() {
+        for n in [[1, 1, 1], [5, 1, 3], [1, 4, 2], [3, 2, 1], [16, 16, 16]] {
+            let words: Vec<u32> = (0..n[0] * n[1] * n[2]).map(|w| w as u32 * 7 + 3).collect();
+            let mut rows = 0;
+            for (at, from) in delta_x_rows(n) {
+                assert_eq!(at, rows * n[0]);
+                let node = [0, (at / n[0]) % n[1], at / (n[0] * n[1])];
+                let first = from.map_or(0, |f| words[f]);
+                assert_eq!(
+                    first,
+                    predict_at(&words, n, at, node, Predictor::DeltaX, u32::MAX)
+                );
+                rows += 1;
+            }
+            assert_eq!(rows, n[1] * n[2]);
+        }
+    }
 
     /// The node-order walk numbers words as `predict` divides them, on bricks flat in each
     /// axis and a full one.
