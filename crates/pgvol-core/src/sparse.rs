@@ -306,9 +306,6 @@ impl SparseGrid {
     pub fn gather(&self, lo: [usize; 3], n: [usize; 3], out: &mut [f32]) {
         let total = n[0] * n[1] * n[2];
         debug_assert!(out.len() >= total);
-        if total > 0 && brick_of(lo) == brick_of([0, 1, 2].map(|a| lo[a] + n[a] - 1)) {
-            return self.gather_in_brick(lo, n, &mut out[..total]);
-        }
         let mut at = 0;
         for k in lo[2]..lo[2] + n[2] {
             for j in lo[1]..lo[1] + n[1] {
@@ -339,24 +336,6 @@ impl SparseGrid {
                     i += run;
                 }
             }
-        }
-    }
-
-    /// [`SparseGrid::gather`] of a box inside one brick: the brick looked up once (a whole
-    /// brick's box was a lookup per row, a tenth of a file's writing).
-    fn gather_in_brick(&self, lo: [usize; 3], n: [usize; 3], out: &mut [f32]) {
-        let b = brick_of(lo);
-        let Some(v) = self.brick(b) else {
-            return out.fill(self.background_of(b));
-        };
-        let s = brick_offset(lo);
-        if n == [BRICK_EDGE; 3] {
-            return out.copy_from_slice(&v[..]);
-        }
-        for (r, row) in out.chunks_exact_mut(n[0]).enumerate() {
-            let (j, k) = (r % n[1], r / n[1]);
-            let from = s + BRICK_EDGE * (j + BRICK_EDGE * k);
-            row.copy_from_slice(&v[from..from + n[0]]);
         }
     }
 
@@ -800,10 +779,12 @@ mod tests {
             ([17, 15, 14], [4, 4, 4]),
             ([20, 18, 17], [1, 1, 1]),
             ([1, 10, 3], [7, 9, 2]),
-            // Inside one brick: a whole stored one, part of a stored edge brick, an absent one.
+            // A whole brick (of 8³), part of one at the grid's end, and whole brick rows along
+            // x across stored and absent bricks.
+            ([0, 0, 0], [8, 8, 8]),
+            ([16, 2, 3], [5, 6, 5]),
             ([0, 0, 0], [16, 16, 16]),
-            ([16, 2, 3], [5, 6, 7]),
-            ([16, 16, 16], [5, 3, 2]),
+            ([8, 3, 1], [8, 9, 17]),
         ];
         for (lo, n) in boxes {
             // Room past the box, which the gather must leave as it was.
