@@ -258,16 +258,8 @@ impl MeshSdf {
                 if stop.load(Ordering::Relaxed) {
                     return GridRow::default();
                 }
-                scratches.with(|scratch| {
-                    self.grid_row(
-                        grid,
-                        &plan,
-                        [ys.start + r % ys.len(), zs.start + r / ys.len()],
-                        scratch,
-                    )
-                })
-            })
-            .map(|out| {
+                let (gj, gk) = (ys.start + r % ys.len(), zs.start + r / ys.len());
+                let out = scratches.with(|scratch| self.grid_row(grid, &plan, [gj, gk], scratch));
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if n.is_multiple_of(16) || n == total {
                     progress.update(n as f64 / total as f64);
