@@ -141,14 +141,15 @@ pub(crate) fn sample(volume: &CoefficientVolume, grid: &Grid) -> Result<Vec<f32>
             grid.spacing
         )));
     }
-    if !grid.origin.is_finite() || !grid.max_corner().is_finite() {
-        return Err(Error::parameter("the grid's corners must be finite"));
-    }
+    // The node count first: the far corner of a grid without nodes is not defined.
     if grid.dims.contains(&0) {
         return Err(Error::parameter(format!(
             "the grid needs at least one node per axis, got {:?}",
             grid.dims
         )));
+    }
+    if !grid.origin.is_finite() || !grid.max_corner().is_finite() {
+        return Err(Error::parameter("the grid's corners must be finite"));
     }
     let nodes = grid.dims.iter().map(|&n| n as u128).product::<u128>();
     if nodes > pgvol_core::MAX_GRID_NODES {
