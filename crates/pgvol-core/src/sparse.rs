@@ -304,6 +304,17 @@ impl SparseGrid {
     /// Copies the box of `n` nodes from node `lo` into `out` (x fastest), a row segment per
     /// brick crossed. The box must lie in the grid.
     pub fn gather(&self, lo: [usize; 3], n: [usize; 3], out: &mut [f32]) {
+        crate::cpu::run(Gather {
+            grid: self,
+            lo,
+            n,
+            out,
+        })
+    }
+
+    /// [`SparseGrid::gather`], inlined into both builds of its kernel.
+    #[inline(always)]
+    fn gather_here(&self, lo: [usize; 3], n: [usize; 3], out: &mut [f32]) {
         let total = n[0] * n[1] * n[2];
         debug_assert!(out.len() >= total);
         let mut at = 0;
@@ -664,6 +675,22 @@ impl PartialEq for SparseGrid {
                 })
             })
         })
+    }
+}
+
+/// [`SparseGrid::gather`] as a kernel: the fit's windows and the decode's stencils.
+struct Gather<'a> {
+    grid: &'a SparseGrid,
+    lo: [usize; 3],
+    n: [usize; 3],
+    out: &'a mut [f32],
+}
+
+impl crate::cpu::Kernel for Gather<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        self.grid.gather_here(self.lo, self.n, self.out)
     }
 }
 

@@ -122,6 +122,28 @@ pub fn prefilter_volume_with(values: &mut [f32], dims: [usize; 3], z: f64) {
 /// [`prefilter_line_with`] on `lanes` interleaved lines of length `n` (`data[lane + lanes · k]`
 /// is sample k of line `lane`), with the same operations in the same order per line.
 pub(crate) fn prefilter_lanes(data: &mut [f64], lanes: usize, n: usize, z: f64) {
+    pgvol_core::cpu::run(PrefilterLanes { data, lanes, n, z })
+}
+
+/// [`prefilter_lanes`] as a kernel: the fit spends most of its time here.
+struct PrefilterLanes<'a> {
+    data: &'a mut [f64],
+    lanes: usize,
+    n: usize,
+    z: f64,
+}
+
+impl pgvol_core::cpu::Kernel for PrefilterLanes<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        prefilter_lanes_here(self.data, self.lanes, self.n, self.z)
+    }
+}
+
+/// [`prefilter_lanes`], inlined into both builds of its kernel.
+#[inline(always)]
+fn prefilter_lanes_here(data: &mut [f64], lanes: usize, n: usize, z: f64) {
     if n < 2 {
         return;
     }

@@ -56,6 +56,17 @@ impl FastScale {
 /// The largest `ratio` a reader accepts.
 pub const MAX_RATIO: u32 = 1 << 16;
 
+/// [`FixedScale::words_of`] as a kernel: every stored coefficient of a file goes through it.
+struct WordsOf<'a>(&'a FixedScale, &'a [f32]);
+
+impl pgvol_core::cpu::Kernel for WordsOf<'_> {
+    type Output = Option<Vec<u32>>;
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        self.0.words_of_here(self.1)
+    }
+}
+
 impl FixedScale {
     /// Whether a reader accepts these parameters.
     pub fn is_valid(&self) -> bool {
@@ -99,6 +110,12 @@ impl FixedScale {
     /// step is below `f32::MAX / 2²⁴` (a word's value is at most 2²³ steps there). Any other
     /// value sends the whole slice through `word`.
     pub fn words_of(&self, values: &[f32]) -> Option<Vec<u32>> {
+        pgvol_core::cpu::run(WordsOf(self, values))
+    }
+
+    /// [`FixedScale::words_of`], inlined into both builds of its kernel.
+    #[inline(always)]
+    fn words_of_here(&self, values: &[f32]) -> Option<Vec<u32>> {
         const FINITE_STEP: f32 = f32::MAX / (1u32 << 24) as f32;
         if self.step < FINITE_STEP {
             let (step, knee, ratio) = (self.step as f64, self.knee as f64, self.ratio as f64);

@@ -334,6 +334,45 @@ fn filter_group(
     drop: f32,
     s: &mut Scratch,
 ) -> Vec<([usize; 3], Box<BrickValues>)> {
+    pgvol_core::cpu::run(FilterGroup {
+        samples,
+        z,
+        h,
+        group,
+        drop,
+        s,
+    })
+}
+
+/// [`filter_group`] as a kernel, for its transposes and copies (the filter is a kernel of its
+/// own).
+struct FilterGroup<'a> {
+    samples: &'a SparseGrid,
+    z: f64,
+    h: usize,
+    group: &'a [[usize; 3]],
+    drop: f32,
+    s: &'a mut Scratch,
+}
+
+impl pgvol_core::cpu::Kernel for FilterGroup<'_> {
+    type Output = Vec<([usize; 3], Box<BrickValues>)>;
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        filter_group_here(self.samples, self.z, self.h, self.group, self.drop, self.s)
+    }
+}
+
+/// [`filter_group`], inlined into both builds of its kernel.
+#[inline(always)]
+fn filter_group_here(
+    samples: &SparseGrid,
+    z: f64,
+    h: usize,
+    group: &[[usize; 3]],
+    drop: f32,
+    s: &mut Scratch,
+) -> Vec<([usize; 3], Box<BrickValues>)> {
     let GroupWindow { lo, hi, w_lo, w_hi } = group_window(samples, group, h);
     let wn = [0, 1, 2].map(|a| w_hi[a] - w_lo[a]);
     let off = [0, 1, 2].map(|a| lo[a] - w_lo[a]);

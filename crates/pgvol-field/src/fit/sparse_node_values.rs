@@ -82,6 +82,35 @@ pub(crate) fn blurred_brick_into(
     b: [usize; 3],
     out: &mut BrickValues,
 ) {
+    pgvol_core::cpu::run(BlurredBrick {
+        coeffs,
+        taps,
+        b,
+        out,
+    })
+}
+
+/// [`blurred_brick_into`] as a kernel: the decode and the fit's sign check take every stored
+/// brick's node values through it.
+struct BlurredBrick<'a> {
+    coeffs: &'a SparseGrid,
+    taps: (f32, f32),
+    b: [usize; 3],
+    out: &'a mut BrickValues,
+}
+
+impl pgvol_core::cpu::Kernel for BlurredBrick<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        blurred_brick_here(self.coeffs, self.taps, self.b, self.out)
+    }
+}
+
+/// [`blurred_brick_into`], inlined into both builds of its kernel with the window and blur
+/// loops it calls.
+#[inline(always)]
+fn blurred_brick_here(coeffs: &SparseGrid, taps: (f32, f32), b: [usize; 3], out: &mut BrickValues) {
     let (lo, n) = coeffs.brick_extent(b);
     out.fill(coeffs.background_of(b));
     let mut win = [0.0f32; WIN * WIN * WIN];
@@ -129,6 +158,7 @@ fn direct_node_values(
 }
 
 /// The 3-tap blur along x, y and z of the window of `n` nodes, into `out`'s first `n` nodes.
+#[inline(always)]
 fn blur_box(win: &Window, n: [usize; 3], (side, centre): (f32, f32), out: &mut BrickValues) {
     let blur = |a: f32, c: f32, d: f32| side * (a + d) + centre * c;
     let mut xs = [0.0f32; WIN * WIN * WIN];
@@ -163,6 +193,7 @@ fn blur_box(win: &Window, n: [usize; 3], (side, centre): (f32, f32), out: &mut B
 
 /// The 3-tap blur of a whole brick's window along each axis: [`brick_node_values`]' loops,
 /// in the same arithmetic, over fixed-length rows the compiler turns into vector operations.
+#[inline(always)]
 fn blur_whole(win: &Window, side: f32, centre: f32, out: &mut BrickValues) {
     const E: usize = BRICK_EDGE;
     let blur = |a: f32, c: f32, d: f32| side * (a + d) + centre * c;
@@ -203,6 +234,7 @@ type Window = [f32; WIN * WIN * WIN];
 
 /// The coefficients of brick `b` (lowest node `lo`, `n` nodes per axis) and one node either
 /// side.
+#[inline(always)]
 fn window(coeffs: &SparseGrid, b: [usize; 3], lo: [usize; 3], n: [usize; 3], win: &mut Window) {
     let dims = coeffs.dims();
     let inner = (0..3).all(|a| n[a] == BRICK_EDGE && lo[a] >= 1 && lo[a] + WIN - 1 <= dims[a]);
@@ -215,6 +247,7 @@ fn window(coeffs: &SparseGrid, b: [usize; 3], lo: [usize; 3], n: [usize; 3], win
 
 /// [`window`] of a whole brick away from the grid's ends: parts of the brick and its 26
 /// neighbours, each looked up once (a gather looks a brick up per row segment).
+#[inline(always)]
 fn inner_window(coeffs: &SparseGrid, b: [usize; 3], win: &mut Window) {
     // Per axis: neighbour offset, first node in it, nodes taken (all or one), first window node.
     const PARTS: [(i64, usize, usize, usize); 3] = [
@@ -256,6 +289,7 @@ fn inner_window(coeffs: &SparseGrid, b: [usize; 3], win: &mut Window) {
 }
 
 /// [`window`] anywhere, its nodes mirrored at the grid's ends as the basis is.
+#[inline(always)]
 fn gathered_window(coeffs: &SparseGrid, lo: [usize; 3], n: [usize; 3], win: &mut Window) {
     let dims = coeffs.dims();
     let index = |a: usize, t: usize| mirror(lo[a] as i64 - 1 + t as i64, dims[a]);

@@ -7,7 +7,7 @@ use half::f16;
 use half::slice::HalfFloatSliceExt;
 
 use super::quantise::{unorder16, unorder32, Q16_PARAMS};
-use crate::fixed_step::FixedScale;
+use crate::fixed_step::{FastScale, FixedScale};
 use crate::sparse_params::{Precision, Predictor, SparseParams};
 
 /// Buffers reused from brick to brick, so that decoding a brick allocates nothing.
@@ -108,19 +108,49 @@ fn fixed_delta_x(
 ) -> Result<(), NonFinite> {
     let largest = fixed_delta_x_words(body, n, words);
     let fast = scale.fast();
-    if fast.all_exact(largest) {
-        for (o, &w) in out.iter_mut().zip(words.iter()) {
-            *o = fast.exact_value(w);
-        }
-    } else {
-        for (o, &w) in out.iter_mut().zip(words.iter()) {
-            *o = fast.value(w);
-        }
-    }
-    if out.iter().all(|v| v.is_finite()) {
+    let exact = fast.all_exact(largest);
+    if pgvol_core::cpu::run(Dequantise {
+        fast,
+        exact,
+        words,
+        out,
+    }) {
         Ok(())
     } else {
         Err(NonFinite)
+    }
+}
+
+/// The values of a brick's `fixed` words, as a kernel (every stored brick a decode reads goes
+/// through it); whether all are finite.
+struct Dequantise<'a> {
+    fast: FastScale,
+    /// Whether every word takes the f32 path.
+    exact: bool,
+    words: &'a [u32],
+    out: &'a mut [f32],
+}
+
+impl pgvol_core::cpu::Kernel for Dequantise<'_> {
+    type Output = bool;
+    #[inline(always)]
+    fn run(self) -> bool {
+        let Dequantise {
+            fast,
+            exact,
+            words,
+            out,
+        } = self;
+        if exact {
+            for (o, &w) in out.iter_mut().zip(words) {
+                *o = fast.exact_value(w);
+            }
+        } else {
+            for (o, &w) in out.iter_mut().zip(words) {
+                *o = fast.value(w);
+            }
+        }
+        out.iter().all(|v| v.is_finite())
     }
 }
 

@@ -41,6 +41,12 @@ impl BrickRef<'_> {
 
     /// Per node layer along grid axis `axis`: the least and greatest value.
     pub fn layer_ranges(&self, axis: usize) -> LayerRanges {
+        pgvol_core::cpu::run(Ranges(self, axis))
+    }
+
+    /// [`BrickRef::layer_ranges`], inlined into both builds of its kernel.
+    #[inline(always)]
+    fn layer_ranges_here(&self, axis: usize) -> LayerRanges {
         match self {
             BrickRef::Borrowed(values) => ranges_of(axis, |i| values[i]),
             BrickRef::Owned(values) => ranges_of(axis, |i| values[i]),
@@ -52,7 +58,19 @@ impl BrickRef<'_> {
     }
 }
 
+/// [`BrickRef::layer_ranges`] as a kernel: every brick a slicing loads goes through it.
+struct Ranges<'r, 'a>(&'r BrickRef<'a>, usize);
+
+impl pgvol_core::cpu::Kernel for Ranges<'_, '_> {
+    type Output = LayerRanges;
+    #[inline(always)]
+    fn run(self) -> LayerRanges {
+        self.0.layer_ranges_here(self.1)
+    }
+}
+
 /// [`BrickRef::layer_ranges`] of 16-bit words: per node layer, the least and greatest word.
+#[inline(always)]
 fn word_ranges(axis: usize, words: &[i16; BRICK_NODES]) -> [[i16; 2]; BRICK_EDGE] {
     let mut lo = [i16::MAX; BRICK_EDGE];
     let mut hi = [i16::MIN; BRICK_EDGE];
@@ -84,6 +102,7 @@ fn add_each(out: &mut [f32], weight: f32, value: impl Fn(usize) -> f32) {
 }
 
 /// [`BrickRef::layer_ranges`] of the values `value(i)`, x fastest.
+#[inline(always)]
 fn ranges_of(axis: usize, value: impl Fn(usize) -> f32) -> [[f32; 2]; BRICK_EDGE] {
     let mut ranges = [[f32::INFINITY, f32::NEG_INFINITY]; BRICK_EDGE];
     for row in 0..BRICK_NODES / BRICK_EDGE {

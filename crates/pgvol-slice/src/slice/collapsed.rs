@@ -391,6 +391,12 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
 
     /// Sums the columns of plane brick `k` with the taps' weights.
     fn collapse(&self, k: usize) -> Box<StoredTile> {
+        pgvol_core::cpu::run(Collapse(self, k))
+    }
+
+    /// [`Self::collapse`], inlined into both builds of its kernel.
+    #[inline(always)]
+    fn collapse_here(&self, k: usize) -> Box<StoredTile> {
         let (kb, kc) = (k % self.counts[0], k / self.counts[0]);
         let len = [E.min(self.dims[0] - kb * E), E.min(self.dims[1] - kc * E)];
         let mut out = Box::new(StoredTile {
@@ -608,7 +614,8 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         // c = min(⌊g⌋, n − 2).
         let g = |x: f32| {
             let q = x.clamp(self.origin[k], self.top(k));
-            (((q - self.origin[k]) / self.spacing).floor() as i64).min(n - 2)
+            // ⌊·⌋ of a coordinate ≥ 0 is its truncation, without a call to floor.
+            (((q - self.origin[k]) / self.spacing) as i64).min(n - 2)
         };
         let (lo, hi) = (g(x0) - 1, g(x1) + 2);
         // Mirrored indices: below 0 they reach up to −lo, past n − 1 down to 2(n − 1) − hi.
@@ -618,28 +625,42 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
     }
 }
 
-impl LayerField for CollapsedPlane<'_, '_> {
-    type Block = BlockLines;
+/// [`CollapsedPlane::collapse`] as a kernel: it reads the file's words of every plane brick a
+/// layer's contours cross.
+struct Collapse<'p, 'w, 's>(&'p CollapsedPlane<'w, 's>, usize);
 
-    fn value(&self, u: f32, v: f32) -> f32 {
-        let (wu, du) = self.window(0, u);
-        let (wv, dv) = self.window(1, v);
-        let mut value = 0.0f32;
-        for t in 0..wv.len {
-            let iv = mirror(wv.first + t as i64, self.dims[1]);
-            let mut s = 0.0f32;
-            for r in 0..wu.len {
-                s += wu.w[r][0] * self.coefficient(mirror(wu.first + r as i64, self.dims[0]), iv);
-            }
-            value += wv.w[t][0] * s;
-        }
-        value + Vec3::new(du, dv, self.off_axis).length()
+impl pgvol_core::cpu::Kernel for Collapse<'_, '_, '_> {
+    type Output = Box<StoredTile>;
+    #[inline(always)]
+    fn run(self) -> Box<StoredTile> {
+        self.0.collapse_here(self.1)
     }
+}
 
-    /// Each node sums its column taps first, then its row taps, as a plane collapsed row by row
-    /// would. The coefficients the nodes read are gathered once when they are few next to the
-    /// nodes' 16 reads each.
-    fn sample(
+/// [`LayerField::sample`] of a collapsed plane as a kernel: the node values of every block a
+/// contour may cross.
+struct Sample<'p, 'w, 's, 'a> {
+    plane: &'p CollapsedPlane<'w, 's>,
+    first: [usize; 2],
+    us: &'a [f32],
+    vs: &'a [f32],
+    out: &'a mut [f32],
+    block: &'a mut BlockLines,
+}
+
+impl pgvol_core::cpu::Kernel for Sample<'_, '_, '_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        self.plane
+            .sample_here(self.first, self.us, self.vs, self.out, self.block)
+    }
+}
+
+impl CollapsedPlane<'_, '_> {
+    /// [`LayerField::sample`], inlined into both builds of its kernel.
+    #[inline(always)]
+    fn sample_here(
         &self,
         first: [usize; 2],
         us: &[f32],
@@ -718,6 +739,46 @@ impl LayerField for CollapsedPlane<'_, '_> {
             }
         }
         (block.gathered, block.u0, block.nu, block.v0) = (gather, u0, nu, v0);
+    }
+}
+
+impl LayerField for CollapsedPlane<'_, '_> {
+    type Block = BlockLines;
+
+    fn value(&self, u: f32, v: f32) -> f32 {
+        let (wu, du) = self.window(0, u);
+        let (wv, dv) = self.window(1, v);
+        let mut value = 0.0f32;
+        for t in 0..wv.len {
+            let iv = mirror(wv.first + t as i64, self.dims[1]);
+            let mut s = 0.0f32;
+            for r in 0..wu.len {
+                s += wu.w[r][0] * self.coefficient(mirror(wu.first + r as i64, self.dims[0]), iv);
+            }
+            value += wv.w[t][0] * s;
+        }
+        value + Vec3::new(du, dv, self.off_axis).length()
+    }
+
+    /// Each node sums its column taps first, then its row taps, as a plane collapsed row by row
+    /// would. The coefficients the nodes read are gathered once when they are few next to the
+    /// nodes' 16 reads each.
+    fn sample(
+        &self,
+        first: [usize; 2],
+        us: &[f32],
+        vs: &[f32],
+        out: &mut [f32],
+        block: &mut BlockLines,
+    ) {
+        pgvol_core::cpu::run(Sample {
+            plane: self,
+            first,
+            us,
+            vs,
+            out,
+            block,
+        })
     }
 
     /// From the block's row sums (along u) or its coefficients summed across the node's column
