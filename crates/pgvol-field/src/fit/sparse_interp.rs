@@ -359,96 +359,91 @@ impl pgvol_core::cpu::Kernel for FilterGroup<'_> {
     type Output = Vec<([usize; 3], Box<BrickValues>)>;
     #[inline(always)]
     fn run(self) -> Self::Output {
-        filter_group_here(self.samples, self.z, self.h, self.group, self.drop, self.s)
-    }
-}
+        let FilterGroup {
+            samples,
+            z,
+            h,
+            group,
+            drop,
+            s,
+        } = self;
+        let GroupWindow { lo, hi, w_lo, w_hi } = group_window(samples, group, h);
+        let wn = [0, 1, 2].map(|a| w_hi[a] - w_lo[a]);
+        let off = [0, 1, 2].map(|a| lo[a] - w_lo[a]);
+        let kn = [0, 1, 2].map(|a| hi[a] - lo[a]);
+        let [wx, wy, wz] = wn;
+        let [kx, ky, _] = kn;
 
-/// [`filter_group`], inlined into both builds of its kernel.
-#[inline(always)]
-fn filter_group_here(
-    samples: &SparseGrid,
-    z: f64,
-    h: usize,
-    group: &[[usize; 3]],
-    drop: f32,
-    s: &mut Scratch,
-) -> Vec<([usize; 3], Box<BrickValues>)> {
-    let GroupWindow { lo, hi, w_lo, w_hi } = group_window(samples, group, h);
-    let wn = [0, 1, 2].map(|a| w_hi[a] - w_lo[a]);
-    let off = [0, 1, 2].map(|a| lo[a] - w_lo[a]);
-    let kn = [0, 1, 2].map(|a| hi[a] - lo[a]);
-    let [wx, wy, wz] = wn;
-    let [kx, ky, _] = kn;
+        s.window.resize(wx * wy * wz, 0.0);
+        samples.gather(w_lo, wn, &mut s.window);
 
-    s.window.resize(wx * wy * wz, 0.0);
-    samples.gather(w_lo, wn, &mut s.window);
-
-    // x: each z-plane transposed so its x lines are interleaved lanes, all filtered at once.
-    s.lanes.resize(wx * wy, 0.0);
-    s.xs.resize(kx * wy * wz, 0.0);
-    for k in 0..wz {
-        let plane = &s.window[wx * wy * k..][..wx * wy];
-        for (j, row) in plane.chunks_exact(wx).enumerate() {
-            for (i, &v) in row.iter().enumerate() {
-                s.lanes[j + wy * i] = v as f64;
-            }
-        }
-        prefilter_lanes(&mut s.lanes, wy, wx, z);
-        let out = &mut s.xs[kx * wy * k..][..kx * wy];
-        for j in 0..wy {
-            for i in 0..kx {
-                out[i + kx * j] = s.lanes[j + wy * (off[0] + i)];
-            }
-        }
-    }
-    // y: per z-plane, the kept x columns are the lanes.
-    s.ys.resize(kx * ky * wz, 0.0);
-    for k in 0..wz {
-        let plane = &mut s.xs[kx * wy * k..][..kx * wy];
-        prefilter_lanes(plane, kx, wy, z);
-        s.ys[kx * ky * k..][..kx * ky].copy_from_slice(&plane[kx * off[1]..][..kx * ky]);
-    }
-    // z: every kept (x, y) column at once.
-    prefilter_lanes(&mut s.ys, kx * ky, wz, z);
-
-    let fill = samples.background().outside;
-    let bg = samples.background();
-    let tolerance = drop * bg.outside.abs().max(bg.inside.abs());
-    group
-        .iter()
-        .filter_map(|&b| {
-            let (blo, n) = samples.brick_extent(b);
-            let mut values = Box::new([fill; BRICK_NODES]);
-            for k in 0..n[2] {
-                for j in 0..n[1] {
-                    let src = (blo[0] - lo[0])
-                        + kx * ((blo[1] - lo[1] + j) + ky * (blo[2] - lo[2] + k + off[2]));
-                    let dst = BRICK_EDGE * (j + BRICK_EDGE * k);
-                    for (d, &c) in values[dst..dst + n[0]]
-                        .iter_mut()
-                        .zip(&s.ys[src..src + n[0]])
-                    {
-                        *d = c as f32;
-                    }
+        // x: each z-plane transposed so its x lines are interleaved lanes, all filtered at once.
+        s.lanes.resize(wx * wy, 0.0);
+        s.xs.resize(kx * wy * wz, 0.0);
+        for k in 0..wz {
+            let plane = &s.window[wx * wy * k..][..wx * wy];
+            for (j, row) in plane.chunks_exact(wx).enumerate() {
+                for (i, &v) in row.iter().enumerate() {
+                    s.lanes[j + wy * i] = v as f64;
                 }
             }
-            // A neighbour whose coefficients all sit at its side's background adds nothing.
-            let side = samples.background_of(b);
-            let flat = drop > 0.0 && !samples.is_stored(b) && {
-                let mut flat = true;
+            prefilter_lanes(&mut s.lanes, wy, wx, z);
+            let out = &mut s.xs[kx * wy * k..][..kx * wy];
+            for j in 0..wy {
+                for i in 0..kx {
+                    out[i + kx * j] = s.lanes[j + wy * (off[0] + i)];
+                }
+            }
+        }
+        // y: per z-plane, the kept x columns are the lanes.
+        s.ys.resize(kx * ky * wz, 0.0);
+        for k in 0..wz {
+            let plane = &mut s.xs[kx * wy * k..][..kx * wy];
+            prefilter_lanes(plane, kx, wy, z);
+            s.ys[kx * ky * k..][..kx * ky].copy_from_slice(&plane[kx * off[1]..][..kx * ky]);
+        }
+        // z: every kept (x, y) column at once.
+        prefilter_lanes(&mut s.ys, kx * ky, wz, z);
+
+        let fill = samples.background().outside;
+        let bg = samples.background();
+        let tolerance = drop * bg.outside.abs().max(bg.inside.abs());
+        group
+            .iter()
+            .filter_map(|&b| {
+                let (blo, n) = samples.brick_extent(b);
+                let mut values = Box::new([fill; BRICK_NODES]);
                 for k in 0..n[2] {
                     for j in 0..n[1] {
-                        let at = BRICK_EDGE * (j + BRICK_EDGE * k);
-                        flat &= values[at..at + n[0]]
-                            .iter()
-                            .all(|c| (c - side).abs() <= tolerance);
+                        let src = (blo[0] - lo[0])
+                            + kx * ((blo[1] - lo[1] + j) + ky * (blo[2] - lo[2] + k + off[2]));
+                        let dst = BRICK_EDGE * (j + BRICK_EDGE * k);
+                        for (d, &c) in values[dst..dst + n[0]]
+                            .iter_mut()
+                            .zip(&s.ys[src..src + n[0]])
+                        {
+                            *d = c as f32;
+                        }
                     }
                 }
-                flat
-            };
-            (!flat).then_some((b, values))
-        })
-        .collect()
+                // A neighbour whose coefficients all sit at its side's background adds nothing.
+                let side = samples.background_of(b);
+                let flat = drop > 0.0 && !samples.is_stored(b) && {
+                    let mut flat = true;
+                    for k in 0..n[2] {
+                        for j in 0..n[1] {
+                            let at = BRICK_EDGE * (j + BRICK_EDGE * k);
+                            flat &= values[at..at + n[0]]
+                                .iter()
+                                .all(|c| (c - side).abs() <= tolerance);
+                        }
+                    }
+                    flat
+                };
+                (!flat).then_some((b, values))
+            })
+            .collect()
+    }
 }
 
 /// Nodes of the coefficient bricks `bricks` (stored in `coeffs`, with every brick beside them

@@ -652,22 +652,14 @@ impl pgvol_core::cpu::Kernel for Sample<'_, '_, '_, '_> {
     type Output = ();
     #[inline(always)]
     fn run(self) {
-        self.plane
-            .sample_here(self.first, self.us, self.vs, self.out, self.block)
-    }
-}
-
-impl CollapsedPlane<'_, '_> {
-    /// [`LayerField::sample`], inlined into both builds of its kernel.
-    #[inline(always)]
-    fn sample_here(
-        &self,
-        first: [usize; 2],
-        us: &[f32],
-        vs: &[f32],
-        out: &mut [f32],
-        block: &mut BlockLines,
-    ) {
+        let Sample {
+            plane,
+            first,
+            us,
+            vs,
+            out,
+            block,
+        } = self;
         let BlockLines {
             columns: wus,
             row_windows: wvs,
@@ -677,12 +669,12 @@ impl CollapsedPlane<'_, '_> {
         } = block;
         wus.clear();
         wvs.clear();
-        if let Some(NodeWindows([along_u, along_v])) = self.node_windows {
+        if let Some(NodeWindows([along_u, along_v])) = plane.node_windows {
             wus.extend_from_slice(&along_u[first[0]..first[0] + us.len()]);
             wvs.extend_from_slice(&along_v[first[1]..first[1] + vs.len()]);
         } else {
-            wus.extend(us.iter().map(|&u| self.window(0, u)));
-            wvs.extend(vs.iter().map(|&v| self.window(1, v)));
+            wus.extend(us.iter().map(|&u| plane.window(0, u)));
+            wvs.extend(vs.iter().map(|&v| plane.window(1, v)));
         }
         let span = |ws: &[(AxisWindow, f32)]| {
             let lo = ws.iter().map(|w| w.0.first).min().unwrap_or(0);
@@ -699,7 +691,7 @@ impl CollapsedPlane<'_, '_> {
         rows.clear();
         if gather {
             local.resize(nu * nv, 0.0);
-            self.gather(u0, nu, v0, local);
+            plane.gather(u0, nu, v0, local);
             rows.resize(nu * vs.len(), 0.0);
         }
         for (j, (wv, dv)) in wvs.iter().enumerate() {
@@ -724,17 +716,17 @@ impl CollapsedPlane<'_, '_> {
                     let line_r = if gather {
                         line[(wu.first + r as i64 - u0) as usize]
                     } else {
-                        let iu = mirror(wu.first + r as i64, self.dims[0]);
+                        let iu = mirror(wu.first + r as i64, plane.dims[0]);
                         let mut sum = 0.0f32;
                         for t in 0..wv.len {
-                            let iv = mirror(wv.first + t as i64, self.dims[1]);
-                            sum += wv.w[t][0] * self.coefficient(iu, iv);
+                            let iv = mirror(wv.first + t as i64, plane.dims[1]);
+                            sum += wv.w[t][0] * plane.coefficient(iu, iv);
                         }
                         sum
                     };
                     value += wu.w[r][0] * line_r;
                 }
-                let outside = Vec3::new(*du, *dv, self.off_axis).length();
+                let outside = Vec3::new(*du, *dv, plane.off_axis).length();
                 out[i + us.len() * j] = value + outside;
             }
         }
