@@ -1,8 +1,8 @@
 //! Squared distances from a point to several triangles at once (four, or eight in the grid
 //! scans).
 //!
-//! Each triangle is stored as its corner `a`, its edges `ab`, `ac` and their dot products, as a
-//! structure of arrays, and every lane repeats the arithmetic of
+//! Each triangle is stored as its corner `a`, its edges `ab`, `ac`, their dot products and its
+//! normal, as a structure of arrays, and every lane repeats the arithmetic of
 //! [`closest_point_and_distance`](crate::triangle::closest_point_and_distance) operation for
 //! operation, so the distances are bit-identical to it. Keeping the edges and their dot products
 //! spares each step 3 of its 6 dot products and the other two corners (fandisk's dense 96³ grid:
@@ -11,11 +11,12 @@
 
 use glam::{Vec3A, Vec4};
 
+use crate::triangle::normal;
 use crate::wide::Wide;
 
-/// Runs per triangle: corner `a`, edges `ab` and `ac` (three axes each), and the edges' dot
-/// products `ab·ab`, `ab·ac`, `ac·ac`.
-const RUNS: usize = 12;
+/// Runs per triangle: corner `a`, edges `ab` and `ac` (three axes each), the edges' dot
+/// products `ab·ab`, `ab·ac`, `ac·ac`, and the normal `ab × ac` ([`normal`]).
+const RUNS: usize = 15;
 
 /// Triangles per step of [`TriangleLanes::distances_squared`].
 pub const LANES: usize = 4;
@@ -73,6 +74,16 @@ impl<W: Wide> Points<W> {
     fn dot(self, o: Self) -> W {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
+
+    /// `self × o`, each coordinate as [`crate::triangle::cross`] computes it.
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Points {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
 }
 
 impl TriangleLanes {
@@ -83,8 +94,9 @@ impl TriangleLanes {
         let terms = |t: &[Vec3A; 3]| -> [f32; RUNS] {
             let (a, ab, ac) = (t[0], t[1] - t[0], t[2] - t[0]);
             let (e11, e12, e22) = (ab.dot(ab), ab.dot(ac), ac.dot(ac));
+            let n = normal(t[0], t[1], t[2]);
             [
-                a.x, a.y, a.z, ab.x, ab.y, ab.z, ac.x, ac.y, ac.z, e11, e12, e22,
+                a.x, a.y, a.z, ab.x, ab.y, ab.z, ac.x, ac.y, ac.z, e11, e12, e22, n.x, n.y, n.z,
             ]
         };
         let all: Vec<[f32; RUNS]> = tris.iter().map(terms).collect();
@@ -108,7 +120,7 @@ impl TriangleLanes {
     // No closures in the kernels: a closure is not always inlined into its caller, and
     // outside the AVX2 build its wide operations become calls.
     /// Runs `3 c .. 3 c + 3` (`c` = 0: corner `a`, 1: edge `ab`, 2: edge `ac`, 3: the dot
-    /// products) for the triangles `start .. start + W::LANES`.
+    /// products, 4: the normal) for the triangles `start .. start + W::LANES`.
     ///
     /// # Safety
     /// [`TriangleLanes::check_step`] passed for `start`.
@@ -139,20 +151,21 @@ impl TriangleLanes {
     pub(crate) fn distances_squared_wide<W: Wide>(&self, p: Vec3A, start: usize) -> W {
         self.check_step::<W>(start);
         // SAFETY: checked above.
-        let (a, ab, ac, e) = unsafe {
+        let (a, ab, ac, e, n) = unsafe {
             (
                 self.triple::<W>(0, start),
                 self.triple::<W>(1, start),
                 self.triple::<W>(2, start),
                 self.triple::<W>(3, start),
+                self.triple::<W>(4, start),
             )
         };
-        distances_to_triangles(p, a, ab, ac, [e.x, e.y, e.z])
+        distances_to_triangles(p, a, ab, ac, [e.x, e.y, e.z], n)
     }
 }
 
 /// The kernel of [`TriangleLanes::distances_squared`]: triangles with corner `a`, edges `ab`,
-/// `ac` and their dot products `e = [ab·ab, ab·ac, ac·ac]`.
+/// `ac`, their dot products `e = [ab·ab, ab·ac, ac·ac]` and normal `n`.
 #[inline(always)]
 fn distances_to_triangles<W: Wide>(
     p: Vec3A,
@@ -160,6 +173,7 @@ fn distances_to_triangles<W: Wide>(
     ab: Points<W>,
     ac: Points<W>,
     e: [W; 3],
+    n: Points<W>,
 ) -> W {
     let zero = W::splat(0.0);
     let p = Points::<W>::splat(p);
@@ -168,11 +182,12 @@ fn distances_to_triangles<W: Wide>(
     let d2 = ac.dot(ap);
     let d3 = d1 - e[0];
     let d4 = d2 - e[1];
-    let vc = d1 * d4 - d3 * d2;
+    let vc = ap.dot(n.cross(ab));
     let d5 = d1 - e[1];
     let d6 = d2 - e[2];
-    let vb = d5 * d2 - d1 * d6;
-    let va = d3 * d6 - d5 * d4;
+    let vb = ap.dot(ac.cross(n));
+    let nn = n.dot(n);
+    let va = nn - vb - vc;
     let (d43, d56) = (d4 - d3, d5 - d6);
     // The regions in the scalar code's order; the first that holds wins, so they are
     // applied last to first.
@@ -182,11 +197,12 @@ fn distances_to_triangles<W: Wide>(
     let vertex_c = d6.ge(zero) & d5.le(d6);
     let edge_ac = vb.le(zero) & d2.ge(zero) & d6.le(zero);
     let edge_bc = va.le(zero) & d43.ge(zero) & d56.ge(zero);
-    let sum = va + vb + vc;
-    // Each lane uses one quotient: the face's `1 / sum` or its edge's parameter. Dividing
-    // once by per-lane operands gives the same bits as the four divisions.
-    let mut numerator = W::splat(1.0);
-    let mut denominator = sum;
+    // Each lane uses one quotient: the face's `h / (n·n)`, whose product with `h` is the
+    // squared distance to the plane, or its edge's parameter. Dividing once by per-lane
+    // operands gives the same bits as the four divisions.
+    let h = n.dot(ap);
+    let mut numerator = h;
+    let mut denominator = nn;
     for (edge, n, d) in [
         (edge_bc, d43, d43 + d56),
         (edge_ac, d2, d2 - d6),
@@ -197,10 +213,10 @@ fn distances_to_triangles<W: Wide>(
     }
     let quotient = numerator / denominator;
     let one = W::splat(1.0);
-    // The closest point's coordinates `(s, t)` along `ab` and `ac`: the face's
-    // `(vb / sum, vc / sum)`, an edge's parameter, or a corner.
-    let mut s = vb * quotient;
-    let mut t = vc * quotient;
+    // The closest point's coordinates `(s, t)` along `ab` and `ac` off the face: an edge's
+    // parameter, or a corner.
+    let mut s = zero;
+    let mut t = zero;
     s = W::select(edge_bc, one - quotient, s);
     t = W::select(edge_bc, quotient, t);
     s = W::select(edge_ac, zero, s);
@@ -214,9 +230,10 @@ fn distances_to_triangles<W: Wide>(
     s = W::select(vertex_a, zero, s);
     t = W::select(vertex_a, zero, t);
     let pq = ap.sub(ab.scale(s)).sub(ac.scale(t));
-    let distance = pq.dot(pq);
+    let off_face = pq.dot(pq);
     let regions = vertex_a | vertex_b | edge_ab | vertex_c | edge_ac | edge_bc;
-    let degenerate = !(sum.gt(zero) & sum.lt(W::splat(f32::INFINITY))) & !regions;
+    let distance = W::select(regions, off_face, h * quotient);
+    let degenerate = !(nn.gt(zero) & nn.lt(W::splat(f32::INFINITY))) & !regions;
     W::select(degenerate, W::splat(f32::NAN), distance)
 }
 
