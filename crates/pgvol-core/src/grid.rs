@@ -39,9 +39,9 @@ pub enum GridError {
     BadBounds,
 }
 
-/// Upper bound on nodes in one grid, 4096³: sparse volumes hold only the band near the surface,
+/// Upper bound on nodes in one grid, 8192³: sparse volumes hold only the band near the surface,
 /// so grids this large fit in memory; every dense path checks its own memory estimate first.
-pub const MAX_GRID_NODES: u128 = 1 << 36;
+pub const MAX_GRID_NODES: u128 = 1 << 39;
 
 impl Grid {
     /// The project convention: a cube of side 1.1 × the longest extent of `[lo, hi]`, centred on the

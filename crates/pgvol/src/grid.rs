@@ -10,10 +10,10 @@ pub const DEFAULT_RES: usize = 128;
 /// The fewest nodes per axis accepted: fewer cannot hold a cubic B-spline's support inside.
 pub const MIN_RES: u32 = 4;
 
-/// The most nodes per axis accepted: a 200 mm part at 50 µm. The sparse encode, decode and slice
+/// The most nodes per axis accepted: a 400 mm part at 50 µm. The sparse encode, decode and slice
 /// hold the band near the surface; each job estimates its memory first and refuses with the
-/// figure when it would not fit.
-pub const MAX_RES: u32 = 4096;
+/// figure when it would not fit (at 8192³ on 24 GB, parts with little surface fit).
+pub const MAX_RES: u32 = 8192;
 
 /// How the grid around a mesh is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,9 +15,15 @@ pub const BYTES_PER_NODE: u64 = 13;
 /// blobs.
 pub const BYTES_PER_BAND_BRICK: u64 = 10 * 1024;
 
-/// Bytes per grid node, whatever the band: the sampler's flags per brick of 4³ nodes (near a
-/// triangle, and the sign of a far region), 3 bytes per 64 nodes.
+/// Bytes per node of a part's box in an encode in parts, whatever the band: the sampler's flags
+/// per brick of 4³ nodes (near a triangle, and the sign of a far region), 3 bytes per 64 nodes.
 pub const BYTES_PER_PLAN_NODE: f64 = 3.0 / 64.0;
+
+/// Bytes per grid node, whatever the band, of an encode in one process: the sampler's flags and
+/// far-region signs, the fit's brick maps and the grid's tile tables. A thin rod (radius 1,
+/// length 200: a band of a few MB) peaks at 92 MB at 2048³, 512 MB at 4096³ and 2.6 GB at
+/// 8192³, 0.004–0.007 bytes per node between those sizes; one byte per 64 nodes keeps a margin.
+pub const BYTES_PER_GRID_NODE: f64 = 1.0 / 64.0;
 
 /// Bytes per stored coefficient brick while contouring at the volume's own grid: the active
 /// blocks' samples and crossings, and the output mesh with its normals as it is written (peak
@@ -148,7 +154,7 @@ pub fn band_bricks(area: f64, spacing: f32, band: f32) -> u64 {
 /// Estimated peak bytes of a sparse encode of a mesh of `area` and `triangles` on `grid`.
 pub fn sparse_encode_bytes(area: f64, triangles: usize, grid: &pgvol_core::Grid, band: f32) -> u64 {
     let bricks = band_bricks(area, grid.spacing, band);
-    let plan = (grid.len() as f64 * BYTES_PER_PLAN_NODE) as u64;
+    let plan = (grid.len() as f64 * BYTES_PER_GRID_NODE) as u64;
     bricks
         .saturating_mul(BYTES_PER_BAND_BRICK)
         .saturating_add(plan)

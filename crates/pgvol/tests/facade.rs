@@ -575,9 +575,9 @@ fn bad_options_are_parameter_errors() {
 #[test]
 fn grids_beyond_the_node_limit_are_resource_errors() {
     let mesh = sphere();
-    // 5000³ and a spacing of 1e-4 over a side of 2.2 both exceed the 2³⁶ nodes (4096³) a
+    // 9000³ and a spacing of 1e-4 over a side of 2.2 both exceed the 2³⁹ nodes (8192³) a
     // grid may have.
-    for grid in [GridSpec::Res(5000), GridSpec::Voxel(1e-4)] {
+    for grid in [GridSpec::Res(9000), GridSpec::Voxel(1e-4)] {
         let options = EncodeOptions {
             grid,
             ..EncodeOptions::default()

@@ -88,11 +88,11 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     let back = pgvol::io::read_pgv_bytes(&bytes, name).unwrap();
     assert_eq!(back.volume.grid, encoded.file.volume.grid);
 
-    // The largest grid is accepted and estimated before any work: a sparse encode at 4096³ is
-    // refused under a 1 GB limit with its figure, and a dense remesh (13 bytes a node, 893 GB)
+    // The largest grid is accepted and estimated before any work: a sparse encode at 8192³ is
+    // refused under a 1 GB limit with its figure, and a dense remesh (13 bytes a node, 7.1 TB)
     // under the machine's own.
     let top = pgvol::limits::MAX_RES as usize;
-    assert_eq!(top, 4096);
+    assert_eq!(top, 8192);
     pgvol::limits::set_memory_limit(Some(1_000_000_000));
     let big = EncodeOptions {
         grid: GridSpec::Res(top),
@@ -101,7 +101,7 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     let encode = pgvol::encode(&mesh, &big, &Silent).unwrap_err();
     pgvol::limits::set_memory_limit(None);
     assert_eq!(encode.kind(), ErrorKind::ResourceLimit, "{encode}");
-    assert!(encode.message().contains("4096 x 4096 x 4096"), "{encode}");
+    assert!(encode.message().contains("8192 x 8192 x 8192"), "{encode}");
     assert!(encode.message().contains("GB"), "{encode}");
     let dense = pgvol::remesh(
         &mesh,
@@ -113,7 +113,7 @@ fn jobs_over_the_limit_are_refused_before_allocating() {
     )
     .unwrap_err();
     assert_eq!(dense.kind(), ErrorKind::ResourceLimit, "{dense}");
-    assert!(dense.message().contains("893.4 GB"), "{dense}");
+    assert!(dense.message().contains("7.1 TB"), "{dense}");
 }
 
 #[test]
