@@ -6,7 +6,7 @@ use pgvol::{DecodeOptions, EncodeOptions, GridSpec, Silent, StorageOptions};
 
 mod common;
 
-use common::peak_bytes;
+use common::assert_peak_below;
 
 #[test]
 fn a_1024_cubed_encode_and_decode_stays_within_a_sparse_memory_bound() {
@@ -53,11 +53,5 @@ fn a_1024_cubed_encode_and_decode_stays_within_a_sparse_memory_bound() {
         "{stats:?}"
     );
 
-    let peak = peak_bytes().expect("VmHWM in /proc/self/status");
-    assert!(
-        peak < BOUND,
-        "peak memory {} MB over the bound {} MB",
-        peak / 1_000_000,
-        BOUND / 1_000_000
-    );
+    assert_peak_below(BOUND);
 }

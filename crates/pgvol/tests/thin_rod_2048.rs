@@ -6,17 +6,14 @@ use pgvol::{DecodeOptions, EncodeOptions, GridSpec, Silent, StorageOptions};
 
 mod common;
 
-use common::peak_bytes;
+use common::{assert_peak_below, thin_rod};
 
 #[test]
 fn a_thin_rod_at_2048_cubed_encodes_and_decodes_within_a_surface_memory_bound() {
     // Measured 73 MB for both in this process.
     const BOUND: u64 = 250_000_000;
-    // A 32-sided prism of radius 1 and length 200 along z: 2048 nodes along it, 9 across.
-    let mut rod = pgvol::mesh::shapes::prism(32);
-    for p in &mut rod.positions {
-        p.z *= 100.0;
-    }
+    // 2048 nodes along the rod, 9 across.
+    let rod = thin_rod();
     let exact = rod.stats().volume;
     let options = EncodeOptions {
         grid: GridSpec::Res(2048),
@@ -39,11 +36,5 @@ fn a_thin_rod_at_2048_cubed_encodes_and_decodes_within_a_surface_memory_bound() 
         (stats.volume - exact).abs() < 0.01 * exact,
         "{stats:?} vs {exact}"
     );
-    let peak = peak_bytes().expect("VmHWM in /proc/self/status");
-    assert!(
-        peak < BOUND,
-        "peak memory {} MB over the bound {} MB",
-        peak / 1_000_000,
-        BOUND / 1_000_000
-    );
+    assert_peak_below(BOUND);
 }

@@ -8,17 +8,14 @@ use pgvol::{EncodeOptions, Field, GridSpec, Silent};
 
 mod common;
 
-use common::peak_bytes;
+use common::{assert_peak_below, thin_rod};
 
 #[test]
 fn a_thin_rod_at_8192_cubed_encodes_and_offsets_in_one_piece() {
     // Measured 2.6 GB for the encode, about 2.9 GB with the offset.
     const BOUND: u64 = 5_000_000_000;
-    // A 32-sided prism of radius 1 and length 200 along z: 8192 nodes along it, 37 across.
-    let mut rod = pgvol::mesh::shapes::prism(32);
-    for p in &mut rod.positions {
-        p.z *= 100.0;
-    }
+    // 8192 nodes along the rod, 37 across.
+    let rod = thin_rod();
     let options = EncodeOptions {
         grid: GridSpec::Res(pgvol::limits::MAX_RES as usize),
         ..EncodeOptions::default()
@@ -55,11 +52,5 @@ fn a_thin_rod_at_8192_cubed_encodes_and_offsets_in_one_piece() {
     let grown = field.offset((1.1 * spacing) as f32).unwrap();
     let back = grown.eval(&points);
     assert!(back.iter().all(|e| e.value < 0.0));
-    let peak = peak_bytes().expect("VmHWM in /proc/self/status");
-    assert!(
-        peak < BOUND,
-        "peak memory {} MB over the bound {} MB",
-        peak / 1_000_000,
-        BOUND / 1_000_000
-    );
+    assert_peak_below(BOUND);
 }
