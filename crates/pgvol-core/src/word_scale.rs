@@ -32,7 +32,7 @@ impl WordScale {
 
     /// The value of word `w` (two's complement), whose magnitude passes
     /// [`WordScale::exact_up_to`]; branch-free, so loops of it vectorise.
-    #[inline]
+    #[inline(always)]
     pub fn value(&self, w: i32) -> f32 {
         let a = w.unsigned_abs() as f32;
         let v = (a + (a - self.knee).max(0.0) * self.ratio_less_one) * self.step;
@@ -41,7 +41,7 @@ impl WordScale {
 
     /// Adds `weight` times the value of each of `words` to `out`; every word must pass
     /// [`WordScale::exact_up_to`].
-    #[inline]
+    #[inline(always)]
     pub fn add_words(&self, words: &[i16], weight: f32, out: &mut [f32]) {
         for (o, &w) in out.iter_mut().zip(words) {
             *o += weight * self.value(w as i32);

@@ -96,9 +96,9 @@ pub(crate) fn decode_values(
     }
 }
 
-/// The default `fixed` encoding (byte planes, delta-x): gathering, un-zig-zag and prediction in
-/// one pass (a serial chain through the previous word), then dequantisation in a second, which
-/// vectorises when every word takes the f32 path. The same values as the separate steps.
+/// The default `fixed` encoding (byte planes, delta-x): the words ([`fixed_delta_x_words`]),
+/// then their dequantisation, which vectorises when every word takes the f32 path. The same
+/// values as the separate steps.
 fn fixed_delta_x(
     body: &[u8],
     n: [usize; 3],
@@ -157,43 +157,70 @@ impl pgvol_core::cpu::Kernel for Dequantise<'_> {
 /// The words of the default `fixed` encoding (`n` nodes, x fastest) into `words`; returns the
 /// largest magnitude among them.
 fn fixed_delta_x_words(body: &[u8], n: [usize; 3], words: &mut Vec<u32>) -> u32 {
-    let count = n[0] * n[1] * n[2];
-    let (p0, rest) = body.split_at(count);
-    let (p1, rest) = rest.split_at(count);
-    let (p2, p3) = rest.split_at(count);
-    words.resize(count, 0);
-    // The first words of the previous row and slice: the predictions at row and slice starts.
-    let (mut row_first, mut slice_first) = (0u32, 0u32);
-    let mut largest = 0u32;
-    let mut at = 0;
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            let mut prev = if j > 0 {
+    words.resize(n[0] * n[1] * n[2], 0);
+    if words.is_empty() {
+        return 0;
+    }
+    pgvol_core::cpu::run(DeltaXWords {
+        body,
+        row: n[0],
+        rows_per_slice: n[1],
+        words,
+    })
+}
+
+/// [`fixed_delta_x_words`] as a kernel: every stored brick a decode or a slicing reads goes
+/// through it.
+struct DeltaXWords<'a> {
+    body: &'a [u8],
+    /// Words per row (along x).
+    row: usize,
+    /// Rows per slice (along y).
+    rows_per_slice: usize,
+    words: &'a mut [u32],
+}
+
+impl pgvol_core::cpu::Kernel for DeltaXWords<'_> {
+    type Output = u32;
+    #[inline(always)]
+    fn run(self) -> u32 {
+        let DeltaXWords {
+            body,
+            row,
+            rows_per_slice,
+            words,
+        } = self;
+        let count = words.len();
+        let (p0, rest) = body.split_at(count);
+        let (p1, rest) = rest.split_at(count);
+        let (p2, p3) = rest.split_at(count);
+        // The residuals first: each word's own, so this loop vectorises.
+        let planes = p0.iter().zip(p1).zip(p2.iter().zip(p3));
+        for (w, ((&b0, &b1), (&b2, &b3))) in words.iter_mut().zip(planes) {
+            *w = unzigzag(u32::from_le_bytes([b0, b1, b2, b3]), u32::MAX);
+        }
+        // Then the running sums along x, the only serial chain. A row's prediction starts from
+        // the previous row's first word, a slice's first row from the previous slice's.
+        let (mut row_first, mut slice_first) = (0u32, 0u32);
+        for (r, run) in words.chunks_exact_mut(row).enumerate() {
+            let mut prev = if r % rows_per_slice != 0 {
                 row_first
-            } else if k > 0 {
-                slice_first
             } else {
-                0
+                slice_first
             };
-            let end = at + n[0];
-            let planes = p0[at..end]
-                .iter()
-                .zip(&p1[at..end])
-                .zip(p2[at..end].iter().zip(&p3[at..end]));
-            for (w, ((&b0, &b1), (&b2, &b3))) in words[at..end].iter_mut().zip(planes) {
-                let z = u32::from_le_bytes([b0, b1, b2, b3]);
-                prev = unzigzag(z, u32::MAX).wrapping_add(prev);
+            for w in run.iter_mut() {
+                prev = w.wrapping_add(prev);
                 *w = prev;
-                largest = largest.max((prev as i32).unsigned_abs());
             }
-            row_first = words[at];
-            if j == 0 {
+            row_first = run[0];
+            if r % rows_per_slice == 0 {
                 slice_first = row_first;
             }
-            at = end;
         }
+        words
+            .iter()
+            .fold(0, |largest, &w| largest.max((w as i32).unsigned_abs()))
     }
-    largest
 }
 
 /// Decodes `raw` as [`decode_values`] does, but into the `fixed` precision's words as 16-bit
@@ -263,7 +290,7 @@ fn gather(body: &[u8], w: usize, shuffle: bool, words: &mut [u32]) {
 }
 
 /// Zig-zag decoding modulo `mask + 1`: even `z` → `z / 2`, odd → `−(z + 1) / 2`.
-#[inline]
+#[inline(always)]
 fn unzigzag(z: u32, mask: u32) -> u32 {
     ((z >> 1) ^ 0u32.wrapping_sub(z & 1)) & mask
 }

@@ -16,7 +16,8 @@ pub enum BrickRef<'a> {
 
 impl BrickRef<'_> {
     /// Adds `weight` times values `start..start + out.len()` (x fastest) to `out`.
-    #[inline]
+    // Always inlined: the plane collapse kernel's AVX2 build must hold it.
+    #[inline(always)]
     pub(crate) fn add_run(&self, start: usize, weight: f32, out: &mut [f32]) {
         let end = start + out.len();
         match self {
@@ -27,7 +28,8 @@ impl BrickRef<'_> {
     }
 
     /// Adds `weight` times values `start`, `start + stride`, ... (x fastest) to `out`.
-    #[inline]
+    // Always inlined: the plane collapse kernel's AVX2 build must hold it.
+    #[inline(always)]
     pub(crate) fn add_strided(&self, start: usize, stride: usize, weight: f32, out: &mut [f32]) {
         let at = |k: usize| start + k * stride;
         match self {
@@ -94,7 +96,7 @@ fn word_ranges(axis: usize, words: &[i16; BRICK_NODES]) -> [[i16; 2]; BRICK_EDGE
     std::array::from_fn(|n| [lo[n], hi[n]])
 }
 
-#[inline]
+#[inline(always)]
 fn add_each(out: &mut [f32], weight: f32, value: impl Fn(usize) -> f32) {
     for (k, o) in out.iter_mut().enumerate() {
         *o += weight * value(k);
@@ -122,7 +124,7 @@ fn ranges_of(axis: usize, value: impl Fn(usize) -> f32) -> [[f32; 2]; BRICK_EDGE
     ranges
 }
 
-#[inline]
+#[inline(always)]
 fn add_values(values: &[f32], weight: f32, out: &mut [f32]) {
     for (o, x) in out.iter_mut().zip(values) {
         *o += weight * x;
