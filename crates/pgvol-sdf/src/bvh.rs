@@ -4,7 +4,7 @@
 //! triangles stored in leaf order, because obvhs answers ray and overlap queries only.
 
 use glam::{Vec3, Vec3A};
-use obvhs::{bvh2::builder::build_bvh2_from_tris, triangle::Triangle, BvhBuildParams};
+use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, Boundable, BvhBuildParams};
 use pgvol_mesh::Mesh;
 use std::time::Duration;
 
@@ -71,18 +71,25 @@ pub const MAX_LEAF: usize = 8;
 /// Enough for any tree obvhs builds on meshes that fit in memory; deeper trees spill to the heap.
 const STACK: usize = 96;
 
+/// A mesh triangle as the BVH builder bounds it.
+struct MeshTriangle<'m> {
+    mesh: &'m Mesh,
+    index: u32,
+}
+
+impl Boundable for MeshTriangle<'_> {
+    fn aabb(&self) -> Aabb {
+        Aabb::from_points(&self.mesh.triangle(self.index as usize).map(Vec3A::from))
+    }
+}
+
 impl Bvh {
     /// Builds the hierarchy. The mesh must have at least one triangle.
     pub fn build(mesh: &Mesh) -> Bvh {
-        let tris: Vec<Triangle> = (0..mesh.triangles.len())
-            .map(|t| {
-                let [a, b, c] = mesh.triangle(t);
-                Triangle {
-                    v0: a.into(),
-                    v1: b.into(),
-                    v2: c.into(),
-                }
-            })
+        // The builder sees each triangle through its index (16 bytes, not the 48 of its
+        // corners): 41 MB less at the build's peak for a mesh of 1.3 M triangles.
+        let tris: Vec<MeshTriangle> = (0..mesh.triangles.len() as u32)
+            .map(|index| MeshTriangle { mesh, index })
             .collect();
         let mut build_time = Duration::ZERO;
         // Presets without spatial splits list each triangle in exactly one leaf. On the bunny at
@@ -97,7 +104,7 @@ impl Bvh {
             max_prims_per_leaf: MAX_LEAF as u32,
             ..BvhBuildParams::very_fast_build()
         };
-        let bvh2 = build_bvh2_from_tris(&tris, params, &mut build_time);
+        let bvh2 = build_bvh2(&tris, params, &mut build_time);
         let mut out = Bvh {
             nodes: Vec::with_capacity(bvh2.nodes.len()),
             oriented: Vec::new(),
@@ -129,8 +136,7 @@ impl Bvh {
                 let first = out.tris.len() as u32;
                 let range = n.first_index as usize..(n.first_index + n.prim_count) as usize;
                 for &prim in &bvh2.primitive_indices[range] {
-                    let t = &tris[prim as usize];
-                    out.tris.push([t.v0, t.v1, t.v2]);
+                    out.tris.push(mesh.triangle(prim as usize).map(Vec3A::from));
                     out.tri_ids.push(prim);
                 }
                 out.nodes[dst] = Node {
