@@ -80,7 +80,7 @@ pub use grids::{resampled_grid, resampled_grid_of};
 pub use marching::{marching_cubes, marching_cubes_on_field, marching_cubes_with};
 pub use pgvol_core::progress::Report;
 pub use quality::min_angle_histogram;
-pub use runs::{contour_runs, CoefficientWindows, RunPart, RunsError, RUN_LAYERS};
+pub use runs::{contour_runs, CoefficientWindows, Occupied, RunPart, RunsError, RUN_LAYERS};
 pub use volume::{
     contour_field, contour_field_hermite, contour_sampled, contour_volume, contour_volume_placing,
     dual_contour_interior, dual_vertices_interior, EdgeHermite, Method, SamplesError,

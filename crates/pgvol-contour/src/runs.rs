@@ -15,6 +15,7 @@
 
 use std::borrow::Cow;
 use std::collections::HashMap;
+use std::ops::Range;
 
 use glam::Vec3;
 use pgvol_core::progress::{stopped, tick, Report, Span};
@@ -44,6 +45,22 @@ pub trait CoefficientWindows {
     /// node with a z index in `layers[0]..=layers[1]` (the others are never read). Windows are
     /// asked for in ascending order.
     fn window(&mut self, layers: [usize; 2]) -> Result<Cow<'_, CoefficientVolume>, Self::Error>;
+
+    /// Where the coefficients may differ from the outside background, if known and the basis
+    /// is separable (values are weighted means of the coefficients within 2 nodes): then the
+    /// contouring of the volume's own grid visits only the box around them.
+    fn occupied(&self) -> Option<Occupied> {
+        None
+    }
+}
+
+/// A box of coefficient bricks outside which every coefficient is the outside background.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Occupied {
+    /// Per axis, the range of brick indices; an empty range when no brick is stored or inside.
+    pub bricks: [Range<usize>; 3],
+    /// The outside background's value.
+    pub outside: f32,
 }
 
 /// A volume held whole is its own window.
@@ -56,6 +73,13 @@ impl CoefficientWindows for &CoefficientVolume {
 
     fn window(&mut self, _: [usize; 2]) -> Result<Cow<'_, CoefficientVolume>, Self::Error> {
         Ok(Cow::Borrowed(*self))
+    }
+
+    fn occupied(&self) -> Option<Occupied> {
+        self.basis.is_separable().then(|| Occupied {
+            bricks: self.coeffs.occupied_bricks(),
+            outside: self.coeffs.background().outside,
+        })
     }
 }
 
@@ -100,6 +124,19 @@ fn contour_runs_of<W: CoefficientWindows>(
     part: &mut dyn FnMut(RunPart) -> Result<(), W::Error>,
 ) -> Result<(), RunsError<W::Error>> {
     let volume_grid = windows.grid();
+    // Node positions are the whole grid's, whatever part of it is contoured.
+    let origin = crate::grids::padded(grid).origin;
+    let (first, grid) = match windows.occupied() {
+        Some(occupied) if grid == &volume_grid => {
+            match cropped(&occupied, grid, iso, [BLOCK, BLOCK, run_layers]) {
+                Some(crop) => crop,
+                // Every coefficient is outside: no surface.
+                None => return Ok(()),
+            }
+        }
+        _ => ([0; 3], *grid),
+    };
+    let grid = &grid;
     let padded = crate::grids::padded(grid);
     let cells = padded.dims[2] - 1;
     let runs = cells.div_ceil(run_layers);
@@ -114,7 +151,8 @@ fn contour_runs_of<W: CoefficientWindows>(
         let needed = coefficient_layers(&volume_grid, grid, layers);
         let window = windows.window(needed).map_err(RunsError::Source)?;
         let span = span.part(run as f64 / runs as f64, (run + 1) as f64 / runs as f64);
-        let (crossings, parts) = run_mesh(&window, grid, iso, layers, span);
+        let at = [first[0], first[1], first[2] + layers[0]];
+        let (crossings, parts) = run_mesh(&window, grid, iso, layers, (origin, at), span);
         let last = run + 1 == runs;
         let out = stitch.add(&crossings, parts, layers, last)?;
         drop(window);
@@ -123,12 +161,64 @@ fn contour_runs_of<W: CoefficientWindows>(
     Ok(())
 }
 
-/// The crossings and the blocks' triangles of the padded node layers `layers` of `grid`.
+/// Nodes past the occupied coefficients whose values can still differ from the outside
+/// background: the supports of the separable bases reach at most 2 nodes.
+const SUPPORT_REACH: usize = 2;
+
+/// The part of the volume's own `grid` that can hold the `iso` level when only the `occupied`
+/// bricks differ from an outside background above it: its first node in `grid` and the grid
+/// of its nodes, `None` when no node can. The box starts at a multiple of `align` (contour
+/// blocks along x and y, runs along z), so its blocks and runs are the whole grid's, and
+/// reaches past the support of the occupied coefficients, so the padding around it stands for
+/// nodes that are outside in the whole grid too: the mesh is the whole grid's, bit for bit.
+/// The whole grid when the background is not clearly above the level.
+fn cropped(
+    occupied: &Occupied,
+    grid: &Grid,
+    iso: f32,
+    align: [usize; 3],
+) -> Option<([usize; 3], Grid)> {
+    // Values of background-only supports are the background up to rounding of the weights;
+    // a NaN level or background keeps the whole grid too.
+    let clearly_above = occupied.outside - iso > 1e-5 * occupied.outside.abs();
+    if !clearly_above {
+        return Some(([0; 3], *grid));
+    }
+    if occupied.bricks.iter().any(|r| r.is_empty()) {
+        return None;
+    }
+    let mut first = [0; 3];
+    let mut dims = grid.dims;
+    for a in 0..3 {
+        let r = &occupied.bricks[a];
+        let lo = r.start * pgvol_core::BRICK_EDGE;
+        let hi = (r.end * pgvol_core::BRICK_EDGE).min(grid.dims[a]);
+        // Node `first - 1`, which the padding stands for, lies beyond the support's reach.
+        first[a] = lo.saturating_sub(SUPPORT_REACH) / align[a] * align[a];
+        let end = (hi - 1 + SUPPORT_REACH + 1).min(grid.dims[a]);
+        dims[a] = end - first[a];
+    }
+    let origin =
+        grid.origin + grid.spacing * Vec3::new(first[0] as f32, first[1] as f32, first[2] as f32);
+    Some((
+        first,
+        Grid {
+            origin,
+            spacing: grid.spacing,
+            dims,
+            offset: grid.offset,
+        },
+    ))
+}
+
+/// The crossings and the blocks' triangles of the padded node layers `layers` of `grid`, its
+/// nodes placed at `origin + spacing · (node + at)` (`place`).
 fn run_mesh(
     volume: &CoefficientVolume,
     grid: &Grid,
     iso: f32,
     layers: [usize; 2],
+    place: (Vec3, [usize; 3]),
     span: Span,
 ) -> (Crossings, Vec<Part>) {
     let sampling = Some(span.part(0.0, SAMPLING_PART));
@@ -140,9 +230,9 @@ fn run_mesh(
         dims: [padded.dims[0], padded.dims[1], layers[1] - layers[0] + 1],
         block_plane: padded.dims[0].div_ceil(BLOCK) * padded.dims[1].div_ceil(BLOCK),
     };
-    let samples = Samples::checked(&run, padded.origin, padded.spacing, iso)
+    let samples = Samples::checked(&run, place.0, padded.spacing, iso)
         .expect("a run holds at least one cell layer")
-        .shifted(layers[0])
+        .shifted(place.1)
         .reporting(Some(span.part(SAMPLING_PART, 1.0)));
     let refine = crate::volume_root::volume_refine(volume, iso);
     let crossings = all_crossings(&samples, Place::Position(&refine), EXTRA_FLAG);
@@ -334,6 +424,73 @@ mod tests {
             }
             Ok(Cow::Owned(v))
         }
+    }
+
+    /// A volume contoured on its whole grid: no box of occupied bricks is given.
+    struct Uncropped<'a>(&'a CoefficientVolume);
+
+    impl CoefficientWindows for Uncropped<'_> {
+        type Error = ();
+
+        fn grid(&self) -> Grid {
+            self.0.grid
+        }
+
+        fn window(&mut self, _: [usize; 2]) -> Result<Cow<'_, CoefficientVolume>, ()> {
+            Ok(Cow::Borrowed(self.0))
+        }
+    }
+
+    #[test]
+    fn the_box_of_occupied_bricks_gives_the_whole_grids_mesh_bit_for_bit() {
+        // A small ball near a corner of a 96³ grid; the bricks away from it absent and outside.
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            spacing: 1.0 / 95.0,
+            dims: [96; 3],
+            offset: Default::default(),
+        };
+        let centre = Vec3::new(0.8, 0.78, 0.82);
+        let samples = (0..grid.len())
+            .map(|n| {
+                let [i, j, k] = [n % 96, n / 96 % 96, n / (96 * 96)];
+                (grid.point(i, j, k) - centre).length() - 0.08
+            })
+            .collect();
+        let mut v = CoefficientVolume::interpolate(grid, Basis::Bspline3, samples).unwrap();
+        let clamp = 0.03;
+        v.coeffs
+            .retain(|_, values| values.iter().any(|&x| x < clamp));
+        v.coeffs
+            .set_background(pgvol_core::Background::clamp(clamp));
+        v.coeffs.compact_tiles();
+        let occupied = (&v).occupied().unwrap();
+        assert!(
+            occupied
+                .bricks
+                .iter()
+                .all(|r| r.start >= 8 && !r.is_empty()),
+            "{occupied:?}"
+        );
+        for run_layers in [BLOCK, 4 * BLOCK] {
+            let cropped = mesh_of(&mut &v, &grid, run_layers);
+            let whole = mesh_of(&mut Uncropped(&v), &grid, run_layers);
+            assert!(cropped.triangles.len() > 500, "{}", cropped.triangles.len());
+            assert_eq!(cropped.positions, whole.positions, "{run_layers}");
+            assert_eq!(cropped.triangles, whole.triangles, "{run_layers}");
+        }
+        // Above the background, every node is inside: the whole grid is contoured.
+        let level = cropped(&occupied, &grid, 0.05, [BLOCK, BLOCK, RUN_LAYERS]);
+        assert_eq!(level, Some(([0; 3], grid)));
+        // Nothing stored or inside: no surface.
+        let empty = Occupied {
+            bricks: [0..0, 0..4, 0..4],
+            outside: clamp,
+        };
+        assert_eq!(
+            cropped(&empty, &grid, 0.0, [BLOCK, BLOCK, RUN_LAYERS]),
+            None
+        );
     }
 
     #[test]

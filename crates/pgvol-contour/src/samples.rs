@@ -138,15 +138,16 @@ impl Nodes for PaddedNodes<'_> {
 pub(crate) const CROSSINGS_PART: f64 = 0.85;
 
 /// A grid of node values being contoured: node `(i, j, k)` at
-/// `origin + spacing * (i, j, k + z_offset)`.
+/// `origin + spacing * ((i, j, k) + offset)`.
 #[derive(Clone, Copy)]
 pub(crate) struct Samples<'a> {
     pub nodes: &'a dyn Nodes,
     pub dims: [usize; 3],
     pub origin: Vec3,
-    /// Node layers of a larger grid below this one: a run of layers contoured on its own places
-    /// its nodes as the whole grid does, so nodes shared by two runs get one position.
-    pub z_offset: usize,
+    /// Where this grid's first node is in a larger grid: a run of layers (or a box) contoured
+    /// on its own places its nodes as the whole grid does, so nodes shared by two runs get one
+    /// position, and a box of the grid gives the positions of the whole.
+    pub offset: [usize; 3],
     pub spacing: f32,
     pub iso: f32,
     /// Where the contouring's fraction done goes, if anywhere.
@@ -177,16 +178,16 @@ impl<'a> Samples<'a> {
             nodes,
             dims,
             origin,
-            z_offset: 0,
+            offset: [0; 3],
             spacing,
             iso,
             progress: None,
         })
     }
 
-    /// These samples as node layers `z_offset..` of a grid with the same origin.
-    pub fn shifted(self, z_offset: usize) -> Self {
-        Self { z_offset, ..self }
+    /// These samples as the nodes from `offset` on of a grid with the same origin.
+    pub fn shifted(self, offset: [usize; 3]) -> Self {
+        Self { offset, ..self }
     }
 
     /// These samples, reporting the contouring's progress through `span`.
@@ -211,8 +212,8 @@ impl<'a> Samples<'a> {
     /// Node position; every caller goes through here so shared nodes get bit-identical positions.
     #[inline]
     pub fn node(&self, n: [usize; 3]) -> Vec3 {
-        let k = n[2] + self.z_offset;
-        self.origin + self.spacing * Vec3::new(n[0] as f32, n[1] as f32, k as f32)
+        let [i, j, k] = [0, 1, 2].map(|a| (n[a] + self.offset[a]) as f32);
+        self.origin + self.spacing * Vec3::new(i, j, k)
     }
 
     /// Inside means below iso; NaN compares false and so counts as outside.

@@ -308,14 +308,17 @@ impl<'a> Sampler<'a> {
     fn evaluate(&self, b: [usize; 3]) -> Box<BrickValues> {
         let (lo, n) = brick_extent(self.grid, b);
         let mut out = Box::new([0.0; BRICK_NODES]);
-        if *self.grid == self.volume.grid
-            && self.volume.basis.is_separable()
-            && n == [BRICK_EDGE; 3]
-        {
+        // The volume's own grid, or a box of it starting on a brick corner: each brick is one
+        // of the volume's.
+        let own_brick = self
+            .first_volume_node
+            .filter(|f| f.iter().all(|c| c % BRICK_EDGE == 0) && self.volume.basis.is_separable())
+            .map(|f| [0, 1, 2].map(|a| b[a] + f[a] / BRICK_EDGE));
+        if let Some(b) = own_brick.filter(|_| n == [BRICK_EDGE; 3]) {
             pgvol_field::fit::brick_node_values_into(self.volume, b, &mut out);
             return out;
         }
-        if *self.grid == self.volume.grid && self.volume.basis.is_separable() {
+        if let Some(b) = own_brick {
             let values = pgvol_field::fit::brick_node_values(self.volume, b);
             for k in 0..n[2] {
                 for j in 0..n[1] {

@@ -519,6 +519,26 @@ impl SparseGrid {
         (inside, outside)
     }
 
+    /// A box of bricks (per axis, a range of brick indices) holding every stored brick and
+    /// every absent brick inside; each brick outside it is absent and outside. Found tile by
+    /// tile, so it costs the tiles, not the bricks; a tile holding any brick counts whole.
+    /// Empty ranges when every brick is absent and outside.
+    pub fn occupied_bricks(&self) -> [std::ops::Range<usize>; 3] {
+        let [tx, ty, _] = self.tile_counts;
+        let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
+        for (ti, &slot) in self.tile_slots.iter().enumerate() {
+            if slot == ABSENT && !bit(&self.tile_inside, ti) {
+                continue;
+            }
+            let t = [ti % tx, ti / tx % ty, ti / (tx * ty)];
+            for a in 0..3 {
+                lo[a] = lo[a].min(t[a] * TILE_EDGE);
+                hi[a] = hi[a].max(((t[a] + 1) * TILE_EDGE).min(self.brick_counts[a]));
+            }
+        }
+        std::array::from_fn(|a| if lo[a] < hi[a] { lo[a]..hi[a] } else { 0..0 })
+    }
+
     /// Stored bricks, to change in place.
     pub fn stored_mut(&mut self) -> impl ExactSizeIterator<Item = ([usize; 3], &mut BrickValues)> {
         self.coords

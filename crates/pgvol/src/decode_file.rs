@@ -4,7 +4,7 @@ use std::borrow::Cow;
 use std::ops::Range;
 use std::path::Path;
 
-use pgvol_contour::{CoefficientWindows, Method, RunPart, RunsError};
+use pgvol_contour::{CoefficientWindows, Method, Occupied, RunPart, RunsError};
 use pgvol_core::{Grid, Mesh, SparseGrid, BRICK_EDGE};
 use pgvol_field::CoefficientVolume;
 use pgvol_format::{SlabReader, SlabSource};
@@ -167,6 +167,13 @@ impl CoefficientWindows for FileWindows<'_, '_> {
         }
         self.held.end = self.held.end.max(wanted.end);
         Ok(Cow::Borrowed(&self.volume))
+    }
+
+    fn occupied(&self) -> Option<Occupied> {
+        self.volume.basis.is_separable().then(|| Occupied {
+            bricks: self.reader.occupied_bricks(),
+            outside: self.reader.background().outside,
+        })
     }
 }
 

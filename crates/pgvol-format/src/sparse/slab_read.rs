@@ -216,6 +216,47 @@ impl<'a> SlabReader<'a> {
         self.layout.bricks.edge / BRICK_EDGE
     }
 
+    /// A box of the sparse grid's bricks (per axis, a range of brick indices) holding every
+    /// stored brick and every absent brick inside; each grid brick outside it is absent and
+    /// outside. From the index alone: a byte of the brick maps at a time, so a file of mostly
+    /// absent bricks costs its bytes, not its bricks. Empty ranges when nothing is stored or
+    /// inside.
+    pub fn occupied_bricks(&self) -> [std::ops::Range<usize>; 3] {
+        let l = &self.layout;
+        let count = l.bricks.count;
+        let total = count.iter().product::<usize>();
+        let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
+        for (byte, (&s, &i)) in l.stored.iter().zip(l.inside).enumerate() {
+            let mut set = s | i;
+            while set != 0 {
+                let b = 8 * byte + set.trailing_zeros() as usize;
+                set &= set - 1;
+                if b >= total {
+                    break;
+                }
+                let c = [
+                    b % count[0],
+                    b / count[0] % count[1],
+                    b / (count[0] * count[1]),
+                ];
+                for a in 0..3 {
+                    lo[a] = lo[a].min(c[a]);
+                    hi[a] = hi[a].max(c[a] + 1);
+                }
+            }
+        }
+        // File bricks to grid bricks; the last file brick along an axis may hold fewer.
+        let per = self.grid_bricks_per_slab();
+        let grid_counts = l.bricks.dims.map(|n| n.div_ceil(BRICK_EDGE));
+        std::array::from_fn(|a| {
+            if lo[a] < hi[a] {
+                lo[a] * per..(hi[a] * per).min(grid_counts[a])
+            } else {
+                0..0
+            }
+        })
+    }
+
     /// The index entry of stored file brick `b`: the stored bricks before it.
     fn entry(&self, b: usize) -> usize {
         let cx = self.layout.bricks.count[0];
