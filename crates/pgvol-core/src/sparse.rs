@@ -524,10 +524,21 @@ impl SparseGrid {
     /// tile, so it costs the tiles, not the bricks; a tile holding any brick counts whole.
     /// Empty ranges when every brick is absent and outside.
     pub fn occupied_bricks(&self) -> [std::ops::Range<usize>; 3] {
-        let [tx, ty, _] = self.tile_counts;
+        self.occupied_bricks_within(0..self.brick_counts[2])
+    }
+
+    /// [`Self::occupied_bricks`] among the brick layers `layers` along z: the bricks of the
+    /// other layers are not looked at.
+    pub fn occupied_bricks_within(
+        &self,
+        layers: std::ops::Range<usize>,
+    ) -> [std::ops::Range<usize>; 3] {
+        let [tx, ty, tz] = self.tile_counts;
+        let tiles = (layers.start >> TILE_SHIFT).min(tz)..layers.end.div_ceil(TILE_EDGE).min(tz);
         let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
-        for (ti, &slot) in self.tile_slots.iter().enumerate() {
-            if slot == ABSENT && !bit(&self.tile_inside, ti) {
+        let plane = tx * ty;
+        for ti in tiles.start * plane..tiles.end * plane {
+            if self.tile_slots[ti] == ABSENT && !bit(&self.tile_inside, ti) {
                 continue;
             }
             let t = [ti % tx, ti / tx % ty, ti / (tx * ty)];
@@ -536,6 +547,9 @@ impl SparseGrid {
                 hi[a] = hi[a].max(((t[a] + 1) * TILE_EDGE).min(self.brick_counts[a]));
             }
         }
+        // Tiles straddle the asked layers: the box stays within them.
+        lo[2] = lo[2].max(layers.start);
+        hi[2] = hi[2].min(layers.end);
         std::array::from_fn(|a| if lo[a] < hi[a] { lo[a]..hi[a] } else { 0..0 })
     }
 

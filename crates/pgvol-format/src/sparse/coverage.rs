@@ -26,7 +26,13 @@ pub(crate) struct Coverage {
     /// Index of the first file brick covered.
     first: usize,
     flags: Vec<u8>,
+    /// A box of file bricks (per axis, a range) outside which every file brick covered is
+    /// [`ALL_OUTSIDE`]; empty ranges when all are.
+    occupied: [Range<usize>; 3],
 }
+
+/// The flags of a file brick whose grid bricks are all unstored and outside.
+pub(crate) const ALL_OUTSIDE: u8 = OUTSIDE | MORE_OUTSIDE;
 
 impl Coverage {
     /// Every file brick.
@@ -36,20 +42,67 @@ impl Coverage {
 
     /// The file bricks of the layers `layers` along z (clipped to the grid), reading only the
     /// grid's brick tables there, so a writer holding a window of layers can ask for them.
+    /// Only the file bricks overlapping the grid's occupied box are looked at
+    /// ([`SparseGrid::occupied_bricks_within`]), so a small part on a large grid costs its box.
     pub(crate) fn layers(coeffs: &SparseGrid, bricks: &Bricks, layers: Range<usize>) -> Coverage {
         let per_layer = bricks.count[0] * bricks.count[1];
         let end = layers.end.min(bricks.count[2]);
-        let first = layers.start.min(end) * per_layer;
-        let flags = (first..end * per_layer)
-            .into_par_iter()
-            .map(|b| file_brick_flags(coeffs, bricks, b))
-            .collect();
-        Coverage { first, flags }
+        let start = layers.start.min(end);
+        let first = start * per_layer;
+        let e = bricks.edge;
+        // Grid brick layers overlapping the file brick layers.
+        let grid_layers = start * e / BRICK_EDGE..(end * e).div_ceil(BRICK_EDGE);
+        let grid_box = coeffs.occupied_bricks_within(grid_layers);
+        let occupied: [Range<usize>; 3] = std::array::from_fn(|a| {
+            let r = &grid_box[a];
+            if r.is_empty() {
+                return 0..0;
+            }
+            let lo = r.start * BRICK_EDGE / e;
+            let hi = (r.end * BRICK_EDGE).div_ceil(e).min(bricks.count[a]);
+            let (lo, hi) = if a == 2 {
+                (lo.max(start), hi.min(end))
+            } else {
+                (lo, hi)
+            };
+            if lo < hi {
+                lo..hi
+            } else {
+                0..0
+            }
+        });
+        let mut flags = vec![ALL_OUTSIDE; (end - start) * per_layer];
+        if occupied.iter().all(|r| !r.is_empty()) {
+            let [xs, ys, zs] = occupied.clone();
+            flags
+                .par_chunks_mut(per_layer)
+                .enumerate()
+                .filter(|(k, _)| zs.contains(&(start + k)))
+                .for_each(|(k, layer)| {
+                    for j in ys.clone() {
+                        for i in xs.clone() {
+                            let b = i + bricks.count[0] * j;
+                            layer[b] =
+                                file_brick_flags(coeffs, bricks, (start + k) * per_layer + b);
+                        }
+                    }
+                });
+        }
+        Coverage {
+            first,
+            flags,
+            occupied,
+        }
     }
 
     #[inline]
     pub(crate) fn flags(&self, b: usize) -> u8 {
         self.flags[b - self.first]
+    }
+
+    /// The box of file bricks outside which every covered one is [`ALL_OUTSIDE`].
+    pub(crate) fn occupied(&self) -> &[Range<usize>; 3] {
+        &self.occupied
     }
 }
 
@@ -115,5 +168,36 @@ mod tests {
         g.set_inside([2, 0, 0], true);
         let c = Coverage::new(&g, &bricks);
         assert_eq!(c.flags(1), INSIDE | MORE_INSIDE);
+    }
+
+    #[test]
+    fn bricks_beyond_the_occupied_box_are_all_outside_and_the_rest_looked_at() {
+        // A small part far from the origin of a 600³ grid (75 grid bricks, 10 tiles per axis):
+        // stored and inside bricks in one tile, file bricks of 12 nodes.
+        let dims = [600; 3];
+        let mut g = SparseGrid::new(dims, Background::clamp(1.0));
+        g.insert([50, 51, 52], Box::new([0.0; BRICK_NODES]));
+        g.set_inside([51, 51, 52], true);
+        g.set_inside([52, 50, 53], true);
+        let bricks = Bricks::new(dims, 12);
+        for layers in [0..bricks.count[2], 30..40, 0..20] {
+            let c = Coverage::layers(&g, &bricks, layers.clone());
+            let per_layer = bricks.count[0] * bricks.count[1];
+            let first = layers.start * per_layer;
+            let mut looked_at = 0;
+            for b in first..layers.end * per_layer {
+                let want = file_brick_flags(&g, &bricks, b);
+                assert_eq!(c.flags(b), want, "file brick {b} of layers {layers:?}");
+                looked_at += usize::from(want != ALL_OUTSIDE);
+            }
+            let boxed: usize = c.occupied().iter().map(|r| r.len()).product();
+            if layers.contains(&35) {
+                // A tile of 8 grid bricks is 64 nodes, at most 7 file bricks across: the box
+                // is the tile's, not the grid's 50³ file bricks.
+                assert!(looked_at > 0 && boxed <= 7 * 7 * 7, "{:?}", c.occupied());
+            } else {
+                assert_eq!(looked_at, 0);
+            }
+        }
     }
 }

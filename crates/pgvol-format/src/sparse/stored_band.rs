@@ -115,8 +115,13 @@ pub(crate) fn stored_band_layers(
     let reach = value_reach(volume.basis);
     let per_layer = bricks.count[0] * bricks.count[1];
     let near = layer_reach(bricks, volume.basis, layers.clone()).near;
-    let candidates: Vec<usize> = (near.start * per_layer..near.end * per_layer)
+    let [xs, ys, zs] = uncovered_ranges(&far, coverage, bricks, reach, near);
+    let rows: Vec<usize> = zs
+        .flat_map(|k| ys.clone().map(move |j| bricks.count[0] * j + per_layer * k))
+        .collect();
+    let candidates: Vec<usize> = rows
         .into_par_iter()
+        .flat_map_iter(|row| xs.clone().map(move |i| row + i))
         .filter(|&b| !far.covers(coverage, bricks, b, reach))
         .collect();
     let near_zero: Vec<(usize, NodeRows)> = candidates
@@ -150,6 +155,35 @@ pub(crate) fn stored_band_layers(
         )
         .flatten()
         .collect()
+}
+
+/// File bricks a far outside background covers: those more than `reach` nodes from the
+/// coverage's occupied box. Per axis, the range of the others (every brick when the outside
+/// is not far, or along z within `near`).
+fn uncovered_ranges(
+    far: &FarBackground,
+    coverage: &Coverage,
+    bricks: &Bricks,
+    reach: usize,
+    near: Range<usize>,
+) -> [Range<usize>; 3] {
+    let whole = [0..bricks.count[0], 0..bricks.count[1], near.clone()];
+    if !far.far[0] {
+        return whole;
+    }
+    // A brick reads the coverage of bricks within `reach` nodes: this many bricks away.
+    let g = reach / bricks.edge + 1;
+    let occupied = coverage.occupied();
+    std::array::from_fn(|a| {
+        let r = &occupied[a];
+        let lo = r.start.saturating_sub(g).max(whole[a].start);
+        let hi = (r.end + g).min(whole[a].end);
+        if r.is_empty() || lo >= hi {
+            0..0
+        } else {
+            lo..hi
+        }
+    })
 }
 
 /// Whether a window of coefficients all equal to one background value `c` is sure to have no
