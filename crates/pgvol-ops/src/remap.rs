@@ -108,6 +108,7 @@ pub(crate) fn map_nodes(
     let [bx, by, bz] = values.brick_counts();
     let moving: Vec<[usize; 3]> = (0..bz)
         .into_par_iter()
+        .filter(|&k| layer_varies(values, grid, k, &varies))
         .flat_map_iter(|k| {
             let values = &*values;
             let varies = &varies;
@@ -156,7 +157,12 @@ fn mapped_layer(
     }
     near.sort_unstable();
     near.dedup();
-    let moving: Vec<[usize; 2]> = (0..by)
+    let rows = if layer_varies(coeffs, grid, k, varies) {
+        0..by
+    } else {
+        0..0
+    };
+    let moving: Vec<[usize; 2]> = rows
         .into_par_iter()
         .flat_map_iter(|j| {
             let near = &near;
@@ -179,6 +185,22 @@ fn mapped_layer(
             (b, values)
         })
         .collect()
+}
+
+/// Whether `f` may vary with position anywhere in brick layer `k` of `values`, for either
+/// background: where it cannot over the layer's box, it cannot over any of its bricks, and the
+/// layer's bricks are not asked one by one (a 4096³ grid has 262,144 bricks per layer).
+fn layer_varies(
+    values: &SparseGrid,
+    grid: Grid,
+    k: usize,
+    varies: &(impl Fn(Vec3, Vec3, f32) -> bool + Sync),
+) -> bool {
+    let [nx, ny, nz] = grid.dims;
+    let (z0, z1) = (k * BRICK_EDGE, ((k + 1) * BRICK_EDGE).min(nz) - 1);
+    let (lo, hi) = (grid.point(0, 0, z0), grid.point(nx - 1, ny - 1, z1));
+    let background = values.background();
+    varies(lo, hi, background.outside) || varies(lo, hi, background.inside)
 }
 
 /// Whether `f` may vary with position over absent brick `b` of `values` (see [`remap`]).
