@@ -276,6 +276,29 @@ impl SparseGrid {
         }
     }
 
+    /// The end (at most `end`) of the run of bricks along x from `b` whose side, were they
+    /// absent, is `b`'s ([`Self::is_inside`]): a tile without bricks is stepped over whole.
+    pub fn same_side_end(&self, b: [usize; 3], end: usize) -> usize {
+        let inside = self.is_inside(b);
+        let mut x = b[0];
+        while x < end {
+            let at = [x, b[1], b[2]];
+            let ti = self.tile_index(at);
+            if self.tile_slots[ti] == ABSENT {
+                if bit(&self.tile_inside, ti) != inside {
+                    return x;
+                }
+                x = ((x >> TILE_SHIFT) + 1) << TILE_SHIFT;
+            } else {
+                if self.is_inside(at) != inside {
+                    return x;
+                }
+                x += 1;
+            }
+        }
+        end
+    }
+
     /// The value every node of an absent brick `b` takes.
     #[inline]
     pub fn background_of(&self, b: [usize; 3]) -> f32 {
@@ -550,7 +573,10 @@ impl SparseGrid {
         // Tiles straddle the asked layers: the box stays within them.
         lo[2] = lo[2].max(layers.start);
         hi[2] = hi[2].min(layers.end);
-        std::array::from_fn(|a| if lo[a] < hi[a] { lo[a]..hi[a] } else { 0..0 })
+        if (0..3).any(|a| lo[a] >= hi[a]) {
+            return [0..0, 0..0, 0..0];
+        }
+        std::array::from_fn(|a| lo[a]..hi[a])
     }
 
     /// Stored bricks, to change in place.
@@ -793,6 +819,36 @@ mod tests {
             assert_eq!(by_bricks(&g).0, (true, false));
             assert_eq!((g.absent_sides(), g.value_range()), by_bricks(&g));
         }
+    }
+
+    #[test]
+    fn side_runs_and_the_occupied_box_are_those_of_every_brick() {
+        // 40 bricks along x (5 tiles), 9 along y: whole tiles inside, single bricks inside,
+        // a stored brick (inside or not).
+        let dims = [320, 72, 40];
+        let mut g = SparseGrid::new(dims, Background::clamp(1.0));
+        assert_eq!(g.occupied_bricks(), [0..0, 0..0, 0..0]);
+        assert!(g.set_tile_inside([17, 1, 0], true));
+        g.set_inside([30, 1, 0], true);
+        g.set_inside([31, 1, 0], true);
+        g.insert([33, 1, 0], Box::new([0.0; BRICK_NODES]));
+        g.set_inside([33, 1, 0], true);
+        g.set_inside([3, 8, 4], true);
+        let counts = g.brick_counts();
+        for b in g.all_bricks() {
+            for end in [b[0] + 1, b[0] + 9, counts[0]] {
+                let end = end.min(counts[0]);
+                let side = g.is_inside(b);
+                let want = (b[0]..end)
+                    .find(|&x| g.is_inside([x, b[1], b[2]]) != side)
+                    .unwrap_or(end);
+                assert_eq!(g.same_side_end(b, end), want, "{b:?} to {end}");
+            }
+        }
+        // Tiles 0 and 2..4 along x, 0 and 1 along y, 0 along z: the box of the tiles.
+        assert_eq!(g.occupied_bricks(), [0..40, 0..9, 0..5]);
+        assert_eq!(g.occupied_bricks_within(1..3), [0..40, 0..9, 1..3]);
+        assert_eq!(g.occupied_bricks_within(5..9), [0..0, 0..0, 0..0]);
     }
 
     #[test]

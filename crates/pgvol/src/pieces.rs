@@ -159,10 +159,7 @@ fn runs(volume: &CoefficientVolume, [j, k]: [usize; 2], xs: Range<usize>, row: &
     let mut start = xs.start;
     while start < xs.end {
         let inside = coeffs.is_inside([start, j, k]);
-        let mut end = start + 1;
-        while end < xs.end && coeffs.is_inside([end, j, k]) == inside {
-            end += 1;
-        }
+        let end = coeffs.same_side_end([start, j, k], xs.end);
         row.push(Segment {
             x: [start, end],
             labels: if inside {
