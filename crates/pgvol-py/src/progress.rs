@@ -26,6 +26,8 @@ pub(crate) struct PyProgress {
     callback: Option<Py<PyAny>>,
     stage: Mutex<Stage>,
     error: Mutex<Option<PyErr>>,
+    /// The thread the call came from: the only one whose signal checks can run a handler.
+    caller: std::thread::ThreadId,
 }
 
 impl PyProgress {
@@ -37,6 +39,7 @@ impl PyProgress {
                 reported: Instant::now(),
             }),
             error: Mutex::new(None),
+            caller: std::thread::current().id(),
         }
     }
 
@@ -121,6 +124,12 @@ impl pgvol::Progress for PyProgress {
     fn cancelled(&self) -> bool {
         if self.failed() {
             return true;
+        }
+        // Python runs signal handlers on its main thread alone, so the library's worker threads
+        // do not take the GIL to ask: it would only be taken from Python threads that run
+        // meanwhile (a timer about to send the signal, say), row after row.
+        if std::thread::current().id() != self.caller {
+            return false;
         }
         // Runs the signal handlers: Ctrl-C raises KeyboardInterrupt here (on the main thread).
         Python::attach(|py| match py.check_signals() {
