@@ -2,6 +2,7 @@
 //! and Ctrl-C (or an exception raised by the callback) stops them at the library's next check.
 
 use std::ffi::CString;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -26,8 +27,6 @@ pub(crate) struct PyProgress {
     callback: Option<Py<PyAny>>,
     stage: Mutex<Stage>,
     error: Mutex<Option<PyErr>>,
-    /// The thread the call came from: the only one whose signal checks can run a handler.
-    caller: std::thread::ThreadId,
 }
 
 impl PyProgress {
@@ -39,8 +38,17 @@ impl PyProgress {
                 reported: Instant::now(),
             }),
             error: Mutex::new(None),
-            caller: std::thread::current().id(),
         }
+    }
+
+    /// Runs Python's signal handlers (Ctrl-C raises KeyboardInterrupt, on the main thread),
+    /// keeping the exception one raises.
+    fn check_signals(&self) {
+        Python::attach(|py| {
+            if let Err(e) = py.check_signals() {
+                self.fail(e);
+            }
+        });
     }
 
     /// Keeps the first Python exception.
@@ -122,23 +130,8 @@ impl pgvol::Progress for PyProgress {
     }
 
     fn cancelled(&self) -> bool {
-        if self.failed() {
-            return true;
-        }
-        // Python runs signal handlers on its main thread alone, so the library's worker threads
-        // do not take the GIL to ask: it would only be taken from Python threads that run
-        // meanwhile (a timer about to send the signal, say), row after row.
-        if std::thread::current().id() != self.caller {
-            return false;
-        }
-        // Runs the signal handlers: Ctrl-C raises KeyboardInterrupt here (on the main thread).
-        Python::attach(|py| match py.check_signals() {
-            Ok(()) => false,
-            Err(e) => {
-                self.fail(e);
-                true
-            }
-        })
+        // The calling thread runs the signal handlers meanwhile (`watching_signals`).
+        self.failed()
     }
 }
 
@@ -158,11 +151,43 @@ pub(crate) fn run<T: Send>(
         }
     }
     let progress = PyProgress::new(callback);
-    let out = py.detach(|| work(&progress));
+    let out = py.detach(|| watching_signals(&progress, work));
     if let Some(e) = progress.take_error() {
         return Err(e);
     }
     out.map_err(|e| errors::to_py(py, e))
+}
+
+/// How often the calling thread runs Python's signal handlers while the work goes on.
+const SIGNAL_POLL: Duration = Duration::from_millis(20);
+
+/// Runs `work` on a thread of its own while this thread, the one the call came from, runs
+/// Python's signal handlers every [`SIGNAL_POLL`]: Python runs them on its main thread alone,
+/// which would otherwise wait in the library's parallel loops and see a Ctrl-C only between
+/// stages. A handler's exception makes `progress` ask the work to stop.
+fn watching_signals<T: Send>(
+    progress: &PyProgress,
+    work: impl FnOnce(&dyn pgvol::Progress) -> pgvol::Result<T> + Send,
+) -> pgvol::Result<T> {
+    let caller = std::thread::current();
+    let done = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let worker = scope.spawn(|| {
+            let out = work(progress);
+            done.store(true, Ordering::Release);
+            caller.unpark();
+            out
+        });
+        while !done.load(Ordering::Acquire) {
+            std::thread::park_timeout(SIGNAL_POLL);
+            if !done.load(Ordering::Acquire) {
+                progress.check_signals();
+            }
+        }
+        worker
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
 }
 
 /// Runs `work` with the GIL released, for calls with no progress to report and nothing to
