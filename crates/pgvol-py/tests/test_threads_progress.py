@@ -152,6 +152,9 @@ def test_ctrl_c_interrupts_a_long_call(mesh_path):
         """
         import os, signal, sys, threading, time
         import pgvol
+        # Python's own Ctrl-C handler, also where the process was started with SIGINT
+        # ignored (a background job of a shell).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         v, t = pgvol.read_mesh(sys.argv[1])
         t0 = time.perf_counter()
         pgvol.Field.from_mesh(v, t, res=192)
