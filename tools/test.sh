@@ -21,10 +21,10 @@ cargo clippy --workspace --all-targets -- -D warnings
 
 section "dependency boundaries"
 # Reading a .pgv file must not pull in the mesh file formats or the BVH.
-if cargo tree -p pgvol-format -e normal --prefix none | grep -E '^(gltf|tobj|obvhs) '; then
+if cargo tree -p pgvol-format -e normal --prefix none | grep -E '^(gltf|tobj|pgvol-sdf) '; then
     echo "pgvol-format depends on a mesh file format or the BVH (above)"; exit 1
 fi
-echo "pgvol-format is free of gltf, tobj and obvhs"
+echo "pgvol-format is free of gltf, tobj and the BVH (pgvol-sdf)"
 
 section "import cycles"
 python3 tools/check_cycles.py

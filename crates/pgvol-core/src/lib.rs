@@ -3,7 +3,8 @@
 //! a file and what is wrong with it. Reading a `.pgv` file needs nothing more than this.
 
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
-// Unsafe code only where a kernel's AVX2 build is entered, after the CPU check.
+// Unsafe code only where a kernel's AVX2 build is entered, after the CPU check, and in the
+// one call that hands freed memory back to the system.
 #![deny(unsafe_code)]
 
 pub mod atomic;
@@ -13,6 +14,8 @@ pub mod cpu;
 pub mod file_error;
 pub mod frame;
 pub mod grid;
+#[allow(unsafe_code)]
+pub mod heap;
 pub mod input;
 pub mod mesh;
 pub mod per_thread;

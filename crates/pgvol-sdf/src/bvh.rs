@@ -1,56 +1,46 @@
 //! A bounding volume hierarchy over a mesh's triangles with nearest-first closest-point queries.
 //!
-//! The tree is built by obvhs (PLOC), then copied into a compact layout of our own with the
-//! triangles stored in leaf order, because obvhs answers ray and overlap queries only.
+//! The tree is built by the binned surface area heuristic ([`crate::bvh_build`]) straight into
+//! the layout the queries walk, with the triangles' corners stored in leaf order.
 
 use glam::{Vec3, Vec3A};
-use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, Boundable, BvhBuildParams};
 use pgvol_mesh::Mesh;
-use std::time::Duration;
 
+pub use crate::bvh_build::Node;
 use crate::{
+    bvh_build::{self, Costs, ItemBox},
     lanes::{TriangleLanes, LANES},
     leaf_bounds::OrientedBox,
     triangle::{closest_point_and_distance, Feature},
 };
 
-/// One node: a box and either two children (`count == 0`, children at `first` and `first + 1`)
-/// or `count` triangles starting at `first` in leaf order.
-#[derive(Clone, Copy, Debug)]
-pub struct Node {
-    pub min: Vec3A,
-    pub max: Vec3A,
-    pub first: u32,
-    pub count: u32,
-}
-
-impl Node {
-    #[inline]
-    pub fn is_leaf(&self) -> bool {
-        self.count > 0
-    }
-
-    /// Squared distance from `p` to the box (0 inside).
-    #[inline]
-    pub fn distance_squared(&self, p: Vec3A) -> f32 {
-        let d = (self.min - p).max(p - self.max).max(Vec3A::ZERO);
-        d.length_squared()
-    }
-}
-
-/// The hierarchy. `tris[n]` are the corners of mesh triangle `tri_ids[n]`; `lanes` holds
-/// them again for scans four at a time.
+/// The hierarchy. Leaf slot `n` holds mesh triangle `tri_ids[n]`, whose corners `lanes` keeps
+/// (for scans four or eight at a time, and [`Bvh::corners`]).
 #[derive(Clone, Debug)]
 pub struct Bvh {
     pub nodes: Vec<Node>,
     /// Per node, the oriented box around a leaf's triangles (`OrientedBox::EVERYWHERE` for
     /// inner nodes).
     pub oriented: Vec<OrientedBox>,
-    pub tris: Vec<[Vec3A; 3]>,
     pub tri_ids: Vec<u32>,
     pub lanes: TriangleLanes,
-    /// Per leaf slot, the first slot of its leaf and the leaf's triangle count.
-    pub leaf_of_slot: Vec<[u32; 2]>,
+    /// Per leaf slot, its place in its leaf (low 4 bits) and the leaf's triangle count (high 4
+    /// bits): a byte where the first slot and the count took 8 ([`Bvh::leaf_of_slot`]).
+    slot_in_leaf: Vec<u8>,
+}
+
+/// The corners of a leaf's triangles, in leaf order.
+pub struct LeafTriangles {
+    corners: [[Vec3A; 3]; MAX_LEAF],
+    len: usize,
+}
+
+impl std::ops::Deref for LeafTriangles {
+    type Target = [[Vec3A; 3]];
+
+    fn deref(&self) -> &[[Vec3A; 3]] {
+        &self.corners[..self.len]
+    }
 }
 
 /// The closest point of the mesh to a query.
@@ -68,108 +58,48 @@ pub struct Closest {
 /// Most triangles in a leaf: one step of the eight-lane scans.
 pub const MAX_LEAF: usize = 8;
 
-/// Enough for any tree obvhs builds on meshes that fit in memory; deeper trees spill to the heap.
+/// More than any tree's depth (the builder keeps it under [`bvh_build::HEURISTIC_DEPTH`] plus
+/// the log of the triangle count); deeper trees would spill to the heap.
 const STACK: usize = 96;
 
-/// A mesh triangle as the BVH builder bounds it.
-struct MeshTriangle<'m> {
-    mesh: &'m Mesh,
-    index: u32,
-}
-
-impl Boundable for MeshTriangle<'_> {
-    fn aabb(&self) -> Aabb {
-        Aabb::from_points(&self.mesh.triangle(self.index as usize).map(Vec3A::from))
-    }
-}
+/// The cost of visiting an inner node against 1 for testing a triangle, for the builder.
+/// Set by encoding the capped bunny, fandisk and the rocker arm at 1024^3 (see
+/// `docs/algorithms.md`, "Signed distance").
+const TRAVERSAL_COST: f32 = 6.0;
 
 impl Bvh {
     /// Builds the hierarchy. The mesh must have at least one triangle.
     pub fn build(mesh: &Mesh) -> Bvh {
-        // The builder sees each triangle through its index (16 bytes, not the 48 of its
-        // corners): 41 MB less at the build's peak for a mesh of 1.3 M triangles.
-        let tris: Vec<MeshTriangle> = (0..mesh.triangles.len() as u32)
-            .map(|index| MeshTriangle { mesh, index })
+        use rayon::prelude::*;
+        let boxes: Vec<ItemBox> = (0..mesh.triangles.len())
+            .into_par_iter()
+            .map(|t| {
+                let [a, b, c] = mesh.triangle(t).map(Vec3A::from);
+                [a.min(b).min(c), a.max(b).max(c)]
+            })
             .collect();
-        let mut build_time = Duration::ZERO;
-        // Presets without spatial splits list each triangle in exactly one leaf. On the bunny at
-        // 64^3, very_fast_build answered closest-point queries fastest of fastest, very_fast and
-        // medium (1.57 s against 1.91 s and 1.71 s on one core). A higher collapse cost makes
-        // fuller leaves (5.6 triangles on average instead of 4.2, at most 8): fewer leaves for
-        // the dense scans to test, one kernel step each; the bunny's dense 128^3 grid took 8 %
-        // less time on one core, fandisk's the same.
-        let params = BvhBuildParams {
-            collapse_traversal_cost: 6.0,
-            // One kernel step per leaf in the grid scans.
-            max_prims_per_leaf: MAX_LEAF as u32,
-            ..BvhBuildParams::very_fast_build()
+        let costs = Costs {
+            traversal: TRAVERSAL_COST,
+            max_leaf: MAX_LEAF,
         };
-        let bvh2 = build_bvh2(&tris, params, &mut build_time);
+        let tree = bvh_build::build(&boxes, costs);
+        drop(boxes);
+        let mut lanes = TriangleLanes::with_len(tree.order.len());
+        for (slot, &t) in tree.order.iter().enumerate() {
+            lanes.set(slot, &mesh.triangle(t as usize).map(Vec3A::from));
+        }
         let mut out = Bvh {
-            nodes: Vec::with_capacity(bvh2.nodes.len()),
+            nodes: tree.nodes,
             oriented: Vec::new(),
-            tris: Vec::with_capacity(tris.len()),
-            tri_ids: Vec::with_capacity(tris.len()),
-            lanes: TriangleLanes::default(),
-            leaf_of_slot: Vec::new(),
+            tri_ids: tree.order,
+            lanes,
+            slot_in_leaf: Vec::new(),
         };
-        if bvh2.nodes.is_empty() {
-            return out;
-        }
-        // Breadth-first copy keeps siblings adjacent, so children sit at `first` and `first + 1`.
-        out.nodes.push(Node {
-            min: Vec3A::ZERO,
-            max: Vec3A::ZERO,
-            first: 0,
-            count: 0,
-        });
-        let mut queue = std::collections::VecDeque::from([(0usize, 0usize)]);
-        while let Some((src, dst)) = queue.pop_front() {
-            let n = &bvh2.nodes[src];
-            let (min, max) = (n.aabb.min, n.aabb.max);
-            if n.prim_count > 0 {
-                assert!(
-                    n.prim_count as usize <= MAX_LEAF,
-                    "a leaf of {} triangles",
-                    n.prim_count
-                );
-                let first = out.tris.len() as u32;
-                let range = n.first_index as usize..(n.first_index + n.prim_count) as usize;
-                for &prim in &bvh2.primitive_indices[range] {
-                    out.tris.push(mesh.triangle(prim as usize).map(Vec3A::from));
-                    out.tri_ids.push(prim);
-                }
-                out.nodes[dst] = Node {
-                    min,
-                    max,
-                    first,
-                    count: n.prim_count,
-                };
-            } else {
-                let child = out.nodes.len();
-                let blank = Node {
-                    min: Vec3A::ZERO,
-                    max: Vec3A::ZERO,
-                    first: 0,
-                    count: 0,
-                };
-                out.nodes.push(blank);
-                out.nodes.push(blank);
-                out.nodes[dst] = Node {
-                    min,
-                    max,
-                    first: child as u32,
-                    count: 0,
-                };
-                queue.push_back((n.first_index as usize, child));
-                queue.push_back((n.first_index as usize + 1, child + 1));
-            }
-        }
-        out.lanes = TriangleLanes::new(&out.tris);
-        out.leaf_of_slot = vec![[0, 0]; out.tris.len()];
+        const _: () = assert!(MAX_LEAF < 16, "a leaf's place and count fit in 4 bits each");
+        out.slot_in_leaf = vec![0; out.tri_ids.len()];
         for n in out.nodes.iter().filter(|n| n.is_leaf()) {
-            for slot in n.first..n.first + n.count {
-                out.leaf_of_slot[slot as usize] = [n.first, n.count];
+            for (place, slot) in (n.first..n.first + n.count).enumerate() {
+                out.slot_in_leaf[slot as usize] = (n.count << 4) as u8 | place as u8;
             }
         }
         out.oriented = out
@@ -177,8 +107,7 @@ impl Bvh {
             .iter()
             .map(|n| {
                 if n.is_leaf() {
-                    let tris = &out.tris[n.first as usize..(n.first + n.count) as usize];
-                    OrientedBox::around(tris, n.min, n.max)
+                    OrientedBox::around(&out.leaf(n), n.min, n.max)
                 } else {
                     OrientedBox::EVERYWHERE
                 }
@@ -208,7 +137,7 @@ impl Bvh {
         let mut best: Option<Closest> = None;
         let mut best_d2 = bound_squared;
         let consider = |slot: u32, best: &mut Option<Closest>, best_d2: &mut f32| {
-            let [a, b, c] = self.tris[slot as usize];
+            let [a, b, c] = self.corners(slot);
             let (point, feature, d2) = closest_point_and_distance(q, a, b, c);
             if d2 < *best_d2 || (best.is_none() && d2 <= *best_d2) {
                 *best_d2 = d2;
@@ -221,7 +150,7 @@ impl Bvh {
                 });
             }
         };
-        if let Some(h) = hint.filter(|&h| (h as usize) < self.tris.len()) {
+        if let Some(h) = hint.filter(|&h| (h as usize) < self.tri_ids.len()) {
             consider(h, &mut best, &mut best_d2);
         }
         let mut stack = [0u32; STACK];
@@ -331,7 +260,7 @@ impl Bvh {
         limit_squared: f32,
     ) -> Closest {
         let q = Vec3A::from(p);
-        let [first, count] = self.leaf_of_slot[start as usize];
+        let [first, count] = self.leaf_of_slot(start);
         let mut best: Option<Closest> = None;
         let scan = |first: usize, end: usize, best: &mut Option<Closest>| {
             // Four triangles per step; only those that improve are looked at one by one, by
@@ -412,7 +341,7 @@ impl Bvh {
                 continue;
             }
             for slot in node.first..node.first + node.count {
-                let t = &self.tris[slot as usize];
+                let t = &self.corners(slot);
                 match segment_crossing(pa, dir, t, JUMP_END_MARGIN) {
                     Crossing::None => {}
                     Crossing::Unsure => return SegmentHit::NotOne,
@@ -480,7 +409,7 @@ impl Bvh {
                 stack.push(node.first + 1);
                 continue;
             }
-            for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
+            for t in self.leaf(node).iter() {
                 match segment_crossing(a, dir, t, end_margin) {
                     Crossing::None => {}
                     Crossing::Unsure => return None,
@@ -492,10 +421,35 @@ impl Bvh {
         Some((into_back, into_front))
     }
 
+    /// The first slot of the leaf holding `slot`, and the leaf's triangle count.
+    #[inline]
+    pub fn leaf_of_slot(&self, slot: u32) -> [u32; 2] {
+        let packed = u32::from(self.slot_in_leaf[slot as usize]);
+        [slot - (packed & 15), packed >> 4]
+    }
+
+    /// The corners of the triangle at leaf slot `slot`.
+    #[inline]
+    pub fn corners(&self, slot: u32) -> [Vec3A; 3] {
+        self.lanes.corners(slot as usize)
+    }
+
+    /// The corners of a leaf's triangles.
+    pub fn leaf(&self, node: &Node) -> LeafTriangles {
+        let mut leaf = LeafTriangles {
+            corners: [[Vec3A::ZERO; 3]; MAX_LEAF],
+            len: node.count as usize,
+        };
+        for (i, slot) in (node.first..node.first + node.count).enumerate() {
+            leaf.corners[i] = self.corners(slot);
+        }
+        leaf
+    }
+
     /// Closest point to `p` on the triangle at leaf slot `slot`.
     pub fn closest_on_slot(&self, p: Vec3, slot: u32) -> Closest {
         let q = Vec3A::from(p);
-        let [a, b, c] = self.tris[slot as usize];
+        let [a, b, c] = self.corners(slot);
         let (point, feature, distance_squared) = closest_point_and_distance(q, a, b, c);
         Closest {
             point: point.into(),
@@ -662,6 +616,18 @@ mod tests {
         let mut ids = bvh.tri_ids.clone();
         ids.sort_unstable();
         assert_eq!(ids, (0..1000).collect::<Vec<u32>>());
+        // Each slot's corners are its mesh triangle's, and its leaf is the one naming it.
+        for (slot, &t) in bvh.tri_ids.iter().enumerate() {
+            assert_eq!(
+                bvh.corners(slot as u32),
+                mesh.triangle(t as usize).map(Vec3A::from)
+            );
+        }
+        for n in bvh.nodes.iter().filter(|n| n.is_leaf()) {
+            for slot in n.first..n.first + n.count {
+                assert_eq!(bvh.leaf_of_slot(slot), [n.first, n.count], "slot {slot}");
+            }
+        }
     }
 
     #[test]
@@ -766,7 +732,7 @@ mod tests {
             let bvh = Bvh::build(&mesh);
             let leaves = bvh.nodes.iter().enumerate().filter(|(_, n)| n.is_leaf());
             for (id, node) in leaves.step_by(7) {
-                let tris = &bvh.tris[node.first as usize..(node.first + node.count) as usize];
+                let tris = bvh.leaf(node);
                 let oriented = &bvh.oriented[id];
                 let size = (node.max - node.min).length();
                 for _ in 0..40 {
@@ -783,7 +749,7 @@ mod tests {
                     let offset = [0.0, 1e-6, 1e-3, 0.3, 3.0, 100.0][rng.gen_range(0..6)];
                     let p = on + direction * (offset * size);
                     let bound = oriented.distance_squared_bound(p, node.min, node.max);
-                    for &[a, b, c] in tris {
+                    for &[a, b, c] in tris.iter() {
                         let scanned = closest_point_and_distance(p, a, b, c).2;
                         assert!(bound <= scanned, "{bound} > {scanned} at {p}");
                         let corners = [a, b, c].map(|x| DVec3::from(Vec3::from(x)));

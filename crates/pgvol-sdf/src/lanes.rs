@@ -1,21 +1,23 @@
 //! Squared distances from a point to several triangles at once (four, or eight in the grid
 //! scans).
 //!
-//! Each triangle is stored as its corner `a`, its edges `ab`, `ac`, their dot products and its
-//! normal, as a structure of arrays, and every lane repeats the arithmetic of
+//! Each triangle is stored as its corners, its edges' dot products and its normal, as a
+//! structure of arrays, and every lane repeats the arithmetic of
 //! [`closest_point_and_distance`](crate::triangle::closest_point_and_distance) operation for
-//! operation, so the distances are bit-identical to it. Keeping the edges and their dot products
-//! spares each step 3 of its 6 dot products and the other two corners (fandisk's dense 96³ grid:
-//! 20 % fewer instructions). A scan compares several triangles per step without branching on the
-//! Voronoi region and asks the scalar code only about the triangles that improve.
+//! operation, so the distances are bit-identical to it. Keeping the dot products spares each step
+//! 3 of its 6 dot products. The corners, not
+//! the edges, are kept so that they are the only copy of the triangles in leaf order: the edges
+//! cost a subtraction each per step, and the copy they would need cost 48 bytes per triangle
+//! (62 MB for a mesh of 1.3 M triangles). A scan compares several triangles per step without
+//! branching on the Voronoi region and asks the scalar code only about the triangles that improve.
 
 use glam::{Vec3A, Vec4};
 
 use crate::triangle::normal;
 use crate::wide::Wide;
 
-/// Runs per triangle: corner `a`, edges `ab` and `ac` (three axes each), the edges' dot
-/// products `ab·ab`, `ab·ac`, `ac·ac`, and the normal `ab × ac` ([`normal`]).
+/// Runs per triangle: corners `a`, `b` and `c` (three axes each), the edges' dot products
+/// `ab·ab`, `ab·ac`, `ac·ac`, and the normal `ab × ac` ([`normal`]).
 const RUNS: usize = 15;
 
 /// Triangles per step of [`TriangleLanes::distances_squared`].
@@ -88,23 +90,49 @@ impl<W: Wide> Points<W> {
 
 impl TriangleLanes {
     pub fn new(tris: &[[Vec3A; 3]]) -> TriangleLanes {
-        let stride = tris.len() + WIDEST - 1;
-        let mut values = Vec::with_capacity(RUNS * stride);
-        // The same arithmetic as the scalar code's, so the terms have its bits.
-        let terms = |t: &[Vec3A; 3]| -> [f32; RUNS] {
-            let (a, ab, ac) = (t[0], t[1] - t[0], t[2] - t[0]);
-            let (e11, e12, e22) = (ab.dot(ab), ab.dot(ac), ac.dot(ac));
-            let n = normal(t[0], t[1], t[2]);
-            [
-                a.x, a.y, a.z, ab.x, ab.y, ab.z, ac.x, ac.y, ac.z, e11, e12, e22, n.x, n.y, n.z,
-            ]
-        };
-        let all: Vec<[f32; RUNS]> = tris.iter().map(terms).collect();
-        for run in 0..RUNS {
-            values.extend(all.iter().map(|t| t[run]));
-            values.extend([0.0; WIDEST - 1]);
+        let mut lanes = TriangleLanes::with_len(tris.len());
+        for (slot, t) in tris.iter().enumerate() {
+            lanes.set(slot, t);
         }
-        TriangleLanes { values, stride }
+        lanes
+    }
+
+    /// Room for `len` triangles, all zero.
+    pub fn with_len(len: usize) -> TriangleLanes {
+        let stride = len + WIDEST - 1;
+        TriangleLanes {
+            values: vec![0.0; RUNS * stride],
+            stride,
+        }
+    }
+
+    /// The number of triangles held.
+    pub fn len(&self) -> usize {
+        self.stride + 1 - WIDEST
+    }
+
+    /// Stores triangle `t` at `slot`.
+    pub fn set(&mut self, slot: usize, t: &[Vec3A; 3]) {
+        assert!(slot < self.len(), "slot {slot} past the lanes");
+        // The same arithmetic as the scalar code's, so the terms have its bits.
+        let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
+        let (e11, e12, e22) = (ab.dot(ab), ab.dot(ac), ac.dot(ac));
+        let n = normal(t[0], t[1], t[2]);
+        let terms = [
+            t[0].x, t[0].y, t[0].z, t[1].x, t[1].y, t[1].z, t[2].x, t[2].y, t[2].z, e11, e12, e22,
+            n.x, n.y, n.z,
+        ];
+        for (run, v) in terms.into_iter().enumerate() {
+            self.values[run * self.stride + slot] = v;
+        }
+    }
+
+    /// The corners of the triangle at `slot`, as they were stored.
+    #[inline]
+    pub fn corners(&self, slot: usize) -> [Vec3A; 3] {
+        let v = |run: usize| self.values[run * self.stride + slot];
+        assert!(slot < self.len(), "slot {slot} past the lanes");
+        [0, 3, 6].map(|r| Vec3A::new(v(r), v(r + 1), v(r + 2)))
     }
 
     /// Panics unless a step of `W::LANES` triangles from `start` stays in the runs: what the
@@ -119,8 +147,8 @@ impl TriangleLanes {
 
     // No closures in the kernels: a closure is not always inlined into its caller, and
     // outside the AVX2 build its wide operations become calls.
-    /// Runs `3 c .. 3 c + 3` (`c` = 0: corner `a`, 1: edge `ab`, 2: edge `ac`, 3: the dot
-    /// products, 4: the normal) for the triangles `start .. start + W::LANES`.
+    /// Runs `3 c .. 3 c + 3` (`c` = 0, 1, 2: corners `a`, `b`, `c`, 3: the dot products,
+    /// 4: the normal) for the triangles `start .. start + W::LANES`.
     ///
     /// # Safety
     /// [`TriangleLanes::check_step`] passed for `start`.
@@ -151,7 +179,7 @@ impl TriangleLanes {
     pub(crate) fn distances_squared_wide<W: Wide>(&self, p: Vec3A, start: usize) -> W {
         self.check_step::<W>(start);
         // SAFETY: checked above.
-        let (a, ab, ac, e, n) = unsafe {
+        let (a, b, c, e, n) = unsafe {
             (
                 self.triple::<W>(0, start),
                 self.triple::<W>(1, start),
@@ -160,7 +188,8 @@ impl TriangleLanes {
                 self.triple::<W>(4, start),
             )
         };
-        distances_to_triangles(p, a, ab, ac, [e.x, e.y, e.z], n)
+        // The edges as the scalar code computes them.
+        distances_to_triangles(p, a, b.sub(a), c.sub(a), [e.x, e.y, e.z], n)
     }
 }
 

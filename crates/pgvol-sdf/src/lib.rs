@@ -7,6 +7,7 @@
 #![cfg_attr(not(test), deny(clippy::print_stdout, clippy::print_stderr))]
 
 mod bvh;
+mod bvh_build;
 #[cfg(test)]
 mod consistency;
 mod lanes;

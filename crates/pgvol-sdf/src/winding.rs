@@ -83,10 +83,10 @@ impl WindingTree {
             let node = bvh.nodes[id];
             let mut m = Moments { ..moments[id] };
             if node.is_leaf() {
-                let range = node.first as usize..(node.first + node.count) as usize;
+                let leaf = bvh.leaf(&node);
                 let mut weighted = Vec3A::ZERO;
                 let mut area_sum = 0.0f32;
-                for t in &bvh.tris[range.clone()] {
+                for t in leaf.iter() {
                     let av = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]);
                     let area = av.length();
                     m.area_vector += av;
@@ -100,7 +100,7 @@ impl WindingTree {
                 };
                 m.area = area_sum;
                 // The ball around the centre holding every corner: tighter than the box.
-                m.radius_squared = bvh.tris[range]
+                m.radius_squared = leaf
                     .iter()
                     .flatten()
                     .map(|v| v.distance_squared(m.centre))
@@ -158,7 +158,7 @@ impl WindingTree {
             }
             let node = &bvh.nodes[id as usize];
             if node.is_leaf() {
-                for t in &bvh.tris[node.first as usize..(node.first + node.count) as usize] {
+                for t in bvh.leaf(node).iter() {
                     total += triangle_winding(t[0] - q, t[1] - q, t[2] - q);
                 }
             } else {

@@ -317,6 +317,7 @@ fn fit_volume_with(
             let sampled = sample_sparse(distances.sdf(), &grid, options.band, progress)?;
             timings.sdf = start.elapsed().as_secs_f64();
             drop(distances);
+            pgvol_core::heap::return_freed_pages();
             // Handed over, so the fit drops the samples behind it.
             let samples = sampled.values;
             progress::stage(progress, "fit", |update| {

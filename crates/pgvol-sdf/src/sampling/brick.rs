@@ -97,7 +97,7 @@ impl MeshSdf {
             if !(node.min.cmple(brick.pmax).all() && node.max.cmpge(brick.pmin).all()) {
                 continue;
             }
-            for t in &bvh.tris[node.first as usize..(node.first + node.count) as usize] {
+            for t in bvh.leaf(node).iter() {
                 let (min, max) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
                 if min.cmple(brick.pmax).all() && max.cmpge(brick.pmin).all() {
                     out.push(LocalTriangle {

@@ -156,7 +156,7 @@ impl LeafTable {
     ) -> Nearest {
         debug_assert_eq!(W::LANES, STEP);
         // The start's leaf first, whole: the scan below skips it.
-        let [start_first, start_count] = bvh.leaf_of_slot[start as usize];
+        let [start_first, start_count] = bvh.leaf_of_slot(start);
         let mut scan = Scan {
             bvh,
             p,

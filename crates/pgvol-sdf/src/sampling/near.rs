@@ -133,10 +133,7 @@ impl MeshSdf {
         bvh.leaves_near_box(lo, hi, 3.0 * reach * reach, &mut leaves);
         for &(_, id) in &leaves {
             let node = &bvh.nodes[id as usize];
-            let first = node.first as usize;
-            bvh.tris[first..first + node.count as usize]
-                .iter()
-                .for_each(&mut mark);
+            bvh.leaf(node).iter().for_each(&mut mark);
         }
         near
     }
