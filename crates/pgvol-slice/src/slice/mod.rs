@@ -9,6 +9,7 @@
 mod bricks;
 mod collapsed;
 mod cubic;
+mod edge_table;
 mod plane;
 mod window;
 
