@@ -23,7 +23,9 @@ use crate::cubic_eval::bspline3_value_gradient;
 
 use crate::blocks::{box_index, BoxValues, BLOCK};
 use crate::samples::Nodes;
-use crate::support::{background_bound, coefficient_ranges, gathered_bound, support_kinds, STORED};
+use crate::support::{
+    background_bound, coefficient_ranges, gathered_bound, support_kinds, support_side, STORED,
+};
 use crate::window_or::or_over_boxes;
 
 // A box of 9 nodes from any node reaches at most two bricks per axis.
@@ -242,7 +244,7 @@ impl<'a> Sampler<'a> {
                 .collect()
         });
         let supports = if volume.basis.is_separable() {
-            support_kinds(&volume.coeffs, [&ranges[0], &ranges[1], &ranges[2]])
+            support_kinds(&volume.coeffs, [&ranges[0], &ranges[1], &ranges[2]], iso)
         } else {
             Vec::new()
         };
@@ -277,6 +279,15 @@ impl<'a> Sampler<'a> {
         }
     }
 
+    /// Whether every node of brick `b` lies above iso (`Some(true)`) or below it, from the
+    /// kinds of the coefficient bricks its support reaches.
+    fn support_side(&self, b: [usize; 3]) -> Option<bool> {
+        let [bx, by, _] = self.brick_counts;
+        let z = b[2] - self.layers.start;
+        let kinds = *self.supports.get(b[0] + bx * (b[1] + by * z))?;
+        support_side(self.volume.coeffs.background(), kinds, self.iso)
+    }
+
     /// Sides of the bricks of row `r` (`bj + by * bk`), evaluating those without a bound. A
     /// one-sided brick without a bound is not kept: it is evaluated again if a block next to
     /// the surface needs it.
@@ -290,6 +301,13 @@ impl<'a> Sampler<'a> {
             let b = [bi, r % by, self.layers.start + r / by];
             if let Some(bound) = self.bound(b) {
                 row.sides.push(side(bound, self.iso));
+                continue;
+            }
+            // Coefficients all on one side: so are the nodes, whose values are needed only if
+            // a block next to the surface reads them (then evaluated, as bricks without a
+            // bound are).
+            if let Some(above) = self.support_side(b) {
+                row.sides.push(if above { OUTSIDE } else { INSIDE });
                 continue;
             }
             let values = self.evaluate(b);
@@ -569,6 +587,46 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// On the volume's own grid, bricks whose supporting coefficients all lie on one side are
+    /// sorted without being evaluated, and every node of theirs does lie on that side.
+    #[test]
+    fn bricks_of_one_sided_coefficients_are_sorted_unevaluated_and_right() {
+        let v = two_balls(Basis::Bspline3);
+        let whole = pgvol_field::fit::node_values_sparse(&v);
+        let counts = v.grid.dims.map(|n| n.div_ceil(BRICK_EDGE));
+        for iso in [0.0, 0.1, -0.05] {
+            let sampler = Sampler::new(&v, &v.grid, iso, 0..counts[2]);
+            let mut decided = 0;
+            for k in 0..counts[2] {
+                for j in 0..counts[1] {
+                    for i in 0..counts[0] {
+                        let b = [i, j, k];
+                        if sampler.bound(b).is_some() {
+                            continue;
+                        }
+                        let Some(above) = sampler.support_side(b) else {
+                            continue;
+                        };
+                        decided += 1;
+                        let (lo, n) = brick_extent(&v.grid, b);
+                        for z in 0..n[2] {
+                            for y in 0..n[1] {
+                                for x in 0..n[0] {
+                                    let value = whole.get([lo[0] + x, lo[1] + y, lo[2] + z]);
+                                    assert_eq!(value < iso, !above, "brick {b:?} iso {iso}");
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            assert!(
+                decided > 0,
+                "iso {iso}: no brick decided by its coefficients"
+            );
         }
     }
 

@@ -23,7 +23,20 @@ use crate::window_or::or_over_boxes;
 /// Kinds of coefficient brick, as bits so that a set of bricks is their OR.
 pub(crate) const OUTSIDE_BACKGROUND: u8 = 1;
 pub(crate) const INSIDE_BACKGROUND: u8 = 2;
+/// Every stored brick has this bit, and one of the next three.
 pub(crate) const STORED: u8 = 4;
+/// A stored brick whose coefficients all lie clearly above the iso value ([`clearly_above`]).
+const STORED_ABOVE: u8 = 8;
+/// A stored brick whose coefficients all lie clearly below the iso value.
+const STORED_BELOW: u8 = 16;
+/// A stored brick with coefficients on both sides of the iso value, or near it.
+const STORED_MIXED: u8 = 32;
+
+/// Whether a field value that is a convex combination of coefficients of at least `min` lies
+/// above `iso` whatever the rounding of the combination: by a margin far beyond f32 rounding.
+fn clearly_above(min: f32, iso: f32) -> bool {
+    min - iso > 1e-5 * (min.abs() + iso.abs())
+}
 
 /// First and last coefficient node per axis of a volume on grid `g` that can weigh on a point
 /// of the box `[lo, hi]`.
@@ -41,8 +54,8 @@ pub(crate) fn coefficient_ranges(g: &Grid, lo: Vec3, hi: Vec3) -> [[usize; 2]; 3
 }
 
 /// The kind of every coefficient brick in the box of bricks `span` (per axis), x fastest, one
-/// byte each.
-fn brick_kinds(coeffs: &SparseGrid, span: [Range<usize>; 3]) -> Vec<u8> {
+/// byte each; stored bricks are told apart by the sides of their coefficients against `iso`.
+fn brick_kinds(coeffs: &SparseGrid, span: [Range<usize>; 3], iso: f32) -> Vec<u8> {
     let [sx, sy, _] = span.clone().map(|r| r.len());
     let mut kinds = vec![0u8; sx * sy * span[2].len()];
     if sx * sy == 0 {
@@ -58,8 +71,20 @@ fn brick_kinds(coeffs: &SparseGrid, span: [Range<usize>; 3]) -> Vec<u8> {
                     span[1].start + at / sx,
                     span[2].start + k,
                 ];
-                *kind = if coeffs.is_stored(b) {
+                *kind = if let Some(values) = coeffs.brick(b) {
+                    let (min, max) = values
+                        .iter()
+                        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &c| {
+                            (lo.min(c), hi.max(c))
+                        });
                     STORED
+                        | if clearly_above(min, iso) {
+                            STORED_ABOVE
+                        } else if clearly_above(-max, -iso) {
+                            STORED_BELOW
+                        } else {
+                            STORED_MIXED
+                        }
                 } else if coeffs.is_inside(b) {
                     INSIDE_BACKGROUND
                 } else {
@@ -74,7 +99,7 @@ fn brick_kinds(coeffs: &SparseGrid, span: [Range<usize>; 3]) -> Vec<u8> {
 /// last node), the OR of the kinds of the coefficient bricks each reaches (x fastest). Only
 /// the bricks the boxes reach are read, so a small sampling grid on a large volume costs its
 /// own share of the volume.
-pub(crate) fn support_kinds(coeffs: &SparseGrid, ranges: [&[[usize; 2]]; 3]) -> Vec<u8> {
+pub(crate) fn support_kinds(coeffs: &SparseGrid, ranges: [&[[usize; 2]]; 3], iso: f32) -> Vec<u8> {
     let mut bricks = ranges.map(|r| -> Vec<Range<usize>> {
         r.iter()
             .map(|&[first, last]| first / BRICK_EDGE..last / BRICK_EDGE + 1)
@@ -89,7 +114,7 @@ pub(crate) fn support_kinds(coeffs: &SparseGrid, ranges: [&[[usize; 2]]; 3]) -> 
         lo..hi
     });
     let dims = span.clone().map(|r| r.len());
-    let kinds = brick_kinds(coeffs, span);
+    let kinds = brick_kinds(coeffs, span, iso);
     or_over_boxes(&kinds, dims, [&bricks[0], &bricks[1], &bricks[2]])
 }
 
@@ -107,6 +132,32 @@ pub(crate) fn background_bound(background: Background, kinds: u8, iso: f32) -> O
         }
     }
     one_side(min, max, iso)
+}
+
+/// Whether every field value over a box whose supporting bricks are of the kinds in `kinds` lies
+/// above iso (`Some(true)`) or below it (`Some(false)`), decided from the kinds alone: the
+/// stored bricks' sides (read once per brick) and the backgrounds' values. `None` when they
+/// differ or a stored brick holds both sides.
+pub(crate) fn support_side(background: Background, kinds: u8, iso: f32) -> Option<bool> {
+    if kinds & STORED_MIXED != 0 {
+        return None;
+    }
+    let (mut above, mut below) = (kinds & STORED_ABOVE != 0, kinds & STORED_BELOW != 0);
+    for (kind, value) in [
+        (OUTSIDE_BACKGROUND, background.outside),
+        (INSIDE_BACKGROUND, background.inside),
+    ] {
+        if kinds & kind != 0 {
+            if clearly_above(value, iso) {
+                above = true;
+            } else if clearly_above(-value, -iso) {
+                below = true;
+            } else {
+                return None;
+            }
+        }
+    }
+    (above != below).then_some(above)
 }
 
 /// The one-sided bound of the coefficients in the node `ranges`, read one by one.
