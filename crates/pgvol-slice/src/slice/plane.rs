@@ -165,16 +165,13 @@ impl Plane {
         [&self.coordinates[0], &self.coordinates[1]]
     }
 
-    /// Node `i`'s coordinate along axis `k`, as [`Plane::node`] places it.
+    /// Node `i`'s coordinate along axis `k`; node 0 is on the ring of outside nodes.
     fn node_coordinate(&self, k: usize, i: usize) -> f32 {
         self.origin[k] + self.spacing * (i as f32 - 1.0)
     }
 
     fn node(&self, i: usize, j: usize) -> [f32; 2] {
-        [
-            self.origin[0] + self.spacing * (i as f32 - 1.0),
-            self.origin[1] + self.spacing * (j as f32 - 1.0),
-        ]
+        [self.node_coordinate(0, i), self.node_coordinate(1, j)]
     }
 
     /// The blocks that may hold a crossing, in raster order, as (block u, block v): of the
