@@ -164,7 +164,7 @@ impl BrickSource for FileBricks<'_, '_> {
         let [p, q] = plane_axes(axis);
         let first = slab * per;
         let count = per.min(self.grid_counts[axis].saturating_sub(first));
-        let plane = self.grid_counts[p] * self.grid_counts[q];
+        let plane = [self.grid_counts[p], self.grid_counts[q]];
         let mut layers: Vec<BrickLayer> = (0..count).map(|_| BrickLayer::outside(plane)).collect();
         let at = |m: [usize; 3]| (m[axis] - first, m[p] + self.grid_counts[p] * m[q]);
         for m in decoded.inside {

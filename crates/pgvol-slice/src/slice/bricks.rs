@@ -143,9 +143,14 @@ pub const INSIDE: u32 = u32::MAX - 1;
 /// plane of the two other axes (the first of them fastest, in the axes' cyclic order), the index
 /// of its values in `bricks`, or [`OUTSIDE`] / [`INSIDE`] for an absent brick.
 pub struct BrickLayer<'a> {
+    /// Brick positions along each of the plane's axes.
+    counts: [usize; 2],
     states: Vec<u32>,
     /// The positions whose state is not [`OUTSIDE`], in the order they were set.
     occupied: Vec<u32>,
+    /// The stored positions and those of another kind (outside, inside, stored) than one of
+    /// their four neighbours, ascending; set by [`BrickLayer::finish`].
+    boundary: Vec<u32>,
     pub bricks: Vec<BrickRef<'a>>,
     /// Per brick in `bricks`, per node layer along the layer's axis: its least and greatest
     /// value.
@@ -153,11 +158,13 @@ pub struct BrickLayer<'a> {
 }
 
 impl<'a> BrickLayer<'a> {
-    /// A layer of `count` brick positions, every brick absent and outside.
-    pub fn outside(count: usize) -> Self {
+    /// A layer of `counts[0] × counts[1]` brick positions, every brick absent and outside.
+    pub fn outside(counts: [usize; 2]) -> Self {
         BrickLayer {
-            states: vec![OUTSIDE; count],
+            counts,
+            states: vec![OUTSIDE; counts[0] * counts[1]],
             occupied: Vec::new(),
+            boundary: Vec::new(),
             bricks: Vec::new(),
             ranges: Vec::new(),
         }
@@ -183,9 +190,51 @@ impl<'a> BrickLayer<'a> {
         &self.occupied
     }
 
-    /// Sorts the occupied positions; to be called once every brick is set.
+    /// The stored positions and those whose kind (absent outside, absent inside, stored)
+    /// differs from one of their four neighbours', ascending, once [`BrickLayer::finish`] has
+    /// run. Away from them the layer is the same absent kind over whole regions, which a plane
+    /// need not visit brick by brick.
+    pub fn boundary(&self) -> &[u32] {
+        &self.boundary
+    }
+
+    /// Sorts the occupied positions and finds the boundary; to be called once every brick is
+    /// set.
     pub fn finish(mut self) -> Self {
         self.occupied.sort_unstable();
+        let kind = |s: u32| match s {
+            OUTSIDE => 0u8,
+            INSIDE => 1,
+            _ => 2,
+        };
+        let [cu, cv] = self.counts;
+        let mut boundary = Vec::new();
+        for &k in &self.occupied {
+            let k = k as usize;
+            let own = kind(self.states[k]);
+            let (tu, tv) = (k % cu, k / cu);
+            let beside = [
+                (tu + 1 < cu).then(|| k + 1),
+                (tv + 1 < cv).then(|| k + cu),
+                (tu > 0).then(|| k - 1),
+                (tv > 0).then(|| k - cu),
+            ];
+            let mut differs = own == 2;
+            for n in beside.into_iter().flatten() {
+                let theirs = kind(self.states[n]);
+                differs |= theirs != own;
+                // An outside neighbour is never visited from its own entry.
+                if theirs == 0 {
+                    boundary.push(n as u32);
+                }
+            }
+            if differs {
+                boundary.push(k as u32);
+            }
+        }
+        boundary.sort_unstable();
+        boundary.dedup();
+        self.boundary = boundary;
         self
     }
 
@@ -243,7 +292,7 @@ impl BrickSource for SparseGrid {
     fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>, SliceError> {
         let counts = self.brick_counts();
         let [b, c] = plane_axes(axis);
-        let mut layer = BrickLayer::outside(counts[b] * counts[c]);
+        let mut layer = BrickLayer::outside([counts[b], counts[c]]);
         for jc in 0..counts[c] {
             for jb in 0..counts[b] {
                 let mut at = [0; 3];
@@ -263,6 +312,52 @@ impl BrickSource for SparseGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_boundary_holds_every_stored_brick_and_every_change_of_kind() {
+        let counts = [9, 7];
+        let values: Box<BrickValues> = Box::new([0.5; BRICK_NODES]);
+        // A few patterns of inside regions and stored bricks, from a fixed pseudo-random walk.
+        for seed in 0..20u64 {
+            let mut layer = BrickLayer::outside(counts);
+            let mut x = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            for at in 0..counts[0] * counts[1] {
+                x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+                match x >> 61 {
+                    0..=2 => {}
+                    3..=5 => layer.set_inside(at),
+                    _ => layer.insert(at, BrickRef::Borrowed(&values), 2),
+                }
+            }
+            let layer = layer.finish();
+            // Stored bricks differ from each other here too, which changes nothing: they are
+            // all on the boundary.
+            let kind = |k: usize| layer.state(k);
+            let boundary = layer.boundary();
+            assert!(
+                boundary.windows(2).all(|w| w[0] < w[1]),
+                "ascending, no repeats"
+            );
+            for k in 0..counts[0] * counts[1] {
+                let (u, v) = (k % counts[0], k / counts[0]);
+                let beside = [
+                    (u + 1 < counts[0]).then(|| k + 1),
+                    (v + 1 < counts[1]).then(|| k + counts[0]),
+                    (u > 0).then(|| k - 1),
+                    (v > 0).then(|| k - counts[0]),
+                ];
+                let stored = layer.state(k) < INSIDE;
+                let changes = beside.into_iter().flatten().any(|n| kind(n) != kind(k));
+                assert_eq!(
+                    boundary.binary_search(&(k as u32)).is_ok(),
+                    stored || changes,
+                    "seed {seed}, position {k}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn word_bricks_range_as_their_values_do() {

@@ -13,7 +13,7 @@ use pgvol_core::BRICK_EDGE;
 use pgvol_field::kernel::{axis_window, AxisWindow, Profile};
 use pgvol_field::{mirror, Grid};
 
-use super::bricks::{brick_counts, plane_axes, BrickLayer, INSIDE};
+use super::bricks::{brick_counts, plane_axes, BrickLayer, INSIDE, OUTSIDE};
 use super::cubic::{shift_cubic, CubicPieces};
 use super::plane::{edge_root, LayerField};
 
@@ -62,6 +62,9 @@ struct StoredTile {
     cells: [Sign; CELLS * CELLS],
 }
 
+/// A plane brick's slot not set when the plane was made.
+const UNRESOLVED: u32 = u32::MAX;
+
 /// Per tap (node layer along the axis): its weight, brick layer and offset within a brick.
 type Tap<'w, 's> = (f32, &'w BrickLayer<'s>, usize);
 
@@ -70,6 +73,8 @@ pub(crate) struct CollapsedPlane<'w, 's> {
     dims: [usize; 2],
     /// Plane bricks per axis.
     counts: [usize; 2],
+    /// Per plane brick, its tile, or [`UNRESOLVED`] for one absent in every tap whose tile
+    /// [`Self::slot`] works out from the taps' sides.
     slots: Vec<u32>,
     tiles: Vec<Tile>,
     /// Plane bricks holding a crossing or beside one of the other side, as (u, v) brick indices.
@@ -245,45 +250,45 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
                 (window.w[t][0], layer(n / E), (n % E) * stride3[axis])
             })
             .collect();
-        let mut uniform_of: [Option<f32>; 16] = [None; 16];
-        // Summed as a column of coefficients is, so the value is the same float.
-        // `key` has bit t set when tap t's brick is inside.
-        let mut uniform = |key: usize| {
-            *uniform_of[key].get_or_insert_with(|| {
+        // Plane bricks whose columns are all absent share one tile per combination of sides:
+        // tile `key` has tap t's brick inside where bit t of `key` is set. Each is summed as a
+        // column of coefficients is, so the value is the same float.
+        let mut tiles: Vec<Tile> = (0..1usize << taps.len())
+            .map(|key| {
                 let mut value = 0.0f32;
                 for (t, (w, _, _)) in taps.iter().enumerate() {
                     value += w * background.value(key >> t & 1 == 1);
                 }
-                value
+                Tile::Uniform(value)
             })
-        };
-        // Slot 0, every plane brick whose columns are all absent and outside. Plane bricks
-        // whose columns are all absent share one tile per combination of sides.
-        let mut tiles = vec![Tile::Uniform(uniform(0))];
-        let mut uniform_slot: [Option<u32>; 16] = [None; 16];
-        uniform_slot[0] = Some(0);
-        let mut slots = vec![0u32; counts[0] * counts[1]];
-        // The positions some tap's brick layer holds; taps in one brick layer share its list.
+            .collect();
+        let mut slots = vec![UNRESOLVED; counts[0] * counts[1]];
+        // The boundary positions of some tap's brick layer; taps in one brick layer share its
+        // list. Every stored position is among them, and every position whose tile may differ
+        // from a neighbour's: the others are read through [`Self::slot`].
         let first: &'w BrickLayer<'s> = taps[0].1;
         let mut merged: Option<Vec<u32>> = None;
         for (t, (_, l, _)) in taps.iter().enumerate().skip(1) {
             if !taps[..t].iter().any(|(_, m, _)| std::ptr::eq(*m, *l)) {
-                let so_far = merged.as_deref().unwrap_or(first.occupied());
-                merged = Some(merge_sorted(so_far, l.occupied()));
+                let so_far = merged.as_deref().unwrap_or(first.boundary());
+                merged = Some(merge_sorted(so_far, l.boundary()));
             }
         }
-        let occupied = merged.as_deref().unwrap_or(first.occupied());
-        for &k in occupied {
+        let boundary = merged.as_deref().unwrap_or(first.boundary());
+        // The boundary positions some tap's brick is not absent and outside at.
+        let mut occupied = Vec::with_capacity(boundary.len());
+        for &k in boundary {
             let k = k as usize;
             let states = taps.iter().map(|(_, l, _)| l.state(k));
+            if states.clone().all(|s| s == OUTSIDE) {
+                continue;
+            }
+            occupied.push(k as u32);
             if states.clone().all(|s| s >= INSIDE) {
                 let key = states
                     .enumerate()
                     .fold(0, |key, (t, s)| key | usize::from(s == INSIDE) << t);
-                slots[k] = *uniform_slot[key].get_or_insert_with(|| {
-                    tiles.push(Tile::Uniform(uniform(key)));
-                    tiles.len() as u32 - 1
-                });
+                slots[k] = key as u32;
                 continue;
             }
             slots[k] = tiles.len() as u32;
@@ -319,12 +324,14 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             off_axis: h - q,
             node_windows,
         };
-        plane.edges = plane.find_edges(occupied);
+        plane.edges = plane.find_edges(&occupied);
         plane
     }
 
     /// The plane bricks whose values may change side within them or toward a neighbour; only
-    /// `occupied` ones and their neighbours can, the others all being slot 0.
+    /// `occupied` ones and their neighbours can: every other plane brick has the tile of all its
+    /// neighbours, or that of slot 0 (absent and outside in every tap) and neighbours that are
+    /// in `occupied` or have it too.
     fn find_edges(&self, occupied: &[u32]) -> Vec<[usize; 2]> {
         let [cu, cv] = self.counts;
         let mut marked: Vec<usize> = Vec::new();
@@ -339,9 +346,9 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             ];
             // Amid plane bricks sharing its uniform tile (the inside of a part, mostly):
             // nothing changes side.
-            let slot = self.slots[k];
-            if matches!(self.tiles[slot as usize], Tile::Uniform(_))
-                && beside.iter().flatten().all(|&n| self.slots[n] == slot)
+            let slot = self.slot(k);
+            if matches!(self.tiles[slot], Tile::Uniform(_))
+                && beside.iter().flatten().all(|&n| self.slot(n) == slot)
             {
                 continue;
             }
@@ -361,9 +368,21 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         marked.into_iter().map(|k| [k % cu, k / cu]).collect()
     }
 
+    /// The tile of plane brick `k`: the one set when the plane was made, or, for a brick absent
+    /// in every tap, that of its sides.
+    #[inline]
+    fn slot(&self, k: usize) -> usize {
+        match self.slots[k] {
+            UNRESOLVED => self.taps.iter().enumerate().fold(0, |key, (t, (_, l, _))| {
+                key | usize::from(l.state(k) == INSIDE) << t
+            }),
+            slot => slot as usize,
+        }
+    }
+
     /// The sign of plane brick `k`, exact where its bound is not.
     fn sign(&self, k: usize) -> Sign {
-        match &self.tiles[self.slots[k] as usize] {
+        match &self.tiles[self.slot(k)] {
             Tile::Uniform(v) => sign_of(*v, *v),
             Tile::Stored {
                 sign: Sign::Mixed, ..
@@ -383,7 +402,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
 
     /// The values of stored plane brick `k`.
     fn stored(&self, k: usize) -> &StoredTile {
-        let Tile::Stored { values, .. } = &self.tiles[self.slots[k] as usize] else {
+        let Tile::Stored { values, .. } = &self.tiles[self.slot(k)] else {
             unreachable!("plane brick {k} is uniform")
         };
         values.get_or_init(|| self.collapse(k))
@@ -459,7 +478,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
     #[inline]
     fn coefficient(&self, iu: usize, iv: usize) -> f32 {
         let k = iu / E + self.counts[0] * (iv / E);
-        match &self.tiles[self.slots[k] as usize] {
+        match &self.tiles[self.slot(k)] {
             Tile::Uniform(v) => *v,
             Tile::Stored { .. } => self.stored(k).values[iu % E + E * (iv % E)],
         }
@@ -484,7 +503,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
                 let run = (E - iu % E).min(nu - done);
                 let k = iu / E + self.counts[0] * (iv / E);
                 let part = &mut row[done..done + run];
-                match &self.tiles[self.slots[k] as usize] {
+                match &self.tiles[self.slot(k)] {
                     Tile::Uniform(v) => part.fill(*v),
                     Tile::Stored { .. } => {
                         let first = iu % E + E * (iv % E);
@@ -509,7 +528,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         for tv in v.0 / E..=v.1 / E {
             for tu in u.0 / E..=u.1 / E {
                 let k = tu + self.counts[0] * tv;
-                match &self.tiles[self.slots[k] as usize] {
+                match &self.tiles[self.slot(k)] {
                     Tile::Stored {
                         sign: Sign::Mixed, ..
                     } => {
