@@ -65,6 +65,12 @@ struct StoredTile {
 /// A plane brick's slot not set when the plane was made.
 const UNRESOLVED: u32 = u32::MAX;
 
+/// How far, in grid spacings, a cubic piece of the field along a segment is carried past its
+/// knot interval rather than starting another piece. The B-spline's pieces meet with two
+/// continuous derivatives, so carried that far a piece differs from its neighbour by about
+/// 1e-10 of the coefficients' scale, far below f32 rounding of the field.
+const KNOT_SNAP: f32 = 1e-3;
+
 /// Per tap (node layer along the axis): its weight, brick layer and offset within a brick.
 type Tap<'w, 's> = (f32, &'w BrickLayer<'s>, usize);
 
@@ -580,7 +586,15 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         let n = self.dims[k] as i64;
         // The knot interval of a grid coordinate, as `window_at` picks it.
         let knot = |g: f32| (g as i64).clamp(0, n - 2);
-        let (c0, c1) = (knot(g[0].min(g[1])), knot(g[0].max(g[1])));
+        // Knot intervals reaching less than `KNOT_SNAP` into the segment are left to their
+        // neighbours' pieces, so that a segment between nodes that sit on knots, which
+        // rounding puts a hair to either side, is one piece rather than three.
+        let (lo, hi) = (g[0].min(g[1]), g[0].max(g[1]));
+        let mid = 0.5 * (lo + hi);
+        let (c0, c1) = (
+            knot((lo + KNOT_SNAP).min(mid)),
+            knot((hi - KNOT_SNAP).max(mid)),
+        );
         if c1 > c0 + 1 {
             return None;
         }

@@ -556,11 +556,13 @@ mod tests {
                         }
                     }
                     // Segments of a spacing or less along either plane axis, across knots,
-                    // inside the box and leaving it: the fraction-of-the-way function agrees
-                    // with the point values.
+                    // between nodes a hair to either side of knots, inside the box and leaving
+                    // it: the fraction-of-the-way function agrees with the point values.
                     for (p, step) in [
                         ([0.03f32, 0.11], [0.1f32, 0.0]),
                         ([0.03, 0.11], [0.0, 0.1]),
+                        ([ou + 0.3 - 1e-6, 0.2], [0.1 + 2e-6, 0.0]),
+                        ([0.2, ov + 0.4 + 1e-6], [0.0, 0.1 - 2e-6]),
                         ([-0.51, 0.2], [0.07, 0.0]),
                         ([0.25, -0.5], [0.0, 0.1]),
                         ([0.95, 0.3], [0.1, 0.0]),
