@@ -60,6 +60,8 @@ struct StoredTile {
     values: [f32; E * E],
     /// Sign of each `CELL`² square of values, the first axis fastest.
     cells: [Sign; CELLS * CELLS],
+    /// The squares' common sign, or `Mixed`.
+    all: Sign,
 }
 
 /// A plane brick's slot not set when the plane was made.
@@ -392,16 +394,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             Tile::Uniform(v) => sign_of(*v, *v),
             Tile::Stored {
                 sign: Sign::Mixed, ..
-            } => {
-                let t = self.stored(k);
-                let mut all = t.cells[0];
-                for &c in &t.cells[1..] {
-                    if c != all {
-                        all = Sign::Mixed;
-                    }
-                }
-                all
-            }
+            } => self.stored(k).all,
             Tile::Stored { sign, .. } => *sign,
         }
     }
@@ -427,6 +420,7 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
         let mut out = Box::new(StoredTile {
             values: [0.0; E * E],
             cells: [Sign::Mixed; CELLS * CELLS],
+            all: Sign::Mixed,
         });
         // Tap by tap over the whole brick, each value summed in the taps' order.
         // The brick test is outside the loops and rows along a contiguous first axis are
@@ -477,6 +471,10 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
             } else {
                 sign_of(r[0], r[1])
             };
+        }
+        let first = out.cells[0];
+        if out.cells.iter().all(|&c| c == first) {
+            out.all = first;
         }
         out
     }

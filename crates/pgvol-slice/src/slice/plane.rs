@@ -112,6 +112,8 @@ struct BlockNodes<K> {
     real: Vec<bool>,
     /// The sampled nodes' values.
     sampled_values: Vec<f32>,
+    /// Per node row of `values`, bit i set when node i lies inside.
+    inside_rows: Vec<u32>,
 }
 
 impl<K> BlockNodes<K> {
@@ -376,19 +378,31 @@ impl Plane {
         for block in active {
             self.evaluate(field, block, cost, &mut b);
             let cells = [b.len[0] - 1, b.len[1] - 1];
+            // Per node row, a bit per node inside: the cells whose corners all lie on one
+            // side, most of a block's, are passed over a row of them at a time.
+            b.inside_rows.clear();
+            b.inside_rows
+                .extend(b.values.chunks_exact(b.len[0]).map(|row| {
+                    row.iter()
+                        .enumerate()
+                        .fold(0u32, |m, (i, &x)| m | u32::from(x < 0.0) << i)
+                }));
+            let row_cells = (1u32 << cells[0]) - 1;
             for cj in 0..cells[1] {
                 let row = &b.values[b.len[0] * cj..b.len[0] * (cj + 2)];
-                for ci in 0..cells[0] {
+                let (lower, upper) = (b.inside_rows[cj], b.inside_rows[cj + 1]);
+                let all_in = lower & lower >> 1 & upper & upper >> 1;
+                let any_in = lower | lower >> 1 | upper | upper >> 1;
+                let mut crossed = any_in & !all_in & row_cells;
+                while crossed != 0 {
+                    let ci = crossed.trailing_zeros() as usize;
+                    crossed &= crossed - 1;
                     let corners = [
                         row[ci],
                         row[ci + 1],
                         row[b.len[0] + ci],
                         row[b.len[0] + ci + 1],
                     ];
-                    let inside = corners.map(|x| x < 0.0);
-                    if inside == [inside[0]; 4] {
-                        continue;
-                    }
                     let (i, j) = (b.first[0] + ci, b.first[1] + cj);
                     mixed.push((i, j, [corners[0], corners[1], corners[3], corners[2]]));
                     let far_u = (i + 2 == nu).then_some((i + 1, j, 1));
