@@ -477,18 +477,18 @@ mod tests {
                     window.hold(&taps, loaded).unwrap();
                     let background = vol.coeffs.background();
                     let layer = |n| window.layer(n);
-                    let plane = CollapsedPlane::new(&grid, background, profile, a, h, &layer, None);
-                    let us = [-2.0, -0.33, 0.0, 0.5, 1.9];
-                    let vs = [-0.2, 0.0, 0.5, 0.71, 2.0];
-                    let mut batch = [0.0f32; 25];
-                    plane.sample([0, 0], &us, &vs, &mut batch, &mut Default::default());
-                    // With the nodes' windows worked out beforehand (here for nodes 1..6,
-                    // sampled from node 2 on), the same values.
+                    // The nodes' windows worked out beforehand, here for nodes 1..6: sampled
+                    // from node 2 on, they give the values sampling by place gives.
                     let (grid_us, grid_vs) = (
                         [-3.0f32, -2.0, -0.33, 0.0, 0.5, 1.9],
                         [-9.0f32, -0.2, 0.0, 0.5, 0.71, 2.0],
                     );
                     let windows = NodeWindows::new(&grid, profile, a, [&grid_us, &grid_vs]);
+                    let plane = CollapsedPlane::new(&grid, background, profile, a, h, &layer, None);
+                    let us = [-2.0, -0.33, 0.0, 0.5, 1.9];
+                    let vs = [-0.2, 0.0, 0.5, 0.71, 2.0];
+                    let mut batch = [0.0f32; 25];
+                    plane.sample([0, 0], &us, &vs, &mut batch, &mut Default::default());
                     let known = CollapsedPlane::new(
                         &grid,
                         background,
