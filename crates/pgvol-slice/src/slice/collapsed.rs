@@ -170,10 +170,33 @@ pub(crate) struct BlockLines {
     local: Vec<f32>,
     /// Per node row j, the coefficients summed along v with the row's weights: `nu` each.
     rows: Vec<f32>,
-    /// Per node column i: its window along u and distance beyond the box.
+    /// The block's first node in the layer grid.
+    first: [usize; 2],
+    /// Per node column i: its window along u and distance beyond the box, where the plane
+    /// has no [`NodeWindows`] (whose own are read in place).
     columns: Vec<(AxisWindow, f32)>,
-    /// Per node row j: its window along v and distance beyond the box.
+    /// Per node row j: its window along v and distance beyond the box, likewise.
     row_windows: Vec<(AxisWindow, f32)>,
+}
+
+impl BlockLines {
+    /// The window of node column `i` along u, with its distance beyond the box.
+    #[inline]
+    fn column<'a>(&'a self, plane: &'a CollapsedPlane, i: usize) -> &'a (AxisWindow, f32) {
+        match plane.node_windows {
+            Some(NodeWindows([along_u, _])) => &along_u[self.first[0] + i],
+            None => &self.columns[i],
+        }
+    }
+
+    /// The window of node row `j` along v, with its distance beyond the box.
+    #[inline]
+    fn row<'a>(&'a self, plane: &'a CollapsedPlane, j: usize) -> &'a (AxisWindow, f32) {
+        match plane.node_windows {
+            Some(NodeWindows([_, along_v])) => &along_v[self.first[1] + j],
+            None => &self.row_windows[j],
+        }
+    }
 }
 
 /// [`axis_window`] at `u ≥ 0`, the cubic profile's weights computed here by the same
@@ -220,6 +243,9 @@ fn clamped_window(
     let q = x.clamp(origin, top);
     (window_at(profile, (q - origin) / spacing, n), x - q)
 }
+
+/// A node coordinate's window along its axis, with its distance beyond the box.
+type NodeWindow = (AxisWindow, f32);
 
 /// The windows of a layer grid's node coordinates along the two plane axes: the same for every
 /// layer of a slicing, so worked out once for them all.
@@ -726,21 +752,26 @@ impl pgvol_core::cpu::Kernel for Sample<'_, '_, '_, '_> {
             block,
         } = self;
         let BlockLines {
-            columns: wus,
-            row_windows: wvs,
+            columns,
+            row_windows,
             local,
             rows,
             ..
         } = block;
-        wus.clear();
-        wvs.clear();
-        if let Some(NodeWindows([along_u, along_v])) = plane.node_windows {
-            wus.extend_from_slice(&along_u[first[0]..first[0] + us.len()]);
-            wvs.extend_from_slice(&along_v[first[1]..first[1] + vs.len()]);
-        } else {
-            wus.extend(us.iter().map(|&u| plane.window(0, u)));
-            wvs.extend(vs.iter().map(|&v| plane.window(1, v)));
-        }
+        // The nodes' windows, read in place where the slicing worked them out.
+        let (wus, wvs): (&[NodeWindow], &[NodeWindow]) = match plane.node_windows {
+            Some(NodeWindows([along_u, along_v])) => (
+                &along_u[first[0]..first[0] + us.len()],
+                &along_v[first[1]..first[1] + vs.len()],
+            ),
+            None => {
+                columns.clear();
+                row_windows.clear();
+                columns.extend(us.iter().map(|&u| plane.window(0, u)));
+                row_windows.extend(vs.iter().map(|&v| plane.window(1, v)));
+                (columns, row_windows)
+            }
+        };
         let span = |ws: &[(AxisWindow, f32)]| {
             let lo = ws.iter().map(|w| w.0.first).min().unwrap_or(0);
             let hi = ws
@@ -796,6 +827,7 @@ impl pgvol_core::cpu::Kernel for Sample<'_, '_, '_, '_> {
             }
         }
         (block.gathered, block.u0, block.nu, block.v0) = (gather, u0, nu, v0);
+        block.first = first;
     }
 }
 
@@ -855,9 +887,9 @@ impl LayerField for CollapsedPlane<'_, '_> {
             let pieces = if k == 0 {
                 let row = &b.rows[b.nu * node[1]..b.nu * (node[1] + 1)];
                 self.cubic_pieces(0, x, b.u0, b.nu, |r| row[r])
-                    .map(|c| (c, b.row_windows[node[1]].1))
+                    .map(|c| (c, b.row(self, node[1]).1))
             } else {
-                let (w, beyond) = &b.columns[node[0]];
+                let (w, beyond) = b.column(self, node[0]);
                 let off = (w.first - b.u0) as usize;
                 let nv = b.local.len() / b.nu;
                 self.cubic_pieces(1, x, b.v0, nv, |r| {

@@ -508,8 +508,9 @@ const ROOT_STEP: f32 = 1e-5;
 
 /// The zero of `g` on [0, 1] given `g(0) = va`, `g(1) = vb` of opposite signs: regula falsi with
 /// the Illinois modification, which keeps the bracket and converges superlinearly. It stops once
-/// an estimate moves less than [`ROOT_STEP`] of the edge.
-pub(crate) fn edge_root(g: &dyn Fn(f32) -> f32, va: f32, vb: f32) -> f32 {
+/// an estimate moves less than [`ROOT_STEP`] of the edge. Generic, so that a polynomial `g` is
+/// compiled into it rather than called.
+pub(crate) fn edge_root<G: Fn(f32) -> f32 + ?Sized>(g: &G, va: f32, vb: f32) -> f32 {
     let (mut t0, mut f0, mut t1, mut f1) = (0.0f32, va, 1.0f32, vb);
     let mut side = 0i8;
     let mut t = f0 / (f0 - f1);
