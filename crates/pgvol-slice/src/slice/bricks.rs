@@ -207,20 +207,12 @@ impl<'a> BrickLayer<'a> {
             INSIDE => 1,
             _ => 2,
         };
-        let [cu, cv] = self.counts;
         let mut boundary = Vec::new();
         for &k in &self.occupied {
             let k = k as usize;
             let own = kind(self.states[k]);
-            let (tu, tv) = (k % cu, k / cu);
-            let beside = [
-                (tu + 1 < cu).then(|| k + 1),
-                (tv + 1 < cv).then(|| k + cu),
-                (tu > 0).then(|| k - 1),
-                (tv > 0).then(|| k - cu),
-            ];
             let mut differs = own == 2;
-            for n in beside.into_iter().flatten() {
+            for n in beside(k, self.counts).into_iter().flatten() {
                 let theirs = kind(self.states[n]);
                 differs |= theirs != own;
                 // An outside neighbour is never visited from its own entry.
@@ -269,6 +261,20 @@ pub trait BrickSource: Sync {
     /// The brick layers of slab `slab` along grid axis `axis` (0, 1 or 2), in order; positions
     /// within a layer as [`BrickLayer`] says. The last slab may hold fewer.
     fn slab(&self, axis: usize, slab: usize) -> Result<Vec<BrickLayer<'_>>, Self::Error>;
+}
+
+/// The four neighbours of position `k` in a plane of `counts` positions (the first axis
+/// fastest) that lie in it: +u, +v, −u, −v.
+#[inline]
+pub(crate) fn beside(k: usize, counts: [usize; 2]) -> [Option<usize>; 4] {
+    let [cu, cv] = counts;
+    let (u, v) = (k % cu, k / cu);
+    [
+        (u + 1 < cu).then(|| k + 1),
+        (v + 1 < cv).then(|| k + cu),
+        (u > 0).then(|| k - 1),
+        (v > 0).then(|| k - cu),
+    ]
 }
 
 /// The axes of a brick layer's plane: the two after `axis` in cyclic order.
@@ -342,14 +348,15 @@ mod tests {
             );
             for k in 0..counts[0] * counts[1] {
                 let (u, v) = (k % counts[0], k / counts[0]);
-                let beside = [
+                // The neighbours written out, not through `beside`, which `finish` uses.
+                let neighbours = [
                     (u + 1 < counts[0]).then(|| k + 1),
                     (v + 1 < counts[1]).then(|| k + counts[0]),
                     (u > 0).then(|| k - 1),
                     (v > 0).then(|| k - counts[0]),
                 ];
                 let stored = layer.state(k) < INSIDE;
-                let changes = beside.into_iter().flatten().any(|n| kind(n) != kind(k));
+                let changes = neighbours.into_iter().flatten().any(|n| kind(n) != kind(k));
                 assert_eq!(
                     boundary.binary_search(&(k as u32)).is_ok(),
                     stored || changes,

@@ -13,7 +13,7 @@ use pgvol_core::BRICK_EDGE;
 use pgvol_field::kernel::{axis_window, AxisWindow, Profile};
 use pgvol_field::{mirror, Grid};
 
-use super::bricks::{brick_counts, plane_axes, BrickLayer, INSIDE, OUTSIDE};
+use super::bricks::{beside, brick_counts, plane_axes, BrickLayer, INSIDE, OUTSIDE};
 use super::cubic::{shift_cubic, CubicPieces};
 use super::plane::{edge_root, LayerField};
 
@@ -174,15 +174,15 @@ pub(crate) struct BlockLines {
     first: [usize; 2],
     /// Per node column i: its window along u and distance beyond the box, where the plane
     /// has no [`NodeWindows`] (whose own are read in place).
-    columns: Vec<(AxisWindow, f32)>,
+    columns: Vec<NodeWindow>,
     /// Per node row j: its window along v and distance beyond the box, likewise.
-    row_windows: Vec<(AxisWindow, f32)>,
+    row_windows: Vec<NodeWindow>,
 }
 
 impl BlockLines {
     /// The window of node column `i` along u, with its distance beyond the box.
     #[inline]
-    fn column<'a>(&'a self, plane: &'a CollapsedPlane, i: usize) -> &'a (AxisWindow, f32) {
+    fn column<'a>(&'a self, plane: &'a CollapsedPlane, i: usize) -> &'a NodeWindow {
         match plane.node_windows {
             Some(NodeWindows([along_u, _])) => &along_u[self.first[0] + i],
             None => &self.columns[i],
@@ -191,7 +191,7 @@ impl BlockLines {
 
     /// The window of node row `j` along v, with its distance beyond the box.
     #[inline]
-    fn row<'a>(&'a self, plane: &'a CollapsedPlane, j: usize) -> &'a (AxisWindow, f32) {
+    fn row<'a>(&'a self, plane: &'a CollapsedPlane, j: usize) -> &'a NodeWindow {
         match plane.node_windows {
             Some(NodeWindows([_, along_v])) => &along_v[self.first[1] + j],
             None => &self.row_windows[j],
@@ -249,7 +249,7 @@ type NodeWindow = (AxisWindow, f32);
 
 /// The windows of a layer grid's node coordinates along the two plane axes: the same for every
 /// layer of a slicing, so worked out once for them all.
-pub(crate) struct NodeWindows([Vec<(AxisWindow, f32)>; 2]);
+pub(crate) struct NodeWindows([Vec<NodeWindow>; 2]);
 
 impl NodeWindows {
     /// For planes across grid axis `axis`, at the node coordinates `nodes` along the plane's
@@ -395,17 +395,11 @@ impl<'w, 's> CollapsedPlane<'w, 's> {
     /// neighbours, or that of slot 0 (absent and outside in every tap) and neighbours that are
     /// in `occupied` or have it too.
     fn find_edges(&self, occupied: &[u32]) -> Vec<[usize; 2]> {
-        let [cu, cv] = self.counts;
+        let cu = self.counts[0];
         let mut marked: Vec<usize> = Vec::new();
         for &k in occupied {
             let k = k as usize;
-            let (tu, tv) = (k % cu, k / cu);
-            let beside = [
-                (tu + 1 < cu).then(|| k + 1),
-                (tv + 1 < cv).then(|| k + cu),
-                (tu > 0).then(|| k - 1),
-                (tv > 0).then(|| k - cu),
-            ];
+            let beside = beside(k, self.counts);
             // Amid plane bricks sharing its uniform tile (the inside of a part, mostly):
             // nothing changes side.
             let slot = self.slot(k);
