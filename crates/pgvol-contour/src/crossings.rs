@@ -63,8 +63,11 @@ struct BlockVertices {
     /// Per owned node (see [`local_node`]): crossed axes in the low bits, then the block-local
     /// index of the node's first crossing. Indices grow with the node, which `locate` uses.
     node_edges: [u16; BLOCK_NODES],
+    /// The block's crossings while they are found; moved into [`Crossings`]' arrays after.
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
+    /// How many crossings the block owns.
+    count: u32,
 }
 
 /// The box of an active block, as the cell passes read it.
@@ -140,13 +143,13 @@ impl Crossings {
 
     /// Crossings owned by the active block at `slot`.
     pub fn block_len(&self, slot: usize) -> usize {
-        self.vertices[slot].positions.len()
+        self.vertices[slot].count as usize
     }
 
     /// The global indices of the crossings owned by the active block at `slot`.
     pub fn block_vertices(&self, slot: usize) -> std::ops::Range<u32> {
         let first = self.base[slot];
-        first..first + self.vertices[slot].positions.len() as u32
+        first..first + self.vertices[slot].count
     }
 
     /// Lower node and axis of the edge holding global vertex `g`.
@@ -201,7 +204,7 @@ pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Cros
         .collect::<Vec<_>>();
     // Stopped part way, the crossings found are a partial set whose triangles would look up
     // edges never visited: none are kept, and the caller drops the empty result.
-    let vertices = if stopped(counter.as_ref()) {
+    let mut vertices = if stopped(counter.as_ref()) {
         Vec::new()
     } else {
         vertices
@@ -217,9 +220,12 @@ pub(crate) fn all_crossings(samples: &Samples, place: Place, limit: u32) -> Cros
     let mut positions = Vec::with_capacity(n);
     let with_normals = matches!(place, Place::WithNormal(_));
     let mut normals = Vec::with_capacity(if with_normals { n } else { 0 });
-    for v in &vertices {
-        positions.extend_from_slice(&v.positions);
-        normals.extend_from_slice(&v.normals);
+    // Each block's arrays are freed as they are copied, so a run's crossings are not held
+    // twice (a large flat face crosses a whole plane of blocks in one run).
+    for v in &mut vertices {
+        v.count = v.positions.len() as u32;
+        positions.extend_from_slice(&std::mem::take(&mut v.positions));
+        normals.extend_from_slice(&std::mem::take(&mut v.normals));
     }
     Crossings {
         blocks,
@@ -249,6 +255,7 @@ fn block_crossings(
         node_edges: [0; BLOCK_NODES],
         positions: Vec::new(),
         normals: Vec::new(),
+        count: 0,
     };
     let nodes = masks.nodes;
     // An edge is owned when its lower node is, and exists when its upper node is in the grid.

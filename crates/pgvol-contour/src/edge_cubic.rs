@@ -47,18 +47,23 @@ impl EdgeStencil {
         sum
     }
 
-    /// Control values of the slopes across the edge, along its first and second plane axes.
+    /// [`Self::value_control`] and the control values of the slopes across the edge, along its
+    /// first and second plane axes, from one read of each line; each sum is added in the
+    /// order of its own loop, so the floats are those of separate passes.
     #[inline]
-    fn slope_controls(&self) -> [Vec4; 2] {
-        let mut control = [Vec4::ZERO; 2];
-        for dv in 0..3 {
-            for du in 0..3 {
-                let c = self.line(du, dv);
-                control[0] += (NODE_SLOPES[du] * NODE_WEIGHTS[dv]) * c;
-                control[1] += (NODE_WEIGHTS[du] * NODE_SLOPES[dv]) * c;
+    fn value_and_slope_controls(&self) -> (Vec4, [Vec4; 2]) {
+        let mut value = Vec4::ZERO;
+        let mut slope = [Vec4::ZERO; 2];
+        for (dv, &wv) in NODE_WEIGHTS.iter().enumerate() {
+            let c = [0, 1, 2].map(|du| self.line(du, dv));
+            let across = NODE_WEIGHTS[0] * c[0] + NODE_WEIGHTS[1] * c[1] + NODE_WEIGHTS[2] * c[2];
+            value += wv * across;
+            for (du, &c) in c.iter().enumerate() {
+                slope[0] += (NODE_SLOPES[du] * wv) * c;
+                slope[1] += (NODE_WEIGHTS[du] * NODE_SLOPES[dv]) * c;
             }
         }
-        control
+        (value, slope)
     }
 }
 
@@ -138,11 +143,11 @@ pub(crate) fn crossing_on_grid_edge(
     }
     let stencil = edge_stencil(volume, a, b)?;
     let axis = stencil.axis;
-    let value = stencil.value_control().to_array();
+    let (value, [slope_u, slope_v]) = stencil.value_and_slope_controls();
+    let value = value.to_array();
     let thirds = [1.0 / 3.0, 2.0 / 3.0].map(|t| along_edge(value, t));
     let p = onto_edge(a, b, axis, root_from_thirds(a, va, b, vb, thirds, iso));
     let t = (p[axis] - a[axis]) / (b[axis] - a[axis]);
-    let [slope_u, slope_v] = stencil.slope_controls().map(|c| c.to_array());
     let s = 1.0 - t;
     let slopes = Vec4::new(
         -0.5 * s * s,
@@ -153,8 +158,8 @@ pub(crate) fn crossing_on_grid_edge(
     let (u, v) = plane_axes(axis);
     let mut grad = Vec3::ZERO;
     grad[axis] = slopes.dot(Vec4::from_array(value));
-    grad[u] = along_edge(slope_u, t);
-    grad[v] = along_edge(slope_v, t);
+    grad[u] = along_edge(slope_u.to_array(), t);
+    grad[v] = along_edge(slope_v.to_array(), t);
     // Only the direction is wanted, so the spacing does not enter.
     Some((p, grad.normalize_or_zero()))
 }

@@ -17,6 +17,9 @@ pub(crate) struct Part {
     /// Loop centre vertices (only for the rare loops that cannot be triangulated from their
     /// crossings alone).
     pub extra: Vec<Vec3>,
+    /// The extra vertices' unit normals, when the crossings have normals: their loop's
+    /// normals averaged.
+    pub extra_normals: Vec<Vec3>,
 }
 
 /// Triangles of the cells owned by the active block at `slot`, in cell scan order.
@@ -25,7 +28,7 @@ pub(crate) fn block_triangles(crossings: &Crossings, iso: f32, slot: usize) -> P
     // About two triangles per vertex on a closed surface.
     let mut part = Part {
         triangles: Vec::with_capacity(2 * crossings.block_len(slot) + 8),
-        extra: Vec::new(),
+        ..Part::default()
     };
     let block = crossings.block(slot);
     let origin = block.origin;
@@ -65,13 +68,19 @@ fn cell_triangles(
     }
     let entry = table.cell(case, joined);
     let first_extra = part.extra.len() as u32;
+    let with_normals = !verts.normals.is_empty();
     for &mask in entry.centers() {
-        let (sum, n) = (0..12)
+        let loop_vertices = (0..12)
             .filter(|e| mask & (1 << e) != 0)
-            .fold((Vec3::ZERO, 0.0), |(s, n), e| {
-                (s + verts.positions[edge_vertex[e] as usize], n + 1.0)
-            });
+            .map(|e| edge_vertex[e] as usize);
+        let (sum, n) = loop_vertices.clone().fold((Vec3::ZERO, 0.0), |(s, n), v| {
+            (s + verts.positions[v], n + 1.0)
+        });
         part.extra.push(sum / n);
+        if with_normals {
+            let normal: Vec3 = loop_vertices.map(|v| verts.normals[v]).sum();
+            part.extra_normals.push(normal.normalize_or_zero());
+        }
     }
     let vertex = |code: u8| -> u32 {
         if code < CENTER {

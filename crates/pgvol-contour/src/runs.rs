@@ -90,6 +90,9 @@ pub struct RunPart {
     pub positions: Vec<Vec3>,
     /// The run's triangles, indexing all vertices so far.
     pub triangles: Vec<[u32; 3]>,
+    /// The unit normals of `positions`: the field's gradient direction, zero where it has
+    /// none (see `volume_place_with_normal`).
+    pub normals: Vec<Vec3>,
 }
 
 /// Why [`contour_runs`] stopped.
@@ -155,6 +158,8 @@ fn contour_runs_of<W: CoefficientWindows>(
         let (crossings, parts) = run_mesh(&window, grid, iso, layers, (origin, at), span);
         let last = run + 1 == runs;
         let out = stitch.add(&crossings, parts, layers, last)?;
+        // Freed before the part is handed on, which may copy it.
+        drop(crossings);
         drop(window);
         part(out).map_err(RunsError::Source)?;
     }
@@ -234,8 +239,10 @@ fn run_mesh(
         .expect("a run holds at least one cell layer")
         .shifted(place.1)
         .reporting(Some(span.part(SAMPLING_PART, 1.0)));
-    let refine = crate::volume_root::volume_refine(volume, iso);
-    let crossings = all_crossings(&samples, Place::Position(&refine), EXTRA_FLAG);
+    // Normals are taken with the crossings, from the stencil each root reads anyway: writers
+    // then need no pass over the faces (angle-weighted normals cost more than the roots).
+    let place = crate::volume_root::volume_place_with_normal(volume, iso);
+    let crossings = all_crossings(&samples, Place::WithNormal(&place), EXTRA_FLAG);
     let blocks = crossings.blocks.active.len();
     let counter = samples.counter(CROSSINGS_PART, 1.0, blocks);
     let parts = (0..blocks)
@@ -332,6 +339,7 @@ impl Stitch {
                 *id = self.count as u32;
                 self.count += 1;
                 out.positions.push(crossings.positions[g]);
+                out.normals.push(crossings.normals[g]);
             }
         }
         let extras: u64 = parts.iter().map(|p| p.extra.len() as u64).sum();
@@ -351,6 +359,7 @@ impl Stitch {
                 .extend(part.triangles.iter().map(|t| t.map(resolve)));
             self.count += part.extra.len() as u64;
             out.positions.extend_from_slice(&part.extra);
+            out.normals.extend_from_slice(&part.extra_normals);
         }
         self.top.clear();
         if !last {

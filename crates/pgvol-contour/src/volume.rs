@@ -131,6 +131,7 @@ fn contour_volume_with(
         let collect = &mut |part: crate::runs::RunPart| {
             mesh.positions.extend_from_slice(&part.positions);
             mesh.triangles.extend_from_slice(&part.triangles);
+            mesh.normals.extend_from_slice(&part.normals);
             Ok(())
         };
         return match crate::runs::contour_runs(&mut { volume }, grid, iso, report, collect) {

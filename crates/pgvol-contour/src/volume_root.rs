@@ -4,7 +4,9 @@
 use glam::Vec3;
 use pgvol_field::CoefficientVolume;
 
-use crate::edge_cubic::thirds_on_grid_edge;
+use crate::crossings::with_normal;
+use crate::edge_cubic::{crossing_on_grid_edge, thirds_on_grid_edge};
+use crate::place::onto_edge;
 use crate::root::{cubic_edge_root, root_from_thirds};
 
 /// Places the crossing of an edge on the continuous field of `volume` where both ends lie in
@@ -21,6 +23,30 @@ pub(crate) fn volume_refine(
         } else {
             let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
             a + (b - a) * t
+        }
+    }
+}
+
+/// [`volume_refine`]'s crossing, put onto its edge along `axis`, with the unit gradient of the
+/// field there; the normal is zero where the gradient vanishes and where the edge reaches into
+/// the padding, whose values are artificial. The positions are [`volume_refine`]'s.
+pub(crate) fn volume_place_with_normal(
+    volume: &CoefficientVolume,
+    iso: f32,
+) -> impl Fn(Vec3, f32, Vec3, f32, usize) -> (Vec3, Vec3) + Sync + '_ {
+    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    let in_box = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    move |a: Vec3, va: f32, b: Vec3, vb: f32, axis: usize| -> (Vec3, Vec3) {
+        if in_box(a) && in_box(b) {
+            // The edge's stencil gives the root and the gradient from one read; where it
+            // declines, `volume_edge_root` evaluates the field in general, and so does this.
+            crossing_on_grid_edge(volume, a, va, b, vb, iso).unwrap_or_else(|| {
+                let p = cubic_edge_root(volume, a, va, b, vb, iso);
+                with_normal(a, b, axis, p, |p| volume.eval(p).1)
+            })
+        } else {
+            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+            (onto_edge(a, b, axis, a + (b - a) * t), Vec3::ZERO)
         }
     }
 }

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use crate::validate::problem;
 use crate::{
-    gltf_io, obj, ply, stl, threemf, vertex_normals, DeclaredUnit, Mesh, MeshError, MeshFormat,
+    gltf_io, obj, output_normals, ply, stl, threemf, DeclaredUnit, Mesh, MeshError, MeshFormat,
     UnitChoice,
 };
 use pgvol_core::write_atomic;
@@ -130,8 +130,8 @@ pub fn check_precision(mesh: &Mesh, format: MeshFormat, name: &Path) -> Result<(
 
 fn encode(w: &mut dyn std::io::Write, mesh: &Mesh, format: MeshFormat) -> std::io::Result<()> {
     let normals = match format {
-        MeshFormat::Stl => Vec::new(),
-        _ => vertex_normals(mesh),
+        MeshFormat::Stl => std::borrow::Cow::Borrowed(&[][..]),
+        _ => output_normals(mesh),
     };
     match format {
         MeshFormat::Obj => obj::write(w, mesh, &normals),

@@ -22,7 +22,7 @@ pub use clean::{clean, read_bytes_clean, read_clean, read_clean_in, CleanReport}
 pub use error::MeshError;
 pub use format::MeshFormat;
 pub use io::{check_precision, read, read_bytes, read_ply_points, write, write_to};
-pub use normals::{face_normal, vertex_normals};
+pub use normals::{face_normal, output_normals, vertex_normals};
 pub use pgvol_core::{write_atomic, FileError, Mesh, MeshStats};
 pub use threemf::{DeclaredUnit, LengthUnit, UnitChoice};
 pub use validate::{

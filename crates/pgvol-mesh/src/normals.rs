@@ -4,6 +4,7 @@
 //! array, which is normalised in place: beyond the output only a batch of faces is held, since
 //! writing a decoded mesh, where normals are made, sets a large decode's peak memory.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
@@ -46,18 +47,51 @@ pub fn vertex_normals(mesh: &Mesh) -> Vec<Vec3> {
     sums.par_iter_mut().for_each(|s| {
         *s = unit(s.as_dvec3()).map_or(Vec3::ZERO, |u| renormalise(u.as_vec3()));
     });
-    let vanished: Vec<u32> = (0..sums.len() as u32)
-        .into_par_iter()
-        .filter(|&i| sums[i as usize] == Vec3::ZERO)
-        .collect();
-    if !vanished.is_empty() {
-        let first = first_faces_with_area(mesh, &vanished);
-        for i in vanished {
-            let dir = first.get(&i).copied().flatten().unwrap_or(DVec3::Z);
-            sums[i as usize] = renormalise(dir.as_vec3());
-        }
-    }
+    fill_vanished(mesh, &mut sums);
     sums
+}
+
+/// The normals a writer stores: the mesh's own where it has one per position (the exact
+/// normals a contour gives), each zero one replaced as in [`vertex_normals`]; else
+/// [`vertex_normals`].
+pub fn output_normals(mesh: &Mesh) -> Cow<'_, [Vec3]> {
+    if mesh.normals.len() != mesh.positions.len() {
+        return Cow::Owned(vertex_normals(mesh));
+    }
+    // Borrowed as they are when every one is a unit vector already: no second copy of a large
+    // mesh's normals while it is written.
+    let unit_length = |n: &Vec3| (n.length_squared() - 1.0).abs() <= UNIT_SLACK;
+    if mesh.normals.par_iter().all(unit_length) {
+        return Cow::Borrowed(&mesh.normals);
+    }
+    let mut normals: Vec<Vec3> = mesh
+        .normals
+        .par_iter()
+        .map(|&n| unit(n.as_dvec3()).map_or(Vec3::ZERO, |u| renormalise(u.as_vec3())))
+        .collect();
+    fill_vanished(mesh, &mut normals);
+    Cow::Owned(normals)
+}
+
+/// How far a stored normal's squared length may be from 1 (a few f32 rounding steps) for it to
+/// be written as it is.
+const UNIT_SLACK: f32 = 1e-6;
+
+/// Gives each zero entry of `normals` the direction of the first face with area at its vertex,
+/// or +Z where there is none.
+fn fill_vanished(mesh: &Mesh, normals: &mut [Vec3]) {
+    let vanished: Vec<u32> = (0..normals.len() as u32)
+        .into_par_iter()
+        .filter(|&i| normals[i as usize] == Vec3::ZERO)
+        .collect();
+    if vanished.is_empty() {
+        return;
+    }
+    let first = first_faces_with_area(mesh, &vanished);
+    for i in vanished {
+        let dir = first.get(&i).copied().flatten().unwrap_or(DVec3::Z);
+        normals[i as usize] = renormalise(dir.as_vec3());
+    }
 }
 
 /// The direction of the first face with area at each vertex of `vertices` (`None` where there
@@ -240,6 +274,29 @@ mod tests {
 
     /// A vertex whose faces cancel takes its first face's normal, a vertex of only arealess
     /// faces and an unreferenced one take +Z.
+    #[test]
+    fn a_meshs_own_normals_are_written_with_zero_ones_from_a_face() {
+        let mut mesh = wobbly_sphere();
+        let n = mesh.positions.len();
+        // Not one per position: weighted from the faces.
+        mesh.normals = vec![Vec3::X; n - 1];
+        assert_eq!(
+            output_normals(&mesh).as_ref(),
+            vertex_normals(&mesh).as_slice()
+        );
+        mesh.normals = vec![Vec3::X; n];
+        assert!(matches!(output_normals(&mesh), Cow::Borrowed(_)));
+        // A zero normal takes its first face's direction; one slightly long is made unit.
+        mesh.normals[0] = Vec3::ZERO;
+        mesh.normals[1] = Vec3::new(0.0, 2.0, 0.0);
+        let out = output_normals(&mesh);
+        let tri = *mesh.triangles.iter().find(|t| t.contains(&0)).unwrap();
+        let face = face_normal(tri.map(|i| mesh.positions[i as usize]));
+        assert!((out[0] - face).length() < 1e-6, "{} vs {face}", out[0]);
+        assert_eq!(out[1], Vec3::Y);
+        assert!(out[2..].iter().all(|&v| v == Vec3::X));
+    }
+
     #[test]
     fn vanished_sums_fall_back_to_a_face_or_z() {
         let positions = vec![

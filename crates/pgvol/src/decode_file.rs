@@ -125,6 +125,8 @@ pub(crate) fn append(mesh: &mut Mesh, part: &RunPart) {
     mesh.positions.extend_from_slice(&part.positions);
     mesh.triangles.reserve_exact(part.triangles.len());
     mesh.triangles.extend_from_slice(&part.triangles);
+    mesh.normals.reserve_exact(part.normals.len());
+    mesh.normals.extend_from_slice(&part.normals);
 }
 
 /// A sparse `.pgv` file's coefficients, held a window of slabs along z at a time.

@@ -1038,16 +1038,102 @@ fn a_file_sliced_slab_by_slab_gives_the_layers_of_the_whole_field() {
     assert!(e.to_string().contains("s.pgv"), "{e}");
 }
 
+/// `file` written to `path` with the default storage and read back: the coefficients a
+/// streamed decode of `path` reads.
+fn written_and_read(path: &Path, file: &pgvol::PgvFile) -> Field {
+    pgvol::io::write_pgv(path, file, &StorageOptions::default()).unwrap();
+    Field::from_file(pgvol::io::read_pgv(path).unwrap())
+}
+
+/// Levels and resamplings a streamed decode is checked at: the surface, an offset of one
+/// spacing, and the surface on another grid.
+fn stream_cases(shape: &Field) -> [(f32, Option<usize>); 3] {
+    let h = shape.volume().grid.spacing;
+    [(0.0, None), (h, None), (0.0, Some(97))]
+}
+
+/// The unit normals a binary little-endian PLY of `pgvol`'s writer stores, one per vertex.
+fn ply_normals(bytes: &[u8]) -> Vec<Vec3> {
+    let end = b"end_header\n";
+    let body = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let header = std::str::from_utf8(&bytes[..body]).unwrap();
+    assert!(header.contains("property float nx"), "{header}");
+    let count: usize = header
+        .split("element vertex ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let float = |at: usize| f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    (0..count)
+        .map(|i| {
+            let at = body + 24 * i + 12;
+            Vec3::new(float(at), float(at + 4), float(at + 8))
+        })
+        .collect()
+}
+
+#[test]
+fn decoded_vertices_carry_the_fields_normals_through_speck_removal_into_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("n.pgv");
+    // A small box below the sphere: its vertices come first, so removing it renumbers every
+    // vertex of the sphere.
+    let mut mesh = sphere();
+    let speck = shapes::cuboid(Vec3::new(-0.2, -0.2, -1.6), Vec3::new(0.0, 0.0, -1.4));
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend(speck.positions);
+    mesh.triangles
+        .extend(speck.triangles.iter().map(|t| t.map(|i| i + base)));
+    let file = pgvol::encode(&mesh, &encode_options(150), &Silent)
+        .unwrap()
+        .file;
+    let shape = written_and_read(&path, &file);
+    for (iso, res) in stream_cases(&shape) {
+        let options = DecodeOptions {
+            iso,
+            res,
+            min_component: Some(0.05),
+            ..Default::default()
+        };
+        let streamed = pgvol::stream::decode_file(&path, &options, &Silent).unwrap();
+        let whole = shape.to_mesh(&options, &Silent).unwrap();
+        assert_eq!(streamed.normals, whole.normals, "iso {iso} res {res:?}");
+        // Only the sphere is left.
+        assert!(
+            streamed.positions.iter().all(|p| p.z > -1.3),
+            "iso {iso} res {res:?}"
+        );
+        let n = streamed.positions.len();
+        assert_eq!(streamed.normals.len(), n, "iso {iso} res {res:?}");
+        // Each normal is the field's gradient direction at its own vertex.
+        let points: Vec<_> = (0..n).map(|i| streamed.world(i)).collect();
+        for (i, e) in shape.eval(&points).iter().enumerate() {
+            let want = Vec3::from_array(e.gradient).normalize();
+            let got = streamed.normals[i];
+            assert!(
+                (got.length() - 1.0).abs() < 1e-5 && got.dot(want) > 0.9999,
+                "iso {iso} res {res:?}: vertex {i} at {}: {got} against {want}",
+                streamed.positions[i]
+            );
+        }
+        // The file stores them.
+        let out = dir.path().join("n.ply");
+        pgvol::io::write_mesh(&out, &streamed).unwrap();
+        let written = ply_normals(&std::fs::read(&out).unwrap());
+        assert_eq!(written, streamed.normals, "iso {iso} res {res:?}");
+    }
+}
+
 #[test]
 fn a_file_decoded_window_by_window_gives_the_mesh_of_the_whole_field() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("d.pgv");
     // 150 layers along z: three runs of contouring, each from its own window of slabs.
     let file = encoded(150).file;
-    pgvol::io::write_pgv(&path, &file, &StorageOptions::default()).unwrap();
-    let shape = Field::from_file(pgvol::io::read_pgv(&path).unwrap());
-    let h = shape.volume().grid.spacing;
-    for (iso, res) in [(0.0, None), (h, None), (0.0, Some(97))] {
+    let shape = written_and_read(&path, &file);
+    for (iso, res) in stream_cases(&shape) {
         let options = DecodeOptions {
             iso,
             res,

@@ -19,7 +19,8 @@ impl Mesh {
     /// Merges vertices that coincide: bit-exactly (treating -0.0 as 0.0) when `tolerance` is 0,
     /// otherwise within `tolerance` of an earlier kept vertex (first-come representatives in a
     /// hash grid, so the cost is linear). Triangles are remapped and unreferenced vertices
-    /// removed. Returns the number of vertices merged into another.
+    /// removed; a kept vertex keeps its normal. Returns the number of vertices merged into
+    /// another.
     pub fn weld(&mut self, tolerance: f32) -> usize {
         let n = self.positions.len();
         let mut rep: Vec<u32> = Vec::with_capacity(n);
@@ -133,8 +134,8 @@ impl Mesh {
         before - self.triangles.len()
     }
 
-    /// Removes vertices no triangle refers to, keeping the order of the rest. Returns how many
-    /// were removed.
+    /// Removes vertices no triangle refers to, keeping the order of the rest and their normals.
+    /// Returns how many were removed.
     pub fn drop_unused_vertices(&mut self) -> usize {
         let n = self.positions.len();
         // Marked and renumbered on every thread; only the compaction, a sequential pass, is
@@ -149,14 +150,23 @@ impl Mesh {
         });
         let mut new_index = vec![u32::MAX; n];
         let mut kept = 0u32;
+        let with_normals = self.normals.len() == n;
         for i in 0..n {
             if used[i].load(Relaxed) {
                 new_index[i] = kept;
                 self.positions[kept as usize] = self.positions[i];
+                if with_normals {
+                    self.normals[kept as usize] = self.normals[i];
+                }
                 kept += 1;
             }
         }
         self.positions.truncate(kept as usize);
+        if with_normals {
+            self.normals.truncate(kept as usize);
+        } else {
+            self.normals.clear();
+        }
         self.triangles.par_iter_mut().for_each(|t| {
             for i in t {
                 // Out-of-range indices stay out of range rather than aliasing a real vertex.
@@ -206,6 +216,25 @@ type FastHash = BuildHasherDefault<KeyHasher>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn removing_and_welding_vertices_carries_their_normals() {
+        // Vertex 1 is unused and vertex 4 repeats vertex 0.
+        let positions = vec![Vec3::ZERO, Vec3::ONE, Vec3::X, Vec3::Y, Vec3::ZERO];
+        let mut mesh = Mesh::new(positions, vec![[0, 2, 3], [4, 3, 2]]);
+        mesh.normals = (0..5).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+        assert_eq!(mesh.weld(0.0), 1);
+        assert_eq!(mesh.positions, vec![Vec3::ZERO, Vec3::X, Vec3::Y]);
+        assert_eq!(
+            mesh.normals,
+            [0.0, 2.0, 3.0].map(|x| Vec3::new(x, 0.0, 0.0))
+        );
+        // Normals that do not cover the positions are dropped, not misaligned.
+        mesh.normals.pop();
+        mesh.triangles.truncate(0);
+        mesh.drop_unused_vertices();
+        assert!(mesh.normals.is_empty() && mesh.positions.is_empty());
+    }
 
     #[test]
     fn repeated_faces_are_dropped_in_any_rotation_but_opposite_ones_stay() {

@@ -30,6 +30,11 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// The world translation of the local frame, in f64.
     pub offset: DVec3,
+    /// Unit normals per position where the mesh's source knows them exactly (a contour gives
+    /// the field's gradient direction at each vertex; zero where it has none), else empty.
+    /// Writers use them only when there is one per position; the operations here that remove
+    /// vertices carry them along, and those that turn faces drop them.
+    pub normals: Vec<Vec3>,
 }
 
 impl Mesh {
@@ -39,6 +44,7 @@ impl Mesh {
             positions,
             triangles,
             offset: DVec3::ZERO,
+            normals: Vec::new(),
         }
     }
 
@@ -52,6 +58,7 @@ impl Mesh {
             positions: world.iter().map(|&p| frame::to_local(p, offset)).collect(),
             triangles,
             offset,
+            normals: Vec::new(),
         }
     }
 
@@ -74,6 +81,8 @@ impl Mesh {
             positions,
             triangles: self.triangles.clone(),
             offset,
+            // A translation turns no direction.
+            normals: self.normals.clone(),
         }
     }
 

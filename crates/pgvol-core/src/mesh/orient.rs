@@ -42,6 +42,10 @@ impl Mesh {
                 count += 1;
             }
         }
+        if count > 0 {
+            // Known normals agreed with the old winding.
+            self.normals.clear();
+        }
         count
     }
 
@@ -316,8 +320,15 @@ mod tests {
         for t in &mut m.triangles {
             t.swap(1, 2);
         }
+        m.normals = vec![Vec3::X; m.positions.len()];
         assert_eq!(m.orient_outward(), 12);
         assert!((volume(&m) - 1.0).abs() < 1e-6);
+        // Normals that went with the old winding are not kept.
+        assert!(m.normals.is_empty());
+        let mut kept = cube(0.0, 1.0);
+        kept.normals = vec![Vec3::X; kept.positions.len()];
+        kept.orient_outward();
+        assert_eq!(kept.normals.len(), kept.positions.len());
     }
 
     #[test]

@@ -124,9 +124,14 @@ pub fn weld_parts(
     progress: &dyn Progress,
 ) -> Result<Mesh> {
     let mut mesh = Mesh::default();
+    // Normals are kept only when every piece has one per vertex.
+    let with_normals = pieces.iter().all(|p| p.normals.len() == p.positions.len());
     for piece in pieces {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend(piece.positions);
+        if with_normals {
+            mesh.normals.extend(piece.normals);
+        }
         mesh.triangles
             .extend(piece.triangles.iter().map(|t| t.map(|i| i + base)));
     }
