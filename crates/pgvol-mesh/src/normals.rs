@@ -1,8 +1,9 @@
-//! Unit normals for writers, every one of length 1 (glTF validators reject others). Each face's
-//! contribution is computed in f64, so that tiny or huge triangles neither underflow nor
-//! overflow, then scaled by one factor for the whole mesh and added in f32 in the normals' own
-//! array, which is normalised in place: beyond the output only a batch of faces is held, since
-//! writing a decoded mesh, where normals are made, sets a large decode's peak memory.
+//! Unit normals for writers, every one of length 1 (glTF validators reject others): a mesh's
+//! own (`Mesh::normals`, a contour's field gradients) where it has one per vertex, else weighted
+//! from the faces. Each face's contribution is computed in f64, so that tiny or huge triangles
+//! neither underflow nor overflow, then scaled by one factor for the whole mesh and added in f32
+//! in the normals' own array, which is normalised in place: beyond the output only a batch of
+//! faces is held, since the normals of a large mesh are made while it is held whole.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -272,8 +273,6 @@ mod tests {
         }
     }
 
-    /// A vertex whose faces cancel takes its first face's normal, a vertex of only arealess
-    /// faces and an unreferenced one take +Z.
     #[test]
     fn a_meshs_own_normals_are_written_with_zero_ones_from_a_face() {
         let mut mesh = wobbly_sphere();
@@ -297,6 +296,8 @@ mod tests {
         assert!(out[2..].iter().all(|&v| v == Vec3::X));
     }
 
+    /// A vertex whose faces cancel takes its first face's normal, a vertex of only arealess
+    /// faces and an unreferenced one take +Z.
     #[test]
     fn vanished_sums_fall_back_to_a_face_or_z() {
         let positions = vec![
