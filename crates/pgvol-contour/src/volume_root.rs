@@ -15,14 +15,12 @@ pub(crate) fn volume_refine(
     volume: &CoefficientVolume,
     iso: f32,
 ) -> impl Fn(Vec3, f32, Vec3, f32) -> Vec3 + Sync + '_ {
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let in_box = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    let in_box = in_box_of(volume);
     move |a: Vec3, va: f32, b: Vec3, vb: f32| -> Vec3 {
         if in_box(a) && in_box(b) {
             volume_edge_root(volume, a, va, b, vb, iso)
         } else {
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            a + (b - a) * t
+            padding_crossing(a, va, b, vb, iso)
         }
     }
 }
@@ -34,8 +32,7 @@ pub(crate) fn volume_place_with_normal(
     volume: &CoefficientVolume,
     iso: f32,
 ) -> impl Fn(Vec3, f32, Vec3, f32, usize) -> (Vec3, Vec3) + Sync + '_ {
-    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
-    let in_box = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    let in_box = in_box_of(volume);
     move |a: Vec3, va: f32, b: Vec3, vb: f32, axis: usize| -> (Vec3, Vec3) {
         if in_box(a) && in_box(b) {
             // The edge's stencil gives the root and the gradient from one read; where it
@@ -45,10 +42,25 @@ pub(crate) fn volume_place_with_normal(
                 with_normal(a, b, axis, p, |p| volume.eval(p).1)
             })
         } else {
-            let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
-            (onto_edge(a, b, axis, a + (b - a) * t), Vec3::ZERO)
+            (
+                onto_edge(a, b, axis, padding_crossing(a, va, b, vb, iso)),
+                Vec3::ZERO,
+            )
         }
     }
+}
+
+/// Whether a point lies in `volume`'s box, where its field is continuous.
+fn in_box_of(volume: &CoefficientVolume) -> impl Fn(Vec3) -> bool + Sync {
+    let (lo, hi) = (volume.grid.origin, volume.grid.max_corner());
+    move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all()
+}
+
+/// The crossing of an edge reaching into the padding, linear in its end values since those of
+/// the padding are artificial.
+fn padding_crossing(a: Vec3, va: f32, b: Vec3, vb: f32, iso: f32) -> Vec3 {
+    let t = ((iso - va) / (vb - va)).clamp(0.0, 1.0);
+    a + (b - a) * t
 }
 
 /// The crossing on a grid edge of the continuous field of `volume`: from the coefficients
