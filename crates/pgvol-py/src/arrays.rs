@@ -9,6 +9,7 @@ use numpy::{
     PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use crate::errors;
 
@@ -90,6 +91,68 @@ pub(crate) fn world_points(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<D
         obj.py(),
         format!("{name} must be float32 or float64, got {}", dtype_name(&a)),
     ))
+}
+
+/// One normal per vertex from an (N, 3) float32 or float64 array-like of `vertices` rows, every
+/// value finite; a writer makes them unit length and gives zero ones a face's direction.
+pub(crate) fn vertex_normals(obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Vec<Vec3>> {
+    let py = obj.py();
+    let a = n_by_3(obj, "normals")?;
+    let finite = |n: Vec3| {
+        if n.is_finite() {
+            Ok(n)
+        } else {
+            Err(errors::parameter(
+                py,
+                format!("normals must be finite, got {n}"),
+            ))
+        }
+    };
+    let normals = rows::<f32, _>(&a, |r| finite(Vec3::from_array(r)))
+        .or_else(|| rows::<f64, _>(&a, |r| finite(DVec3::from_array(r).as_vec3())))
+        .ok_or_else(|| {
+            errors::parameter(
+                py,
+                format!("normals must be float32 or float64, got {}", dtype_name(&a)),
+            )
+        })??;
+    if normals.len() != vertices {
+        return Err(errors::parameter(
+            py,
+            format!(
+                "normals has {} rows for {vertices} vertices; give one per vertex",
+                normals.len()
+            ),
+        ));
+    }
+    Ok(normals)
+}
+
+/// The normals a file written from `mesh` stores, as an (N, 3) float32 array: the field's own
+/// where the contour gave them, else weighted from the faces.
+pub(crate) fn output_normals<'py>(
+    py: Python<'py>,
+    mesh: &pgvol::Mesh,
+) -> Bound<'py, PyArray2<f32>> {
+    vec3s(py, pgvol::io::output_normals(mesh).into_owned())
+}
+
+/// A mesh as `(vertices, faces)` ([`mesh_vertices`], int32 faces), or with `normals`
+/// `(vertices, faces, normals)` ([`output_normals`]).
+pub(crate) fn mesh_tuple(
+    py: Python<'_>,
+    mut mesh: pgvol::Mesh,
+    normals: bool,
+) -> PyResult<Bound<'_, PyTuple>> {
+    let n = mesh.positions.len();
+    let normals = normals.then(|| output_normals(py, &mesh));
+    mesh.normals = Vec::new();
+    let triangles = triangles(py, std::mem::take(&mut mesh.triangles), n)?;
+    let vertices = mesh_vertices(py, mesh);
+    match normals {
+        Some(normals) => PyTuple::new(py, [vertices, triangles.into_any(), normals.into_any()]),
+        None => PyTuple::new(py, [vertices, triangles.into_any()]),
+    }
 }
 
 /// A mesh's vertices in world coordinates: (N, 3) float32 as held for a mesh near the origin,

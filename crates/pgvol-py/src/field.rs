@@ -711,9 +711,10 @@ impl Field {
     }
 
     /// Contours the level set `iso` into a mesh: (vertices (N, 3), faces (M, 3) int32), the
-    /// vertices float32, or float64 world positions for a field far from the origin.
-    #[pyo3(signature = (*, method="mc", iso=0.0, res=None, min_component=None, progress=None))]
-    #[allow(clippy::type_complexity, clippy::too_many_arguments)]
+    /// vertices float32, or float64 world positions for a field far from the origin; with
+    /// `normals`, also the unit normals (N, 3) float32 that `write_mesh` stores.
+    #[pyo3(signature = (*, method="mc", iso=0.0, res=None, min_component=None, normals=false, progress=None))]
+    #[allow(clippy::too_many_arguments)]
     fn to_mesh<'py>(
         &self,
         py: Python<'py>,
@@ -721,8 +722,9 @@ impl Field {
         iso: f32,
         res: Option<usize>,
         min_component: Option<f32>,
+        normals: bool,
         progress: Option<Py<PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyArray2<i32>>)> {
+    ) -> PyResult<Bound<'py, PyTuple>> {
         if min_component.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
             return Err(pyo3::exceptions::PyValueError::new_err(
                 "min_component must be a finite volume of at least 0",
@@ -735,15 +737,11 @@ impl Field {
             min_component,
         };
         let mesh = run(py, progress, |p| self.shape.to_mesh(&options, p))?;
-        let n = mesh.positions.len();
-        let triangles = mesh.triangles.clone();
-        Ok((
-            arrays::mesh_vertices(py, mesh),
-            arrays::triangles(py, triangles, n)?,
-        ))
+        arrays::mesh_tuple(py, mesh, normals)
     }
 
-    /// The contoured mesh as a `trimesh.Trimesh`; the keywords are those of `to_mesh`.
+    /// The contoured mesh as a `trimesh.Trimesh` carrying `to_mesh`'s normals; the keywords
+    /// are those of `to_mesh`.
     #[pyo3(signature = (**kwargs))]
     fn to_trimesh(
         slf: &Bound<'_, Self>,
@@ -751,11 +749,17 @@ impl Field {
     ) -> PyResult<Py<PyAny>> {
         let py = slf.py();
         let trimesh = py.import("trimesh")?;
-        let (v, f): (Bound<'_, PyAny>, Bound<'_, PyAny>) =
-            slf.getattr("to_mesh")?.call((), kwargs)?.extract()?;
+        let kwargs = match kwargs {
+            Some(k) => k.copy()?,
+            None => pyo3::types::PyDict::new(py),
+        };
+        kwargs.set_item("normals", true)?;
+        let (v, f, n): (Bound<'_, PyAny>, Bound<'_, PyAny>, Bound<'_, PyAny>) =
+            slf.getattr("to_mesh")?.call((), Some(&kwargs))?.extract()?;
         let kw = pyo3::types::PyDict::new(py);
         kw.set_item("vertices", v)?;
         kw.set_item("faces", f)?;
+        kw.set_item("vertex_normals", n)?;
         kw.set_item("process", false)?;
         Ok(trimesh.getattr("Trimesh")?.call((), Some(&kw))?.unbind())
     }

@@ -46,18 +46,25 @@ fn read_mesh(
     ))
 }
 
-/// Writes a mesh file (GLB, glTF, OBJ, STL or PLY by extension), atomically.
+/// Writes a mesh file (GLB, glTF, OBJ, STL or PLY by extension), atomically. The vertex normals
+/// stored are `normals` (one per vertex, made unit length) where given, else weighted from the
+/// faces.
 #[pyfunction]
+#[pyo3(signature = (path, vertices, faces, normals=None))]
 fn write_mesh(
     py: Python<'_>,
     path: PathBuf,
     vertices: &Bound<'_, PyAny>,
     faces: &Bound<'_, PyAny>,
+    normals: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
-    let mesh = pgvol::Mesh::from_world(
+    let mut mesh = pgvol::Mesh::from_world(
         &arrays::world_points(vertices, "vertices")?,
         arrays::faces(faces)?,
     );
+    if let Some(normals) = normals {
+        mesh.normals = arrays::vertex_normals(normals, mesh.positions.len())?;
+    }
     quiet(py, || pgvol::io::write_mesh(&path, &mesh))
 }
 

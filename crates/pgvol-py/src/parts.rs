@@ -5,9 +5,8 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use numpy::PyArray2;
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
+use pyo3::types::{PyBytes, PyTuple};
 
 use pgvol::distributed as parts;
 
@@ -289,40 +288,42 @@ pub(crate) fn decode_part_bricks<'py>(
     PyBytes::new(py, &bytes)
 }
 
-/// The triangles of the z cells `start..end`: (vertices, faces).
+/// The triangles of the z cells `start..end`: (vertices, faces), with `normals` (vertices,
+/// faces, normals).
 #[pyfunction]
-#[pyo3(signature = (bricks, start, end, *, iso=0.0))]
-#[allow(clippy::type_complexity)]
+#[pyo3(signature = (bricks, start, end, *, iso=0.0, normals=true))]
 pub(crate) fn decode_part<'py>(
     py: Python<'py>,
     bricks: Vec<u8>,
     start: usize,
     end: usize,
     iso: f32,
-) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
-    part_triangles(py, iso, |options| {
-        parts::decode_part(&bricks, start..end, options)
-    })
+    normals: bool,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let options = part_options(iso);
+    let mesh = quiet(py, || parts::decode_part(&bricks, start..end, &options))?;
+    part_arrays(py, mesh, normals)
 }
 
-/// The (vertices, faces) arrays of the part `contour` gives with the options of a part at
-/// level `iso`.
-#[allow(clippy::type_complexity)]
-fn part_triangles<'py>(
-    py: Python<'py>,
-    iso: f32,
-    contour: impl FnOnce(&pgvol::DecodeOptions) -> pgvol::Result<pgvol::Mesh> + Send,
-) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
-    let options = pgvol::DecodeOptions {
+/// The options of a part contoured at level `iso`.
+fn part_options(iso: f32) -> pgvol::DecodeOptions {
+    pgvol::DecodeOptions {
         iso,
         ..Default::default()
-    };
-    let mesh = quiet(py, || contour(&options))?;
+    }
+}
+
+/// A part's mesh as (vertices, faces), float32 positions and int32 faces, with `normals` also
+/// the unit normals written for its vertices.
+fn part_arrays(py: Python<'_>, mesh: pgvol::Mesh, normals: bool) -> PyResult<Bound<'_, PyTuple>> {
     let n = mesh.positions.len();
-    Ok((
-        arrays::vec3s(py, mesh.positions),
-        arrays::triangles(py, mesh.triangles, n)?,
-    ))
+    let normals = normals.then(|| arrays::output_normals(py, &mesh).into_any());
+    let vertices = arrays::vec3s(py, mesh.positions).into_any();
+    let faces = arrays::triangles(py, mesh.triangles, n)?.into_any();
+    match normals {
+        Some(normals) => PyTuple::new(py, [vertices, faces, normals]),
+        None => PyTuple::new(py, [vertices, faces]),
+    }
 }
 
 /// The z cells of each part of contouring the `.pgv` file at `path` and its grid spacing, from
@@ -352,53 +353,60 @@ pub(crate) fn decode_file_part_bricks<'py>(
 }
 
 /// The triangles of the z cells `start..end` from the bytes `decode_file_part_bricks` gave:
-/// (vertices, faces).
+/// as [`decode_part`] returns them.
 #[pyfunction]
-#[pyo3(signature = (part, start, end, *, iso=0.0))]
-#[allow(clippy::type_complexity)]
+#[pyo3(signature = (part, start, end, *, iso=0.0, normals=true))]
 pub(crate) fn decode_file_part<'py>(
     py: Python<'py>,
     part: Vec<u8>,
     start: usize,
     end: usize,
     iso: f32,
-) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
-    part_triangles(py, iso, |options| {
-        parts::decode_file_part(&part, start..end, options)
-    })
+    normals: bool,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let options = part_options(iso);
+    let mesh = quiet(py, || parts::decode_file_part(&part, start..end, &options))?;
+    part_arrays(py, mesh, normals)
 }
 
-/// The mesh of the parts' pieces ((vertices, faces) pairs): seams welded, small pieces removed.
+/// The mesh of the parts' pieces ((vertices, faces, normals) triples, or (vertices, faces)
+/// pairs): seams welded, small pieces removed; (vertices, faces), with `normals` (vertices,
+/// faces, normals), the pieces' normals where every piece has them, else weighted from the
+/// faces.
 #[pyfunction]
-#[pyo3(signature = (pieces, spacing, *, iso=0.0, min_component=None))]
-#[allow(clippy::type_complexity)]
+#[pyo3(signature = (pieces, spacing, *, iso=0.0, min_component=None, normals=true))]
 pub(crate) fn weld_parts<'py>(
     py: Python<'py>,
     pieces: Vec<Bound<'py, PyAny>>,
     spacing: f32,
     iso: f32,
     min_component: Option<f32>,
-) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+    normals: bool,
+) -> PyResult<Bound<'py, PyTuple>> {
     let meshes = pieces
         .iter()
         .map(|p| {
+            type Triple<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>);
+            if let Ok((v, f, n)) = p.extract::<Triple>() {
+                let v = arrays::world_points(&v, "vertices")?;
+                let mut mesh = pgvol::Mesh::from_world(&v, arrays::faces(&f)?);
+                if normals {
+                    mesh.normals = arrays::vertex_normals(&n, mesh.positions.len())?;
+                }
+                return Ok(mesh);
+            }
             let (v, f) = arrays::mesh_parts(p, "piece")?;
             Ok(pgvol::Mesh::from_world(&v, f))
         })
         .collect::<PyResult<Vec<_>>>()?;
     let options = pgvol::DecodeOptions {
-        iso,
         min_component,
-        ..Default::default()
+        ..part_options(iso)
     };
     let mesh = quiet(py, || {
         parts::weld_parts(meshes, spacing, &options, &pgvol::Silent)
     })?;
-    let n = mesh.positions.len();
-    Ok((
-        arrays::vec3s(py, mesh.positions),
-        arrays::triangles(py, mesh.triangles, n)?,
-    ))
+    part_arrays(py, mesh, normals)
 }
 
 /// The layer numbers of each part of slicing `field`.

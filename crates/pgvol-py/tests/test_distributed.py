@@ -154,17 +154,29 @@ def test_a_part_plan_really_splits(mesh_path):
     assert len({p["z"] for p in plan}) == 4 and len({p["y"] for p in plan}) == 2
 
 
+def vertex_rows(vertices: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Each vertex's position and normal as the bits of six float32s, rows sorted: equal for
+    meshes whose vertices carry the same normals, in any order."""
+    rows = np.hstack([np.asarray(vertices, dtype=np.float32),
+                      np.asarray(normals, dtype=np.float32)]).view(np.uint32)
+    return rows[np.lexsort(rows.T[::-1])]
+
+
 @pytest.mark.parametrize("name", ["stanford-bunny", "fandisk"])
 def test_decode_in_tasks_gives_the_single_process_triangles_welded(client, mesh_path, name):
     field = pgvol.Field.from_mesh(*pgvol.read_mesh(mesh_path(name)), res=RES)
-    v, f = field.to_mesh(method="mc")
+    v, f, n = field.to_mesh(method="mc", normals=True)
     for parts in (1, 2, 8):
-        dv, df = distributed.decode(field, client=None if parts == 1 else client, parts=parts)
+        dv, df, dn = distributed.decode(field, client=None if parts == 1 else client,
+                                        parts=parts, normals=True)
         assert len(dv) == len(v) and len(df) == len(f), parts
         got, want = triangle_sets((dv, df), (v, f))
         assert np.array_equal(got, want), parts
+        # Each vertex carries the normal the single process gives it, seams included.
+        assert np.array_equal(vertex_rows(dv, dn), vertex_rows(v, n)), parts
         assert boundary_edges(dv, df) == 0, parts
         assert trimesh.Trimesh(dv, df, process=False).is_watertight, parts
+    assert len(distributed.decode(field, parts=2)) == 2
 
 
 def test_decode_of_a_file_in_tasks_reads_its_slabs_and_gives_its_triangles(
@@ -184,8 +196,9 @@ def test_decode_of_a_file_in_tasks_reads_its_slabs_and_gives_its_triangles(
         got = _pgvol.decode_file_part(part, s, e)
         want = _pgvol.decode_part(_pgvol.decode_part_bricks(field, s, e), s, e)
         assert len(got[1]) == len(want[1])
-        a, b = triangle_sets(got, want)
+        a, b = triangle_sets(got[:2], want[:2])
         assert np.array_equal(a, b), (s, e)
+        assert np.array_equal(vertex_rows(got[0], got[2]), vertex_rows(want[0], want[2]))
         triangles += len(got[1])
     assert triangles >= len(f)
     for parts in (1, 3):
@@ -357,6 +370,23 @@ def test_command_line_front_end_writes_the_single_process_file(mesh_path, tmp_pa
         [sys.executable, "-m", "pgvol.distributed", "encode", str(tmp_path / "none.obj"),
          "-o", str(out), "--res", "96"], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 1 and "none.obj" in bad.stderr
+
+
+def test_command_line_decode_writes_the_vertices_and_normals_of_pgvol_decode(
+        mesh_path, run_cli, tmp_path):
+    pgv = tmp_path / "fandisk.pgv"
+    run_cli("encode", mesh_path("fandisk"), "-o", pgv, "--res", 96, "-q")
+    single, parted = tmp_path / "single.ply", tmp_path / "parted.ply"
+    run_cli("decode", pgv, "-o", single, "-q")
+    r = subprocess.run(
+        [sys.executable, "-m", "pgvol.distributed", "decode", str(pgv), "-o", str(parted),
+         "--parts", "3", "--local", "1"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    a, b = (trimesh.load(p, process=False) for p in (single, parted))
+    assert "vertex_normals" in b._cache.cache, "the PLY holds no normals"
+    assert len(a.faces) == len(b.faces) and len(a.vertices) == len(b.vertices)
+    assert np.array_equal(vertex_rows(b.vertices, b.vertex_normals),
+                          vertex_rows(a.vertices, a.vertex_normals))
 
 
 def test_options_that_cannot_be_split_are_refused(mesh_path, spot_field):

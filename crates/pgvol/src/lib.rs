@@ -166,6 +166,7 @@ pub mod io {
     };
     pub use crate::slice::{write_layers, LayerFormat};
     pub use crate::vdb_in::{encode_vdb, is_vdb, VdbEncodeOptions};
+    pub use pgvol_mesh::output_normals;
 }
 
 /// Work on a `.pgv` file window by window, so memory follows the surface rather than the grid.

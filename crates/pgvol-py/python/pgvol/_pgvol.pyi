@@ -558,6 +558,7 @@ class Field:
         ``origin + spacing * (i, j, k)``. The array is Fortran-ordered (x fastest in memory)."""
     def to_dense(self) -> npt.NDArray[np.float32]:
         """sample_grid() on the field's own grid."""
+    @overload
     def to_mesh(
         self,
         *,
@@ -565,15 +566,31 @@ class Field:
         iso: float = 0.0,
         res: Optional[int] = None,
         min_component: Optional[float] = None,
+        normals: Literal[False] = False,
         progress: Optional[_Progress] = None,
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]:
         """Contours the level set ``iso`` into a watertight, manifold mesh: vertices (N, 3)
         float32 and faces (M, 3) int32, counter-clockwise seen from outside. ``method``:
         marching cubes, surface nets or dual contouring; ``res`` resamples the box with that
         many nodes along its longest side; pieces enclosing less than ``min_component``
-        (default: 2 grid cells) are removed, ``0`` keeps every piece."""
+        (default: 2 grid cells) are removed, ``0`` keeps every piece. With ``normals=True``,
+        also the vertices' unit normals (N, 3) float32, those a file written by ``pgvol decode``
+        stores: the field's gradient direction at each vertex for marching cubes on the
+        field's own grid or on a resampled one, else weighted from the faces."""
+    @overload
+    def to_mesh(
+        self,
+        *,
+        method: Literal["mc", "sn", "dc"] = "mc",
+        iso: float = 0.0,
+        res: Optional[int] = None,
+        min_component: Optional[float] = None,
+        normals: Literal[True],
+        progress: Optional[_Progress] = None,
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32], npt.NDArray[np.float32]]: ...
     def to_trimesh(self, **kwargs: Any) -> Any:
-        """to_mesh() as a trimesh.Trimesh (needs trimesh)."""
+        """to_mesh() as a trimesh.Trimesh with to_mesh(normals=True)'s vertex normals (needs
+        trimesh)."""
     def offset(self, distance: float) -> "Field":
         """The shape grown (distance > 0) or shrunk (distance < 0); |distance| must be below
         exact_band."""
@@ -861,8 +878,12 @@ def read_mesh(path: _PathLike) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.
     """Reads an OBJ, glTF/GLB, STL, PLY or 3MF file (by extension; a 3MF build in millimetres),
     welding bit-identical vertices and dropping degenerate and repeated triangles."""
 
-def write_mesh(path: _PathLike, vertices: _Points, faces: _Faces) -> None:
-    """Writes a GLB, glTF, OBJ, STL or PLY file (by extension), atomically."""
+def write_mesh(
+    path: _PathLike, vertices: _Points, faces: _Faces, normals: Optional[_Points] = None
+) -> None:
+    """Writes a GLB, glTF, OBJ, STL or PLY file (by extension), atomically. The vertex normals
+    stored (STL stores none) are ``normals``, one finite (N, 3) row per vertex made unit length
+    (a zero one takes a face's direction), where given; else weighted from the faces."""
 
 def compare(
     a: _MeshLike, b: _MeshLike, *, samples: int = 200000, seed: int = 0
@@ -1025,18 +1046,23 @@ def write_encode_parts(
 def plan_decode(field: Field, parts: int) -> List[Tuple[int, int]]: ...
 def decode_part_bricks(field: Field, start: int, end: int) -> bytes: ...
 def decode_part(
-    bricks: bytes, start: int, end: int, *, iso: float = 0.0
-) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
+    bricks: bytes, start: int, end: int, *, iso: float = 0.0, normals: bool = True
+) -> Tuple[npt.NDArray[Any], ...]: ...
 def plan_decode_file(
     path: _PathLike, parts: int
 ) -> Optional[Tuple[List[Tuple[int, int]], float]]: ...
 def decode_file_part_bricks(path: _PathLike, start: int, end: int) -> bytes: ...
 def decode_file_part(
-    part: bytes, start: int, end: int, *, iso: float = 0.0
-) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
+    part: bytes, start: int, end: int, *, iso: float = 0.0, normals: bool = True
+) -> Tuple[npt.NDArray[Any], ...]: ...
 def weld_parts(
-    pieces: List[Any], spacing: float, *, iso: float = 0.0, min_component: Optional[float] = None
-) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
+    pieces: List[Any],
+    spacing: float,
+    *,
+    iso: float = 0.0,
+    min_component: Optional[float] = None,
+    normals: bool = True,
+) -> Tuple[npt.NDArray[Any], ...]: ...
 def plan_slice(
     field: Field,
     parts: int,

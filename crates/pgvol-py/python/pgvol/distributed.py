@@ -248,37 +248,41 @@ def _field(source: Any) -> Field:
     return source if isinstance(source, Field) else Field.load(Path(source))
 
 
-def _decode_part(bricks: bytes, cells: tuple[int, int], iso: float):
-    """Task: the triangles of one slab of cells."""
-    return _pgvol.decode_part(bricks, cells[0], cells[1], iso=iso)
+def _decode_part(bricks: bytes, cells: tuple[int, int], iso: float, normals: bool):
+    """Task: the triangles of one slab of cells, with their vertices' normals if asked."""
+    return _pgvol.decode_part(bricks, cells[0], cells[1], iso=iso, normals=normals)
 
 
-def _decode_file_part(part: bytes, cells: tuple[int, int], iso: float):
-    """Task: the triangles of one slab of cells, from its part of the file."""
-    return _pgvol.decode_file_part(part, cells[0], cells[1], iso=iso)
+def _decode_file_part(part: bytes, cells: tuple[int, int], iso: float, normals: bool):
+    """Task: the triangles of one slab of cells, with their vertices' normals if asked, from
+    its part of the file."""
+    return _pgvol.decode_file_part(part, cells[0], cells[1], iso=iso, normals=normals)
 
 
 def decode(source: Any, *, client: Any = None, parts: int | None = None, iso: float = 0.0,
-           min_component: float | None = None,
-           retries: int = RETRIES) -> tuple[np.ndarray, np.ndarray]:
+           min_component: float | None = None, normals: bool = False,
+           retries: int = RETRIES) -> tuple[np.ndarray, ...]:
     """Contours a field (a ``Field`` or a ``.pgv`` path) in parts by marching cubes on its own
     grid: (vertices, faces), the triangles of ``Field.to_mesh(method="mc")``, in another
-    order, welded at the seams. From a path to a sparse file each task gets the file's own
-    bricks of its slabs, so this process never decodes the field."""
+    order, welded at the seams; with ``normals``, (vertices, faces, normals), each vertex with
+    the normal ``to_mesh(normals=True)`` gives it. From a path to a sparse file each task gets
+    the file's own bricks of its slabs, so this process never decodes the field."""
     count = _parts(parts, client)
     if not isinstance(source, Field):
         path = Path(source)
         plan = _pgvol.plan_decode_file(path, count)
         if plan is not None:
             ranges, spacing = plan
-            pieces = _in_parts(client, "decode", ranges, _decode_file_part, (iso,),
+            pieces = _in_parts(client, "decode", ranges, _decode_file_part, (iso, normals),
                                lambda s, e: _pgvol.decode_file_part_bricks(path, s, e), retries)
-            return _pgvol.weld_parts(pieces, spacing, iso=iso, min_component=min_component)
+            return _pgvol.weld_parts(pieces, spacing, iso=iso, min_component=min_component,
+                                     normals=normals)
     field = _field(source)
     ranges = _pgvol.plan_decode(field, count)
-    pieces = _in_parts(client, "decode", ranges, _decode_part, (iso,),
+    pieces = _in_parts(client, "decode", ranges, _decode_part, (iso, normals),
                        lambda s, e: _pgvol.decode_part_bricks(field, s, e), retries)
-    return _pgvol.weld_parts(pieces, field.grid.spacing, iso=iso, min_component=min_component)
+    return _pgvol.weld_parts(pieces, field.grid.spacing, iso=iso, min_component=min_component,
+                             normals=normals)
 
 
 def _slice_part(bricks: bytes, layers: tuple[int, int], layer_height: float, settings: dict,
@@ -437,9 +441,10 @@ def main(argv: list[str] | None = None) -> int:
                                parts=args.parts)
             report["grid"] = list(grid.dims)
         elif args.command == "decode":
-            vertices, faces = decode(args.input, client=client, parts=args.parts, iso=args.iso,
-                                     min_component=args.min_component)
-            _pgvol.write_mesh(Path(args.output), vertices, faces)
+            vertices, faces, normals = decode(args.input, client=client, parts=args.parts,
+                                              iso=args.iso, min_component=args.min_component,
+                                              normals=True)
+            _pgvol.write_mesh(Path(args.output), vertices, faces, normals)
             report.update(vertices=len(vertices), triangles=len(faces))
         else:
             layers = slice(args.input, args.layer_height, axis=args.axis, client=client,
