@@ -137,8 +137,8 @@ pub(crate) fn output_normals<'py>(
     vec3s(py, pgvol::io::output_normals(mesh).into_owned())
 }
 
-/// A mesh as `(vertices, faces)` ([`mesh_vertices`], int32 faces), or with `normals`
-/// `(vertices, faces, normals)` ([`output_normals`]).
+/// A mesh as `(vertices, faces)` ([`mesh_vertices`]: float32 near the origin; int32 faces), or
+/// with `normals` `(vertices, faces, normals)` ([`output_normals`]).
 pub(crate) fn mesh_tuple(
     py: Python<'_>,
     mut mesh: pgvol::Mesh,
@@ -146,7 +146,6 @@ pub(crate) fn mesh_tuple(
 ) -> PyResult<Bound<'_, PyTuple>> {
     let n = mesh.positions.len();
     let normals = normals.then(|| output_normals(py, &mesh));
-    mesh.normals = Vec::new();
     let triangles = triangles(py, std::mem::take(&mut mesh.triangles), n)?;
     let vertices = mesh_vertices(py, mesh);
     match normals {

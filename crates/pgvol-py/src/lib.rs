@@ -21,8 +21,9 @@ mod view;
 
 use std::path::PathBuf;
 
-use numpy::{PyArray2, PyArray3};
+use numpy::PyArray3;
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use crate::progress::{quiet, run};
 
@@ -32,18 +33,9 @@ use crate::progress::{quiet, run};
 /// Vertices are float32, or float64 for a mesh far from the origin (more than 64 times its
 /// size away), whose positions single precision would round.
 #[pyfunction]
-#[allow(clippy::type_complexity)]
-fn read_mesh(
-    py: Python<'_>,
-    path: PathBuf,
-) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyArray2<i32>>)> {
+fn read_mesh(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyTuple>> {
     let mesh = quiet(py, || pgvol::io::read_mesh(&path))?.mesh;
-    let n = mesh.positions.len();
-    let triangles = mesh.triangles.clone();
-    Ok((
-        arrays::mesh_vertices(py, mesh),
-        arrays::triangles(py, triangles, n)?,
-    ))
+    arrays::mesh_tuple(py, mesh, false)
 }
 
 /// Writes a mesh file (GLB, glTF, OBJ, STL or PLY by extension), atomically. The vertex normals
@@ -150,7 +142,7 @@ fn remesh<'py>(
     min_component: Option<f32>,
     sign: &str,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyArray2<i32>>)> {
+) -> PyResult<Bound<'py, PyTuple>> {
     let positions = arrays::world_points(vertices, "vertices")?;
     let triangles = arrays::faces(faces)?;
     let options = pgvol::RemeshOptions {
@@ -167,13 +159,7 @@ fn remesh<'py>(
         let mesh = pgvol::io::mesh_from_world(&positions, triangles)?.mesh;
         pgvol::remesh(&mesh, &options, p)
     })?;
-    let mesh = remeshed.mesh;
-    let n = mesh.positions.len();
-    let triangles = mesh.triangles.clone();
-    Ok((
-        arrays::mesh_vertices(py, mesh),
-        arrays::triangles(py, triangles, n)?,
-    ))
+    arrays::mesh_tuple(py, remeshed.mesh, false)
 }
 
 /// The layers of the `.pgv` file at `path`, as `Field.load(path).slice(...)` gives them, read

@@ -302,7 +302,7 @@ pub(crate) fn decode_part<'py>(
 ) -> PyResult<Bound<'py, PyTuple>> {
     let options = part_options(iso);
     let mesh = quiet(py, || parts::decode_part(&bricks, start..end, &options))?;
-    part_arrays(py, mesh, normals)
+    arrays::mesh_tuple(py, mesh, normals)
 }
 
 /// The options of a part contoured at level `iso`.
@@ -310,19 +310,6 @@ fn part_options(iso: f32) -> pgvol::DecodeOptions {
     pgvol::DecodeOptions {
         iso,
         ..Default::default()
-    }
-}
-
-/// A part's mesh as (vertices, faces), float32 positions and int32 faces, with `normals` also
-/// the unit normals written for its vertices.
-fn part_arrays(py: Python<'_>, mesh: pgvol::Mesh, normals: bool) -> PyResult<Bound<'_, PyTuple>> {
-    let n = mesh.positions.len();
-    let normals = normals.then(|| arrays::output_normals(py, &mesh).into_any());
-    let vertices = arrays::vec3s(py, mesh.positions).into_any();
-    let faces = arrays::triangles(py, mesh.triangles, n)?.into_any();
-    match normals {
-        Some(normals) => PyTuple::new(py, [vertices, faces, normals]),
-        None => PyTuple::new(py, [vertices, faces]),
     }
 }
 
@@ -366,7 +353,7 @@ pub(crate) fn decode_file_part<'py>(
 ) -> PyResult<Bound<'py, PyTuple>> {
     let options = part_options(iso);
     let mesh = quiet(py, || parts::decode_file_part(&part, start..end, &options))?;
-    part_arrays(py, mesh, normals)
+    arrays::mesh_tuple(py, mesh, normals)
 }
 
 /// The mesh of the parts' pieces ((vertices, faces, normals) triples, or (vertices, faces)
@@ -406,7 +393,7 @@ pub(crate) fn weld_parts<'py>(
     let mesh = quiet(py, || {
         parts::weld_parts(meshes, spacing, &options, &pgvol::Silent)
     })?;
-    part_arrays(py, mesh, normals)
+    arrays::mesh_tuple(py, mesh, normals)
 }
 
 /// The layer numbers of each part of slicing `field`.
